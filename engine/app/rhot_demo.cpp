@@ -3,8 +3,11 @@
 
 #include <atomic>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -14,6 +17,9 @@
 #include "engine/app/FrameLoop.h"
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
+#include "engine/render/Renderer.h"
+#include "engine/render/SceneRenderer.h"
+#include "engine/render/Window.h"
 #include "engine/scene/SceneLoader.h"
 
 #ifndef RHOT_ASSET_DIR
@@ -26,10 +32,11 @@ std::atomic<bool> g_interrupted{false};
 
 void on_signal(int) { g_interrupted.store(true); }
 
-bool display_available() {
-  const char* x11 = std::getenv("DISPLAY");
-  const char* wayland = std::getenv("WAYLAND_DISPLAY");
-  return (x11 != nullptr && *x11 != '\0') || (wayland != nullptr && *wayland != '\0');
+// "1080x1200" -> {1080, 1200}
+bool parse_size(const std::string& text, int& w, int& h) {
+  char x = 0;
+  char rest = 0;
+  return std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &rest) == 3 && (x == 'x' || x == 'X') && w > 0 && h > 0;
 }
 
 }  // namespace
@@ -54,14 +61,32 @@ int main(int argc, char** argv) {
   cli.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->capture_default_str()
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
+  std::string capture_dir;
+  std::string capture_layout = "eyes";
+  std::string eye_size;
+  rhot::RendererSettings render;
+  std::string stereo = "auto";
+  cli.add_option("--capture", capture_dir, "Write every frame as PNG into this folder (created if missing)");
+  cli.add_option("--capture-layout", capture_layout, "eyes: one PNG per eye; side-by-side: both eyes in one PNG")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"eyes", "side-by-side"}));
+  cli.add_option("--eye", eye_size, "Pixels per eye, WxH (default: the scene's headset, 1080x1200)");
+  cli.add_option("--device", render.device,
+                 "Vulkan device: auto, gpu, cpu, an index or part of its name (or set RHOT_VK_DEVICE)")
+      ->capture_default_str();
+  cli.add_option("--stereo", stereo, "auto (multiview where the driver passes a self-test), multiview or two-pass")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "multiview", "two-pass"}));
+  cli.add_flag("--validation", render.validation, "Enable the Vulkan validation layer (or set RHOT_VK_VALIDATION=1)");
   CLI11_PARSE(cli, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
 
-  if (!headless && !display_available()) {
+  if (!eye_size.empty() && !parse_size(eye_size, render.eye_width_px, render.eye_height_px)) {
+    spdlog::error("--eye: expected WIDTHxHEIGHT in pixels, such as 1080x1200, got \"{}\"", eye_size);
+    return EXIT_FAILURE;
+  }
+  if (!headless && !rhot::Window::display_available()) {
     spdlog::info("no display found (DISPLAY and WAYLAND_DISPLAY are unset); running headless");
-    headless = true;
-  } else if (!headless) {
-    spdlog::info("this build has no desktop window yet; running headless");
     headless = true;
   }
   if (headless && frames == 0) frames = 900;
@@ -71,12 +96,81 @@ int main(int argc, char** argv) {
     spdlog::error("cannot load scene: {}", scene.error().to_string());
     return EXIT_FAILURE;
   }
+  const rhot::HeadsetSettings& headset = scene->settings.headset;
+  if (eye_size.empty()) {
+    render.eye_width_px = headset.eye_width_px;
+    render.eye_height_px = headset.eye_height_px;
+  }
+  render.stereo = stereo == "multiview" ? rhot::StereoMode::kMultiview
+                  : stereo == "two-pass" ? rhot::StereoMode::kTwoPass
+                                         : rhot::StereoMode::kAuto;
+  if (!capture_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(capture_dir, ec);
+    if (ec) {
+      spdlog::error("--capture: cannot create folder {}: {}", capture_dir, ec.message());
+      return EXIT_FAILURE;
+    }
+  }
+
+  std::unique_ptr<rhot::Window> window;
+  if (!headless) {
+    // Both eyes side by side, scaled to fit a desktop.
+    const double scale = std::min(1.0, 1600.0 / (2.0 * render.eye_width_px));
+    auto created = rhot::Window::create("rhot", static_cast<int>(2.0 * render.eye_width_px * scale),
+                                        static_cast<int>(render.eye_height_px * scale));
+    if (created) {
+      window = std::move(*created);
+    } else {
+      spdlog::warn("cannot open a window ({}); running headless", created.error());
+      headless = true;
+      if (frames == 0) frames = 900;
+    }
+  }
+  auto renderer = rhot::Renderer::create(render, window.get());
+  if (!renderer) {
+    spdlog::error("cannot start the renderer: {}", renderer.error());
+    return EXIT_FAILURE;
+  }
+
   rhot::World world;
   const auto entities = rhot::instantiate(*scene, world);
   spdlog::info("scene {}: {} entities", scene_path, entities.size());
 
+  rhot::SceneRenderer scene_renderer(**renderer);
+  const rhot::StereoViews views = rhot::stereo_views(rhot::default_world_from_head(), headset);
+  const auto hands = rhot::reference_hands();
+  std::vector<rhot::HandDrawInput> shown_hands;
+  if (scene->settings.left_hand) shown_hands.push_back(hands[0]);
+  if (scene->settings.right_hand) shown_hands.push_back(hands[1]);
+  bool capture_failed = false;
+
   rhot::Systems systems;
-  systems.add({"transforms", {}, {}, [](rhot::World& w, const rhot::FrameContext&) { rhot::update_world_transforms(w); }});
+  systems.add({"window-events", {}, {}, [&](rhot::World&, const rhot::FrameContext&) {
+                 if (window) window->poll_events();
+               }});
+  systems.add({"transforms", {"window-events"}, {}, [](rhot::World& w, const rhot::FrameContext&) { rhot::update_world_transforms(w); }});
+  systems.add({"render", {"transforms"}, {}, [&](rhot::World& w, const rhot::FrameContext&) {
+                 (*renderer)->render(scene_renderer.build(w, views, shown_hands));
+               }});
+  systems.add({"capture", {"render"}, {}, [&](rhot::World&, const rhot::FrameContext& f) {
+                 if (capture_dir.empty() || capture_failed) return;
+                 char stem[32];
+                 std::snprintf(stem, sizeof(stem), "frame_%06llu", static_cast<unsigned long long>(f.frame_index));
+                 const auto eyes = (*renderer)->read_eyes();
+                 const std::filesystem::path dir(capture_dir);
+                 std::expected<void, std::string> written;
+                 if (capture_layout == "side-by-side") {
+                   written = rhot::write_png(rhot::side_by_side(eyes[0], eyes[1]), dir / (std::string(stem) + ".png"));
+                 } else {
+                   written = rhot::write_png(eyes[0], dir / (std::string(stem) + "_left.png"));
+                   if (written) written = rhot::write_png(eyes[1], dir / (std::string(stem) + "_right.png"));
+                 }
+                 if (!written) {
+                   spdlog::error("capture stopped: {}", written.error());
+                   capture_failed = true;
+                 }
+               }});
   if (const auto built = systems.build(); !built) {
     spdlog::error("cannot order systems: {}", built.error());
     return EXIT_FAILURE;
@@ -86,7 +180,8 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   loop.real_time = !headless;
   rhot::FrameLoop frame_loop(world, systems, loop);
-  const std::uint64_t ran = frame_loop.run(frames, [] { return !g_interrupted.load(); });
+  const std::uint64_t ran =
+      frame_loop.run(frames, [&] { return !g_interrupted.load() && !(window && window->should_close()); });
 
   const rhot::FrameStats& stats = frame_loop.stats();
   const rhot::TimingSummary whole = stats.frame_summary();
@@ -108,5 +203,7 @@ int main(int argc, char** argv) {
     }
     spdlog::info("statistics written to {}", stats_path);
   }
-  return EXIT_SUCCESS;
+  const std::uint64_t validation = (*renderer)->validation_messages();
+  if (validation > 0) spdlog::warn("{} Vulkan validation message(s)", validation);
+  return capture_failed ? EXIT_FAILURE : EXIT_SUCCESS;
 }

@@ -51,7 +51,7 @@ TEST(DemoCli, HelpListsTheOptions) {
 
 TEST(DemoCli, RunsTheDefaultSceneHeadlessAndWritesStatistics) {
   const fs::path stats = temp_dir() / "stats.json";
-  const DemoRun r = run_demo("--headless --frames 90 --stats " + stats.string());
+  const DemoRun r = run_demo("--headless --frames 90 --eye 160x176 --stats " + stats.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(stats);
   ASSERT_TRUE(in.good()) << r.output;
@@ -70,6 +70,35 @@ TEST(DemoCli, FallsBackToHeadlessWithoutADisplay) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("no display found"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("5 frames"), std::string::npos) << r.output;
+}
+
+TEST(DemoCli, CapturesBothEyesAsPng) {
+  const fs::path dir = temp_dir();
+  const DemoRun eyes = run_demo("--headless --frames 2 --eye 64x48 --capture " + (dir / "eyes").string());
+  ASSERT_EQ(eyes.exit_code, 0) << eyes.output;
+  for (const char* name : {"frame_000000_left.png", "frame_000000_right.png", "frame_000001_left.png", "frame_000001_right.png"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir / "eyes" / name)) << name;
+  }
+  const DemoRun sbs = run_demo("--headless --frames 1 --eye 64x48 --capture-layout side-by-side --capture " + (dir / "sbs").string());
+  ASSERT_EQ(sbs.exit_code, 0) << sbs.output;
+  // A PNG's IHDR holds width and height as big-endian 32-bit numbers at bytes 16 and 20.
+  std::ifstream png(dir / "sbs" / "frame_000000.png", std::ios::binary);
+  ASSERT_TRUE(png.good());
+  std::array<unsigned char, 24> header{};
+  png.read(reinterpret_cast<char*>(header.data()), header.size());
+  EXPECT_EQ((header[16] << 24) | (header[17] << 16) | (header[18] << 8) | header[19], 128) << "two 64-pixel eyes side by side";
+  EXPECT_EQ((header[20] << 24) | (header[21] << 16) | (header[22] << 8) | header[23], 48);
+}
+
+TEST(DemoCli, BadRendererOptionsAreReported) {
+  const DemoRun size = run_demo("--headless --frames 1 --eye 64by48");
+  EXPECT_EQ(size.exit_code, 1);
+  EXPECT_NE(size.output.find("--eye: expected WIDTHxHEIGHT in pixels, such as 1080x1200, got \"64by48\""), std::string::npos)
+      << size.output;
+  const DemoRun device = run_demo("--headless --frames 1 --device warp-drive");
+  EXPECT_EQ(device.exit_code, 1);
+  EXPECT_NE(device.output.find("cannot start the renderer: no Vulkan device matches \"warp-drive\""), std::string::npos)
+      << device.output;
 }
 
 TEST(DemoCli, BadSceneExitsNonZeroWithTheError) {

@@ -1,0 +1,137 @@
+#pragma once
+// The stereo renderer: both eyes of a headset drawn into a two-layer colour target (layer 0 the
+// left eye, layer 1 the right), either in one multiview pass or in one pass per eye; read back to
+// the CPU for PNG capture, or shown side by side in a desktop window.
+//
+// This header is the whole interface to the GPU: no Vulkan or GLFW type crosses it (the backend
+// lives in engine/render/vk/). Errors at start-up (no Vulkan, no device, no display) come back as
+// messages; the frame loop never sees a failed frame except through a device loss, which stops
+// the program with a message.
+
+#include <array>
+#include <cstdint>
+#include <expected>
+#include <memory>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/render/Image.h"
+#include "engine/render/MeshData.h"
+#include "engine/render/StereoCamera.h"
+
+namespace rhot {
+
+class Window;
+
+enum class StereoMode {
+  kAuto,       // multiview where the start-up self-test shows the driver gets it right, else two passes
+  kMultiview,  // one pass with VK_KHR_multiview, even if the self-test fails (for measurements)
+  kTwoPass,    // one render pass per eye
+};
+
+struct RendererSettings {
+  int eye_width_px = 1080;
+  int eye_height_px = 1200;
+  // Which Vulkan device: "auto" (a discrete GPU if there is one, then integrated, virtual, and
+  // last the CPU driver), "gpu" (any non-CPU device, or fail), "cpu" (the CPU driver, lavapipe),
+  // a device index from the log, or part of a device name. Where this is "auto", the environment
+  // variable RHOT_VK_DEVICE, if set, chooses instead.
+  std::string device = "auto";
+  StereoMode stereo = StereoMode::kAuto;
+  // Enable VK_LAYER_KHRONOS_validation and count its messages (validation_messages()). Also
+  // switched on by the environment variable RHOT_VK_VALIDATION=1.
+  bool validation = false;
+  glm::vec4 clear_color{0.55f, 0.62f, 0.70f, 1.0f};  // linear RGBA
+
+  [[nodiscard]] std::expected<void, std::string> check() const;
+};
+
+// A mesh uploaded to the GPU. Valid for the renderer's lifetime.
+struct MeshHandle {
+  std::uint32_t index = ~0u;
+};
+
+struct MeshInstance {
+  glm::mat4 world_from_local{1.0f};
+  glm::vec4 color{0.8f, 0.8f, 0.8f, 1.0f};  // linear RGBA
+};
+
+struct MeshBatch {
+  MeshHandle mesh;
+  std::vector<MeshInstance> instances;  // drawn with one instanced call
+};
+
+struct LineVertex {
+  glm::vec3 position{0.0f};     // world, metres
+  glm::vec4 color{1.0f};        // linear RGBA
+};
+
+// Everything one frame draws. Matrices and positions must be finite (the renderer checks, and
+// skips an instance or line that is not, logging once).
+struct FrameInput {
+  StereoViews views;
+  std::vector<MeshBatch> batches;
+  std::vector<LineVertex> lines;  // pairs: a line list (ground grid, debug draw)
+  glm::vec3 light_dir_world = glm::normalize(glm::vec3(-0.4f, -1.0f, -0.3f));  // direction light travels
+  glm::vec3 light_color{0.85f, 0.85f, 0.8f};
+  float ambient = 0.3f;
+};
+
+struct RendererInfo {
+  std::string device_name;
+  bool cpu_device = false;       // lavapipe or another CPU implementation
+  bool validation_enabled = false;
+  bool multiview_supported = false;
+  bool multiview_self_test_passed = false;  // meaningful where multiview_supported
+  StereoMode mode = StereoMode::kTwoPass;   // what is actually used: kMultiview or kTwoPass
+};
+
+class Renderer {
+ public:
+  // Creates the renderer for offscreen rendering, or (with a window) also for presenting into
+  // it. Fails with a message where there is no Vulkan, no suitable device, or the window cannot
+  // get a swapchain.
+  [[nodiscard]] static std::expected<std::unique_ptr<Renderer>, std::string> create(
+      const RendererSettings& settings, Window* window = nullptr);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  const RendererInfo& info() const;
+  int eye_width_px() const;
+  int eye_height_px() const;
+
+  // Uploads a mesh. Precondition: a valid MeshData (indices in range, three per triangle).
+  MeshHandle upload_mesh(const MeshData& mesh);
+
+  // Draws both eyes and waits for the GPU to finish (submit to fence). With a window, also shows
+  // both eyes side by side in it (unless it is minimised).
+  void render(const FrameInput& frame);
+
+  // Copies the last rendered frame of one eye (or both) to the CPU.
+  Image read_eye(int eye);
+  std::array<Image, 2> read_eyes();
+
+  // Validation-layer warnings and errors so far (0 when validation is off).
+  std::uint64_t validation_messages() const;
+
+  // Time of the last render(): recording, submitting and waiting for the fence.
+  double last_render_ms() const;
+
+  // With a window: how often its swapchain was (re)created, and its current size in pixels.
+  std::uint64_t swapchain_recreations() const;
+  std::pair<int, int> swapchain_extent() const;
+
+ private:
+  struct Impl;
+  explicit Renderer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+const char* to_string(StereoMode mode);
+
+}  // namespace rhot
