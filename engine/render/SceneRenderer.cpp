@@ -124,6 +124,14 @@ FrameInput SceneRenderer::build(World& world, const StereoViews& views, std::spa
       add(frame, unit_sphere_, glm::scale(glm::translate(glm::mat4(1.0f), p.position), glm::vec3(p.radius_m)), p.color);
     }
   }
+  // Large planes (floors, walls) are mostly hidden behind other things: drawn last, the depth
+  // test rejects their hidden pixels before shading, which matters on CPU rasterisers.
+  const auto plane_batch = batch_of_mesh_.find(unit_plane_.index);
+  if (plane_batch != batch_of_mesh_.end() && plane_batch->second + 1 < frame.batches.size()) {
+    MeshBatch planes = std::move(frame.batches[plane_batch->second]);
+    frame.batches.erase(frame.batches.begin() + static_cast<std::ptrdiff_t>(plane_batch->second));
+    frame.batches.push_back(std::move(planes));
+  }
   return frame;
 }
 
