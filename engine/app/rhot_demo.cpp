@@ -28,6 +28,13 @@
 
 namespace {
 
+// Debug builds run with the Vulkan validation layer unless told otherwise.
+#ifdef NDEBUG
+constexpr bool kDebugBuild = false;
+#else
+constexpr bool kDebugBuild = true;
+#endif
+
 std::atomic<bool> g_interrupted{false};
 
 void on_signal(int) { g_interrupted.store(true); }
@@ -65,6 +72,7 @@ int main(int argc, char** argv) {
   std::string capture_layout = "eyes";
   std::string eye_size;
   rhot::RendererSettings render;
+  render.validation = kDebugBuild;
   std::string stereo = "auto";
   cli.add_option("--capture", capture_dir, "Write every frame as PNG into this folder (created if missing)");
   cli.add_option("--capture-layout", capture_layout, "eyes: one PNG per eye; side-by-side: both eyes in one PNG")
@@ -77,7 +85,8 @@ int main(int argc, char** argv) {
   cli.add_option("--stereo", stereo, "auto (multiview where the driver passes a self-test), multiview or two-pass")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "multiview", "two-pass"}));
-  cli.add_flag("--validation", render.validation, "Enable the Vulkan validation layer (or set RHOT_VK_VALIDATION=1)");
+  cli.add_flag("--validation,!--no-validation", render.validation,
+               "Vulkan validation layer (default: on in debug builds; or set RHOT_VK_VALIDATION=1)");
   CLI11_PARSE(cli, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
 

@@ -15,7 +15,7 @@ namespace rhot {
 namespace {
 
 // Side of a cylinder of radius 1 from y = -0.5 to 0.5 (its ends are hidden inside joint spheres).
-MeshData make_unit_cylinder_side(int segments = 16) {
+MeshData make_unit_cylinder_side(int segments = 12) {
   MeshData m;
   for (int i = 0; i <= segments; ++i) {
     const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(i) / static_cast<float>(segments);
@@ -54,6 +54,7 @@ SceneRenderer::SceneRenderer(Renderer& renderer, SceneRenderSettings settings)
       settings_(settings),
       unit_box_(renderer.upload_mesh(make_box(glm::vec3(1.0f)))),
       unit_sphere_(renderer.upload_mesh(make_sphere(1.0f, 24, 12))),
+      small_sphere_(renderer.upload_mesh(make_sphere(1.0f, 12, 6))),
       unit_plane_(renderer.upload_mesh(make_plane(glm::vec2(1.0f)))),
       unit_cylinder_(renderer.upload_mesh(make_unit_cylinder_side())) {}
 
@@ -103,7 +104,7 @@ FrameInput SceneRenderer::build(World& world, const StereoViews& views, std::spa
     for (int j = 0; j < kHandJointCount; ++j) {
       const float r = hand.radius_m[static_cast<std::size_t>(j)];
       const glm::vec3 p = hand.joint_world[static_cast<std::size_t>(j)];
-      add(frame, unit_sphere_, glm::scale(glm::translate(glm::mat4(1.0f), p), glm::vec3(r)), hand.color);
+      add(frame, small_sphere_, glm::scale(glm::translate(glm::mat4(1.0f), p), glm::vec3(r)), hand.color);
       if (const auto parent = joint_parent(static_cast<HandJoint>(j))) {
         const auto pj = static_cast<std::size_t>(*parent);
         const glm::vec3 q = hand.joint_world[pj];
@@ -121,7 +122,7 @@ FrameInput SceneRenderer::build(World& world, const StereoViews& views, std::spa
   if (debug != nullptr) {
     frame.lines.insert(frame.lines.end(), debug->lines().begin(), debug->lines().end());
     for (const DebugPoint& p : debug->points()) {
-      add(frame, unit_sphere_, glm::scale(glm::translate(glm::mat4(1.0f), p.position), glm::vec3(p.radius_m)), p.color);
+      add(frame, small_sphere_, glm::scale(glm::translate(glm::mat4(1.0f), p.position), glm::vec3(p.radius_m)), p.color);
     }
   }
   // Large planes (floors, walls) are mostly hidden behind other things: drawn last, the depth

@@ -52,6 +52,7 @@ class SceneRenderer {
   SceneRenderSettings settings_;
   MeshHandle unit_box_;
   MeshHandle unit_sphere_;
+  MeshHandle small_sphere_;  // fewer triangles, for joints and markers a few centimetres across
   MeshHandle unit_plane_;
   MeshHandle unit_cylinder_;
   std::map<std::pair<float, float>, MeshHandle> capsules_;

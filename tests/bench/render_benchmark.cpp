@@ -119,7 +119,7 @@ void BM_BuildFrameFromWorld(benchmark::State& state) {
 
 void sizes(benchmark::internal::Benchmark* b) {
   // Wall time: the calling thread mostly waits on the fence while the driver works.
-  b->Args({1080, 1200})->Args({720, 800})->Args({540, 600})->Args({432, 480})->Unit(benchmark::kMillisecond)->UseRealTime();
+  b->Args({1080, 1200})->Args({720, 800})->Args({540, 600})->Args({432, 480})->Args({64, 64})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
 BENCHMARK_CAPTURE(BM_DefaultScene, multiview, rhot::StereoMode::kMultiview)->Apply(sizes);

@@ -53,6 +53,7 @@ TEST(DemoCli, RunsTheDefaultSceneHeadlessAndWritesStatistics) {
   const fs::path stats = temp_dir() / "stats.json";
   const DemoRun r = run_demo("--headless --frames 90 --eye 160x176 --stats " + stats.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("vulkan validation"), std::string::npos) << "debug builds validate; no message allowed:\n" << r.output;
   std::ifstream in(stats);
   ASSERT_TRUE(in.good()) << r.output;
   const nlohmann::json j = nlohmann::json::parse(in);
@@ -99,6 +100,16 @@ TEST(DemoCli, BadRendererOptionsAreReported) {
   EXPECT_EQ(device.exit_code, 1);
   EXPECT_NE(device.output.find("cannot start the renderer: no Vulkan device matches \"warp-drive\""), std::string::npos)
       << device.output;
+}
+
+TEST(DemoCli, NoVulkanDriverIsAClearError) {
+  // Point the Vulkan loader at a driver list that does not exist: as on a machine with no driver.
+  const DemoRun r = run_demo("--headless --frames 1", "env VK_ICD_FILENAMES=/nonexistent/icd.json VK_DRIVER_FILES=/nonexistent/icd.json");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("cannot start the renderer: "), std::string::npos) << r.output;
+  EXPECT_TRUE(r.output.find("VK_ERROR_INCOMPATIBLE_DRIVER (no Vulkan driver installed?)") != std::string::npos ||
+              r.output.find("no Vulkan device found") != std::string::npos)
+      << r.output;
 }
 
 TEST(DemoCli, BadSceneExitsNonZeroWithTheError) {

@@ -49,6 +49,7 @@ class StereoPass {
   void create_pipelines();
   VkPipeline create_pipeline(std::span<const std::uint32_t> vert, std::span<const std::uint32_t> frag, bool lines);
   void ensure_capacity(Buffer& buffer, VkDeviceSize bytes, VkBufferUsageFlags usage);
+  void wait_for_fence();
 
   const Context& ctx_;
   int width_;

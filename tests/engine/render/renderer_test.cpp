@@ -4,11 +4,13 @@
 #include "engine/render/Renderer.h"
 
 #include <cmath>
+#include <fstream>
 #include <limits>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "engine/render/SceneRenderer.h"
 #include "engine/scene/SceneLoader.h"
@@ -163,6 +165,35 @@ TEST_F(RendererTest, NonFiniteInstancesAreSkippedNotDrawn) {
   const Image left = renderer->read_eye(kLeftEye);
   EXPECT_EQ(count_colour(left, {255, 0, 0}), 0);
   EXPECT_GT(count_colour(left, {0, 0, 255}), 100) << "the finite box is still drawn";
+  EXPECT_NO_VALIDATION_MESSAGES(renderer);
+}
+
+// A glTF mesh that cannot be loaded is logged and drawn as a 10 cm box in its material colour.
+TEST_F(RendererTest, BrokenGltfMeshFallsBackToABox) {
+  const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / "rhot_broken_mesh.gltf";
+  std::ofstream(file) << "{ not glTF";
+  World world;
+  const Entity e = world.create();
+  world.add<Transform>(e, Transform{{0.0f, 0.0f, -0.5f}, glm::quat(1, 0, 0, 0), glm::vec3(1.0f)});
+  world.add<WorldTransform>(e);
+  world.add<Mesh>(e, Mesh{GltfMeshShape{file}});
+  world.add<Material>(e, Material{glm::vec4(1, 0, 1, 1)});
+  update_world_transforms(world);
+  auto renderer = make(test_settings(64, 64));
+  ASSERT_NE(renderer, nullptr);
+  SceneRenderSettings no_grid;
+  no_grid.draw_grid = false;
+  SceneRenderer scene_renderer(*renderer, no_grid);
+  HeadsetSettings headset;
+  headset.left_eye = headset.right_eye = EyeFovDeg{45, 45, 45, 45};
+  FrameInput f = scene_renderer.build(world, stereo_views(glm::mat4(1.0f), headset));
+  f.ambient = 1.0f;
+  f.light_color = glm::vec3(0.0f);
+  renderer->render(f);
+  // The box's front face, 0.45 m away and 0.1 m wide, covers about 64 * 0.1 / (2 * 0.45) = 7 pixels across.
+  const int magenta = count_colour(renderer->read_eye(kLeftEye), {255, 0, 255});
+  EXPECT_GT(magenta, 30);
+  EXPECT_LT(magenta, 80);
   EXPECT_NO_VALIDATION_MESSAGES(renderer);
 }
 
