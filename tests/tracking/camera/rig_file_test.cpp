@@ -1,0 +1,119 @@
+#include "tracking/camera/RigFile.h"
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+namespace rhot {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path rig_asset(const char* name) { return fs::path(RHOT_ASSET_DIR) / "rigs" / name; }
+
+fs::path temp(const std::string& name) {
+  const fs::path d = fs::path(::testing::TempDir()) / "rhot_rig_test";
+  fs::create_directories(d);
+  return d / name;
+}
+
+TEST(RigFile, ShippedRigsLoadAndSeeTheirVolume) {
+  struct Expect {
+    const char* file;
+    std::size_t cameras;
+    Eigen::Vector3d centre;
+  };
+  for (const Expect& e : {Expect{"seated-4.yaml", 4, {0, 1.1, -0.45}}, Expect{"room-8.yaml", 8, {0, 1.0, 0.0}},
+                          Expect{"stereo-2.yaml", 2, {0, 1.0, -0.45}}}) {
+    const auto rig = load_rig(rig_asset(e.file));
+    ASSERT_TRUE(rig.has_value()) << rig.error();
+    EXPECT_EQ(rig->cameras.size(), e.cameras) << e.file;
+    for (const Camera& c : rig->cameras) {
+      const auto pixel = c.project(e.centre);
+      ASSERT_TRUE(pixel.has_value()) << e.file << " " << c.name;
+      EXPECT_TRUE(c.in_image(*pixel)) << e.file << " " << c.name << " does not see the volume's centre";
+    }
+  }
+}
+
+TEST(RigFile, SeatedRigCoversTheWholeCubeWithAtLeastTwoCameras) {
+  const auto rig = load_rig(rig_asset("seated-4.yaml"));
+  ASSERT_TRUE(rig.has_value()) << rig.error();
+  for (double x = -0.5; x <= 0.5; x += 0.25) {
+    for (double y = 0.6; y <= 1.6; y += 0.25) {
+      for (double z = -0.95; z <= 0.05; z += 0.25) {
+        int seen = 0;
+        for (const Camera& c : rig->cameras) {
+          const auto p = c.project({x, y, z});
+          seen += (p && c.in_image(*p)) ? 1 : 0;
+        }
+        EXPECT_GE(seen, 2) << "(" << x << ", " << y << ", " << z << ")";
+      }
+    }
+  }
+}
+
+TEST(RigFile, SaveThenLoadIsExactAndOpenCvCanReadIt) {
+  const auto rig = load_rig(rig_asset("seated-4.yaml"));
+  ASSERT_TRUE(rig.has_value());
+  const fs::path out = temp("copy.yaml");
+  ASSERT_TRUE(save_rig(*rig, out).has_value());
+  const auto back = load_rig(out);
+  ASSERT_TRUE(back.has_value()) << back.error();
+  ASSERT_EQ(back->cameras.size(), rig->cameras.size());
+  for (std::size_t i = 0; i < rig->cameras.size(); ++i) {
+    EXPECT_EQ(back->cameras[i].name, rig->cameras[i].name);
+    EXPECT_EQ(back->cameras[i].intrinsics.fx, rig->cameras[i].intrinsics.fx);
+    EXPECT_LT((back->cameras[i].centre_world() - rig->cameras[i].centre_world()).norm(), 1e-12);
+  }
+  // Plain OpenCV reads the matrices.
+  cv::FileStorage fs(out.string(), cv::FileStorage::READ);
+  cv::Mat k;
+  fs["cameras"][0]["camera_matrix"] >> k;
+  EXPECT_EQ(k.rows, 3);
+  EXPECT_DOUBLE_EQ(k.at<double>(0, 0), rig->cameras[0].intrinsics.fx);
+}
+
+// Writes the seated rig with one substitution applied to its text.
+std::string error_after(const std::string& pattern, const std::string& replacement) {
+  std::ifstream in(rig_asset("seated-4.yaml"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string changed = std::regex_replace(text, std::regex(pattern), replacement, std::regex_constants::format_first_only);
+  EXPECT_NE(changed, text) << "pattern " << pattern << " did not match";
+  const fs::path p = temp("bad.yaml");
+  std::ofstream(p) << changed;
+  const auto r = load_rig(p);
+  return r ? std::string("loaded") : r.error().substr(p.string().size() + 2);
+}
+
+TEST(RigFile, MalformedAndInconsistentRigsAreRefusedWithTheField) {
+  EXPECT_EQ(load_rig(temp("none.yaml")).error(), temp("none.yaml").string() + ": rig file not found");
+  EXPECT_EQ(error_after("image_width: 1280", "image_width: wide"), "cameras[0] (\"front-left\").image_width: expected an integer");
+  EXPECT_EQ(error_after("image_height: 720", "image_height: -720"),
+            "cameras[0] (\"front-left\").image_width/image_height: expected 1 to 65536 pixels, got 1280x-720");
+  EXPECT_EQ(error_after("data: \\[ 900.0, 0.0, 639.5", "data: [ -900.0, 0.0, 639.5"),
+            "cameras[0] (\"front-left\").camera_matrix: focal lengths fx and fy must be positive");
+  EXPECT_EQ(error_after("data: \\[ 900.0, 0.0, 639.5", "data: [ 900.0, 0.0, 6390.5"),
+            "cameras[0] (\"front-left\").camera_matrix: the principal point (6390.500000, 359.500000) lies outside the "
+            "1280x720 image");
+  EXPECT_EQ(error_after("rows: 1\n         cols: 5\n         dt: d\n         data: \\[ -0.05, 0.01, 0.0, 0.0, 0.0 \\]",
+                        "rows: 1\n         cols: 4\n         dt: d\n         data: [ -0.05, 0.01, 0.0, 0.0 ]"),
+            "cameras[0] (\"front-left\").distortion_coefficients: expected 1x5, got 1x4");
+  EXPECT_EQ(error_after("data: \\[ -0.728199992693", "data: [ -0.9"),
+            "cameras[0] (\"front-left\").rotation: not a rotation matrix (expected orthonormal with determinant +1)");
+  EXPECT_EQ(error_after("data: \\[ 0.308414114552", "data: [ .nan"),
+            "cameras[0] (\"front-left\").translation: contains a value that is not finite");
+  EXPECT_EQ(error_after("name: \"front-right\"", "name: \"front-left\""),
+            "cameras[1] (\"front-left\").name: duplicate name \"front-left\"");
+  EXPECT_EQ(error_after("      translation: !!opencv-matrix", "      translatoin: !!opencv-matrix"),
+            "cameras[0] (\"front-left\").translation: missing");
+  EXPECT_EQ(error_after("cameras:", "kameras:"), "cameras: missing");
+  const auto junk = error_after("%YAML:1.0", "{{{ not yaml");
+  EXPECT_NE(junk, "loaded");
+}
+
+}  // namespace
+}  // namespace rhot

@@ -1,0 +1,73 @@
+#!/usr/bin/env python3
+"""Writes the shipped camera rigs in assets/rigs/ as OpenCV FileStorage YAML.
+
+Run from the repository root: tools/generate_rigs.py. Each camera is placed at a position and
+aimed at a target (OpenCV camera frame: x right, y down, z forward; world: +Y up, -Z forward).
+"""
+import math
+import os
+
+
+def sub(a, b): return [a[i] - b[i] for i in range(3)]
+def cross(a, b): return [a[1]*b[2]-a[2]*b[1], a[2]*b[0]-a[0]*b[2], a[0]*b[1]-a[1]*b[0]]
+def norm(a):
+    n = math.sqrt(sum(x*x for x in a))
+    return [x / n for x in a]
+
+
+def look_at(position, target):
+    z = norm(sub(target, position))
+    x = norm(cross(z, [0.0, 1.0, 0.0]))
+    y = cross(z, x)
+    rotation = [x, y, z]  # rows of cam_from_world's rotation
+    translation = [-sum(rotation[r][c] * position[c] for c in range(3)) for r in range(3)]
+    return rotation, translation
+
+
+def matrix(name, rows, cols, values, indent):
+    data = ", ".join(repr(float(round(v, 12))) for v in values)
+    pad = " " * indent
+    return (f"{pad}{name}: !!opencv-matrix\n{pad}   rows: {rows}\n{pad}   cols: {cols}\n"
+            f"{pad}   dt: d\n{pad}   data: [ {data} ]\n")
+
+
+def write_rig(path, rig_name, cameras):
+    out = ["%YAML:1.0\n---\n", f"rig_name: \"{rig_name}\"\n", "cameras:\n"]
+    for cam in cameras:
+        rotation, translation = look_at(cam["position"], cam["target"])
+        w, h, f = cam["width"], cam["height"], cam["f"]
+        out.append(f"   -\n      name: \"{cam['name']}\"\n      image_width: {w}\n      image_height: {h}\n")
+        out.append(matrix("camera_matrix", 3, 3, [f, 0, (w - 1) / 2, 0, f, (h - 1) / 2, 0, 0, 1], 6))
+        out.append(matrix("distortion_coefficients", 1, 5, cam["dist"], 6))
+        out.append(matrix("rotation", 3, 3, [v for row in rotation for v in row], 6))
+        out.append(matrix("translation", 3, 1, translation, 6))
+    with open(path, "w") as fh:
+        fh.write("".join(out))
+
+
+def main():
+    os.makedirs("assets/rigs", exist_ok=True)
+    webcam = dict(width=1280, height=720, f=900.0, dist=[-0.05, 0.01, 0.0, 0.0, 0.0])
+    # Seated: a 1 x 1 x 1 m volume above a desk (table top at 0.74 m, user at the origin).
+    centre = [0.0, 1.1, -0.45]
+    seated = [dict(webcam, name=n, position=p, target=centre) for n, p in [
+        ("front-left", [-0.8, 1.9, -1.3]), ("front-right", [0.8, 1.9, -1.3]),
+        ("back-left", [-0.8, 1.9, 0.35]), ("back-right", [0.8, 1.9, 0.35])]]
+    write_rig("assets/rigs/seated-4.yaml", "seated-4", seated)
+    # Room: about 4 x 4 x 2 m, cameras on the walls at 2.4 m looking at the middle at 1 m.
+    room_centre = [0.0, 1.0, 0.0]
+    room = []
+    for i in range(8):
+        a = 2 * math.pi * i / 8
+        room.append(dict(webcam, name=f"wall-{i}", position=[2.2 * math.cos(a), 2.4, 2.2 * math.sin(a)], target=room_centre))
+    write_rig("assets/rigs/room-8.yaml", "room-8", room)
+    # Stereo pair: 20 cm baseline above the user's head, looking at the desk volume (Wiimote-like
+    # 1024 x 768 infrared cameras, about 45 degrees across).
+    wiimote = dict(width=1024, height=768, f=1280.0, dist=[0.0, 0.0, 0.0, 0.0, 0.0])
+    stereo = [dict(wiimote, name="left", position=[-0.1, 1.6, 0.3], target=[-0.1, 1.0, -0.45]),
+              dict(wiimote, name="right", position=[0.1, 1.6, 0.3], target=[0.1, 1.0, -0.45])]
+    write_rig("assets/rigs/stereo-2.yaml", "stereo-2", stereo)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,97 @@
+#include "tracking/camera/Camera.h"
+
+#include <cmath>
+
+#include <Eigen/Geometry>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+namespace rhot {
+
+namespace {
+
+constexpr double kMinDepth_m = 1e-3;
+
+// Distortion of normalised coordinates and its 2x2 Jacobian.
+Eigen::Vector2d distort(const std::array<double, 5>& k, const Eigen::Vector2d& xy, Eigen::Matrix2d* jacobian) {
+  const double x = xy.x();
+  const double y = xy.y();
+  const double k1 = k[0], k2 = k[1], p1 = k[2], p2 = k[3], k3 = k[4];
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  const Eigen::Vector2d out(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+                            y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
+  if (jacobian != nullptr) {
+    const double d = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r2)
+    (*jacobian) << radial + 2.0 * x * x * d + 2.0 * p1 * y + 6.0 * p2 * x, 2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y,
+        2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y, radial + 2.0 * y * y * d + 6.0 * p1 * y + 2.0 * p2 * x;
+  }
+  return out;
+}
+
+}  // namespace
+
+Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy) {
+  return distort(k, xy, nullptr);
+}
+
+std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world) const {
+  const Eigen::Vector3d p = cam_from_world * p_world;
+  if (!(p.z() > kMinDepth_m)) return std::nullopt;
+  const Eigen::Vector2d d = distort(intrinsics.distortion, p.head<2>() / p.z(), nullptr);
+  return Eigen::Vector2d(intrinsics.fx * d.x() + intrinsics.cx, intrinsics.fy * d.y() + intrinsics.cy);
+}
+
+std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world, Eigen::Matrix<double, 2, 3>& jacobian) const {
+  const Eigen::Vector3d p = cam_from_world * p_world;
+  if (!(p.z() > kMinDepth_m)) return std::nullopt;
+  const double inv_z = 1.0 / p.z();
+  Eigen::Matrix2d d_distort;
+  const Eigen::Vector2d d = distort(intrinsics.distortion, p.head<2>() * inv_z, &d_distort);
+  Eigen::Matrix<double, 2, 3> d_normalised;
+  d_normalised << inv_z, 0.0, -p.x() * inv_z * inv_z, 0.0, inv_z, -p.y() * inv_z * inv_z;
+  const Eigen::Matrix2d focal = Eigen::Vector2d(intrinsics.fx, intrinsics.fy).asDiagonal();
+  jacobian = focal * d_distort * d_normalised * cam_from_world.rotation.toRotationMatrix();
+  return Eigen::Vector2d(intrinsics.fx * d.x() + intrinsics.cx, intrinsics.fy * d.y() + intrinsics.cy);
+}
+
+bool Camera::in_image(const Eigen::Vector2d& pixel) const {
+  // Pixel centres are integers, so the sensor spans [-0.5, size - 0.5).
+  return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < intrinsics.width_px - 0.5 &&
+         pixel.y() < intrinsics.height_px - 0.5;
+}
+
+Eigen::Vector2d Camera::undistort(const Eigen::Vector2d& pixel) const {
+  const cv::Matx33d k(intrinsics.fx, 0.0, intrinsics.cx, 0.0, intrinsics.fy, intrinsics.cy, 0.0, 0.0, 1.0);
+  const cv::Vec<double, 5> dist(intrinsics.distortion[0], intrinsics.distortion[1], intrinsics.distortion[2],
+                                intrinsics.distortion[3], intrinsics.distortion[4]);
+  const std::vector<cv::Point2d> in{{pixel.x(), pixel.y()}};
+  std::vector<cv::Point2d> out;
+  // OpenCV's default stops after 5 fixed-point steps, too few for wide lenses; iterate to 1e-14.
+  cv::undistortPoints(in, out, k, dist, cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-14));
+  return {out[0].x, out[0].y};
+}
+
+Eigen::Vector3d Camera::centre_world() const { return cam_from_world.inverse().translation; }
+
+Eigen::Vector3d Camera::ray_world(const Eigen::Vector2d& pixel) const {
+  const Eigen::Vector2d xy = undistort(pixel);
+  return (cam_from_world.rotation.conjugate() * Eigen::Vector3d(xy.x(), xy.y(), 1.0)).normalized();
+}
+
+Rigid3d cam_from_world_look_at(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - position).normalized();             // forward
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitY()).normalized();  // right (world up x forward)
+  const Eigen::Vector3d y = z.cross(x);                                   // down in the image
+  Eigen::Matrix3d world_from_cam_rotation;
+  world_from_cam_rotation.col(0) = x;
+  world_from_cam_rotation.col(1) = y;
+  world_from_cam_rotation.col(2) = z;
+  Rigid3d world_from_cam;
+  world_from_cam.rotation = Eigen::Quaterniond(world_from_cam_rotation).normalized();
+  world_from_cam.translation = position;
+  return world_from_cam.inverse();
+}
+
+}  // namespace rhot

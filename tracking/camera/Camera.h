@@ -1,0 +1,60 @@
+#pragma once
+// Pinhole cameras with OpenCV's distortion model, and rigs of them.
+//
+// Camera frames follow OpenCV: x right, y down, z forward (out of the lens); pixel (0, 0) is the
+// centre of the top-left pixel, as in OpenCV. The world frame is rhot's (metres, +Y up, -Z
+// forward). `cam_from_world` maps world points into the camera frame.
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "tracking/core/Rigid3.h"
+
+namespace rhot {
+
+struct CameraIntrinsics {
+  int width_px = 0;
+  int height_px = 0;
+  double fx = 0.0, fy = 0.0;  // focal lengths, pixels
+  double cx = 0.0, cy = 0.0;  // principal point, pixels
+  // OpenCV's order: k1, k2, p1, p2, k3 (radial k, tangential p).
+  std::array<double, 5> distortion{0.0, 0.0, 0.0, 0.0, 0.0};
+};
+
+struct Camera {
+  std::string name;
+  CameraIntrinsics intrinsics;
+  Rigid3d cam_from_world;
+
+  // The pixel where a world point appears, or nothing when it is behind the camera (z <= 1 mm).
+  // Does not check the image bounds (see in_image).
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_world) const;
+  // The same with the 2x3 Jacobian d(pixel)/d(p_world), for refinement and error bounds.
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_world, Eigen::Matrix<double, 2, 3>& jacobian) const;
+  bool in_image(const Eigen::Vector2d& pixel) const;
+
+  // Distorted pixel -> undistorted normalised image coordinates (x/z, y/z), by OpenCV's iterative
+  // inversion of the distortion model.
+  Eigen::Vector2d undistort(const Eigen::Vector2d& pixel) const;
+  // The ray through a pixel: origin (the camera centre) and unit direction, both in world coordinates.
+  Eigen::Vector3d centre_world() const;
+  Eigen::Vector3d ray_world(const Eigen::Vector2d& pixel) const;
+};
+
+// Normalised undistorted image coordinates -> distorted normalised coordinates (OpenCV's model).
+Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy);
+
+struct CameraRig {
+  std::string name;
+  std::vector<Camera> cameras;
+};
+
+// A camera at `position` looking at `target`, with world +Y as "up" in the image (OpenCV frame:
+// image y points away from world up). Precondition: target != position, and not straight up/down.
+Rigid3d cam_from_world_look_at(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
+
+}  // namespace rhot

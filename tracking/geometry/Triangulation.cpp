@@ -1,0 +1,86 @@
+#include "tracking/geometry/Triangulation.h"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+namespace rhot {
+
+std::optional<Eigen::Vector3d> triangulate_linear(const CameraRig& rig, std::span<const Observation> observations) {
+  if (observations.size() < 2) return std::nullopt;
+  // Each observation (x, y) of P = [R | t] gives x P3 - P1 = 0 and y P3 - P2 = 0 on the
+  // homogeneous point. Accumulate A^T A (4x4) and take its smallest eigenvector.
+  Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
+  for (const Observation& o : observations) {
+    const Camera& c = rig.cameras[static_cast<std::size_t>(o.camera)];
+    const Eigen::Vector2d xy = c.undistort(o.pixel);
+    Eigen::Matrix<double, 3, 4> p;
+    p.leftCols<3>() = c.cam_from_world.rotation.toRotationMatrix();
+    p.col(3) = c.cam_from_world.translation;
+    const Eigen::RowVector4d r1 = xy.x() * p.row(2) - p.row(0);
+    const Eigen::RowVector4d r2 = xy.y() * p.row(2) - p.row(1);
+    // Rows normalised so every camera weighs alike whatever its distance.
+    ata += r1.transpose() * r1 / r1.squaredNorm() + r2.transpose() * r2 / r2.squaredNorm();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> solver(ata);
+  const Eigen::Vector4d h = solver.eigenvectors().col(0);
+  // Degenerate: the two smallest eigenvalues are (nearly) equal, or the point is at infinity.
+  if (solver.eigenvalues()(1) < 1e-12 * solver.eigenvalues()(3) || std::abs(h.w()) < 1e-12) return std::nullopt;
+  const Eigen::Vector3d x = h.head<3>() / h.w();
+  for (const Observation& o : observations) {
+    if (!((rig.cameras[static_cast<std::size_t>(o.camera)].cam_from_world * x).z() > 0.0)) return std::nullopt;
+  }
+  return x;
+}
+
+std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations,
+                                             int max_iterations) {
+  const auto linear = triangulate_linear(rig, observations);
+  if (!linear) return std::nullopt;
+  TriangulatedPoint out;
+  out.position_world = *linear;
+  Eigen::Matrix<double, 2, 3> j;
+  for (int it = 0; it < max_iterations; ++it) {
+    Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d jtr = Eigen::Vector3d::Zero();
+    for (const Observation& o : observations) {
+      const auto pixel = rig.cameras[static_cast<std::size_t>(o.camera)].project(out.position_world, j);
+      if (!pixel) return std::nullopt;
+      const Eigen::Vector2d r = o.pixel - *pixel;
+      jtj += j.transpose() * j;
+      jtr += j.transpose() * r;
+    }
+    const Eigen::Vector3d step = jtj.ldlt().solve(jtr);
+    if (!step.allFinite()) break;
+    out.position_world += step;
+    if (step.norm() < 1e-9) break;
+  }
+  double sum = 0.0;
+  for (const Observation& o : observations) {
+    const auto pixel = rig.cameras[static_cast<std::size_t>(o.camera)].project(out.position_world);
+    if (!pixel) return std::nullopt;
+    sum += (o.pixel - *pixel).squaredNorm();
+    out.cameras.push_back(o.camera);
+  }
+  out.reprojection_rms_px = std::sqrt(sum / static_cast<double>(observations.size()));
+  if (!out.position_world.allFinite()) return std::nullopt;
+  return out;
+}
+
+std::optional<Eigen::Matrix3d> crlb_covariance(const CameraRig& rig, const Eigen::Vector3d& p_world,
+                                               std::span<const int> cameras, double sigma_px) {
+  if (cameras.size() < 2) return std::nullopt;
+  Eigen::Matrix3d fisher = Eigen::Matrix3d::Zero();
+  Eigen::Matrix<double, 2, 3> j;
+  for (const int c : cameras) {
+    if (!rig.cameras[static_cast<std::size_t>(c)].project(p_world, j)) return std::nullopt;
+    fisher += j.transpose() * j;
+  }
+  fisher /= sigma_px * sigma_px;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(fisher);
+  if (solver.eigenvalues()(0) <= 1e-12 * solver.eigenvalues()(2)) return std::nullopt;
+  return fisher.inverse();
+}
+
+}  // namespace rhot

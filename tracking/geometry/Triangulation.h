@@ -1,0 +1,44 @@
+#pragma once
+// Triangulating a marker from the cameras that see it: a linear estimate over all of them (DLT
+// on undistorted coordinates), refined by Gauss-Newton on the reprojection error in pixels, which
+// is the maximum-likelihood estimate under Gaussian pixel noise. And the Cramer-Rao lower bound
+// on that estimate's error, the physical limit a rig and a noise level allow.
+
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "tracking/camera/Camera.h"
+
+namespace rhot {
+
+struct Observation {
+  int camera = 0;              // index into the rig
+  Eigen::Vector2d pixel{0, 0};  // distorted pixel coordinates as detected
+};
+
+struct TriangulatedPoint {
+  Eigen::Vector3d position_world{0, 0, 0};
+  double reprojection_rms_px = 0.0;
+  std::vector<int> cameras;  // which cameras saw it
+};
+
+// Linear (DLT) estimate from two or more observations, or nothing when the rays are degenerate
+// (fewer than two cameras, parallel rays) or the point lands behind a camera.
+std::optional<Eigen::Vector3d> triangulate_linear(const CameraRig& rig, std::span<const Observation> observations);
+
+// Linear estimate refined by Gauss-Newton on the pixel reprojection error (at most
+// `max_iterations` steps; stops when a step is below 1e-9 m).
+std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations,
+                                             int max_iterations = 10);
+
+// Covariance lower bound (m^2) of any unbiased estimate of a point seen by `cameras` with
+// independent Gaussian pixel noise of sigma_px per axis: the inverse Fisher information
+// sigma^2 (sum J_i^T J_i)^-1 from the projection Jacobians. Nothing if the cameras cannot fix the
+// point (fewer than two, or all on one ray).
+std::optional<Eigen::Matrix3d> crlb_covariance(const CameraRig& rig, const Eigen::Vector3d& p_world,
+                                               std::span<const int> cameras, double sigma_px);
+
+}  // namespace rhot
