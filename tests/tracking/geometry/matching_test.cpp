@@ -1,0 +1,162 @@
+#include "tracking/geometry/Matching.h"
+
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "tracking/camera/RigFile.h"
+#include "tracking/source/SimulatedRig.h"
+
+namespace rhot {
+namespace {
+
+CameraRig rig(const char* name) {
+  auto r = load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / name);
+  EXPECT_TRUE(r.has_value()) << (r ? "" : r.error());
+  return r.value_or(CameraRig{});
+}
+
+struct Score {
+  int findable = 0;  // markers detected by at least two cameras in this frame
+  int found = 0;   // markers recovered by a point whose detections are all that marker's
+  int wrong = 0;   // points mixing markers, or ghosts
+  double max_error_m = 0.0;
+};
+
+Score score(const RigFrame& frame, const std::vector<MatchedPoint>& points) {
+  Score s;
+  std::vector<int> cameras_seeing(frame.truth_position_m.size(), 0);
+  for (const CameraFrame& cf : frame.cameras) {
+    for (const Detection& d : cf.detections) ++cameras_seeing[static_cast<std::size_t>(d.truth_marker)];
+  }
+  for (const int n : cameras_seeing) s.findable += n >= 2 ? 1 : 0;
+  for (const MatchedPoint& p : points) {
+    int marker = -2;
+    bool consistent = true;
+    for (std::size_t k = 0; k < p.observations.size(); ++k) {
+      const int truth = frame.cameras[static_cast<std::size_t>(p.observations[k].camera)]
+                            .detections[static_cast<std::size_t>(p.detection[k])]
+                            .truth_marker;
+      if (marker == -2) marker = truth;
+      consistent = consistent && truth == marker;
+    }
+    if (!consistent) {
+      ++s.wrong;
+      continue;
+    }
+    ++s.found;
+    s.max_error_m = std::max(s.max_error_m, (p.point.position_world - frame.truth_position_m[static_cast<std::size_t>(marker)]).norm());
+  }
+  return s;
+}
+
+TEST(Matching, NoiselessHundredMarkersAreAllRecoveredExactly) {
+  SimulatedRigSettings s;
+  s.sigma_px = 0.0;
+  SimulatedRig sim(rig("seated-4.yaml"), random_trajectories(100, {-0.4, 0.8, -0.85}, {0.4, 1.4, -0.05}, 11), s);
+  for (int f = 0; f < 3; ++f) {
+    const RigFrame frame = sim.next();
+    const auto points = match_and_triangulate(sim.rig(), frame);
+    const Score sc = score(frame, points);
+    EXPECT_EQ(sc.wrong, 0);
+    EXPECT_EQ(sc.found, 100);
+    EXPECT_LT(sc.max_error_m, 1e-6);
+  }
+}
+
+TEST(Matching, RoomRigWithNoiseAndDropoutsFindsNearlyAllAndNoGhosts) {
+  SimulatedRigSettings s;
+  s.sigma_px = 0.3;
+  s.dropout = 0.1;
+  s.seed = 3;
+  SimulatedRig sim(rig("room-8.yaml"), random_trajectories(100, {-1.5, 0.2, -1.5}, {1.5, 1.9, 1.5}, 5), s);
+  int findable = 0;
+  int found = 0;
+  int wrong = 0;
+  for (int f = 0; f < 5; ++f) {
+    const RigFrame frame = sim.next();
+    const Score sc = score(frame, match_and_triangulate(sim.rig(), frame));
+    findable += sc.findable;
+    found += sc.found;
+    wrong += sc.wrong;
+    EXPECT_LT(sc.max_error_m, 0.005);
+  }
+  std::printf("room-8, 10%% dropout: %d of %d findable marker-frames found (%d in all), %d wrong\n", found, findable, 500, wrong);
+  EXPECT_GE(found, findable * 99 / 100);
+  EXPECT_EQ(wrong, 0);
+}
+
+// A marker near the room's edge that only two of the eight cameras can see is still found.
+TEST(Matching, MarkerSeenByTwoOfEightCamerasIsFound) {
+  const CameraRig r = rig("room-8.yaml");
+  SimulatedRig probe(r, {}, {});
+  Eigen::Vector3d two_view{0, 0, 0};
+  bool found_place = false;
+  for (double x = -2.0; x <= 2.0 && !found_place; x += 0.05) {
+    for (double z = -2.0; z <= 2.0 && !found_place; z += 0.05) {
+      for (double y = 0.1; y <= 2.2 && !found_place; y += 0.1) {
+        int seen = 0;
+        for (int c = 0; c < 8; ++c) seen += probe.visible(c, {x, y, z}) ? 1 : 0;
+        if (seen == 2) {
+          two_view = {x, y, z};
+          found_place = true;
+        }
+      }
+    }
+  }
+  ASSERT_TRUE(found_place) << "no place in the room is seen by exactly two cameras";
+  Trajectory lonely;
+  lonely.centre_m = two_view;
+  std::vector<Trajectory> markers = random_trajectories(30, {-1.0, 0.5, -1.0}, {1.0, 1.5, 1.0}, 9);
+  markers.push_back(lonely);
+  SimulatedRigSettings s;
+  s.sigma_px = 0.3;
+  SimulatedRig sim(r, markers, s);
+  const RigFrame frame = sim.next();
+  const auto points = match_and_triangulate(r, frame);
+  const Score sc = score(frame, points);
+  EXPECT_EQ(sc.wrong, 0);
+  bool lonely_found = false;
+  for (const MatchedPoint& p : points) {
+    if ((p.point.position_world - two_view).norm() < 0.01) {
+      lonely_found = true;
+      EXPECT_EQ(p.observations.size(), 2u);
+    }
+  }
+  EXPECT_TRUE(lonely_found) << "marker at " << two_view.transpose();
+}
+
+// Two markers on one epipolar plane of cameras 0 and 1: those two cameras alone also allow two
+// ghost points (each marker's detection paired with the other's). The other cameras refute them.
+TEST(Matching, CoincidentalEpipolarGhostsAreRejected) {
+  const CameraRig r = rig("seated-4.yaml");
+  const Eigen::Vector3d c0 = r.cameras[0].centre_world();
+  const Eigen::Vector3d c1 = r.cameras[1].centre_world();
+  const Eigen::Vector3d a(-0.1, 1.0, -0.4);
+  // b = a + u (c1 - c0) + v (a - c0) lies in the plane through both camera centres and a, so
+  // a and b share epipolar lines in cameras 0 and 1.
+  Trajectory ta, tb;
+  ta.centre_m = a;
+  tb.centre_m = a + 0.25 * (c1 - c0).normalized() + 0.15 * (a - c0).normalized();
+  SimulatedRigSettings s;
+  s.sigma_px = 0.0;
+  SimulatedRig sim(r, {ta, tb}, s);
+  const RigFrame frame = sim.next();
+  // Check the setup: in cameras 0 and 1 the swapped pairs satisfy the epipolar constraint.
+  const Rigid3d one_from_zero = r.cameras[1].cam_from_world * r.cameras[0].cam_from_world.inverse();
+  const Eigen::Vector3d pa0 = (r.cameras[0].cam_from_world * ta.centre_m).normalized();
+  const Eigen::Vector3d pb1 = (r.cameras[1].cam_from_world * tb.centre_m).normalized();
+  const Eigen::Matrix3d t_x = (Eigen::Matrix3d() << 0, -one_from_zero.translation.z(), one_from_zero.translation.y(),
+                               one_from_zero.translation.z(), 0, -one_from_zero.translation.x(), -one_from_zero.translation.y(),
+                               one_from_zero.translation.x(), 0)
+                                  .finished();
+  ASSERT_LT(std::abs(pb1.dot(t_x * one_from_zero.rotation.toRotationMatrix() * pa0)), 1e-9) << "setup: a and b share an epipolar plane";
+  const auto points = match_and_triangulate(r, frame);
+  const Score sc = score(frame, points);
+  EXPECT_EQ(sc.wrong, 0);
+  EXPECT_EQ(sc.found, 2);
+  EXPECT_EQ(points.size(), 2u);
+}
+
+}  // namespace
+}  // namespace rhot

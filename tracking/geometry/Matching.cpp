@@ -1,0 +1,242 @@
+#include "tracking/geometry/Matching.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include <Eigen/Geometry>
+#include <opencv2/calib3d.hpp>
+
+#include "tracking/core/Check.h"
+
+namespace rhot {
+
+namespace {
+
+// Detections of one camera: pixels, undistorted normalised coordinates, and a coarse grid over
+// the image for nearest-detection lookups.
+struct CameraDetections {
+  std::vector<Eigen::Vector2d> pixel;
+  std::vector<Eigen::Vector2d> normalised;
+  double cell_px = 16.0;
+  int cols = 0;
+  int rows = 0;
+  std::vector<std::vector<int>> grid;
+
+  void build(const Camera& camera, const CameraFrame& frame) {
+    for (const Detection& d : frame.detections) pixel.push_back(d.pixel);
+    normalised.resize(pixel.size());
+    if (!pixel.empty()) {
+      std::vector<cv::Point2d> in;
+      in.reserve(pixel.size());
+      for (const Eigen::Vector2d& p : pixel) in.emplace_back(p.x(), p.y());
+      std::vector<cv::Point2d> out;
+      const CameraIntrinsics& k = camera.intrinsics;
+      cv::undistortPoints(in, out, cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1),
+                          cv::Vec<double, 5>(k.distortion.data()), cv::noArray(), cv::noArray(),
+                          cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 1e-12));
+      for (std::size_t i = 0; i < out.size(); ++i) normalised[i] = {out[i].x, out[i].y};
+    }
+    cols = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.width_px / cell_px)) + 1);
+    rows = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.height_px / cell_px)) + 1);
+    grid.assign(static_cast<std::size_t>(cols * rows), {});
+    for (std::size_t i = 0; i < pixel.size(); ++i) {
+      if (const int c = cell(pixel[i]); c >= 0) grid[static_cast<std::size_t>(c)].push_back(static_cast<int>(i));
+    }
+  }
+  int cell(const Eigen::Vector2d& p) const {
+    const int x = static_cast<int>(std::floor((p.x() + 0.5) / cell_px));
+    const int y = static_cast<int>(std::floor((p.y() + 0.5) / cell_px));
+    return (x < 0 || y < 0 || x >= cols || y >= rows) ? -1 : y * cols + x;
+  }
+  // Nearest detection within `radius` (<= cell_px) of p, or -1.
+  int nearest(const Eigen::Vector2d& p, double radius) const {
+    const int cx = static_cast<int>(std::floor((p.x() + 0.5) / cell_px));
+    const int cy = static_cast<int>(std::floor((p.y() + 0.5) / cell_px));
+    int best = -1;
+    double best_d2 = radius * radius;
+    for (int y = cy - 1; y <= cy + 1; ++y) {
+      for (int x = cx - 1; x <= cx + 1; ++x) {
+        if (x < 0 || y < 0 || x >= cols || y >= rows) continue;
+        for (const int i : grid[static_cast<std::size_t>(y * cols + x)]) {
+          const double d2 = (pixel[static_cast<std::size_t>(i)] - p).squaredNorm();
+          if (d2 <= best_d2) {
+            best_d2 = d2;
+            best = i;
+          }
+        }
+      }
+    }
+    return best;
+  }
+};
+
+struct Cluster {
+  std::vector<int> detection;  // per camera, -1 where none
+  int support = 0;
+  int missing = 0;
+  TriangulatedPoint point;
+  std::vector<Observation> observations;
+};
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+}  // namespace
+
+std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings) {
+  const std::size_t n = rig.cameras.size();
+  RHOT_PRECONDITION(frame.cameras.size() == n, "match_and_triangulate: one CameraFrame per camera of the rig");
+  std::vector<CameraDetections> cams(n);
+  for (std::size_t c = 0; c < n; ++c) {
+    RHOT_PRECONDITION(frame.cameras[c].camera == static_cast<int>(c), "match_and_triangulate: cameras in rig order");
+    cams[c].build(rig.cameras[c], frame.cameras[c]);
+  }
+
+  // membership[c][d]: clusters containing detection d of camera c (to skip redundant seeds).
+  std::vector<std::vector<std::vector<int>>> membership(n);
+  for (std::size_t c = 0; c < n; ++c) membership[c].resize(cams[c].pixel.size());
+  std::vector<Cluster> clusters;
+
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = i + 1; j < n; ++j) {
+      if (cams[i].pixel.empty() || cams[j].pixel.empty()) continue;
+      // cam_j_from_cam_i = R t; essential matrix E = [t]x R maps x_i to the epipolar line in j.
+      const Rigid3d j_from_i = rig.cameras[j].cam_from_world * rig.cameras[i].cam_from_world.inverse();
+      const Eigen::Matrix3d e = skew(j_from_i.translation) * j_from_i.rotation.toRotationMatrix();
+      const double fj = 0.5 * (rig.cameras[j].intrinsics.fx + rig.cameras[j].intrinsics.fy);
+      for (std::size_t a = 0; a < cams[i].pixel.size(); ++a) {
+        const Eigen::Vector3d line = e * cams[i].normalised[a].homogeneous();
+        const double scale = fj / line.head<2>().norm();
+        for (std::size_t b = 0; b < cams[j].pixel.size(); ++b) {
+          if (std::abs(line.dot(cams[j].normalised[b].homogeneous())) * scale > settings.epipolar_tolerance_px) continue;
+          // Skip a seed already explained by one cluster.
+          bool explained = false;
+          for (const int k : membership[i][a]) {
+            if (clusters[static_cast<std::size_t>(k)].detection[j] == static_cast<int>(b)) explained = true;
+          }
+          if (explained) continue;
+          const std::array<Observation, 2> seed{Observation{static_cast<int>(i), cams[i].pixel[a]},
+                                                Observation{static_cast<int>(j), cams[j].pixel[b]}};
+          const auto x = triangulate_linear(rig, seed);
+          if (!x) continue;
+          Cluster cl;
+          cl.detection.assign(n, -1);
+          cl.detection[i] = static_cast<int>(a);
+          cl.detection[j] = static_cast<int>(b);
+          for (std::size_t k = 0; k < n; ++k) {
+            if (k == i || k == j) continue;
+            const auto p = rig.cameras[k].project(*x);
+            if (!p || !rig.cameras[k].in_image(*p)) continue;
+            cl.detection[k] = cams[k].nearest(*p, settings.reprojection_tolerance_px);
+          }
+          const int index = static_cast<int>(clusters.size());
+          for (std::size_t k = 0; k < n; ++k) {
+            if (cl.detection[k] >= 0) membership[k][static_cast<std::size_t>(cl.detection[k])].push_back(index);
+          }
+          clusters.push_back(std::move(cl));
+        }
+      }
+    }
+  }
+
+  // Refine every cluster, count its support and the cameras that should have seen it.
+  for (Cluster& cl : clusters) {
+    for (std::size_t k = 0; k < n; ++k) {
+      if (cl.detection[k] >= 0) cl.observations.push_back({static_cast<int>(k), cams[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
+    }
+    cl.support = static_cast<int>(cl.observations.size());
+    const auto t = triangulate(rig, cl.observations, 5);
+    if (!t) {
+      cl.support = 0;
+      continue;
+    }
+    cl.point = *t;
+    // A two-view seed predicts the other cameras only roughly; with the refined point, look again
+    // for detections the first pass missed.
+    bool grew = false;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (cl.detection[k] >= 0) continue;
+      const auto p = rig.cameras[k].project(cl.point.position_world);
+      if (!p || !rig.cameras[k].in_image(*p)) continue;
+      const int d = cams[k].nearest(*p, settings.reprojection_tolerance_px);
+      if (d < 0) continue;
+      cl.detection[k] = d;
+      cl.observations.push_back({static_cast<int>(k), cams[k].pixel[static_cast<std::size_t>(d)]});
+      grew = true;
+    }
+    if (grew) {
+      std::sort(cl.observations.begin(), cl.observations.end(),
+                [](const Observation& a, const Observation& b) { return a.camera < b.camera; });
+      if (const auto again = triangulate(rig, cl.observations, 5)) cl.point = *again;
+    }
+    // Drop, one at a time, observations that disagree with the others: a neighbouring marker's
+    // detection picked up while growing.
+    for (;;) {
+      double worst = 0.0;
+      std::size_t worst_at = 0;
+      for (std::size_t o = 0; o < cl.observations.size(); ++o) {
+        const auto p = rig.cameras[static_cast<std::size_t>(cl.observations[o].camera)].project(cl.point.position_world);
+        const double r = p ? (cl.observations[o].pixel - *p).norm() : 1e9;
+        if (r > worst) {
+          worst = r;
+          worst_at = o;
+        }
+      }
+      if (worst <= settings.max_residual_px) break;
+      if (cl.observations.size() <= 2) {
+        cl.observations.clear();
+        break;
+      }
+      cl.detection[static_cast<std::size_t>(cl.observations[worst_at].camera)] = -1;
+      cl.observations.erase(cl.observations.begin() + static_cast<std::ptrdiff_t>(worst_at));
+      const auto again = triangulate(rig, cl.observations, 5);
+      if (!again) {
+        cl.observations.clear();
+        break;
+      }
+      cl.point = *again;
+    }
+    cl.support = static_cast<int>(cl.observations.size());
+    if (cl.support < 2) continue;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (cl.detection[k] >= 0) continue;
+      const auto p = rig.cameras[k].project(cl.point.position_world);
+      if (p && rig.cameras[k].in_image(*p)) ++cl.missing;
+    }
+  }
+  std::vector<std::size_t> order(clusters.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (clusters[a].support != clusters[b].support) return clusters[a].support > clusters[b].support;
+    return clusters[a].point.reprojection_rms_px < clusters[b].point.reprojection_rms_px;
+  });
+
+  std::vector<std::vector<bool>> used(n);
+  for (std::size_t c = 0; c < n; ++c) used[c].assign(cams[c].pixel.size(), false);
+  std::vector<MatchedPoint> out;
+  for (const std::size_t k : order) {
+    const Cluster& cl = clusters[k];
+    if (cl.support < 2 || cl.point.reprojection_rms_px > settings.max_rms_px || cl.missing > cl.support) continue;
+    bool free = true;
+    for (std::size_t c = 0; c < n; ++c) {
+      if (cl.detection[c] >= 0 && used[c][static_cast<std::size_t>(cl.detection[c])]) free = false;
+    }
+    if (!free) continue;
+    MatchedPoint m;
+    m.point = cl.point;
+    m.observations = cl.observations;
+    for (std::size_t c = 0; c < n; ++c) {
+      if (cl.detection[c] < 0) continue;
+      used[c][static_cast<std::size_t>(cl.detection[c])] = true;
+      m.detection.push_back(cl.detection[c]);
+    }
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+}  // namespace rhot

@@ -1,0 +1,45 @@
+#pragma once
+// Multi-camera correspondence: which detections in different cameras are the same marker.
+//
+// 1. Every detection is undistorted to normalised image coordinates.
+// 2. Seeds: for every pair of cameras, detection pairs that satisfy the epipolar constraint
+//    within `epipolar_tolerance_px` (measured in the second camera's pixels).
+// 3. Each seed is triangulated and grown: every other camera contributes its detection nearest
+//    the point's reprojection, if within `reprojection_tolerance_px`. Seeds whose two detections
+//    already belong to one grown cluster are skipped.
+// 4. Clusters are refined (Gauss-Newton), grown again from the refined point, and pruned of
+//    observations whose residual exceeds `max_residual_px` (worst first); then accepted greedily, best supported first, each
+//    detection used once, so a ghost built from detections that better-supported points explain
+//    is never accepted. A cluster is also refused when more cameras that should see its point (in
+//    front, inside the image) have no detection there than cameras that do, or when its
+//    reprojection RMS exceeds `max_rms_px`.
+//
+// Markers seen by only two of many cameras are still found when the others cannot see them (out
+// of view). A marker hidden by occlusion from most cameras that could see it is refused like a
+// ghost: the rule cannot tell the two apart.
+
+#include <vector>
+
+#include "tracking/camera/Camera.h"
+#include "tracking/geometry/Triangulation.h"
+#include "tracking/source/Frames.h"
+
+namespace rhot {
+
+struct MatchSettings {
+  double epipolar_tolerance_px = 2.0;
+  double reprojection_tolerance_px = 2.5;
+  double max_rms_px = 1.5;
+  double max_residual_px = 1.5;  // an observation further than this from its point's reprojection is dropped
+};
+
+struct MatchedPoint {
+  TriangulatedPoint point;
+  std::vector<Observation> observations;
+  std::vector<int> detection;  // per observation: its index in that camera's detections
+};
+
+// Precondition: frame.cameras[i].camera == i for every camera of the rig.
+std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings = {});
+
+}  // namespace rhot

@@ -1,0 +1,31 @@
+#pragma once
+// What a frame source delivers: per camera, the 2D marker detections of one exposure with its
+// timestamp. Sources with ground truth (the simulated rig) also give each detection's true marker
+// and every marker's true position, for evaluation only: the tracker never reads them.
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace rhot {
+
+struct Detection {
+  Eigen::Vector2d pixel{0, 0};  // distorted pixel coordinates, sub-pixel
+  int truth_marker = -1;        // ground truth (simulation only), -1 when unknown
+};
+
+struct CameraFrame {
+  int camera = 0;            // index into the rig
+  double timestamp_s = 0.0;  // mid-exposure, on the source's clock
+  std::vector<Detection> detections;  // in no particular order
+};
+
+struct RigFrame {
+  std::uint64_t index = 0;
+  double time_s = 0.0;
+  std::vector<CameraFrame> cameras;                // one per camera in the rig
+  std::vector<Eigen::Vector3d> truth_position_m;   // per marker (simulation only)
+};
+
+}  // namespace rhot

@@ -1,0 +1,123 @@
+#include "tracking/source/SimulatedRig.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "tracking/core/Check.h"
+
+namespace rhot {
+
+namespace {
+
+// Smallest distance between segments [p0, p1] and [q0, q1].
+double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0,
+                        const Eigen::Vector3d& q1) {
+  const Eigen::Vector3d d1 = p1 - p0;
+  const Eigen::Vector3d d2 = q1 - q0;
+  const Eigen::Vector3d r = p0 - q0;
+  const double a = d1.squaredNorm();
+  const double e = d2.squaredNorm();
+  const double f = d2.dot(r);
+  double s = 0.0;
+  double t = 0.0;
+  if (a <= 1e-18 && e <= 1e-18) return r.norm();
+  if (a <= 1e-18) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= 1e-18) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2);
+      const double denom = a * e - b * b;
+      s = denom > 1e-18 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  return ((p0 + d1 * s) - (q0 + d2 * t)).norm();
+}
+
+}  // namespace
+
+Eigen::Vector3d Trajectory::at(double t_s) const {
+  Eigen::Vector3d p = centre_m;
+  for (int i = 0; i < 3; ++i) p(i) += amplitude_m(i) * std::sin(2.0 * std::numbers::pi * frequency_hz(i) * t_s + phase_rad(i));
+  return p;
+}
+
+SimulatedRig::SimulatedRig(CameraRig rig, std::vector<Trajectory> markers, SimulatedRigSettings settings)
+    : rig_(std::move(rig)), markers_(std::move(markers)), settings_(settings), rng_(settings.seed) {
+  RHOT_PRECONDITION(settings.sigma_px >= 0.0 && settings.dropout >= 0.0 && settings.dropout <= 1.0 && settings.rate_hz > 0.0,
+                    "SimulatedRig: sigma >= 0, dropout in [0, 1], rate > 0");
+}
+
+bool SimulatedRig::visible(int camera, const Eigen::Vector3d& p_world) const {
+  const Camera& c = rig_.cameras[static_cast<std::size_t>(camera)];
+  const auto pixel = c.project(p_world);
+  if (!pixel || !c.in_image(*pixel)) return false;
+  // The line of sight stops 1 mm short of the marker, so the surface a marker sits on does not
+  // hide it from cameras on its own side.
+  const Eigen::Vector3d from = c.centre_world();
+  const Eigen::Vector3d to = p_world + (from - p_world).normalized() * 1e-3;
+  for (const Occluder& o : occluders_) {
+    if (segment_distance(from, to, o.a_m, o.b_m) < o.radius_m) return false;
+  }
+  return true;
+}
+
+RigFrame SimulatedRig::next() {
+  RigFrame frame;
+  frame.index = frame_++;
+  frame.time_s = static_cast<double>(frame.index) / settings_.rate_hz;
+  std::normal_distribution<double> noise(0.0, settings_.sigma_px);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (const Trajectory& m : markers_) frame.truth_position_m.push_back(m.at(frame.time_s));
+  for (std::size_t c = 0; c < rig_.cameras.size(); ++c) {
+    CameraFrame cf;
+    cf.camera = static_cast<int>(c);
+    cf.timestamp_s = frame.time_s + static_cast<double>(c) * settings_.camera_skew_s;
+    for (std::size_t m = 0; m < markers_.size(); ++m) {
+      // Unsynchronised cameras see the marker where it is at their own exposure time.
+      const Eigen::Vector3d p = settings_.camera_skew_s == 0.0 ? frame.truth_position_m[m] : markers_[m].at(cf.timestamp_s);
+      // Draw the random numbers whatever happens, so one marker's visibility does not shift the
+      // noise of every other: frames stay comparable across settings.
+      const double drop = uniform(rng_);
+      const Eigen::Vector2d n(noise(rng_), noise(rng_));
+      if (!visible(static_cast<int>(c), p) || drop < settings_.dropout) continue;
+      cf.detections.push_back({*rig_.cameras[c].project(p) + n, static_cast<int>(m)});
+    }
+    std::shuffle(cf.detections.begin(), cf.detections.end(), rng_);
+    frame.cameras.push_back(std::move(cf));
+  }
+  return frame;
+}
+
+std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m,
+                                            unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Trajectory> out;
+  const Eigen::Vector3d size = box_max_m - box_min_m;
+  for (int i = 0; i < count; ++i) {
+    Trajectory t;
+    for (int a = 0; a < 3; ++a) {
+      t.amplitude_m(a) = 0.25 * size(a) * unit(rng);
+      // Keep the whole path inside the box.
+      t.centre_m(a) = box_min_m(a) + t.amplitude_m(a) + (size(a) - 2.0 * t.amplitude_m(a)) * unit(rng);
+      t.frequency_hz(a) = 0.1 + 0.4 * unit(rng);
+      t.phase_rad(a) = 2.0 * std::numbers::pi * unit(rng);
+    }
+    out.push_back(t);
+  }
+  return out;
+}
+
+}  // namespace rhot

@@ -1,0 +1,72 @@
+#pragma once
+// The built-in frame source: markers moving along scripted trajectories, seen by a rig of
+// simulated cameras with Gaussian pixel noise, sensor bounds, per-camera dropout, occlusion by
+// spheres and capsules, and per-camera timestamps. Seeded and deterministic: the same settings
+// and seed give the same frames. Ground truth stays in every frame for evaluation.
+
+#include <random>
+#include <vector>
+
+#include "tracking/camera/Camera.h"
+#include "tracking/source/Frames.h"
+
+namespace rhot {
+
+// A marker's path: centre + amplitude * sin(2 pi frequency t + phase), per axis. Amplitude 0 is
+// a fixed marker; equal x/z frequencies with a quarter-period phase shift give a circle.
+struct Trajectory {
+  Eigen::Vector3d centre_m{0, 0, 0};
+  Eigen::Vector3d amplitude_m{0, 0, 0};
+  Eigen::Vector3d frequency_hz{0, 0, 0};
+  Eigen::Vector3d phase_rad{0, 0, 0};
+
+  Eigen::Vector3d at(double t_s) const;
+};
+
+// Something that hides markers behind it: a sphere (a == b) or a capsule from a to b.
+struct Occluder {
+  Eigen::Vector3d a_m{0, 0, 0};
+  Eigen::Vector3d b_m{0, 0, 0};
+  double radius_m = 0.0;
+};
+
+struct SimulatedRigSettings {
+  double sigma_px = 0.3;        // Gaussian pixel noise per axis
+  double dropout = 0.0;         // probability that a camera misses a visible marker in a frame
+  double rate_hz = 90.0;        // frames per second
+  double camera_skew_s = 0.0;   // camera i's exposure is offset by i * camera_skew_s (unsynchronised cameras)
+  unsigned seed = 1;
+};
+
+class SimulatedRig {
+ public:
+  // Precondition: settings are sane (sigma >= 0, dropout in [0, 1], rate > 0).
+  SimulatedRig(CameraRig rig, std::vector<Trajectory> markers, SimulatedRigSettings settings = {});
+
+  // Occluders for the following frames (for example a hand's bones).
+  void set_occluders(std::vector<Occluder> occluders) { occluders_ = std::move(occluders); }
+
+  // The next frame: each camera's detections of the markers it sees, shuffled.
+  RigFrame next();
+
+  const CameraRig& rig() const { return rig_; }
+  const std::vector<Trajectory>& markers() const { return markers_; }
+
+  // Whether a camera sees a world point: in front, inside the image, and not behind an occluder.
+  bool visible(int camera, const Eigen::Vector3d& p_world) const;
+
+ private:
+  CameraRig rig_;
+  std::vector<Trajectory> markers_;
+  SimulatedRigSettings settings_;
+  std::vector<Occluder> occluders_;
+  std::mt19937_64 rng_;
+  std::uint64_t frame_ = 0;
+};
+
+// `count` markers wandering smoothly through an axis-aligned box (random centres, amplitudes up
+// to a quarter of the box, frequencies 0.1 to 0.5 Hz), from a seed.
+std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m,
+                                            unsigned seed);
+
+}  // namespace rhot
