@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -80,7 +81,9 @@ TEST(RigFile, SaveThenLoadIsExactAndOpenCvCanReadIt) {
 // Writes the seated rig with one substitution applied to its text.
 std::string error_after(const std::string& pattern, const std::string& replacement) {
   std::ifstream in(rig_asset("seated-4.yaml"));
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
   const std::string changed = std::regex_replace(text, std::regex(pattern), replacement, std::regex_constants::format_first_only);
   EXPECT_NE(changed, text) << "pattern " << pattern << " did not match";
   const fs::path p = temp("bad.yaml");

@@ -1,0 +1,51 @@
+// Runs the real rhot-eval and checks its JSON.
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+struct EvalRun {
+  int exit_code = -1;
+  std::string out;
+};
+
+EvalRun run_eval(const std::string& args) {
+  const std::string command = std::string(RHOT_BINARY_DIR) + "/rhot-eval " + args + " 2>/dev/null";
+  EvalRun r;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return r;
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), static_cast<int>(buffer.size()), pipe) != nullptr) r.out += buffer.data();
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+TEST(EvalCli, TriangulationPrintsTheAccuracyJsonForEveryShippedRig) {
+  for (const char* rig : {"seated-4.yaml --volume-m 1 1 1", "room-8.yaml --volume-m 3 1.6 3",
+                          "stereo-2.yaml --volume-centre-m 0 1 -0.45 --volume-m 0.6 0.6 0.6"}) {
+    const EvalRun r = run_eval(std::string("triangulation --rig ") + RHOT_ASSET_DIR + "/rigs/" + rig + " --frames 3 --markers 30 --json");
+    ASSERT_EQ(r.exit_code, 0) << rig << "\n" << r.out;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    for (const char* key : {"rms_mm", "crlb_mm", "ratio", "found_fraction", "ghosts", "median_ms", "p99_ms"}) {
+      EXPECT_TRUE(j.contains(key)) << rig << " lacks " << key;
+    }
+    EXPECT_GT(j["crlb_mm"].get<double>(), 0.0) << rig;
+    EXPECT_GT(j["found_fraction"].get<double>(), 0.9) << rig;
+    EXPECT_LT(j["ratio"].get<double>(), 1.5) << rig;
+  }
+}
+
+TEST(EvalCli, BadRigIsReported) {
+  const EvalRun r = run_eval("triangulation --rig /nonexistent.yaml --json");
+  EXPECT_EQ(r.exit_code, 1);
+}
+
+}  // namespace

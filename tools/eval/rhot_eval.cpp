@@ -1,0 +1,166 @@
+// rhot-eval: measurements a user sizing a rig wants, as one JSON object on stdout.
+//
+//   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M]
+//                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//
+// Markers wander through a box of the given size centred where the cameras' optical axes meet
+// (least squares); the simulated rig sees them with Gaussian noise and dropouts; matching and
+// triangulation recover them; the result is compared with ground truth and with the Cramer-Rao
+// bound of each point for the cameras that saw it.
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "tracking/camera/RigFile.h"
+#include "tracking/geometry/Matching.h"
+#include "tracking/source/SimulatedRig.h"
+
+namespace {
+
+// The point nearest (least squares) to every camera's optical axis.
+Eigen::Vector3d axes_meeting_point(const rhot::CameraRig& rig) {
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const rhot::Camera& c : rig.cameras) {
+    const Eigen::Vector3d o = c.centre_world();
+    const Eigen::Vector3d d = c.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
+    a += p;
+    b += p * o;
+  }
+  return a.ldlt().solve(b);
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
+}
+
+int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
+                  const std::vector<double>& volume, const std::vector<double>& volume_centre) {
+  const auto rig = rhot::load_rig(rig_file);
+  if (!rig) {
+    std::cerr << "rhot-eval: " << rig.error() << "\n";
+    return 1;
+  }
+  if (rig->cameras.size() < 2) {
+    std::cerr << "rhot-eval: " << rig_file << ": triangulation needs at least two cameras\n";
+    return 1;
+  }
+  const Eigen::Vector3d centre = volume_centre.size() == 3 ? Eigen::Vector3d(volume_centre[0], volume_centre[1], volume_centre[2])
+                                                          : axes_meeting_point(*rig);
+  const Eigen::Vector3d half(volume[0] / 2, volume[1] / 2, volume[2] / 2);
+  rhot::SimulatedRigSettings settings;
+  settings.sigma_px = sigma;
+  settings.dropout = dropout;
+  settings.seed = seed;
+  rhot::SimulatedRig sim(*rig, rhot::random_trajectories(markers, centre - half, centre + half, seed + 1), settings);
+
+  double sum_error2 = 0.0;
+  double sum_bound2 = 0.0;
+  long points = 0;
+  long findable = 0;
+  long found = 0;
+  long ghosts = 0;
+  std::vector<double> ms;
+  for (int f = 0; f < frames; ++f) {
+    const rhot::RigFrame frame = sim.next();
+    const auto start = std::chrono::steady_clock::now();
+    const auto matched = rhot::match_and_triangulate(*rig, frame);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    std::vector<int> seen_by(frame.truth_position_m.size(), 0);
+    for (const rhot::CameraFrame& cf : frame.cameras) {
+      for (const rhot::Detection& d : cf.detections) ++seen_by[static_cast<std::size_t>(d.truth_marker)];
+    }
+    for (const int n : seen_by) findable += n >= 2 ? 1 : 0;
+    for (const rhot::MatchedPoint& m : matched) {
+      int marker = -2;
+      bool consistent = true;
+      for (std::size_t k = 0; k < m.observations.size(); ++k) {
+        const int t = frame.cameras[static_cast<std::size_t>(m.observations[k].camera)]
+                          .detections[static_cast<std::size_t>(m.detection[k])]
+                          .truth_marker;
+        if (marker == -2) marker = t;
+        consistent = consistent && t == marker;
+      }
+      if (!consistent) {
+        ++ghosts;
+        continue;
+      }
+      ++found;
+      const Eigen::Vector3d truth = frame.truth_position_m[static_cast<std::size_t>(marker)];
+      const auto cov = rhot::crlb_covariance(*rig, truth, m.point.cameras, sigma);
+      if (!cov) continue;
+      sum_error2 += (m.point.position_world - truth).squaredNorm();
+      sum_bound2 += cov->trace();
+      ++points;
+    }
+    if (frames >= 20 && (f + 1) % (frames / 10) == 0) std::cerr << "rhot-eval: frame " << f + 1 << " of " << frames << "\n";
+  }
+  const double rms_mm = points > 0 ? 1000.0 * std::sqrt(sum_error2 / static_cast<double>(points)) : 0.0;
+  const double crlb_mm = points > 0 ? 1000.0 * std::sqrt(sum_bound2 / static_cast<double>(points)) : 0.0;
+  nlohmann::json j;
+  j["rig"] = rig_file;
+  j["cameras"] = rig->cameras.size();
+  j["sigma_px"] = sigma;
+  j["dropout"] = dropout;
+  j["frames"] = frames;
+  j["markers"] = markers;
+  j["seed"] = seed;
+  j["volume_centre_m"] = {centre.x(), centre.y(), centre.z()};
+  j["volume_size_m"] = volume;
+  j["rms_mm"] = rms_mm;
+  j["crlb_mm"] = crlb_mm;
+  j["ratio"] = crlb_mm > 0.0 ? rms_mm / crlb_mm : 0.0;
+  j["found_fraction"] = findable > 0 ? static_cast<double>(found) / static_cast<double>(findable) : 0.0;
+  j["ghosts"] = ghosts;
+  j["median_ms"] = percentile(ms, 0.5);
+  j["p99_ms"] = percentile(ms, 0.99);
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rhot-eval: accuracy and speed of rhot's tracking on simulated data, as JSON"};
+  app.require_subcommand(1);
+  auto* tri = app.add_subcommand("triangulation", "matching and triangulation accuracy against the Cramer-Rao bound");
+  std::string rig_file;
+  double sigma = 0.3;
+  int frames = 100;
+  unsigned seed = 1;
+  int markers = 100;
+  double dropout = 0.0;
+  std::vector<double> volume{1.0, 1.0, 1.0};
+  std::vector<double> volume_centre;
+  bool json = false;
+  tri->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
+  tri->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
+  tri->add_option("--frames", frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
+  tri->add_option("--seed", seed, "random seed")->capture_default_str();
+  tri->add_option("--markers", markers, "markers in the volume")->capture_default_str()->check(CLI::Range(1, 10000));
+  tri->add_option("--dropout", dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  tri->add_option("--volume-m", volume, "size of the box the markers move in, X Y Z metres")
+      ->expected(3)
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  tri->add_option("--volume-centre-m", volume_centre,
+                  "centre of that box, X Y Z metres (default: where the optical axes meet, least squares)")
+      ->expected(3);
+  tri->add_flag("--json", json, "print JSON (the only output format)");
+  CLI11_PARSE(app, argc, argv);
+  if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
+  return 1;
+}
