@@ -73,6 +73,7 @@ struct CameraDetections {
 
 struct Cluster {
   std::vector<int> detection;  // per camera, -1 where none
+  Eigen::Vector3d seed_point{0, 0, 0};
   int support = 0;
   int missing = 0;
   TriangulatedPoint point;
@@ -100,6 +101,13 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
   std::vector<std::vector<std::vector<int>>> membership(n);
   for (std::size_t c = 0; c < n; ++c) membership[c].resize(cams[c].pixel.size());
   std::vector<Cluster> clusters;
+  // explained[c][d]: detection d of camera c seeded a cluster that three or more cameras confirm.
+  // Such a detection seeds nothing more: its marker is found, and pairing it with another
+  // detection could only make a ghost. This is what keeps seeding near linear in the markers.
+  // (Detections a cluster only picked up while growing stay free to seed: two markers can
+  // project to nearly the same pixel in one camera.)
+  std::vector<std::vector<bool>> explained(n);
+  for (std::size_t c = 0; c < n; ++c) explained[c].assign(cams[c].pixel.size(), false);
 
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t j = i + 1; j < n; ++j) {
@@ -109,21 +117,24 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
       const Eigen::Matrix3d e = skew(j_from_i.translation) * j_from_i.rotation.toRotationMatrix();
       const double fj = 0.5 * (rig.cameras[j].intrinsics.fx + rig.cameras[j].intrinsics.fy);
       for (std::size_t a = 0; a < cams[i].pixel.size(); ++a) {
+        if (explained[i][a]) continue;
         const Eigen::Vector3d line = e * cams[i].normalised[a].homogeneous();
         const double scale = fj / line.head<2>().norm();
         for (std::size_t b = 0; b < cams[j].pixel.size(); ++b) {
+          if (explained[j][b]) continue;
           if (std::abs(line.dot(cams[j].normalised[b].homogeneous())) * scale > settings.epipolar_tolerance_px) continue;
           // Skip a seed already explained by one cluster.
-          bool explained = false;
+          bool already = false;
           for (const int k : membership[i][a]) {
-            if (clusters[static_cast<std::size_t>(k)].detection[j] == static_cast<int>(b)) explained = true;
+            if (clusters[static_cast<std::size_t>(k)].detection[j] == static_cast<int>(b)) already = true;
           }
-          if (explained) continue;
-          const std::array<Observation, 2> seed{Observation{static_cast<int>(i), cams[i].pixel[a]},
-                                                Observation{static_cast<int>(j), cams[j].pixel[b]}};
-          const auto x = triangulate_linear(rig, seed);
+          if (already) continue;
+          const std::array<int, 2> seed_cameras{static_cast<int>(i), static_cast<int>(j)};
+          const std::array<Eigen::Vector2d, 2> seed_xy{cams[i].normalised[a], cams[j].normalised[b]};
+          const auto x = triangulate_linear_normalised(rig, seed_cameras, seed_xy);
           if (!x) continue;
           Cluster cl;
+          cl.seed_point = *x;
           cl.detection.assign(n, -1);
           cl.detection[i] = static_cast<int>(a);
           cl.detection[j] = static_cast<int>(b);
@@ -134,10 +145,33 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
             cl.detection[k] = cams[k].nearest(*p, settings.reprojection_tolerance_px);
           }
           const int index = static_cast<int>(clusters.size());
+          std::vector<Observation> grown;
           for (std::size_t k = 0; k < n; ++k) {
-            if (cl.detection[k] >= 0) membership[k][static_cast<std::size_t>(cl.detection[k])].push_back(index);
+            if (cl.detection[k] >= 0) grown.push_back({static_cast<int>(k), cams[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
+          }
+          // Three or more views that agree after refinement (every residual small) explain their
+          // detections; a coincidental third detection near a ghost rarely survives refinement.
+          bool confirmed = false;
+          if (grown.size() >= 3) {
+            if (const auto refined = refine_point(rig, grown, cl.seed_point, 5)) {
+              confirmed = true;
+              for (const Observation& o : grown) {
+                const auto p = rig.cameras[static_cast<std::size_t>(o.camera)].project(refined->position_world);
+                confirmed = confirmed && p && (o.pixel - *p).norm() <= settings.max_residual_px;
+              }
+              cl.seed_point = refined->position_world;
+            }
+          }
+          for (std::size_t k = 0; k < n; ++k) {
+            if (cl.detection[k] < 0) continue;
+            membership[k][static_cast<std::size_t>(cl.detection[k])].push_back(index);
           }
           clusters.push_back(std::move(cl));
+          if (confirmed) {
+            explained[i][a] = true;
+            explained[j][b] = true;
+            break;  // a is explained: no more seeds from it
+          }
         }
       }
     }
@@ -149,7 +183,7 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
       if (cl.detection[k] >= 0) cl.observations.push_back({static_cast<int>(k), cams[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
     }
     cl.support = static_cast<int>(cl.observations.size());
-    const auto t = triangulate(rig, cl.observations, 5);
+    const auto t = refine_point(rig, cl.observations, cl.seed_point, 5);
     if (!t) {
       cl.support = 0;
       continue;
@@ -171,7 +205,7 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
     if (grew) {
       std::sort(cl.observations.begin(), cl.observations.end(),
                 [](const Observation& a, const Observation& b) { return a.camera < b.camera; });
-      if (const auto again = triangulate(rig, cl.observations, 5)) cl.point = *again;
+      if (const auto again = refine_point(rig, cl.observations, cl.point.position_world, 5)) cl.point = *again;
     }
     // Drop, one at a time, observations that disagree with the others: a neighbouring marker's
     // detection picked up while growing.
@@ -193,7 +227,7 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
       }
       cl.detection[static_cast<std::size_t>(cl.observations[worst_at].camera)] = -1;
       cl.observations.erase(cl.observations.begin() + static_cast<std::ptrdiff_t>(worst_at));
-      const auto again = triangulate(rig, cl.observations, 5);
+      const auto again = refine_point(rig, cl.observations, cl.point.position_world, 5);
       if (!again) {
         cl.observations.clear();
         break;

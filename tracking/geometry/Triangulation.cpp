@@ -7,19 +7,19 @@
 
 namespace rhot {
 
-std::optional<Eigen::Vector3d> triangulate_linear(const CameraRig& rig, std::span<const Observation> observations) {
-  if (observations.size() < 2) return std::nullopt;
+std::optional<Eigen::Vector3d> triangulate_linear_normalised(const CameraRig& rig, std::span<const int> cameras,
+                                                             std::span<const Eigen::Vector2d> normalised) {
+  if (cameras.size() < 2 || cameras.size() != normalised.size()) return std::nullopt;
   // Each observation (x, y) of P = [R | t] gives x P3 - P1 = 0 and y P3 - P2 = 0 on the
   // homogeneous point. Accumulate A^T A (4x4) and take its smallest eigenvector.
   Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
-  for (const Observation& o : observations) {
-    const Camera& c = rig.cameras[static_cast<std::size_t>(o.camera)];
-    const Eigen::Vector2d xy = c.undistort(o.pixel);
+  for (std::size_t i = 0; i < cameras.size(); ++i) {
+    const Camera& c = rig.cameras[static_cast<std::size_t>(cameras[i])];
     Eigen::Matrix<double, 3, 4> p;
     p.leftCols<3>() = c.cam_from_world.rotation.toRotationMatrix();
     p.col(3) = c.cam_from_world.translation;
-    const Eigen::RowVector4d r1 = xy.x() * p.row(2) - p.row(0);
-    const Eigen::RowVector4d r2 = xy.y() * p.row(2) - p.row(1);
+    const Eigen::RowVector4d r1 = normalised[i].x() * p.row(2) - p.row(0);
+    const Eigen::RowVector4d r2 = normalised[i].y() * p.row(2) - p.row(1);
     // Rows normalised so every camera weighs alike whatever its distance.
     ata += r1.transpose() * r1 / r1.squaredNorm() + r2.transpose() * r2 / r2.squaredNorm();
   }
@@ -28,18 +28,34 @@ std::optional<Eigen::Vector3d> triangulate_linear(const CameraRig& rig, std::spa
   // Degenerate: the two smallest eigenvalues are (nearly) equal, or the point is at infinity.
   if (solver.eigenvalues()(1) < 1e-12 * solver.eigenvalues()(3) || std::abs(h.w()) < 1e-12) return std::nullopt;
   const Eigen::Vector3d x = h.head<3>() / h.w();
-  for (const Observation& o : observations) {
-    if (!((rig.cameras[static_cast<std::size_t>(o.camera)].cam_from_world * x).z() > 0.0)) return std::nullopt;
+  for (const int c : cameras) {
+    if (!((rig.cameras[static_cast<std::size_t>(c)].cam_from_world * x).z() > 0.0)) return std::nullopt;
   }
   return x;
+}
+
+std::optional<Eigen::Vector3d> triangulate_linear(const CameraRig& rig, std::span<const Observation> observations) {
+  std::vector<int> cameras;
+  std::vector<Eigen::Vector2d> normalised;
+  for (const Observation& o : observations) {
+    cameras.push_back(o.camera);
+    normalised.push_back(rig.cameras[static_cast<std::size_t>(o.camera)].undistort(o.pixel));
+  }
+  return triangulate_linear_normalised(rig, cameras, normalised);
 }
 
 std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations,
                                              int max_iterations) {
   const auto linear = triangulate_linear(rig, observations);
   if (!linear) return std::nullopt;
+  return refine_point(rig, observations, *linear, max_iterations);
+}
+
+std::optional<TriangulatedPoint> refine_point(const CameraRig& rig, std::span<const Observation> observations,
+                                              const Eigen::Vector3d& initial_world, int max_iterations) {
+  if (observations.size() < 2) return std::nullopt;
   TriangulatedPoint out;
-  out.position_world = *linear;
+  out.position_world = initial_world;
   Eigen::Matrix<double, 2, 3> j;
   for (int it = 0; it < max_iterations; ++it) {
     Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();

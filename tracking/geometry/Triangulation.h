@@ -29,6 +29,15 @@ struct TriangulatedPoint {
 // (fewer than two cameras, parallel rays) or the point lands behind a camera.
 std::optional<Eigen::Vector3d> triangulate_linear(const CameraRig& rig, std::span<const Observation> observations);
 
+// The same from undistorted normalised image coordinates already at hand (cameras[i] saw
+// normalised[i]); skips the undistortion.
+std::optional<Eigen::Vector3d> triangulate_linear_normalised(const CameraRig& rig, std::span<const int> cameras,
+                                                             std::span<const Eigen::Vector2d> normalised);
+
+// Gauss-Newton on the pixel reprojection error from an initial estimate.
+std::optional<TriangulatedPoint> refine_point(const CameraRig& rig, std::span<const Observation> observations,
+                                              const Eigen::Vector3d& initial_world, int max_iterations = 10);
+
 // Linear estimate refined by Gauss-Newton on the pixel reprojection error (at most
 // `max_iterations` steps; stops when a step is below 1e-9 m).
 std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations,
