@@ -160,6 +160,15 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
                 confirmed = confirmed && p && (o.pixel - *p).norm() <= settings.max_residual_px;
               }
               cl.seed_point = refined->position_world;
+              // Where two markers project close together in one camera, the refined point picks
+              // the right detection more often than the two-view seed did.
+              for (std::size_t k = 0; k < n; ++k) {
+                if (k == i || k == j || cl.detection[k] < 0) continue;
+                if (const auto p = rig.cameras[k].project(cl.seed_point)) {
+                  const int d = cams[k].nearest(*p, settings.reprojection_tolerance_px);
+                  if (d >= 0) cl.detection[k] = d;
+                }
+              }
             }
           }
           for (std::size_t k = 0; k < n; ++k) {
