@@ -1,0 +1,88 @@
+// Matching plus triangulation for 8 cameras x 100 markers with 10 % dropout (the room rig), single
+// thread, beside the obvious baseline: OpenCV's cv::triangulatePoints on the same detections,
+// pairwise (the first two cameras that see each marker), given the true correspondences, which
+// the baseline cannot find by itself. Results: docs/PERFORMANCE.md.
+
+#include <filesystem>
+
+#include <benchmark/benchmark.h>
+#include <opencv2/calib3d.hpp>
+
+#include "tracking/camera/RigFile.h"
+#include "tracking/geometry/Matching.h"
+#include "tracking/source/SimulatedRig.h"
+
+namespace {
+
+struct Data {
+  rhot::CameraRig rig;
+  std::vector<rhot::RigFrame> frames;
+};
+
+const Data& data() {
+  static const Data d = [] {
+    Data out;
+    out.rig = rhot::load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / "room-8.yaml").value();
+    rhot::SimulatedRigSettings s;
+    s.dropout = 0.1;
+    rhot::SimulatedRig sim(out.rig, rhot::random_trajectories(100, {-1.5, 0.2, -1.5}, {1.5, 1.8, 1.5}, 2), s);
+    for (int i = 0; i < 64; ++i) out.frames.push_back(sim.next());
+    return out;
+  }();
+  return d;
+}
+
+void BM_MatchAndTriangulate(benchmark::State& state) {
+  const Data& d = data();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(rhot::match_and_triangulate(d.rig, d.frames[i++ % d.frames.size()]));
+  }
+}
+BENCHMARK(BM_MatchAndTriangulate)->Unit(benchmark::kMicrosecond);
+
+void BM_PairwiseCvTriangulatePoints(benchmark::State& state) {
+  const Data& d = data();
+  std::vector<cv::Matx34d> projection;
+  std::vector<cv::Matx33d> k;
+  std::vector<cv::Vec<double, 5>> dist;
+  for (const rhot::Camera& c : d.rig.cameras) {
+    const Eigen::Matrix3d r = c.cam_from_world.rotation.toRotationMatrix();
+    const Eigen::Vector3d t = c.cam_from_world.translation;
+    projection.emplace_back(r(0, 0), r(0, 1), r(0, 2), t.x(), r(1, 0), r(1, 1), r(1, 2), t.y(), r(2, 0), r(2, 1), r(2, 2), t.z());
+    const rhot::CameraIntrinsics& in = c.intrinsics;
+    k.emplace_back(in.fx, 0, in.cx, 0, in.fy, in.cy, 0, 0, 1);
+    dist.emplace_back(in.distortion.data());
+  }
+  std::size_t f = 0;
+  for (auto _ : state) {
+    const rhot::RigFrame& frame = d.frames[f++ % d.frames.size()];
+    // Group detections by true marker: camera and pixel of the first two cameras that see it.
+    std::vector<std::array<int, 2>> cam(frame.truth_position_m.size(), {-1, -1});
+    std::vector<std::array<cv::Point2d, 2>> px(frame.truth_position_m.size());
+    for (const rhot::CameraFrame& cf : frame.cameras) {
+      for (const rhot::Detection& det : cf.detections) {
+        auto& c = cam[static_cast<std::size_t>(det.truth_marker)];
+        const int slot = c[0] < 0 ? 0 : (c[1] < 0 ? 1 : -1);
+        if (slot < 0) continue;
+        c[static_cast<std::size_t>(slot)] = cf.camera;
+        px[static_cast<std::size_t>(det.truth_marker)][static_cast<std::size_t>(slot)] = {det.pixel.x(), det.pixel.y()};
+      }
+    }
+    for (std::size_t m = 0; m < cam.size(); ++m) {
+      if (cam[m][1] < 0) continue;
+      std::array<std::vector<cv::Point2d>, 2> undistorted;
+      for (std::size_t s = 0; s < 2; ++s) {
+        const auto c = static_cast<std::size_t>(cam[m][s]);
+        cv::undistortPoints(std::vector<cv::Point2d>{px[m][s]}, undistorted[s], k[c], dist[c]);
+      }
+      cv::Mat x;
+      cv::triangulatePoints(projection[static_cast<std::size_t>(cam[m][0])], projection[static_cast<std::size_t>(cam[m][1])],
+                            undistorted[0], undistorted[1], x);
+      benchmark::DoNotOptimize(x);
+    }
+  }
+}
+BENCHMARK(BM_PairwiseCvTriangulatePoints)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
