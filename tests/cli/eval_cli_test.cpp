@@ -43,6 +43,18 @@ TEST(EvalCli, TriangulationPrintsTheAccuracyJsonForEveryShippedRig) {
   }
 }
 
+TEST(EvalCli, WandLengthIsMeasuredToAboutAMillimetre) {
+  const EvalRun r = run_eval(std::string("wand --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --length-mm 195 --frames 40 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["frames_measured"], 40);
+  // Sigma 0.3 px on the seated rig locates each end to about 0.5 mm (see the triangulation
+  // numbers), so the length is off by well under 2 mm RMS; a wrong scale or a swapped end is not.
+  EXPECT_LT(j["rms_error_mm"].get<double>(), 2.0);
+  EXPECT_GT(j["rms_error_mm"].get<double>(), 0.05) << "noise-free results would mean the noise is not applied";
+  EXPECT_LE(j["mean_error_mm"].get<double>(), j["rms_error_mm"].get<double>());
+}
+
 TEST(EvalCli, BadRigIsReported) {
   const EvalRun r = run_eval("triangulation --rig /nonexistent.yaml --json");
   EXPECT_EQ(r.exit_code, 1);

@@ -49,7 +49,10 @@ double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, co
 
 Eigen::Vector3d Trajectory::at(double t_s) const {
   Eigen::Vector3d p = centre_m;
-  for (int i = 0; i < 3; ++i) p(i) += amplitude_m(i) * std::sin(2.0 * std::numbers::pi * frequency_hz(i) * t_s + phase_rad(i));
+  for (int i = 0; i < 3; ++i) {
+    p(i) += amplitude_m(i) * std::sin(2.0 * std::numbers::pi * frequency_hz(i) * t_s + phase_rad(i)) +
+            drift_amplitude_m(i) * std::sin(2.0 * std::numbers::pi * drift_frequency_hz(i) * t_s + drift_phase_rad(i));
+  }
   return p;
 }
 
@@ -98,6 +101,28 @@ RigFrame SimulatedRig::next() {
     frame.cameras.push_back(std::move(cf));
   }
   return frame;
+}
+
+std::array<Trajectory, 2> wand_trajectories(double length_m, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m) {
+  // Half the wand along the horizontal circle (x, z) = r (sin, cos) of one frequency: the two ends
+  // are opposite points of that circle, so their distance is exactly 2 r. The middle drifts on
+  // independent frequencies through the box, keeping the ends inside it.
+  const double r = 0.5 * length_m;
+  const Eigen::Vector3d centre = 0.5 * (box_min_m + box_max_m);
+  const Eigen::Vector3d room = (0.5 * (box_max_m - box_min_m)).array() - r;
+  std::array<Trajectory, 2> ends;
+  for (int e = 0; e < 2; ++e) {
+    Trajectory& t = ends[static_cast<std::size_t>(e)];
+    const double phase = e == 0 ? 0.0 : std::numbers::pi;
+    t.centre_m = centre;
+    t.amplitude_m = {r, 0.0, r};
+    t.frequency_hz = {0.23, 0.0, 0.23};
+    t.phase_rad = {phase, 0.0, phase + 0.5 * std::numbers::pi};
+    t.drift_amplitude_m = room.cwiseMax(0.0);
+    t.drift_frequency_hz = {0.071, 0.113, 0.089};
+    t.drift_phase_rad = {0.0, 1.0, 2.0};
+  }
+  return ends;
 }
 
 std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m,

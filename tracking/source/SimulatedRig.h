@@ -4,6 +4,7 @@
 // spheres and capsules, and per-camera timestamps. Seeded and deterministic: the same settings
 // and seed give the same frames. Ground truth stays in every frame for evaluation.
 
+#include <array>
 #include <random>
 #include <vector>
 
@@ -12,13 +13,17 @@
 
 namespace rhot {
 
-// A marker's path: centre + amplitude * sin(2 pi frequency t + phase), per axis. Amplitude 0 is
-// a fixed marker; equal x/z frequencies with a quarter-period phase shift give a circle.
+// A marker's path: centre + amplitude * sin(2 pi frequency t + phase) + a second "drift" term of
+// the same form, per axis. Amplitude 0 is a fixed marker; equal x/z frequencies with a
+// quarter-period phase shift give a circle; markers sharing a drift move together (a wand).
 struct Trajectory {
   Eigen::Vector3d centre_m{0, 0, 0};
   Eigen::Vector3d amplitude_m{0, 0, 0};
   Eigen::Vector3d frequency_hz{0, 0, 0};
   Eigen::Vector3d phase_rad{0, 0, 0};
+  Eigen::Vector3d drift_amplitude_m{0, 0, 0};
+  Eigen::Vector3d drift_frequency_hz{0, 0, 0};
+  Eigen::Vector3d drift_phase_rad{0, 0, 0};
 
   Eigen::Vector3d at(double t_s) const;
 };
@@ -66,6 +71,10 @@ class SimulatedRig {
 
 // `count` markers wandering smoothly through an axis-aligned box (random centres, amplitudes up
 // to a quarter of the box, frequencies 0.1 to 0.5 Hz), from a seed.
+// The two ends of a rigid wand of length_m, held level and spinning about the vertical axis while
+// its middle drifts through the box. The two markers stay exactly length_m apart.
+std::array<Trajectory, 2> wand_trajectories(double length_m, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m);
+
 std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m,
                                             unsigned seed);
 

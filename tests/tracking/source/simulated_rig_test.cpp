@@ -98,5 +98,20 @@ TEST(SimulatedRig, CamerasSeeOnlyWhatIsInTheirImageAndStampTheirOwnTime) {
   EXPECT_DOUBLE_EQ(f.cameras[3].timestamp_s, 1.0 / 90.0 + 0.006);
 }
 
+TEST(SimulatedRig, WandEndsStayTheirLengthApartInsideTheBox) {
+  const Eigen::Vector3d lo(-0.5, 0.6, -0.95);
+  const Eigen::Vector3d hi(0.5, 1.6, 0.05);
+  const auto ends = wand_trajectories(0.195, lo, hi);
+  for (double t = 0.0; t < 60.0; t += 0.37) {
+    const Eigen::Vector3d a = ends[0].at(t);
+    const Eigen::Vector3d b = ends[1].at(t);
+    EXPECT_NEAR((a - b).norm(), 0.195, 1e-12);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_GE(a(i), lo(i) - 1e-9);
+      EXPECT_LE(a(i), hi(i) + 1e-9);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rhot
