@@ -88,16 +88,8 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
     }
     for (const int n : seen_by) findable += n >= 2 ? 1 : 0;
     for (const rhot::MatchedPoint& m : matched) {
-      int marker = -2;
-      bool consistent = true;
-      for (std::size_t k = 0; k < m.observations.size(); ++k) {
-        const int t = frame.cameras[static_cast<std::size_t>(m.observations[k].camera)]
-                          .detections[static_cast<std::size_t>(m.detection[k])]
-                          .truth_marker;
-        if (marker == -2) marker = t;
-        consistent = consistent && t == marker;
-      }
-      if (!consistent) {
+      const int marker = rhot::truth_marker(frame, m);
+      if (marker < 0) {
         ++ghosts;
         continue;
       }
@@ -163,16 +155,8 @@ int wand(const std::string& rig_file, double length_mm, double sigma, int frames
     std::array<const rhot::MatchedPoint*, 2> end_point{nullptr, nullptr};
     int points_per_end[2] = {0, 0};
     for (const rhot::MatchedPoint& m : matched) {
-      int marker = -2;
-      bool consistent = true;
-      for (std::size_t k = 0; k < m.observations.size(); ++k) {
-        const int t = frame.cameras[static_cast<std::size_t>(m.observations[k].camera)]
-                          .detections[static_cast<std::size_t>(m.detection[k])]
-                          .truth_marker;
-        if (marker == -2) marker = t;
-        consistent = consistent && t == marker;
-      }
-      if (!consistent || marker < 0) continue;
+      const int marker = rhot::truth_marker(frame, m);
+      if (marker < 0) continue;
       ++points_per_end[marker];
       end_point[static_cast<std::size_t>(marker)] = &m;
     }

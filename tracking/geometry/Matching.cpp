@@ -88,6 +88,18 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 
 }  // namespace
 
+int truth_marker(const RigFrame& frame, const MatchedPoint& point) {
+  int marker = -1;
+  for (std::size_t k = 0; k < point.observations.size(); ++k) {
+    const int t = frame.cameras[static_cast<std::size_t>(point.observations[k].camera)]
+                      .detections[static_cast<std::size_t>(point.detection[k])]
+                      .truth_marker;
+    if (t < 0 || (k > 0 && t != marker)) return -1;
+    marker = t;
+  }
+  return marker;
+}
+
 std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings) {
   const std::size_t n = rig.cameras.size();
   RHOT_PRECONDITION(frame.cameras.size() == n, "match_and_triangulate: one CameraFrame per camera of the rig");

@@ -39,6 +39,10 @@ struct MatchedPoint {
   std::vector<int> detection;  // per observation: its index in that camera's detections
 };
 
+// The ground-truth marker a matched point belongs to (simulated frames only): -1 when its
+// detections come from different markers (a ghost or a mix-up) or carry no truth.
+int truth_marker(const RigFrame& frame, const MatchedPoint& point);
+
 // Precondition: frame.cameras[i].camera == i for every camera of the rig.
 std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings = {});
 

@@ -31,16 +31,8 @@ Score score(const RigFrame& frame, const std::vector<MatchedPoint>& points) {
   }
   for (const int n : cameras_seeing) s.findable += n >= 2 ? 1 : 0;
   for (const MatchedPoint& p : points) {
-    int marker = -2;
-    bool consistent = true;
-    for (std::size_t k = 0; k < p.observations.size(); ++k) {
-      const int truth = frame.cameras[static_cast<std::size_t>(p.observations[k].camera)]
-                            .detections[static_cast<std::size_t>(p.detection[k])]
-                            .truth_marker;
-      if (marker == -2) marker = truth;
-      consistent = consistent && truth == marker;
-    }
-    if (!consistent) {
+    const int marker = truth_marker(frame, p);
+    if (marker < 0) {
       ++s.wrong;
       continue;
     }
@@ -48,6 +40,22 @@ Score score(const RigFrame& frame, const std::vector<MatchedPoint>& points) {
     s.max_error_m = std::max(s.max_error_m, (p.point.position_world - frame.truth_position_m[static_cast<std::size_t>(marker)]).norm());
   }
   return s;
+}
+
+TEST(Matching, TruthMarkerOfAPointIsMinusOneWhenItsDetectionsDisagree) {
+  RigFrame frame;
+  frame.cameras.resize(2);
+  frame.cameras[0].detections = {{{1, 1}, 4}, {{2, 2}, 7}};
+  frame.cameras[1].camera = 1;
+  frame.cameras[1].detections = {{{3, 3}, 7}, {{4, 4}, -1}};
+  MatchedPoint p;
+  p.observations = {{0, {2, 2}}, {1, {3, 3}}};
+  p.detection = {1, 0};
+  EXPECT_EQ(truth_marker(frame, p), 7);
+  p.detection = {0, 0};
+  EXPECT_EQ(truth_marker(frame, p), -1) << "markers 4 and 7 mixed";
+  p.detection = {1, 1};
+  EXPECT_EQ(truth_marker(frame, p), -1) << "a detection without truth";
 }
 
 TEST(Matching, NoiselessHundredMarkersAreAllRecoveredExactly) {
