@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -96,6 +97,9 @@ class Node {
     if (!j_.is_number()) fail("expected a number, got " + describe(j_));
     const double v = j_.get<double>();
     if (!std::isfinite(v)) fail("expected a finite number, got " + describe(j_));
+    if (std::abs(v) > static_cast<double>(std::numeric_limits<float>::max())) {
+      fail("expected a number within float range (magnitude up to 3.4e38), got " + describe(j_));
+    }
     return v;
   }
   double number_in(double lo, double hi, const char* what) const {
@@ -105,7 +109,10 @@ class Node {
   }
   double positive() const {
     const double v = number();
-    if (!(v > 0.0)) fail("expected a number greater than 0, got " + describe(j_));
+    // Stored as float downstream: refuse what a float turns into 0 or infinity.
+    if (!(v > 0.0) || !(static_cast<float>(v) > 0.0f) || v > static_cast<double>(std::numeric_limits<float>::max())) {
+      fail("expected a number greater than 0 (and within float range), got " + describe(j_));
+    }
     return v;
   }
   int integer_in(int lo, int hi) const {

@@ -233,7 +233,7 @@ TEST_F(SceneFiles, InconsistentEntities) {
 
 TEST_F(SceneFiles, OutOfRangeValues) {
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "transform": {"scale": [1, 0, 1]}})")),
-            "/entities/0/transform/scale/1: expected a number greater than 0, got 0");
+            "/entities/0/transform/scale/1: expected a number greater than 0 (and within float range), got 0");
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "transform": {"rotation": [0, 0, 0, 2]}})")),
             "/entities/0/transform/rotation: expected a unit quaternion [x, y, z, w], got one of length 2.000000");
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "transform": {"rotation": [0, 0, 0, 1], "rotation_deg": [0, 0, 0]}})")),
@@ -247,6 +247,11 @@ TEST_F(SceneFiles, OutOfRangeValues) {
             "/settings/headset/eye_resolution_px/0: expected an integer, got 1080.5");
   EXPECT_EQ(error_of(R"({"settings": {"hands": ["left", "left"]}})"), "/settings/hands/1: hand \"left\" is listed twice");
   EXPECT_EQ(error_of(R"({"version": 2})"), "/version: expected an integer from 1 to 1, got 2");
+  // Sizes are floats at run time: 1e-50 would become 0 and 1e50 infinity.
+  EXPECT_EQ(error_of(scene_with(R"({"name": "a", "mesh": {"shape": "sphere", "radius_m": 1e-50}})")),
+            "/entities/0/mesh/radius_m: expected a number greater than 0 (and within float range), got 1e-50");
+  EXPECT_EQ(error_of(scene_with(R"({"name": "a", "transform": {"position": [1e50, 0, 0]}})")),
+            "/entities/0/transform/position/0: expected a number within float range (magnitude up to 3.4e38), got 1e+50");
 }
 
 TEST_F(SceneFiles, FailedLoadLeavesTheWorldUntouched) {
