@@ -22,18 +22,30 @@ struct Image {
   const std::uint8_t* pixel(int x, int y) const { return rgba.data() + (static_cast<std::size_t>(y) * width + x) * 4; }
 };
 
+// Writes `image` as an 8-bit RGBA PNG, replacing `file` and creating its missing parent folders.
+// Refuses an empty image (no pixels) or one whose `rgba` is not width * height * 4 bytes. Errors
+// name the file and the reason, e.g. "<file>: cannot write PNG: Permission denied". A failed write
+// leaves no partial file and keeps an existing one. Cost: stb's zlib encoder, about 0.2 s for a
+// 2160x1200 rendered frame (up to 1 s for noise), far beyond a 90 Hz frame budget.
 [[nodiscard]] std::expected<void, std::string> write_png(const Image& image, const std::filesystem::path& file);
+
+// Reads a PNG of any colour type and bit depth as 8-bit RGBA (grey is copied to R, G and B; a
+// missing alpha becomes 255; 16-bit channels keep their high byte). Colour is not converted: the
+// bytes are taken as sRGB whatever gAMA/iCCP chunks say. Other formats are refused even where stb
+// could decode them. Errors: "<file>: file not found", "<file>: not a PNG image: <reason>".
 [[nodiscard]] std::expected<Image, std::string> read_png(const std::filesystem::path& file);
 
-// Places images side by side, left to right. Precondition: equal heights.
+// Places images side by side, left to right: `left` at x = 0, `right` at x = left.width.
+// Precondition: equal heights and well-formed images (rgba of width * height * 4 bytes).
 Image side_by_side(const Image& left, const Image& right);
 
 // Tolerance for comparing a rendered frame with its golden image. Rasterisers differ a little at
 // edges (coverage, rounding), so a pixel counts as matching when some pixel of the other image
-// within `search_radius_px` has every channel within `channel_tolerance`. The check runs both
-// ways (actual against expected and expected against actual) so a missing thin line is caught as
-// surely as an extra one. The images match when at most `max_differing_fraction` of the pixels
-// differ.
+// within `search_radius_px` (a square window: diagonal neighbours count) has every channel,
+// alpha included, within `channel_tolerance` (of 255). The check runs both ways (actual against
+// expected and expected against actual; a position differs when either fails) so a missing thin
+// line is caught as surely as an extra one. The images match when at most
+// `max_differing_fraction` of the pixels differ.
 struct ImageCompareSettings {
   int channel_tolerance = 8;
   int search_radius_px = 1;
@@ -49,7 +61,13 @@ struct ImageCompareResult {
   std::string summary;             // one line for a test failure message
 };
 
-// Precondition-free: images of different sizes simply do not match (summary says so).
+// Precondition-free: images of different sizes, empty or malformed images simply do not match
+// (the summary says why, `diff` is then empty). A negative tolerance or radius counts as 0.
+// The diff image has the size of `expected`: differing pixels are pure red (255, 0, 0, 255), the
+// others the expected pixel's luma at a third of its brightness, opaque.
+// Cost: one pass over the pixels; only a pixel whose plain difference exceeds the tolerance
+// searches its (2r+1)^2 neighbourhood, so near-identical frames cost about a plain comparison.
+// 2160x1200 in a debug build: about 50 ms nearly identical, 0.25 s with every pixel differing.
 ImageCompareResult compare_images(const Image& actual, const Image& expected,
                                   const ImageCompareSettings& settings = {});
 
