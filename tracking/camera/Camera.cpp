@@ -29,6 +29,11 @@ Eigen::Vector2d distort(const std::array<double, 5>& k, const Eigen::Vector2d& x
   return out;
 }
 
+bool inside_sensor(const CameraIntrinsics& k, const Eigen::Vector2d& pixel) {
+  // Pixel centres are integers, so the sensor spans [-0.5, size - 0.5).
+  return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < k.width_px - 0.5 && pixel.y() < k.height_px - 0.5;
+}
+
 }  // namespace
 
 Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy) {
@@ -36,29 +41,57 @@ Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::
 }
 
 std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world) const {
-  const Eigen::Vector3d p = cam_from_world * p_world;
-  if (!(p.z() > kMinDepth_m)) return std::nullopt;
-  const Eigen::Vector2d d = distort(intrinsics.distortion, p.head<2>() / p.z(), nullptr);
-  return Eigen::Vector2d(intrinsics.fx * d.x() + intrinsics.cx, intrinsics.fy * d.y() + intrinsics.cy);
+  return CameraProjection(*this).project(p_world);
 }
 
 std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world, Eigen::Matrix<double, 2, 3>& jacobian) const {
-  const Eigen::Vector3d p = cam_from_world * p_world;
-  if (!(p.z() > kMinDepth_m)) return std::nullopt;
-  const double inv_z = 1.0 / p.z();
-  Eigen::Matrix2d d_distort;
-  const Eigen::Vector2d d = distort(intrinsics.distortion, p.head<2>() * inv_z, &d_distort);
-  Eigen::Matrix<double, 2, 3> d_normalised;
-  d_normalised << inv_z, 0.0, -p.x() * inv_z * inv_z, 0.0, inv_z, -p.y() * inv_z * inv_z;
-  const Eigen::Matrix2d focal = Eigen::Vector2d(intrinsics.fx, intrinsics.fy).asDiagonal();
-  jacobian = focal * d_distort * d_normalised * cam_from_world.rotation.toRotationMatrix();
-  return Eigen::Vector2d(intrinsics.fx * d.x() + intrinsics.cx, intrinsics.fy * d.y() + intrinsics.cy);
+  return CameraProjection(*this).project(p_world, jacobian);
 }
 
-bool Camera::in_image(const Eigen::Vector2d& pixel) const {
-  // Pixel centres are integers, so the sensor spans [-0.5, size - 0.5).
-  return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < intrinsics.width_px - 0.5 &&
-         pixel.y() < intrinsics.height_px - 0.5;
+bool Camera::in_image(const Eigen::Vector2d& pixel) const { return inside_sensor(intrinsics, pixel); }
+
+CameraProjection::CameraProjection(const Camera& camera)
+    : intrinsics_(camera.intrinsics),
+      rotation_(camera.cam_from_world.rotation.toRotationMatrix()),
+      translation_(camera.cam_from_world.translation),
+      centre_world_(-(rotation_.transpose() * translation_)) {}
+
+std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world) const {
+  const Eigen::Vector3d p = rotation_ * p_world + translation_;
+  if (!(p.z() > kMinDepth_m)) return std::nullopt;
+  const Eigen::Vector2d d = distort(intrinsics_.distortion, p.head<2>() / p.z(), nullptr);
+  return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
+}
+
+std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world,
+                                                         Eigen::Matrix<double, 2, 3>& jacobian) const {
+  const Eigen::Vector3d p = rotation_ * p_world + translation_;
+  if (!(p.z() > kMinDepth_m)) return std::nullopt;
+  const double inv_z = 1.0 / p.z();
+  const Eigen::Vector2d xy = p.head<2>() * inv_z;
+  Eigen::Matrix2d d_distort;
+  const Eigen::Vector2d d = distort(intrinsics_.distortion, xy, &d_distort);
+  // d(x/z, y/z)/d(p_world) = (R.row(i) - (x/z or y/z) R.row(2)) / z, then distortion and focal length.
+  Eigen::Matrix<double, 2, 3> d_normalised;
+  d_normalised.row(0) = (rotation_.row(0) - xy.x() * rotation_.row(2)) * inv_z;
+  d_normalised.row(1) = (rotation_.row(1) - xy.y() * rotation_.row(2)) * inv_z;
+  d_distort.row(0) *= intrinsics_.fx;
+  d_distort.row(1) *= intrinsics_.fy;
+  jacobian.noalias() = d_distort * d_normalised;
+  return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
+}
+
+bool CameraProjection::in_image(const Eigen::Vector2d& pixel) const { return inside_sensor(intrinsics_, pixel); }
+
+Eigen::Vector3d CameraProjection::ray_direction_world(const Eigen::Vector2d& normalised) const {
+  return rotation_.transpose() * normalised.homogeneous();
+}
+
+std::vector<CameraProjection> camera_projections(const CameraRig& rig) {
+  std::vector<CameraProjection> out;
+  out.reserve(rig.cameras.size());
+  for (const Camera& c : rig.cameras) out.emplace_back(c);
+  return out;
 }
 
 Eigen::Vector2d Camera::undistort(const Eigen::Vector2d& pixel) const {

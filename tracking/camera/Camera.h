@@ -48,10 +48,35 @@ struct Camera {
 // Normalised undistorted image coordinates -> distorted normalised coordinates (OpenCV's model).
 Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy);
 
+// A camera prepared for projecting many points: its rotation held as a matrix, which projects
+// faster than the quaternion. Copies what it needs, so it does not refer back to the camera.
+class CameraProjection {
+ public:
+  explicit CameraProjection(const Camera& camera);
+
+  // As Camera::project, Camera::in_image.
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_world) const;
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_world, Eigen::Matrix<double, 2, 3>& jacobian) const;
+  bool in_image(const Eigen::Vector2d& pixel) const;
+  // The camera centre and the (unnormalised) world direction of the ray through undistorted
+  // normalised image coordinates.
+  const Eigen::Vector3d& centre_world() const { return centre_world_; }
+  Eigen::Vector3d ray_direction_world(const Eigen::Vector2d& normalised) const;
+
+ private:
+  CameraIntrinsics intrinsics_;
+  Eigen::Matrix3d rotation_;  // cam_from_world
+  Eigen::Vector3d translation_;
+  Eigen::Vector3d centre_world_;
+};
+
 struct CameraRig {
   std::string name;
   std::vector<Camera> cameras;
 };
+
+// One CameraProjection per camera of the rig, in rig order.
+std::vector<CameraProjection> camera_projections(const CameraRig& rig);
 
 // A camera at `position` looking at `target`, with world +Y as "up" in the image (OpenCV frame:
 // image y points away from world up). Precondition: target != position, and not straight up/down.

@@ -21,7 +21,13 @@ struct CameraDetections {
   double cell_px = 16.0;
   int cols = 0;
   int rows = 0;
-  std::vector<std::vector<int>> grid;
+  // The grid as compressed rows: detections of cell c are sorted[cell_start[c] .. cell_start[c + 1]).
+  std::vector<int> cell_start;
+  std::vector<int> sorted;
+  // Per detection: it seeded (or joined) a cluster three or more cameras confirm.
+  std::vector<char> explained;
+  // Per detection: the first link of its list of clusters (see Membership), -1 for none.
+  std::vector<int> first_link;
 
   void build(const Camera& camera, const CameraFrame& frame) {
     for (const Detection& d : frame.detections) pixel.push_back(d.pixel);
@@ -39,10 +45,20 @@ struct CameraDetections {
     }
     cols = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.width_px / cell_px)) + 1);
     rows = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.height_px / cell_px)) + 1);
-    grid.assign(static_cast<std::size_t>(cols * rows), {});
+    cell_start.assign(static_cast<std::size_t>(cols * rows) + 1, 0);
+    std::vector<int> cell_of(pixel.size());
     for (std::size_t i = 0; i < pixel.size(); ++i) {
-      if (const int c = cell(pixel[i]); c >= 0) grid[static_cast<std::size_t>(c)].push_back(static_cast<int>(i));
+      cell_of[i] = cell(pixel[i]);
+      if (cell_of[i] >= 0) ++cell_start[static_cast<std::size_t>(cell_of[i]) + 1];
     }
+    for (std::size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
+    sorted.assign(static_cast<std::size_t>(cell_start.back()), -1);
+    std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+    for (std::size_t i = 0; i < pixel.size(); ++i) {
+      if (cell_of[i] >= 0) sorted[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = static_cast<int>(i);
+    }
+    explained.assign(pixel.size(), 0);
+    first_link.assign(pixel.size(), -1);
   }
   int cell(const Eigen::Vector2d& p) const {
     const int x = static_cast<int>(std::floor((p.x() + 0.5) / cell_px));
@@ -58,7 +74,9 @@ struct CameraDetections {
     for (int y = cy - 1; y <= cy + 1; ++y) {
       for (int x = cx - 1; x <= cx + 1; ++x) {
         if (x < 0 || y < 0 || x >= cols || y >= rows) continue;
-        for (const int i : grid[static_cast<std::size_t>(y * cols + x)]) {
+        const auto c = static_cast<std::size_t>(y * cols + x);
+        for (int s = cell_start[c]; s < cell_start[c + 1]; ++s) {
+          const int i = sorted[static_cast<std::size_t>(s)];
           const double d2 = (pixel[static_cast<std::size_t>(i)] - p).squaredNorm();
           if (d2 <= best_d2) {
             best_d2 = d2;
@@ -86,6 +104,20 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return m;
 }
 
+// A two-view seed: the midpoint of the rays' closest approach, or nothing when the rays are
+// (nearly) parallel or meet behind either camera. Refinement makes it optimal later.
+std::optional<Eigen::Vector3d> ray_midpoint(const Eigen::Vector3d& o1, const Eigen::Vector3d& d1, const Eigen::Vector3d& o2,
+                                            const Eigen::Vector3d& d2) {
+  const Eigen::Vector3d w = o1 - o2;
+  const double a = d1.dot(d1), b = d1.dot(d2), c = d2.dot(d2), d = d1.dot(w), e = d2.dot(w);
+  const double denom = a * c - b * b;
+  if (!(denom > 1e-10 * a * c)) return std::nullopt;
+  const double s = (b * e - c * d) / denom;
+  const double t = (a * e - b * d) / denom;
+  if (!(s > 0.0 && t > 0.0)) return std::nullopt;
+  return 0.5 * ((o1 + s * d1) + (o2 + t * d2));
+}
+
 }  // namespace
 
 int truth_marker(const RigFrame& frame, const MatchedPoint& point) {
@@ -109,18 +141,16 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
     cams[c].build(rig.cameras[c], frame.cameras[c]);
   }
 
-  // membership[c][d]: clusters containing detection d of camera c (to skip redundant seeds).
-  std::vector<std::vector<std::vector<int>>> membership(n);
-  for (std::size_t c = 0; c < n; ++c) membership[c].resize(cams[c].pixel.size());
+  // The clusters containing each detection (to skip redundant seeds), as singly linked lists:
+  // links[l] = {cluster, next link}, heads in CameraDetections::first_link.
+  std::vector<std::pair<int, int>> links;
   std::vector<Cluster> clusters;
-  // explained[c][d]: detection d of camera c seeded a cluster that three or more cameras confirm.
-  // Such a detection seeds nothing more: its marker is found, and pairing it with another
-  // detection could only make a ghost. This is what keeps seeding near linear in the markers.
-  // (Detections a cluster only picked up while growing stay free to seed: two markers can
-  // project to nearly the same pixel in one camera.)
-  std::vector<std::vector<bool>> explained(n);
-  for (std::size_t c = 0; c < n; ++c) explained[c].assign(cams[c].pixel.size(), false);
+  // A detection that seeded or joined a cluster three or more cameras confirm seeds nothing more:
+  // its marker is found, and pairing it with another detection could only make a ghost. This is
+  // what keeps seeding near linear in the markers.
 
+  const std::vector<CameraProjection> poses = camera_projections(rig);
+  std::vector<Observation> grown;
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t j = i + 1; j < n; ++j) {
       if (cams[i].pixel.empty() || cams[j].pixel.empty()) continue;
@@ -129,46 +159,50 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
       const Eigen::Matrix3d e = skew(j_from_i.translation) * j_from_i.rotation.toRotationMatrix();
       const double fj = 0.5 * (rig.cameras[j].intrinsics.fx + rig.cameras[j].intrinsics.fy);
       for (std::size_t a = 0; a < cams[i].pixel.size(); ++a) {
-        if (explained[i][a]) continue;
+        if (cams[i].explained[a] != 0) continue;
         const Eigen::Vector3d line = e * cams[i].normalised[a].homogeneous();
-        const double scale = fj / line.head<2>().norm();
+        const double tolerance = settings.epipolar_tolerance_px * line.head<2>().norm() / fj;
+        const Eigen::Vector3d ray_a = poses[i].ray_direction_world(cams[i].normalised[a]);
         for (std::size_t b = 0; b < cams[j].pixel.size(); ++b) {
-          if (explained[j][b]) continue;
-          if (std::abs(line.dot(cams[j].normalised[b].homogeneous())) * scale > settings.epipolar_tolerance_px) continue;
+          if (cams[j].explained[b] != 0) continue;
+          if (std::abs(line.dot(cams[j].normalised[b].homogeneous())) > tolerance) continue;
           // Skip a seed already explained by one cluster.
           bool already = false;
-          for (const int k : membership[i][a]) {
-            if (clusters[static_cast<std::size_t>(k)].detection[j] == static_cast<int>(b)) already = true;
+          for (int l = cams[i].first_link[a]; l >= 0 && !already; l = links[static_cast<std::size_t>(l)].second) {
+            already = clusters[static_cast<std::size_t>(links[static_cast<std::size_t>(l)].first)].detection[j] == static_cast<int>(b);
           }
           if (already) continue;
-          const std::array<int, 2> seed_cameras{static_cast<int>(i), static_cast<int>(j)};
-          const std::array<Eigen::Vector2d, 2> seed_xy{cams[i].normalised[a], cams[j].normalised[b]};
-          const auto x = triangulate_linear_normalised(rig, seed_cameras, seed_xy);
+          const auto x = ray_midpoint(poses[i].centre_world(), ray_a, poses[j].centre_world(),
+                                      poses[j].ray_direction_world(cams[j].normalised[b]));
           if (!x) continue;
           Cluster cl;
           cl.seed_point = *x;
           cl.detection.assign(n, -1);
           cl.detection[i] = static_cast<int>(a);
           cl.detection[j] = static_cast<int>(b);
+          int unseen = 0;  // cameras that should see the point and have no detection near it
           for (std::size_t k = 0; k < n; ++k) {
             if (k == i || k == j) continue;
-            const auto p = rig.cameras[k].project(*x);
-            if (!p || !rig.cameras[k].in_image(*p)) continue;
+            const auto p = poses[k].project(*x);
+            if (!p || !poses[k].in_image(*p)) continue;
             cl.detection[k] = cams[k].nearest(*p, settings.reprojection_tolerance_px);
+            if (cl.detection[k] < 0) ++unseen;
           }
-          const int index = static_cast<int>(clusters.size());
-          std::vector<Observation> grown;
+          grown.clear();
           for (std::size_t k = 0; k < n; ++k) {
             if (cl.detection[k] >= 0) grown.push_back({static_cast<int>(k), cams[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
           }
+          // A pair no third camera confirms, where more than two cameras should have seen it, is
+          // a ghost: the acceptance rule below would refuse it anyway (more missing than support).
+          if (grown.size() == 2 && unseen > 2) continue;
           // Three or more views that agree after refinement (every residual small) explain their
           // detections; a coincidental third detection near a ghost rarely survives refinement.
           bool confirmed = false;
           if (grown.size() >= 3) {
-            if (const auto refined = refine_point(rig, grown, cl.seed_point, 5)) {
+            if (const auto refined = refine_point(poses, grown, cl.seed_point, 5)) {
               confirmed = true;
               for (const Observation& o : grown) {
-                const auto p = rig.cameras[static_cast<std::size_t>(o.camera)].project(refined->position_world);
+                const auto p = poses[static_cast<std::size_t>(o.camera)].project(refined->position_world);
                 confirmed = confirmed && p && (o.pixel - *p).norm() <= settings.max_residual_px;
               }
               cl.seed_point = refined->position_world;
@@ -176,23 +210,23 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
               // the right detection more often than the two-view seed did.
               for (std::size_t k = 0; k < n; ++k) {
                 if (k == i || k == j || cl.detection[k] < 0) continue;
-                if (const auto p = rig.cameras[k].project(cl.seed_point)) {
+                if (const auto p = poses[k].project(cl.seed_point)) {
                   const int d = cams[k].nearest(*p, settings.reprojection_tolerance_px);
                   if (d >= 0) cl.detection[k] = d;
                 }
               }
             }
           }
+          const int index = static_cast<int>(clusters.size());
           for (std::size_t k = 0; k < n; ++k) {
             if (cl.detection[k] < 0) continue;
-            membership[k][static_cast<std::size_t>(cl.detection[k])].push_back(index);
+            const auto d = static_cast<std::size_t>(cl.detection[k]);
+            links.emplace_back(index, cams[k].first_link[d]);
+            cams[k].first_link[d] = static_cast<int>(links.size()) - 1;
+            if (confirmed) cams[k].explained[d] = 1;
           }
           clusters.push_back(std::move(cl));
-          if (confirmed) {
-            explained[i][a] = true;
-            explained[j][b] = true;
-            break;  // a is explained: no more seeds from it
-          }
+          if (confirmed) break;  // a is explained: no more seeds from it
         }
       }
     }
@@ -204,7 +238,7 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
       if (cl.detection[k] >= 0) cl.observations.push_back({static_cast<int>(k), cams[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
     }
     cl.support = static_cast<int>(cl.observations.size());
-    const auto t = refine_point(rig, cl.observations, cl.seed_point, 5);
+    const auto t = refine_point(poses, cl.observations, cl.seed_point, 5);
     if (!t) {
       cl.support = 0;
       continue;
@@ -215,8 +249,8 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
     bool grew = false;
     for (std::size_t k = 0; k < n; ++k) {
       if (cl.detection[k] >= 0) continue;
-      const auto p = rig.cameras[k].project(cl.point.position_world);
-      if (!p || !rig.cameras[k].in_image(*p)) continue;
+      const auto p = poses[k].project(cl.point.position_world);
+      if (!p || !poses[k].in_image(*p)) continue;
       const int d = cams[k].nearest(*p, settings.reprojection_tolerance_px);
       if (d < 0) continue;
       cl.detection[k] = d;
@@ -226,7 +260,7 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
     if (grew) {
       std::sort(cl.observations.begin(), cl.observations.end(),
                 [](const Observation& a, const Observation& b) { return a.camera < b.camera; });
-      if (const auto again = refine_point(rig, cl.observations, cl.point.position_world, 5)) cl.point = *again;
+      if (const auto again = refine_point(poses, cl.observations, cl.point.position_world, 5)) cl.point = *again;
     }
     // Drop, one at a time, observations that disagree with the others: a neighbouring marker's
     // detection picked up while growing.
@@ -234,7 +268,7 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
       double worst = 0.0;
       std::size_t worst_at = 0;
       for (std::size_t o = 0; o < cl.observations.size(); ++o) {
-        const auto p = rig.cameras[static_cast<std::size_t>(cl.observations[o].camera)].project(cl.point.position_world);
+        const auto p = poses[static_cast<std::size_t>(cl.observations[o].camera)].project(cl.point.position_world);
         const double r = p ? (cl.observations[o].pixel - *p).norm() : 1e9;
         if (r > worst) {
           worst = r;
@@ -248,7 +282,7 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
       }
       cl.detection[static_cast<std::size_t>(cl.observations[worst_at].camera)] = -1;
       cl.observations.erase(cl.observations.begin() + static_cast<std::ptrdiff_t>(worst_at));
-      const auto again = refine_point(rig, cl.observations, cl.point.position_world, 5);
+      const auto again = refine_point(poses, cl.observations, cl.point.position_world, 5);
       if (!again) {
         cl.observations.clear();
         break;
@@ -259,8 +293,8 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
     if (cl.support < 2) continue;
     for (std::size_t k = 0; k < n; ++k) {
       if (cl.detection[k] >= 0) continue;
-      const auto p = rig.cameras[k].project(cl.point.position_world);
-      if (p && rig.cameras[k].in_image(*p)) ++cl.missing;
+      const auto p = poses[k].project(cl.point.position_world);
+      if (p && poses[k].in_image(*p)) ++cl.missing;
     }
   }
   std::vector<std::size_t> order(clusters.size());

@@ -53,6 +53,11 @@ std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<con
 
 std::optional<TriangulatedPoint> refine_point(const CameraRig& rig, std::span<const Observation> observations,
                                               const Eigen::Vector3d& initial_world, int max_iterations) {
+  return refine_point(camera_projections(rig), observations, initial_world, max_iterations);
+}
+
+std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> cameras, std::span<const Observation> observations,
+                                              const Eigen::Vector3d& initial_world, int max_iterations) {
   if (observations.size() < 2) return std::nullopt;
   TriangulatedPoint out;
   out.position_world = initial_world;
@@ -61,7 +66,7 @@ std::optional<TriangulatedPoint> refine_point(const CameraRig& rig, std::span<co
     Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
     Eigen::Vector3d jtr = Eigen::Vector3d::Zero();
     for (const Observation& o : observations) {
-      const auto pixel = rig.cameras[static_cast<std::size_t>(o.camera)].project(out.position_world, j);
+      const auto pixel = cameras[static_cast<std::size_t>(o.camera)].project(out.position_world, j);
       if (!pixel) return std::nullopt;
       const Eigen::Vector2d r = o.pixel - *pixel;
       jtj += j.transpose() * j;
@@ -74,7 +79,7 @@ std::optional<TriangulatedPoint> refine_point(const CameraRig& rig, std::span<co
   }
   double sum = 0.0;
   for (const Observation& o : observations) {
-    const auto pixel = rig.cameras[static_cast<std::size_t>(o.camera)].project(out.position_world);
+    const auto pixel = cameras[static_cast<std::size_t>(o.camera)].project(out.position_world);
     if (!pixel) return std::nullopt;
     sum += (o.pixel - *pixel).squaredNorm();
     out.cameras.push_back(o.camera);

@@ -34,12 +34,15 @@ std::optional<Eigen::Vector3d> triangulate_linear(const CameraRig& rig, std::spa
 std::optional<Eigen::Vector3d> triangulate_linear_normalised(const CameraRig& rig, std::span<const int> cameras,
                                                              std::span<const Eigen::Vector2d> normalised);
 
-// Gauss-Newton on the pixel reprojection error from an initial estimate.
+// Gauss-Newton on the pixel reprojection error from an initial estimate (at most
+// `max_iterations` steps; stops when a step is below 1e-9 m).
 std::optional<TriangulatedPoint> refine_point(const CameraRig& rig, std::span<const Observation> observations,
                                               const Eigen::Vector3d& initial_world, int max_iterations = 10);
+// The same with the rig's cameras prepared (camera_projections(rig)), for code that refines many points.
+std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> cameras, std::span<const Observation> observations,
+                                              const Eigen::Vector3d& initial_world, int max_iterations = 10);
 
-// Linear estimate refined by Gauss-Newton on the pixel reprojection error (at most
-// `max_iterations` steps; stops when a step is below 1e-9 m).
+// Linear estimate refined by Gauss-Newton on the pixel reprojection error.
 std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations,
                                              int max_iterations = 10);
 
