@@ -31,7 +31,7 @@ def matrix(name, rows, cols, values, indent):
             f"{pad}   dt: d\n{pad}   data: [ {data} ]\n")
 
 
-def write_rig(path, rig_name, cameras):
+def write_rig(path, rig_name, cameras, volume_centre, volume_size):
     out = ["%YAML:1.0\n---\n", f"rig_name: \"{rig_name}\"\n", "cameras:\n"]
     for cam in cameras:
         rotation, translation = look_at(cam["position"], cam["target"])
@@ -41,6 +41,8 @@ def write_rig(path, rig_name, cameras):
         out.append(matrix("distortion_coefficients", 1, 5, cam["dist"], 6))
         out.append(matrix("rotation", 3, 3, [v for row in rotation for v in row], 6))
         out.append(matrix("translation", 3, 1, translation, 6))
+    out.append(matrix("volume_centre", 3, 1, volume_centre, 0))
+    out.append(matrix("volume_size", 3, 1, volume_size, 0))
     with open(path, "w") as fh:
         fh.write("".join(out))
 
@@ -53,20 +55,20 @@ def main():
     seated = [dict(webcam, name=n, position=p, target=centre) for n, p in [
         ("front-left", [-0.8, 1.9, -1.3]), ("front-right", [0.8, 1.9, -1.3]),
         ("back-left", [-0.8, 1.9, 0.35]), ("back-right", [0.8, 1.9, 0.35])]]
-    write_rig("assets/rigs/seated-4.yaml", "seated-4", seated)
+    write_rig("assets/rigs/seated-4.yaml", "seated-4", seated, centre, [1.0, 1.0, 1.0])
     # Room: about 4 x 4 x 2 m, cameras on the walls at 2.4 m looking at the middle at 1 m.
     room_centre = [0.0, 1.0, 0.0]
     room = []
     for i in range(8):
         a = 2 * math.pi * i / 8
         room.append(dict(webcam, name=f"wall-{i}", position=[2.2 * math.cos(a), 2.4, 2.2 * math.sin(a)], target=room_centre))
-    write_rig("assets/rigs/room-8.yaml", "room-8", room)
+    write_rig("assets/rigs/room-8.yaml", "room-8", room, room_centre, [3.0, 1.6, 3.0])
     # Stereo pair: 20 cm baseline above the user's head, looking at the desk volume (Wiimote-like
     # 1024 x 768 infrared cameras, about 45 degrees across).
     wiimote = dict(width=1024, height=768, f=1280.0, dist=[0.0, 0.0, 0.0, 0.0, 0.0])
     stereo = [dict(wiimote, name="left", position=[-0.1, 1.6, 0.3], target=[-0.1, 1.0, -0.45]),
               dict(wiimote, name="right", position=[0.1, 1.6, 0.3], target=[0.1, 1.0, -0.45])]
-    write_rig("assets/rigs/stereo-2.yaml", "stereo-2", stereo)
+    write_rig("assets/rigs/stereo-2.yaml", "stereo-2", stereo, [0.0, 1.0, -0.45], [0.6, 0.6, 0.6])
 
 
 if __name__ == "__main__":

@@ -26,7 +26,7 @@ const Data& data() {
     rhot::SimulatedRigSettings s;
     s.dropout = 0.1;
     rhot::SimulatedRig sim(out.rig, rhot::random_trajectories(100, {-1.5, 0.2, -1.5}, {1.5, 1.8, 1.5}, 2), s);
-    for (int i = 0; i < 64; ++i) out.frames.push_back(sim.next());
+    for (int i = 0; i < 512; ++i) out.frames.push_back(sim.next());
     return out;
   }();
   return d;

@@ -5,8 +5,8 @@
 //   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
 //                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
 //
-// Markers wander through a box of the given size centred where the cameras' optical axes meet
-// (least squares); the simulated rig sees them with Gaussian noise and dropouts; matching and
+// Markers wander through a box: the flags', else the rig file's tracking volume, else a 1 m cube
+// where the cameras' optical axes meet (least squares); the simulated rig sees them with Gaussian noise and dropouts; matching and
 // triangulation recover them; the result is compared with ground truth and with the Cramer-Rao
 // bound of each point for the cameras that saw it.
 
@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,23 @@ Eigen::Vector3d axes_meeting_point(const rhot::CameraRig& rig) {
   return a.ldlt().solve(b);
 }
 
+// A matched point further than this from every true marker is a ghost.
+constexpr double kGhostDistance_m = 0.005;
+
+// The box simulated markers move in: the flags when given, else the rig file's tracking volume,
+// else a 1 m cube where the optical axes meet.
+struct Box {
+  Eigen::Vector3d centre;
+  Eigen::Vector3d size;
+};
+Box evaluation_box(const rhot::CameraRig& rig, const std::vector<double>& size, const std::vector<double>& centre) {
+  Box box{axes_meeting_point(rig), Eigen::Vector3d::Ones()};
+  if (rig.volume) box = {rig.volume->centre_m, rig.volume->size_m};
+  if (size.size() == 3) box.size = {size[0], size[1], size[2]};
+  if (centre.size() == 3) box.centre = {centre[0], centre[1], centre[2]};
+  return box;
+}
+
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -61,9 +79,9 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
     std::cerr << "rhot-eval: " << rig_file << ": triangulation needs at least two cameras\n";
     return 1;
   }
-  const Eigen::Vector3d centre = volume_centre.size() == 3 ? Eigen::Vector3d(volume_centre[0], volume_centre[1], volume_centre[2])
-                                                          : axes_meeting_point(*rig);
-  const Eigen::Vector3d half(volume[0] / 2, volume[1] / 2, volume[2] / 2);
+  const Box box = evaluation_box(*rig, volume, volume_centre);
+  const Eigen::Vector3d centre = box.centre;
+  const Eigen::Vector3d half = box.size / 2;
   rhot::SimulatedRigSettings settings;
   settings.sigma_px = sigma;
   settings.dropout = dropout;
@@ -76,6 +94,7 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   long findable = 0;
   long found = 0;
   long ghosts = 0;
+  long mixed = 0;
   std::vector<double> ms;
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
@@ -90,7 +109,11 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
     for (const rhot::MatchedPoint& m : matched) {
       const int marker = rhot::truth_marker(frame, m);
       if (marker < 0) {
-        ++ghosts;
+        // Detections of more than one marker: a mix-up when the point still lies at a marker (two
+        // markers' projections nearly coincide in a camera), a ghost when it lies at none.
+        double nearest_m = std::numeric_limits<double>::infinity();
+        for (const Eigen::Vector3d& t : frame.truth_position_m) nearest_m = std::min(nearest_m, (t - m.point.position_world).norm());
+        ++(nearest_m <= kGhostDistance_m ? mixed : ghosts);
         continue;
       }
       ++found;
@@ -114,12 +137,15 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   j["markers"] = markers;
   j["seed"] = seed;
   j["volume_centre_m"] = {centre.x(), centre.y(), centre.z()};
-  j["volume_size_m"] = volume;
+  j["volume_size_m"] = {box.size.x(), box.size.y(), box.size.z()};
   j["rms_mm"] = rms_mm;
   j["crlb_mm"] = crlb_mm;
   j["ratio"] = crlb_mm > 0.0 ? rms_mm / crlb_mm : 0.0;
+  // Markers seen by two or more cameras, per frame: what there was to find.
+  j["findable_per_frame"] = static_cast<double>(findable) / static_cast<double>(frames);
   j["found_fraction"] = findable > 0 ? static_cast<double>(found) / static_cast<double>(findable) : 0.0;
   j["ghosts"] = ghosts;
+  j["mixed"] = mixed;
   j["median_ms"] = percentile(ms, 0.5);
   j["p99_ms"] = percentile(ms, 0.99);
   std::cout << j.dump(2) << "\n";
@@ -135,9 +161,9 @@ int wand(const std::string& rig_file, double length_mm, double sigma, int frames
     std::cerr << "rhot-eval: " << rig.error() << "\n";
     return 1;
   }
-  const Eigen::Vector3d centre = volume_centre.size() == 3 ? Eigen::Vector3d(volume_centre[0], volume_centre[1], volume_centre[2])
-                                                          : axes_meeting_point(*rig);
-  const Eigen::Vector3d half(volume[0] / 2, volume[1] / 2, volume[2] / 2);
+  const Box box = evaluation_box(*rig, volume, volume_centre);
+  const Eigen::Vector3d centre = box.centre;
+  const Eigen::Vector3d half = box.size / 2;
   const auto ends = rhot::wand_trajectories(length_mm / 1000.0, centre - half, centre + half);
   rhot::SimulatedRigSettings settings;
   settings.sigma_px = sigma;
@@ -175,6 +201,8 @@ int wand(const std::string& rig_file, double length_mm, double sigma, int frames
   j["dropout"] = dropout;
   j["frames"] = frames;
   j["frames_measured"] = measured;
+  j["volume_centre_m"] = {centre.x(), centre.y(), centre.z()};
+  j["volume_size_m"] = {box.size.x(), box.size.y(), box.size.z()};
   j["mean_error_mm"] = measured > 0 ? sum_abs / static_cast<double>(measured) : 0.0;
   j["rms_error_mm"] = measured > 0 ? std::sqrt(sum_sq / static_cast<double>(measured)) : 0.0;
   j["max_error_mm"] = max_abs;
@@ -194,7 +222,7 @@ int main(int argc, char** argv) {
   unsigned seed = 1;
   int markers = 100;
   double dropout = 0.0;
-  std::vector<double> volume{1.0, 1.0, 1.0};
+  std::vector<double> volume;
   std::vector<double> volume_centre;
   bool json = false;
   tri->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
@@ -203,13 +231,10 @@ int main(int argc, char** argv) {
   tri->add_option("--seed", seed, "random seed")->capture_default_str();
   tri->add_option("--markers", markers, "markers in the volume")->capture_default_str()->check(CLI::Range(1, 10000));
   tri->add_option("--dropout", dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
-  tri->add_option("--volume-m", volume, "size of the box the markers move in, X Y Z metres")
-      ->expected(3)
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  tri->add_option("--volume-centre-m", volume_centre,
-                  "centre of that box, X Y Z metres (default: where the optical axes meet, least squares)")
-      ->expected(3);
+  const char* volume_help = "size of the box the markers move in, X Y Z metres (default: the rig file's volume_size, else 1 1 1)";
+  const char* centre_help = "centre of that box, X Y Z metres (default: the rig file's volume_centre, else where the optical axes meet)";
+  tri->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
+  tri->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   tri->add_flag("--json", json, "print JSON (the only output format)");
   auto* wand_cmd = app.add_subcommand("wand", "length of a two-marker wand waved through the volume (mean and RMS error)");
   double length_mm = 195.0;
@@ -219,8 +244,8 @@ int main(int argc, char** argv) {
   wand_cmd->add_option("--frames", frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
   wand_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
   wand_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
-  wand_cmd->add_option("--volume-m", volume, "size of the box the wand moves in, X Y Z metres")->expected(3)->capture_default_str()->check(CLI::PositiveNumber);
-  wand_cmd->add_option("--volume-centre-m", volume_centre, "centre of that box, X Y Z metres")->expected(3);
+  wand_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
+  wand_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   wand_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);

@@ -70,9 +70,17 @@ class CameraProjection {
   Eigen::Vector3d centre_world_;
 };
 
+// The box a rig is meant to track (axis-aligned in the world, metres): where evaluation puts its
+// simulated markers unless told otherwise.
+struct TrackingVolume {
+  Eigen::Vector3d centre_m{0, 0, 0};
+  Eigen::Vector3d size_m{1, 1, 1};
+};
+
 struct CameraRig {
   std::string name;
   std::vector<Camera> cameras;
+  std::optional<TrackingVolume> volume;
 };
 
 // One CameraProjection per camera of the rig, in rig order.

@@ -20,8 +20,9 @@ std::string camera_label(std::size_t i, const std::string& name) {
 
 // Reads an rows x cols matrix of numbers from a node.
 Eigen::MatrixXd read_matrix(const cv::FileNode& parent, const char* key, int rows, int cols, const std::string& where) {
+  const std::string label = where.empty() ? std::string(key) : where + "." + key;
   const cv::FileNode node = parent[key];
-  if (node.empty()) throw Failure{where + "." + key + ": missing"};
+  if (node.empty()) throw Failure{label + ": missing"};
   cv::Mat m;
   try {
     node >> m;
@@ -29,10 +30,10 @@ Eigen::MatrixXd read_matrix(const cv::FileNode& parent, const char* key, int row
     m = cv::Mat();
   }
   if (m.empty() || m.channels() != 1) {
-    throw Failure{where + "." + key + ": expected an !!opencv-matrix of " + std::to_string(rows) + "x" + std::to_string(cols) + " numbers"};
+    throw Failure{label + ": expected an !!opencv-matrix of " + std::to_string(rows) + "x" + std::to_string(cols) + " numbers"};
   }
   if (m.rows * m.cols != rows * cols || (m.rows != rows && !(rows == 1 || cols == 1))) {
-    throw Failure{where + "." + key + ": expected " + std::to_string(rows) + "x" + std::to_string(cols) + ", got " +
+    throw Failure{label + ": expected " + std::to_string(rows) + "x" + std::to_string(cols) + ", got " +
                   std::to_string(m.rows) + "x" + std::to_string(m.cols)};
   }
   cv::Mat d;
@@ -40,7 +41,7 @@ Eigen::MatrixXd read_matrix(const cv::FileNode& parent, const char* key, int row
   Eigen::MatrixXd out(rows, cols);
   for (int i = 0; i < rows * cols; ++i) {
     const double v = d.at<double>(i / d.cols, i % d.cols);
-    if (!std::isfinite(v)) throw Failure{where + "." + key + ": contains a value that is not finite"};
+    if (!std::isfinite(v)) throw Failure{label + ": contains a value that is not finite"};
     out(i / cols, i % cols) = v;
   }
   return out;
@@ -57,6 +58,12 @@ int read_int(const cv::FileNode& parent, const char* key, const std::string& whe
 
 std::expected<void, std::string> check_rig(const CameraRig& rig) {
   if (rig.cameras.empty()) return std::unexpected(std::string("cameras: a rig needs at least one camera"));
+  if (rig.volume) {
+    if (!rig.volume->centre_m.allFinite()) return std::unexpected(std::string("volume_centre: contains a value that is not finite"));
+    if (!rig.volume->size_m.allFinite() || !(rig.volume->size_m.minCoeff() > 0.0)) {
+      return std::unexpected(std::string("volume_size: every side must be positive and finite"));
+    }
+  }
   std::set<std::string> names;
   for (std::size_t i = 0; i < rig.cameras.size(); ++i) {
     const Camera& c = rig.cameras[i];
@@ -138,6 +145,13 @@ std::expected<CameraRig, std::string> load_rig(const std::filesystem::path& file
       c.cam_from_world.translation = read_matrix(node, "translation", 3, 1, where);
       rig.cameras.push_back(std::move(c));
     }
+    const bool has_centre = !fs["volume_centre"].empty();
+    const bool has_size = !fs["volume_size"].empty();
+    if (has_centre != has_size) throw Failure{has_centre ? "volume_size: missing (volume_centre needs it)" : "volume_centre: missing (volume_size needs it)"};
+    if (has_centre) {
+      const cv::FileNode root = fs.root();
+      rig.volume = TrackingVolume{read_matrix(root, "volume_centre", 3, 1, ""), read_matrix(root, "volume_size", 3, 1, "")};
+    }
   } catch (const Failure& f) {
     return std::unexpected(path + ": " + f.message);
   } catch (const cv::Exception& e) {
@@ -167,6 +181,12 @@ std::expected<void, std::string> save_rig(const CameraRig& rig, const std::files
          << "translation" << cv::Mat(cv::Matx31d(t.x(), t.y(), t.z())) << "}";
     }
     fs << "]";
+    if (rig.volume) {
+      const Eigen::Vector3d& c = rig.volume->centre_m;
+      const Eigen::Vector3d& z = rig.volume->size_m;
+      fs << "volume_centre" << cv::Mat(cv::Matx31d(c.x(), c.y(), c.z()));
+      fs << "volume_size" << cv::Mat(cv::Matx31d(z.x(), z.y(), z.z()));
+    }
   } catch (const cv::Exception& e) {
     return std::unexpected(file.string() + ": cannot write: " + e.msg);
   }

@@ -12,6 +12,8 @@
 //       distortion_coefficients: !!opencv-matrix   1x5, k1 k2 p1 p2 k3
 //       rotation: !!opencv-matrix             3x3, cam_from_world
 //       translation: !!opencv-matrix          3x1, cam_from_world, metres
+//   volume_centre: !!opencv-matrix    optional, 3x1: the tracked box's centre in the world, metres
+//   volume_size: !!opencv-matrix      optional (with volume_centre), 3x1: its size X Y Z, metres
 //
 // Every problem is reported as one message naming the file, the camera and the field.
 
@@ -28,7 +30,7 @@ namespace rhot {
 
 // Consistency of a rig from any source: at least one camera, unique non-empty names, positive
 // image sizes and focal lengths, principal points inside the image, finite values, proper
-// rotations, distinct camera centres. The message names the camera and the field.
+// rotations, distinct camera centres, a tracking volume of positive finite size. The message names the camera and the field.
 [[nodiscard]] std::expected<void, std::string> check_rig(const CameraRig& rig);
 
 }  // namespace rhot

@@ -65,15 +65,18 @@ struct CameraDetections {
     const int y = static_cast<int>(std::floor((p.y() + 0.5) / cell_px));
     return (x < 0 || y < 0 || x >= cols || y >= rows) ? -1 : y * cols + x;
   }
-  // Nearest detection within `radius` (<= cell_px) of p, or -1.
+  // Nearest detection within `radius` of p, or -1. Visits only the cells the disc overlaps.
   int nearest(const Eigen::Vector2d& p, double radius) const {
-    const int cx = static_cast<int>(std::floor((p.x() + 0.5) / cell_px));
-    const int cy = static_cast<int>(std::floor((p.y() + 0.5) / cell_px));
+    // Far outside the grid (or NaN): nothing to find, and the cell arithmetic below would overflow.
+    if (!(p.x() > -radius - 1.0 && p.y() > -radius - 1.0 && p.x() < cols * cell_px && p.y() < rows * cell_px)) return -1;
+    const int x0 = std::max(0, static_cast<int>(std::floor((p.x() + 0.5 - radius) / cell_px)));
+    const int y0 = std::max(0, static_cast<int>(std::floor((p.y() + 0.5 - radius) / cell_px)));
+    const int x1 = std::min(cols - 1, static_cast<int>(std::floor((p.x() + 0.5 + radius) / cell_px)));
+    const int y1 = std::min(rows - 1, static_cast<int>(std::floor((p.y() + 0.5 + radius) / cell_px)));
     int best = -1;
     double best_d2 = radius * radius;
-    for (int y = cy - 1; y <= cy + 1; ++y) {
-      for (int x = cx - 1; x <= cx + 1; ++x) {
-        if (x < 0 || y < 0 || x >= cols || y >= rows) continue;
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
         const auto c = static_cast<std::size_t>(y * cols + x);
         for (int s = cell_start[c]; s < cell_start[c + 1]; ++s) {
           const int i = sorted[static_cast<std::size_t>(s)];
@@ -200,11 +203,7 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
           bool confirmed = false;
           if (grown.size() >= 3) {
             if (const auto refined = refine_point(poses, grown, cl.seed_point, 5)) {
-              confirmed = true;
-              for (const Observation& o : grown) {
-                const auto p = poses[static_cast<std::size_t>(o.camera)].project(refined->position_world);
-                confirmed = confirmed && p && (o.pixel - *p).norm() <= settings.max_residual_px;
-              }
+              confirmed = refined->max_residual_px <= settings.max_residual_px;
               cl.seed_point = refined->position_world;
               // Where two markers project close together in one camera, the refined point picks
               // the right detection more often than the two-view seed did.
@@ -260,22 +259,17 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
     if (grew) {
       std::sort(cl.observations.begin(), cl.observations.end(),
                 [](const Observation& a, const Observation& b) { return a.camera < b.camera; });
-      if (const auto again = refine_point(poses, cl.observations, cl.point.position_world, 5)) cl.point = *again;
+      const auto again = refine_point(poses, cl.observations, cl.point.position_world, 5);
+      if (!again) {
+        cl.support = 0;
+        continue;
+      }
+      cl.point = *again;
     }
     // Drop, one at a time, observations that disagree with the others: a neighbouring marker's
     // detection picked up while growing.
-    for (;;) {
-      double worst = 0.0;
-      std::size_t worst_at = 0;
-      for (std::size_t o = 0; o < cl.observations.size(); ++o) {
-        const auto p = poses[static_cast<std::size_t>(cl.observations[o].camera)].project(cl.point.position_world);
-        const double r = p ? (cl.observations[o].pixel - *p).norm() : 1e9;
-        if (r > worst) {
-          worst = r;
-          worst_at = o;
-        }
-      }
-      if (worst <= settings.max_residual_px) break;
+    while (cl.point.max_residual_px > settings.max_residual_px) {
+      const auto worst_at = static_cast<std::size_t>(cl.point.worst_observation);
       if (cl.observations.size() <= 2) {
         cl.observations.clear();
         break;
@@ -308,13 +302,28 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
   for (std::size_t c = 0; c < n; ++c) used[c].assign(cams[c].pixel.size(), false);
   std::vector<MatchedPoint> out;
   for (const std::size_t k : order) {
-    const Cluster& cl = clusters[k];
+    Cluster& cl = clusters[k];
     if (cl.support < 2 || cl.point.reprojection_rms_px > settings.max_rms_px || cl.missing > cl.support) continue;
-    bool free = true;
+    int taken = -1;  // the camera whose detection a better point already took
+    int conflicts = 0;
     for (std::size_t c = 0; c < n; ++c) {
-      if (cl.detection[c] >= 0 && used[c][static_cast<std::size_t>(cl.detection[c])]) free = false;
+      if (cl.detection[c] >= 0 && used[c][static_cast<std::size_t>(cl.detection[c])]) {
+        ++conflicts;
+        taken = static_cast<int>(c);
+      }
     }
-    if (!free) continue;
+    if (conflicts > 1) continue;
+    if (conflicts == 1) {
+      // Two markers whose projections nearly coincide in one camera share a detection there; the
+      // point seen by three or more other cameras is still found, without that camera. (Two
+      // clusters of one marker share two detections or more, so no duplicate comes of this.)
+      if (cl.support < 4) continue;
+      std::erase_if(cl.observations, [&](const Observation& o) { return o.camera == taken; });
+      const auto again = refine_point(poses, cl.observations, cl.point.position_world, 5);
+      if (!again || again->max_residual_px > settings.max_residual_px || again->reprojection_rms_px > settings.max_rms_px) continue;
+      cl.point = *again;
+      cl.detection[static_cast<std::size_t>(taken)] = -1;
+    }
     MatchedPoint m;
     m.point = cl.point;
     m.observations = cl.observations;

@@ -3,16 +3,20 @@
 //
 // 1. Every detection is undistorted to normalised image coordinates.
 // 2. Seeds: for every pair of cameras, detection pairs that satisfy the epipolar constraint
-//    within `epipolar_tolerance_px` (measured in the second camera's pixels).
-// 3. Each seed is triangulated and grown: every other camera contributes its detection nearest
-//    the point's reprojection, if within `reprojection_tolerance_px`. Seeds whose two detections
-//    already belong to one grown cluster are skipped.
+//    within `epipolar_tolerance_px` (measured in the second camera's pixels), triangulated as the
+//    midpoint of the two rays.
+// 3. Each seed is grown: every other camera contributes its detection nearest the point's
+//    reprojection, if within `reprojection_tolerance_px`. A seed that three or more cameras
+//    confirm (refined, every residual within `max_residual_px`) explains its detections: they
+//    seed nothing more, which keeps seeding near linear in the markers. A two-view seed that more
+//    than two other cameras should see, and do not, is dropped at once (step 4 would refuse it).
+//    Seeds whose two detections already belong to one cluster are skipped.
 // 4. Clusters are refined (Gauss-Newton), grown again from the refined point, and pruned of
-//    observations whose residual exceeds `max_residual_px` (worst first); then accepted greedily, best supported first, each
-//    detection used once, so a ghost built from detections that better-supported points explain
-//    is never accepted. A cluster is also refused when more cameras that should see its point (in
-//    front, inside the image) have no detection there than cameras that do, or when its
-//    reprojection RMS exceeds `max_rms_px`.
+//    observations whose residual exceeds `max_residual_px` (worst first); then accepted greedily,
+//    best supported first, each detection used once, so a ghost built from detections that
+//    better-supported points explain is never accepted. A cluster is also refused when more
+//    cameras that should see its point (in front, inside the image) have no detection there than
+//    cameras that do, or when its reprojection RMS exceeds `max_rms_px`.
 //
 // Markers seen by only two of many cameras are still found when the others cannot see them (out
 // of view). A marker hidden by occlusion from most cameras that could see it is refused like a

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <Eigen/Eigenvalues>
 
 namespace rhot {
@@ -62,30 +62,41 @@ std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> 
   TriangulatedPoint out;
   out.position_world = initial_world;
   Eigen::Matrix<double, 2, 3> j;
-  for (int it = 0; it < max_iterations; ++it) {
+  // Each pass evaluates the residuals at the current point; all but the last also take a step.
+  // A step below 1e-9 m is not taken, so the residuals reported are those of the point returned.
+  for (int it = 0;; ++it) {
     Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
     Eigen::Vector3d jtr = Eigen::Vector3d::Zero();
-    for (const Observation& o : observations) {
+    double sum = 0.0;
+    out.max_residual_px = 0.0;
+    for (std::size_t k = 0; k < observations.size(); ++k) {
+      const Observation& o = observations[k];
       const auto pixel = cameras[static_cast<std::size_t>(o.camera)].project(out.position_world, j);
       if (!pixel) return std::nullopt;
       const Eigen::Vector2d r = o.pixel - *pixel;
+      const double r2 = r.squaredNorm();
+      sum += r2;
+      if (r2 > out.max_residual_px) {
+        out.max_residual_px = r2;
+        out.worst_observation = static_cast<int>(k);
+      }
       jtj += j.transpose() * j;
       jtr += j.transpose() * r;
     }
-    const Eigen::Vector3d step = jtj.ldlt().solve(jtr);
-    if (!step.allFinite()) break;
+    out.max_residual_px = std::sqrt(out.max_residual_px);
+    out.reprojection_rms_px = std::sqrt(sum / static_cast<double>(observations.size()));
+    if (it >= max_iterations) break;
+    Eigen::Matrix3d inverse;
+    bool invertible = false;
+    jtj.computeInverseWithCheck(inverse, invertible, 1e-300);
+    if (!invertible) break;
+    const Eigen::Vector3d step = inverse * jtr;
+    if (!step.allFinite() || step.norm() < 1e-9) break;
     out.position_world += step;
-    if (step.norm() < 1e-9) break;
   }
-  double sum = 0.0;
-  for (const Observation& o : observations) {
-    const auto pixel = cameras[static_cast<std::size_t>(o.camera)].project(out.position_world);
-    if (!pixel) return std::nullopt;
-    sum += (o.pixel - *pixel).squaredNorm();
-    out.cameras.push_back(o.camera);
-  }
-  out.reprojection_rms_px = std::sqrt(sum / static_cast<double>(observations.size()));
-  if (!out.position_world.allFinite()) return std::nullopt;
+  if (!out.position_world.allFinite() || !std::isfinite(out.reprojection_rms_px)) return std::nullopt;
+  out.cameras.reserve(observations.size());
+  for (const Observation& o : observations) out.cameras.push_back(o.camera);
   return out;
 }
 

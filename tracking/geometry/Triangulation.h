@@ -22,6 +22,8 @@ struct Observation {
 struct TriangulatedPoint {
   Eigen::Vector3d position_world{0, 0, 0};
   double reprojection_rms_px = 0.0;
+  double max_residual_px = 0.0;  // the largest observation's residual
+  int worst_observation = 0;     // which observation (index into the observations given) that was
   std::vector<int> cameras;  // which cameras saw it
 };
 

@@ -76,6 +76,30 @@ bool SimulatedRig::visible(int camera, const Eigen::Vector3d& p_world) const {
   return true;
 }
 
+void SimulatedRig::merge_blobs(int camera, const std::vector<Eigen::Vector3d>& positions, std::vector<Detection>& detections) const {
+  const Rigid3d& cam_from_world = rig_.cameras[static_cast<std::size_t>(camera)].cam_from_world;
+  auto depth = [&](const Detection& d) { return (cam_from_world * positions[static_cast<std::size_t>(d.truth_marker)]).z(); };
+  std::sort(detections.begin(), detections.end(), [&](const Detection& a, const Detection& b) { return depth(a) < depth(b); });
+  struct Blob {
+    Eigen::Vector2d sum;
+    int count;
+    int marker;
+  };
+  std::vector<Blob> blobs;
+  const double merge2 = settings_.merge_distance_px * settings_.merge_distance_px;
+  for (const Detection& d : detections) {
+    auto into = std::find_if(blobs.begin(), blobs.end(), [&](const Blob& b) { return (b.sum / static_cast<double>(b.count) - d.pixel).squaredNorm() < merge2; });
+    if (into == blobs.end()) {
+      blobs.push_back({d.pixel, 1, d.truth_marker});
+    } else {
+      into->sum += d.pixel;
+      ++into->count;
+    }
+  }
+  detections.clear();
+  for (const Blob& b : blobs) detections.push_back({b.sum / static_cast<double>(b.count), b.marker});
+}
+
 RigFrame SimulatedRig::next() {
   RigFrame frame;
   frame.index = frame_++;
@@ -97,6 +121,7 @@ RigFrame SimulatedRig::next() {
       if (!visible(static_cast<int>(c), p) || drop < settings_.dropout) continue;
       cf.detections.push_back({*rig_.cameras[c].project(p) + n, static_cast<int>(m)});
     }
+    if (settings_.merge_distance_px > 0.0) merge_blobs(static_cast<int>(c), frame.truth_position_m, cf.detections);
     std::shuffle(cf.detections.begin(), cf.detections.end(), rng_);
     frame.cameras.push_back(std::move(cf));
   }

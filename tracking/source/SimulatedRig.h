@@ -40,6 +40,9 @@ struct SimulatedRigSettings {
   double dropout = 0.0;         // probability that a camera misses a visible marker in a frame
   double rate_hz = 90.0;        // frames per second
   double camera_skew_s = 0.0;   // camera i's exposure is offset by i * camera_skew_s (unsynchronised cameras)
+  // Detections of one camera closer than this merge into one blob at their mean pixel, credited to
+  // the marker nearest the camera, as a blob detector sees markers whose images overlap. 0: never.
+  double merge_distance_px = 0.0;
   unsigned seed = 1;
 };
 
@@ -61,6 +64,8 @@ class SimulatedRig {
   bool visible(int camera, const Eigen::Vector3d& p_world) const;
 
  private:
+  void merge_blobs(int camera, const std::vector<Eigen::Vector3d>& positions, std::vector<Detection>& detections) const;
+
   CameraRig rig_;
   std::vector<Trajectory> markers_;
   SimulatedRigSettings settings_;

@@ -26,12 +26,16 @@ TEST(RigFile, ShippedRigsLoadAndSeeTheirVolume) {
     const char* file;
     std::size_t cameras;
     Eigen::Vector3d centre;
+    Eigen::Vector3d size;
   };
-  for (const Expect& e : {Expect{"seated-4.yaml", 4, {0, 1.1, -0.45}}, Expect{"room-8.yaml", 8, {0, 1.0, 0.0}},
-                          Expect{"stereo-2.yaml", 2, {0, 1.0, -0.45}}}) {
+  for (const Expect& e : {Expect{"seated-4.yaml", 4, {0, 1.1, -0.45}, {1, 1, 1}}, Expect{"room-8.yaml", 8, {0, 1.0, 0.0}, {3, 1.6, 3}},
+                          Expect{"stereo-2.yaml", 2, {0, 1.0, -0.45}, {0.6, 0.6, 0.6}}}) {
     const auto rig = load_rig(rig_asset(e.file));
     ASSERT_TRUE(rig.has_value()) << rig.error();
     EXPECT_EQ(rig->cameras.size(), e.cameras) << e.file;
+    ASSERT_TRUE(rig->volume.has_value()) << e.file;
+    EXPECT_EQ(rig->volume->centre_m, e.centre) << e.file;
+    EXPECT_EQ(rig->volume->size_m, e.size) << e.file;
     for (const Camera& c : rig->cameras) {
       const auto pixel = c.project(e.centre);
       ASSERT_TRUE(pixel.has_value()) << e.file << " " << c.name;
@@ -70,6 +74,9 @@ TEST(RigFile, SaveThenLoadIsExactAndOpenCvCanReadIt) {
     EXPECT_EQ(back->cameras[i].intrinsics.fx, rig->cameras[i].intrinsics.fx);
     EXPECT_LT((back->cameras[i].centre_world() - rig->cameras[i].centre_world()).norm(), 1e-12);
   }
+  ASSERT_TRUE(back->volume.has_value());
+  EXPECT_EQ(back->volume->centre_m, rig->volume->centre_m);
+  EXPECT_EQ(back->volume->size_m, rig->volume->size_m);
   // Plain OpenCV reads the matrices.
   cv::FileStorage fs(out.string(), cv::FileStorage::READ);
   cv::Mat k;
@@ -114,6 +121,11 @@ TEST(RigFile, MalformedAndInconsistentRigsAreRefusedWithTheField) {
   EXPECT_EQ(error_after("      translation: !!opencv-matrix", "      translatoin: !!opencv-matrix"),
             "cameras[0] (\"front-left\").translation: missing");
   EXPECT_EQ(error_after("cameras:", "kameras:"), "cameras: missing");
+  EXPECT_EQ(error_after("volume_size:", "volume_sighs:"), "volume_size: missing (volume_centre needs it)");
+  EXPECT_EQ(error_after("volume_centre:", "volume_center:"), "volume_centre: missing (volume_size needs it)");
+  EXPECT_EQ(error_after("data: \\[ 1.0, 1.0, 1.0 \\]", "data: [ 1.0, -1.0, 1.0 ]"), "volume_size: every side must be positive and finite");
+  EXPECT_EQ(error_after("data: \\[ 1.0, 1.0, 1.0 \\]", "data: [ 1.0, 1.0 ]"), "volume_size: expected an !!opencv-matrix of 3x1 numbers");
+  EXPECT_EQ(error_after("data: \\[ 0.0, 1.1, -0.45 \\]", "data: [ 0.0, .inf, -0.45 ]"), "volume_centre: contains a value that is not finite");
   const auto junk = error_after("%YAML:1.0", "{{{ not yaml");
   EXPECT_NE(junk, "loaded");
 }

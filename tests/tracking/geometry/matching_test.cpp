@@ -1,5 +1,6 @@
 #include "tracking/geometry/Matching.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include <gtest/gtest.h>
@@ -164,6 +165,40 @@ TEST(Matching, CoincidentalEpipolarGhostsAreRejected) {
   EXPECT_EQ(sc.wrong, 0);
   EXPECT_EQ(sc.found, 2);
   EXPECT_EQ(points.size(), 2u);
+}
+
+// Two markers on one ray of camera 0 make one blob there: one detection for both, so one of the
+// two points must do without camera 0. Both are still found, each at its marker.
+TEST(Matching, MarkersProjectingToOnePixelAreBothFound) {
+  const CameraRig r = rig("seated-4.yaml");
+  const Eigen::Vector3d near{0.05, 1.05, -0.5};
+  const Eigen::Vector3d along = (near - r.cameras[0].centre_world()).normalized();
+  Trajectory a;
+  a.centre_m = near;
+  Trajectory b;
+  b.centre_m = near + 0.15 * along;
+  SimulatedRigSettings s;
+  s.sigma_px = 0.0;
+  s.merge_distance_px = 3.0;
+  SimulatedRig sim(r, {a, b}, s);
+  const RigFrame frame = sim.next();
+  ASSERT_EQ(frame.cameras[0].detections.size(), 1u);
+  for (std::size_t c = 1; c < 4; ++c) ASSERT_EQ(frame.cameras[c].detections.size(), 2u) << "camera " << c;
+  const auto points = match_and_triangulate(r, frame);
+  ASSERT_EQ(points.size(), 2u);
+  std::vector<std::size_t> views;
+  for (const Eigen::Vector3d& truth : {a.centre_m, b.centre_m}) {
+    int at = 0;
+    for (const MatchedPoint& p : points) {
+      if ((p.point.position_world - truth).norm() < 1e-6) {
+        ++at;
+        views.push_back(p.observations.size());
+      }
+    }
+    EXPECT_EQ(at, 1) << "marker at " << truth.transpose();
+  }
+  std::sort(views.begin(), views.end());
+  EXPECT_EQ(views, (std::vector<std::size_t>{3, 4})) << "one point takes camera 0's detection, the other does without";
 }
 
 }  // namespace

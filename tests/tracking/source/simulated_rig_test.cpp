@@ -98,6 +98,33 @@ TEST(SimulatedRig, CamerasSeeOnlyWhatIsInTheirImageAndStampTheirOwnTime) {
   EXPECT_DOUBLE_EQ(f.cameras[3].timestamp_s, 1.0 / 90.0 + 0.006);
 }
 
+TEST(SimulatedRig, OverlappingBlobsMergeIntoOneDetectionOfTheNearerMarker) {
+  const CameraRig r = rig("seated-4.yaml");
+  const Eigen::Vector3d near{0.0, 1.1, -0.45};
+  const Eigen::Vector3d along = (near - r.cameras[0].centre_world()).normalized();
+  const Eigen::Vector3d side = along.cross(Eigen::Vector3d::UnitY()).normalized();
+  Trajectory far_one;  // behind `near` as camera 0 sees it, offset sideways by about a pixel
+  far_one.centre_m = near + 0.2 * along + 0.001 * side;
+  Trajectory near_one;
+  near_one.centre_m = near;
+  SimulatedRigSettings s;
+  s.sigma_px = 0.0;
+  s.merge_distance_px = 3.0;
+  SimulatedRig sim(r, {far_one, near_one}, s);
+  const RigFrame frame = sim.next();
+  const Camera& c0 = r.cameras[0];
+  const Eigen::Vector2d p_far = *c0.project(far_one.centre_m);
+  const Eigen::Vector2d p_near = *c0.project(near_one.centre_m);
+  ASSERT_GT((p_far - p_near).norm(), 0.2);
+  ASSERT_LT((p_far - p_near).norm(), 3.0);
+  ASSERT_EQ(frame.cameras[0].detections.size(), 1u);
+  EXPECT_EQ(frame.cameras[0].detections[0].truth_marker, 1) << "credited to the marker nearer the camera";
+  EXPECT_LT((frame.cameras[0].detections[0].pixel - 0.5 * (p_far + p_near)).norm(), 1e-9);
+  for (std::size_t c = 1; c < 4; ++c) EXPECT_EQ(frame.cameras[c].detections.size(), 2u) << "camera " << c << " sees them apart";
+  s.merge_distance_px = 0.0;
+  EXPECT_EQ(SimulatedRig(r, {far_one, near_one}, s).next().cameras[0].detections.size(), 2u) << "merging off";
+}
+
 TEST(SimulatedRig, WandEndsStayTheirLengthApartInsideTheBox) {
   const Eigen::Vector3d lo(-0.5, 0.6, -0.95);
   const Eigen::Vector3d hi(0.5, 1.6, 0.05);
