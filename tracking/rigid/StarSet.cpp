@@ -1,0 +1,185 @@
+#include "tracking/rigid/StarSet.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace rhot {
+
+namespace {
+
+std::string format_mm(double v) {
+  std::ostringstream s;
+  s.precision(4);
+  s << v;
+  return s.str();
+}
+
+std::string star_label(std::size_t index, int id) { return "stars[" + std::to_string(index) + "] (id " + std::to_string(id) + ")"; }
+
+// The edge of a face opposite each of its vertices, in vertex order: edge k joins the other two.
+std::array<double, 3> face_edges(const MarkerStar& s, const std::array<int, 3>& face) {
+  std::array<double, 3> e{};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d& a = s.markers_mm[static_cast<std::size_t>(face[static_cast<std::size_t>((k + 1) % 3)])];
+    const Eigen::Vector3d& b = s.markers_mm[static_cast<std::size_t>(face[static_cast<std::size_t>((k + 2) % 3)])];
+    e[static_cast<std::size_t>(k)] = (a - b).norm();
+  }
+  return e;
+}
+
+double number(const nlohmann::json& j, const std::string& where) {
+  if (!j.is_number()) throw std::runtime_error(where + ": expected a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) throw std::runtime_error(where + ": not a finite number");
+  return v;
+}
+
+Eigen::Vector3d vector3(const nlohmann::json& j, const std::string& where) {
+  if (!j.is_array() || j.size() != 3) throw std::runtime_error(where + ": expected [x, y, z]");
+  return {number(j[0], where + "[0]"), number(j[1], where + "[1]"), number(j[2], where + "[2]")};
+}
+
+}  // namespace
+
+std::vector<std::string> check_star_set(const StarSet& set) {
+  std::vector<std::string> problems;
+  const StarSetRules& r = set.rules;
+  const double v = r.variation_mm;
+  const double radius = 0.5 * r.marker_diameter_mm;
+  std::set<int> ids;
+  for (std::size_t i = 0; i < set.stars.size(); ++i) {
+    const MarkerStar& s = set.stars[i];
+    const std::string where = star_label(i, s.id);
+    if (!ids.insert(s.id).second) problems.push_back(where + ": duplicate id");
+    // Edges: distinct by the variation, markers apart by a diameter.
+    std::array<double, 6> edges{};
+    for (std::size_t e = 0; e < 6; ++e) {
+      edges[e] = (s.markers_mm[static_cast<std::size_t>(kStarEdges[e][0])] - s.markers_mm[static_cast<std::size_t>(kStarEdges[e][1])]).norm();
+      if (!(edges[e] >= r.marker_diameter_mm)) {
+        problems.push_back(where + ": markers " + std::to_string(kStarEdges[e][0]) + " and " + std::to_string(kStarEdges[e][1]) +
+                           " overlap (" + format_mm(edges[e]) + " mm apart)");
+      }
+    }
+    for (std::size_t a = 0; a < 6; ++a) {
+      for (std::size_t b = a + 1; b < 6; ++b) {
+        if (!(std::abs(edges[a] - edges[b]) >= v)) {
+          problems.push_back(where + ": edges " + format_mm(edges[a]) + " and " + format_mm(edges[b]) + " mm differ by less than " +
+                             format_mm(v) + " mm");
+        }
+      }
+    }
+    // The box.
+    for (std::size_t m = 0; m < 4; ++m) {
+      const Eigen::Vector3d& p = s.markers_mm[m];
+      const bool inside = std::abs(p.x()) + radius <= 0.5 * r.box_mm.x() + 1e-9 && std::abs(p.y()) + radius <= 0.5 * r.box_mm.y() + 1e-9 &&
+                          p.z() - radius >= -1e-9 && p.z() + radius <= r.box_mm.z() + 1e-9;
+      if (!inside) problems.push_back(where + ": marker " + std::to_string(m) + " is not inside the box");
+    }
+  }
+  // Faces against every other face, under all six vertex correspondences.
+  struct Face {
+    std::size_t star;
+    int face;
+    std::array<double, 3> edges;
+  };
+  std::vector<Face> faces;
+  for (std::size_t i = 0; i < set.stars.size(); ++i) {
+    for (std::size_t f = 0; f < 4; ++f) faces.push_back({i, static_cast<int>(f), face_edges(set.stars[i], kStarFaces[f])});
+  }
+  for (std::size_t a = 0; a < faces.size(); ++a) {
+    for (std::size_t b = a + 1; b < faces.size(); ++b) {
+      std::array<int, 3> perm{0, 1, 2};
+      do {
+        double most = 0.0;
+        for (std::size_t k = 0; k < 3; ++k) most = std::max(most, std::abs(faces[a].edges[k] - faces[b].edges[static_cast<std::size_t>(perm[k])]));
+        if (!(most >= v)) {
+          problems.push_back(star_label(faces[a].star, set.stars[faces[a].star].id) + " face " + std::to_string(faces[a].face) + " and " +
+                             star_label(faces[b].star, set.stars[faces[b].star].id) + " face " + std::to_string(faces[b].face) +
+                             " differ by at most " + format_mm(most) + " mm in every edge");
+          break;
+        }
+      } while (std::next_permutation(perm.begin(), perm.end()));
+    }
+  }
+  return problems;
+}
+
+std::expected<StarSet, std::string> load_star_set(const std::filesystem::path& file) {
+  const std::string path = file.string();
+  std::ifstream in(file);
+  if (!in) return std::unexpected(path + ": star set file not found");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    return std::unexpected(path + ": not JSON: " + e.what());
+  }
+  StarSet set;
+  try {
+    if (!j.is_object()) throw std::runtime_error("expected a JSON object");
+    if (j.value("format", std::string()) != "rhot-marker-stars") throw std::runtime_error("format: expected \"rhot-marker-stars\"");
+    if (!j.contains("version") || j["version"] != 1) throw std::runtime_error("version: expected 1");
+    for (const char* key : {"marker_diameter_mm", "box_mm", "variation_mm", "stars"}) {
+      if (!j.contains(key)) throw std::runtime_error(std::string(key) + ": missing");
+    }
+    set.rules.marker_diameter_mm = number(j["marker_diameter_mm"], "marker_diameter_mm");
+    set.rules.box_mm = vector3(j["box_mm"], "box_mm");
+    set.rules.variation_mm = number(j["variation_mm"], "variation_mm");
+    if (!(set.rules.marker_diameter_mm > 0.0)) throw std::runtime_error("marker_diameter_mm: must be positive");
+    if (!(set.rules.box_mm.minCoeff() > 0.0)) throw std::runtime_error("box_mm: every side must be positive");
+    if (!(set.rules.variation_mm > 0.0)) throw std::runtime_error("variation_mm: must be positive");
+    if (!j["stars"].is_array()) throw std::runtime_error("stars: expected an array");
+    for (std::size_t i = 0; i < j["stars"].size(); ++i) {
+      const nlohmann::json& s = j["stars"][i];
+      const std::string where = "stars[" + std::to_string(i) + "]";
+      if (!s.is_object()) throw std::runtime_error(where + ": expected an object with id and markers_mm");
+      if (!s.contains("id") || !s["id"].is_number_integer()) throw std::runtime_error(where + ".id: expected an integer");
+      if (!s.contains("markers_mm") || !s["markers_mm"].is_array() || s["markers_mm"].size() != 4) {
+        throw std::runtime_error(where + ".markers_mm: expected four [x, y, z] marker centres");
+      }
+      MarkerStar star;
+      star.id = s["id"].get<int>();
+      for (std::size_t m = 0; m < 4; ++m) star.markers_mm[m] = vector3(s["markers_mm"][m], where + ".markers_mm[" + std::to_string(m) + "]");
+      set.stars.push_back(star);
+    }
+  } catch (const std::exception& e) {
+    return std::unexpected(path + ": " + e.what());
+  }
+  if (const auto problems = check_star_set(set); !problems.empty()) {
+    return std::unexpected(path + ": " + problems.front() + (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : ""));
+  }
+  return set;
+}
+
+std::expected<void, std::string> save_star_set(const StarSet& set, const std::filesystem::path& file) {
+  nlohmann::json j;
+  j["format"] = "rhot-marker-stars";
+  j["version"] = 1;
+  j["marker_diameter_mm"] = set.rules.marker_diameter_mm;
+  j["box_mm"] = {set.rules.box_mm.x(), set.rules.box_mm.y(), set.rules.box_mm.z()};
+  j["variation_mm"] = set.rules.variation_mm;
+  j["stars"] = nlohmann::json::array();
+  for (const MarkerStar& s : set.stars) {
+    nlohmann::json markers = nlohmann::json::array();
+    for (const Eigen::Vector3d& m : s.markers_mm) markers.push_back({m.x(), m.y(), m.z()});
+    j["stars"].push_back({{"id", s.id}, {"markers_mm", markers}});
+  }
+  const std::filesystem::path tmp = file.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) return std::unexpected(file.string() + ": cannot write");
+    out << j.dump(2) << "\n";
+    if (!out) return std::unexpected(file.string() + ": write failed");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) return std::unexpected(file.string() + ": cannot write: " + ec.message());
+  return {};
+}
+
+}  // namespace rhot
