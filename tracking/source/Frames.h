@@ -8,6 +8,8 @@
 
 #include <Eigen/Core>
 
+#include "tracking/core/Rigid3.h"
+
 namespace rhot {
 
 struct Detection {
@@ -26,6 +28,8 @@ struct RigFrame {
   double time_s = 0.0;
   std::vector<CameraFrame> cameras;                // one per camera in the rig
   std::vector<Eigen::Vector3d> truth_position_m;   // per marker (simulation only)
+  std::vector<int> truth_marker_body;              // per marker: its rigid body, -1 for a loose marker (simulation only)
+  std::vector<Rigid3d> truth_world_from_body;      // per rigid body (simulation only)
 };
 
 }  // namespace rhot

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/Geometry>
+
 #include "tracking/core/Check.h"
 
 namespace rhot {
@@ -76,6 +78,31 @@ bool SimulatedRig::visible(int camera, const Eigen::Vector3d& p_world) const {
   return true;
 }
 
+Rigid3d RigidMotion::world_from_body(double t_s) const {
+  Eigen::Vector3d turn;
+  for (int a = 0; a < 3; ++a) turn(a) = turn_amplitude_rad(a) * std::sin(2.0 * std::numbers::pi * turn_frequency_hz(a) * t_s + turn_phase_rad(a));
+  Rigid3d out;
+  out.rotation = base_orientation;
+  if (turn.norm() > 0.0) out.rotation = (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) * base_orientation).normalized();
+  out.translation = position.at(t_s);
+  return out;
+}
+
+void SimulatedRig::set_bodies(std::vector<SimulatedBody> bodies) {
+  bodies_ = std::move(bodies);
+  body_markers_.clear();
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    for (std::size_t m = 0; m < bodies_[b].markers_body_m.size(); ++m) body_markers_.emplace_back(static_cast<int>(b), static_cast<int>(m));
+  }
+}
+
+Eigen::Vector3d SimulatedRig::marker_at(std::size_t marker, double t_s) const {
+  if (marker < markers_.size()) return markers_[marker].at(t_s);
+  const auto [b, m] = body_markers_[marker - markers_.size()];
+  const SimulatedBody& body = bodies_[static_cast<std::size_t>(b)];
+  return body.motion.world_from_body(t_s) * body.markers_body_m[static_cast<std::size_t>(m)];
+}
+
 void SimulatedRig::merge_blobs(int camera, const std::vector<Eigen::Vector3d>& positions, std::vector<Detection>& detections) const {
   const Rigid3d& cam_from_world = rig_.cameras[static_cast<std::size_t>(camera)].cam_from_world;
   auto depth = [&](const Detection& d) { return (cam_from_world * positions[static_cast<std::size_t>(d.truth_marker)]).z(); };
@@ -106,14 +133,19 @@ RigFrame SimulatedRig::next() {
   frame.time_s = static_cast<double>(frame.index) / settings_.rate_hz;
   std::normal_distribution<double> noise(0.0, settings_.sigma_px);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  for (const Trajectory& m : markers_) frame.truth_position_m.push_back(m.at(frame.time_s));
+  const std::size_t marker_count = markers_.size() + body_markers_.size();
+  for (std::size_t m = 0; m < marker_count; ++m) {
+    frame.truth_position_m.push_back(marker_at(m, frame.time_s));
+    frame.truth_marker_body.push_back(m < markers_.size() ? -1 : body_markers_[m - markers_.size()].first);
+  }
+  for (const SimulatedBody& b : bodies_) frame.truth_world_from_body.push_back(b.motion.world_from_body(frame.time_s));
   for (std::size_t c = 0; c < rig_.cameras.size(); ++c) {
     CameraFrame cf;
     cf.camera = static_cast<int>(c);
     cf.timestamp_s = frame.time_s + static_cast<double>(c) * settings_.camera_skew_s;
-    for (std::size_t m = 0; m < markers_.size(); ++m) {
+    for (std::size_t m = 0; m < marker_count; ++m) {
       // Unsynchronised cameras see the marker where it is at their own exposure time.
-      const Eigen::Vector3d p = settings_.camera_skew_s == 0.0 ? frame.truth_position_m[m] : markers_[m].at(cf.timestamp_s);
+      const Eigen::Vector3d p = settings_.camera_skew_s == 0.0 ? frame.truth_position_m[m] : marker_at(m, cf.timestamp_s);
       // Draw the random numbers whatever happens, so one marker's visibility does not shift the
       // noise of every other: frames stay comparable across settings.
       const double drop = uniform(rng_);
@@ -148,6 +180,28 @@ std::array<Trajectory, 2> wand_trajectories(double length_m, const Eigen::Vector
     t.drift_phase_rad = {0.0, 1.0, 2.0};
   }
   return ends;
+}
+
+std::vector<RigidMotion> random_motions(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed) {
+  std::vector<RigidMotion> out;
+  const std::vector<Trajectory> paths = random_trajectories(count, box_min_m, box_max_m, seed);
+  std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ULL);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const Trajectory& path : paths) {
+    RigidMotion m;
+    m.position = path;
+    // Uniform over rotations: a normalised 4D Gaussian (Eigen's UnitRandom would draw from std::rand).
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    const double w = gauss(rng), x = gauss(rng), y = gauss(rng), z = gauss(rng);
+    m.base_orientation = Eigen::Quaterniond(w, x, y, z).normalized();
+    for (int a = 0; a < 3; ++a) {
+      m.turn_amplitude_rad(a) = 0.5 * std::numbers::pi * unit(rng);
+      m.turn_frequency_hz(a) = 0.1 + 0.3 * unit(rng);
+      m.turn_phase_rad(a) = 2.0 * std::numbers::pi * unit(rng);
+    }
+    out.push_back(m);
+  }
+  return out;
 }
 
 std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m,

@@ -28,6 +28,24 @@ struct Trajectory {
   Eigen::Vector3d at(double t_s) const;
 };
 
+// A rigid body's path: its origin follows `position`; it turns from `base_orientation` by the
+// rotation vector turn_amplitude * sin(2 pi turn_frequency t + turn_phase) (per axis, world frame).
+struct RigidMotion {
+  Trajectory position;
+  Eigen::Quaterniond base_orientation = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d turn_amplitude_rad{0, 0, 0};
+  Eigen::Vector3d turn_frequency_hz{0, 0, 0};
+  Eigen::Vector3d turn_phase_rad{0, 0, 0};
+
+  Rigid3d world_from_body(double t_s) const;
+};
+
+// Markers fixed to a rigid body (a marker star on an object), in the body's frame.
+struct SimulatedBody {
+  RigidMotion motion;
+  std::vector<Eigen::Vector3d> markers_body_m;
+};
+
 // Something that hides markers behind it: a sphere (a == b) or a capsule from a to b.
 struct Occluder {
   Eigen::Vector3d a_m{0, 0, 0};
@@ -51,6 +69,10 @@ class SimulatedRig {
   // Precondition: settings are sane (sigma >= 0, dropout in [0, 1], rate > 0).
   SimulatedRig(CameraRig rig, std::vector<Trajectory> markers, SimulatedRigSettings settings = {});
 
+  // Rigid bodies from the next frame on. Their markers follow the loose markers in each frame's
+  // marker numbering: body 0's first, then body 1's, and so on.
+  void set_bodies(std::vector<SimulatedBody> bodies);
+
   // Occluders for the following frames (for example a hand's bones).
   void set_occluders(std::vector<Occluder> occluders) { occluders_ = std::move(occluders); }
 
@@ -64,15 +86,22 @@ class SimulatedRig {
   bool visible(int camera, const Eigen::Vector3d& p_world) const;
 
  private:
+  Eigen::Vector3d marker_at(std::size_t marker, double t_s) const;
   void merge_blobs(int camera, const std::vector<Eigen::Vector3d>& positions, std::vector<Detection>& detections) const;
 
   CameraRig rig_;
   std::vector<Trajectory> markers_;
+  std::vector<SimulatedBody> bodies_;
+  std::vector<std::pair<int, int>> body_markers_;  // per body marker: (body, marker of that body)
   SimulatedRigSettings settings_;
   std::vector<Occluder> occluders_;
   std::mt19937_64 rng_;
   std::uint64_t frame_ = 0;
 };
+
+// `count` rigid motions whose origins wander through the box as random_trajectories' markers do,
+// each from a random orientation turning by up to 90 degrees about each axis at 0.1 to 0.4 Hz.
+std::vector<RigidMotion> random_motions(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed);
 
 // `count` markers wandering smoothly through an axis-aligned box (random centres, amplitudes up
 // to a quarter of the box, frequencies 0.1 to 0.5 Hz), from a seed.

@@ -1,0 +1,25 @@
+#pragma once
+// Least-squares rigid fit between corresponding point sets (Umeyama's closed form, which is Kabsch
+// with the reflection case handled), with the residual that says whether the sets really are one
+// rigid shape, and the scale a similarity fit would need (1 for the right shape).
+
+#include <optional>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "tracking/core/Rigid3.h"
+
+namespace rhot {
+
+struct RigidFit {
+  Rigid3d to_from_from;      // maps `from` points onto `to` points
+  double rms_m = 0.0;        // RMS distance between mapped `from` points and `to` points
+  double scale = 1.0;        // the similarity fit's scale: far from 1 means a different shape
+};
+
+// Nothing when the sets differ in size, have fewer than three points, are (nearly) collinear, or
+// contain a value that is not finite.
+std::optional<RigidFit> fit_rigid(std::span<const Eigen::Vector3d> from, std::span<const Eigen::Vector3d> to);
+
+}  // namespace rhot

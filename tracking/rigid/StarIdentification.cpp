@@ -1,0 +1,262 @@
+#include "tracking/rigid/StarIdentification.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <tuple>
+
+#include "tracking/rigid/RigidFit.h"
+
+namespace rhot {
+
+StarLibrary::StarLibrary(const StarSet& set, const StarIdentificationSettings& settings)
+    : settings_(settings),
+      tolerance_m_(settings.edge_tolerance_fraction * set.rules.variation_mm * 1e-3),
+      check_m_(settings.edge_check_fraction * set.rules.variation_mm * 1e-3) {
+  for (std::size_t s = 0; s < set.stars.size(); ++s) {
+    Star star;
+    star.id = set.stars[s].id;
+    for (std::size_t m = 0; m < 4; ++m) star.markers_m[m] = set.stars[s].markers_mm[m] * 1e-3;
+    for (const auto& e : kStarEdges) {
+      const double length = (star.markers_m[static_cast<std::size_t>(e[0])] - star.markers_m[static_cast<std::size_t>(e[1])]).norm();
+      edge_lengths_.push_back(length);
+      longest_m_ = std::max(longest_m_, length);
+    }
+    for (const auto& f : kStarFaces) {
+      // Edge opposite each vertex, then sorted with its vertex.
+      std::array<std::pair<double, int>, 3> opposite{};
+      for (std::size_t k = 0; k < 3; ++k) {
+        const auto& a = star.markers_m[static_cast<std::size_t>(f[(k + 1) % 3])];
+        const auto& b = star.markers_m[static_cast<std::size_t>(f[(k + 2) % 3])];
+        opposite[k] = {(a - b).norm(), f[k]};
+      }
+      std::sort(opposite.begin(), opposite.end());
+      Face face;
+      face.star = static_cast<int>(s);
+      for (std::size_t k = 0; k < 3; ++k) {
+        face.edges[k] = opposite[k].first;
+        face.marker[k] = opposite[k].second;
+      }
+      faces_.push_back(face);
+    }
+    stars_.push_back(star);
+  }
+  std::sort(faces_.begin(), faces_.end(), [](const Face& a, const Face& b) { return a.edges[0] < b.edges[0]; });
+  std::sort(edge_lengths_.begin(), edge_lengths_.end());
+}
+
+const StarLibrary::Face* StarLibrary::find_face(const std::array<double, 3>& e) const {
+  auto it = std::lower_bound(faces_.begin(), faces_.end(), e[0] - tolerance_m_,
+                             [](const Face& f, double v) { return f.edges[0] < v; });
+  for (; it != faces_.end() && it->edges[0] <= e[0] + tolerance_m_; ++it) {
+    if (std::abs(it->edges[1] - e[1]) <= tolerance_m_ && std::abs(it->edges[2] - e[2]) <= tolerance_m_) return &*it;
+  }
+  return nullptr;
+}
+
+bool StarLibrary::is_edge_length(double length_m) const {
+  const auto it = std::lower_bound(edge_lengths_.begin(), edge_lengths_.end(), length_m - tolerance_m_);
+  return it != edge_lengths_.end() && *it <= length_m + tolerance_m_;
+}
+
+namespace {
+
+// The largest difference between a measured edge and the model's, over the seen markers.
+double worst_edge_error(const StarLibrary::Star& s, const std::array<int, 4>& point, std::span<const Eigen::Vector3d> points) {
+  double worst = 0.0;
+  for (const auto& e : kStarEdges) {
+    const int a = point[static_cast<std::size_t>(e[0])], b = point[static_cast<std::size_t>(e[1])];
+    if (a < 0 || b < 0) continue;
+    const double measured = (points[static_cast<std::size_t>(a)] - points[static_cast<std::size_t>(b)]).norm();
+    const double model = (s.markers_m[static_cast<std::size_t>(e[0])] - s.markers_m[static_cast<std::size_t>(e[1])]).norm();
+    worst = std::max(worst, std::abs(measured - model));
+  }
+  return worst;
+}
+
+}  // namespace
+
+std::array<int, 4> best_correspondence(const StarLibrary& library, int star, std::span<const int> point_indices,
+                                       std::span<const Eigen::Vector3d> points_world) {
+  std::array<int, 4> best{-1, -1, -1, -1};
+  if (point_indices.size() < 3 || point_indices.size() > 4) return best;
+  const StarLibrary::Star& s = library.stars()[static_cast<std::size_t>(star)];
+  std::array<int, 4> marker_of{0, 1, 2, 3};  // point k is marker marker_of[k]
+  double best_error = std::numeric_limits<double>::infinity();
+  do {
+    std::array<int, 4> point{-1, -1, -1, -1};
+    for (std::size_t k = 0; k < point_indices.size(); ++k) point[static_cast<std::size_t>(marker_of[k])] = point_indices[k];
+    const double error = worst_edge_error(s, point, points_world);
+    if (error < best_error) {
+      best_error = error;
+      best = point;
+    }
+  } while (std::next_permutation(marker_of.begin(), marker_of.end()));
+  return best;
+}
+
+std::optional<IdentifiedStar> fit_star(const StarLibrary& library, int star, const std::array<int, 4>& point,
+                                       std::span<const Eigen::Vector3d> points_world) {
+  if (worst_edge_error(library.stars()[static_cast<std::size_t>(star)], point, points_world) > library.edge_check_m()) return std::nullopt;
+  std::array<Eigen::Vector3d, 4> model;
+  std::array<Eigen::Vector3d, 4> measured;
+  std::size_t n = 0;
+  const StarLibrary::Star& s = library.stars()[static_cast<std::size_t>(star)];
+  for (std::size_t m = 0; m < 4; ++m) {
+    if (point[m] < 0) continue;
+    model[n] = s.markers_m[m];
+    measured[n] = points_world[static_cast<std::size_t>(point[m])];
+    ++n;
+  }
+  const auto fit = fit_rigid(std::span(model.data(), n), std::span(measured.data(), n));
+  const StarIdentificationSettings& settings = library.settings();
+  if (!fit || fit->rms_m > settings.max_rms_m || std::abs(fit->scale - 1.0) > settings.max_scale_error) return std::nullopt;
+  IdentifiedStar out;
+  out.star = star;
+  out.world_from_star = fit->to_from_from;
+  out.rms_m = fit->rms_m;
+  out.point = point;
+  out.markers_seen = static_cast<int>(n);
+  return out;
+}
+
+std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span<const Eigen::Vector3d> points) {
+  const std::size_t n = points.size();
+  const double reach = library.longest_edge_m() + library.edge_tolerance_m();
+  // Edge candidates: pairs at a star edge's length, found by a sweep along x.
+  std::vector<std::size_t> by_x(n);
+  for (std::size_t i = 0; i < n; ++i) by_x[i] = i;
+  std::sort(by_x.begin(), by_x.end(), [&](std::size_t a, std::size_t b) { return points[a].x() < points[b].x(); });
+  std::vector<std::vector<std::pair<int, double>>> neighbours(n);  // (point, distance), any order
+  for (std::size_t a = 0; a < n; ++a) {
+    const Eigen::Vector3d& p = points[by_x[a]];
+    if (!p.allFinite()) continue;
+    for (std::size_t b = a + 1; b < n && points[by_x[b]].x() - p.x() <= reach; ++b) {
+      const double d = (points[by_x[b]] - p).norm();
+      if (!library.is_edge_length(d)) continue;
+      neighbours[by_x[a]].emplace_back(static_cast<int>(by_x[b]), d);
+      neighbours[by_x[b]].emplace_back(static_cast<int>(by_x[a]), d);
+    }
+  }
+  auto distance_between = [&](int i, int j) -> double {
+    for (const auto& [k, d] : neighbours[static_cast<std::size_t>(i)]) {
+      if (k == j) return d;
+    }
+    return -1.0;
+  };
+
+  // Hypotheses from every candidate triangle (i < j < k) that is a face of the set.
+  std::vector<IdentifiedStar> hypotheses;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& ni = neighbours[i];
+    for (std::size_t x = 0; x < ni.size(); ++x) {
+      const int j = ni[x].first;
+      if (j <= static_cast<int>(i)) continue;
+      for (std::size_t y = 0; y < ni.size(); ++y) {
+        const int k = ni[y].first;
+        if (k <= j) continue;
+        const double djk = distance_between(j, k);
+        if (djk < 0.0) continue;
+        // Edge opposite each point: i -> jk, j -> ik, k -> ij.
+        std::array<std::pair<double, int>, 3> opposite{{{djk, static_cast<int>(i)}, {ni[y].second, j}, {ni[x].second, k}}};
+        std::sort(opposite.begin(), opposite.end());
+        const StarLibrary::Face* face = library.find_face({opposite[0].first, opposite[1].first, opposite[2].first});
+        if (face == nullptr) continue;
+        std::array<int, 4> point{-1, -1, -1, -1};
+        for (std::size_t e = 0; e < 3; ++e) point[static_cast<std::size_t>(face->marker[e])] = opposite[e].second;
+        auto three = fit_star(library, face->star, point, points);
+        if (!three) continue;
+        // The fourth marker where the three put it.
+        const auto missing = static_cast<std::size_t>(std::find(point.begin(), point.end(), -1) - point.begin());
+        const Eigen::Vector3d predicted = three->world_from_star * library.stars()[static_cast<std::size_t>(face->star)].markers_m[missing];
+        int best = -1;
+        double best_d = library.settings().fourth_marker_gate_m;
+        for (std::size_t q = 0; q < n; ++q) {
+          const double d = (points[q] - predicted).norm();
+          if (d <= best_d && static_cast<int>(q) != point[0] && static_cast<int>(q) != point[1] && static_cast<int>(q) != point[2] &&
+              static_cast<int>(q) != point[3]) {
+            best_d = d;
+            best = static_cast<int>(q);
+          }
+        }
+        if (best >= 0) {
+          std::array<int, 4> four = point;
+          four[missing] = best;
+          if (auto full = fit_star(library, face->star, four, points)) {
+            hypotheses.push_back(*full);
+            continue;
+          }
+        }
+        hypotheses.push_back(*three);
+      }
+    }
+  }
+
+  // A star in view is found from each of its faces whose edges are within the tolerance: the
+  // number of faces that found a hypothesis is its support. A chance match rarely has more than one.
+  std::sort(hypotheses.begin(), hypotheses.end(), [](const IdentifiedStar& a, const IdentifiedStar& b) {
+    return std::tie(a.star, a.point) < std::tie(b.star, b.point);
+  });
+  std::vector<IdentifiedStar> unique;
+  std::vector<int> support;
+  for (const IdentifiedStar& x : hypotheses) {
+    if (!unique.empty() && unique.back().star == x.star && unique.back().point == x.point) {
+      ++support.back();
+      continue;
+    }
+    unique.push_back(x);
+    support.push_back(1);
+  }
+  hypotheses = std::move(unique);
+
+  // Choosing among conflicting hypotheses (sharing a point, or one star at two places): a chance
+  // triangle takes points from two or three real stars, so it conflicts with more hypotheses than
+  // a real star does. Repeatedly take the hypothesis with the most markers, then the most support,
+  // then the fewest conflicts left, then the smallest residual; drop what it conflicts with.
+  const std::size_t h = hypotheses.size();
+  auto conflict = [&](std::size_t a, std::size_t b) {
+    if (hypotheses[a].star == hypotheses[b].star) return true;
+    for (const int p : hypotheses[a].point) {
+      if (p >= 0 && std::find(hypotheses[b].point.begin(), hypotheses[b].point.end(), p) != hypotheses[b].point.end()) return true;
+    }
+    return false;
+  };
+  std::vector<std::vector<std::size_t>> conflicts(h);
+  for (std::size_t a = 0; a < h; ++a) {
+    for (std::size_t b = a + 1; b < h; ++b) {
+      if (!conflict(a, b)) continue;
+      conflicts[a].push_back(b);
+      conflicts[b].push_back(a);
+    }
+  }
+  std::vector<int> degree(h);
+  for (std::size_t a = 0; a < h; ++a) degree[a] = static_cast<int>(conflicts[a].size());
+  std::vector<bool> alive(h, true);
+  std::vector<IdentifiedStar> out;
+  for (;;) {
+    std::size_t best = h;
+    for (std::size_t a = 0; a < h; ++a) {
+      if (!alive[a]) continue;
+      if (best == h) {
+        best = a;
+        continue;
+      }
+      const IdentifiedStar& x = hypotheses[a];
+      const IdentifiedStar& y = hypotheses[best];
+      if (std::make_tuple(-x.markers_seen, -support[a], degree[a], x.rms_m) < std::make_tuple(-y.markers_seen, -support[best], degree[best], y.rms_m)) {
+        best = a;
+      }
+    }
+    if (best == h) break;
+    out.push_back(hypotheses[best]);
+    alive[best] = false;
+    for (const std::size_t c : conflicts[best]) {
+      if (!alive[c]) continue;
+      alive[c] = false;
+      for (const std::size_t d : conflicts[c]) --degree[d];
+    }
+  }
+  return out;
+}
+
+}  // namespace rhot
