@@ -34,13 +34,14 @@ bool StarTracker::near_prediction(const TrackedStar& s, const Rigid3d& predicted
 
 void StarTracker::accept(TrackedStar& s, const IdentifiedStar& fit, double time_s) {
   const double dt = time_s - s.last_seen_s;
-  // Velocities from the last two poses, smoothed; only across short gaps (a long one says little).
-  if (s.frames_since_seen >= 0 && s.frames_since_seen <= 2 && dt > 1e-6) {
+  // Velocities from the last two poses: smoothed from frame to frame, the average across a gap.
+  if (recent(s) && dt > 1e-6) {
     const Eigen::Vector3d v = (fit.world_from_star.translation - s.world_from_star.translation) / dt;
     const Eigen::AngleAxisd turn(fit.world_from_star.rotation * s.world_from_star.rotation.conjugate());
     const Eigen::Vector3d w = turn.axis() * (turn.angle() > std::numbers::pi ? turn.angle() - 2 * std::numbers::pi : turn.angle()) / dt;
-    s.velocity_m_s = 0.5 * (s.velocity_m_s + v);
-    s.angular_velocity_rad_s = 0.5 * (s.angular_velocity_rad_s + w);
+    const bool consecutive = s.frames_since_seen == 0;
+    s.velocity_m_s = consecutive ? Eigen::Vector3d(0.5 * (s.velocity_m_s + v)) : v;
+    s.angular_velocity_rad_s = consecutive ? Eigen::Vector3d(0.5 * (s.angular_velocity_rad_s + w)) : w;
   } else {
     s.velocity_m_s.setZero();
     s.angular_velocity_rad_s.setZero();
