@@ -304,14 +304,16 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
       bool own = false;
       for (const int p : t.point) {
         if (p < 0) continue;
-        const int body = point_body[static_cast<std::size_t>(p)];
+        // A point within a millimetre of one of the star's own markers is the star's, whichever
+        // marker's detections it was built from (two bodies' markers can meet in space).
+        int body = point_body[static_cast<std::size_t>(p)];
+        for (std::size_t k = 0; k < frame.truth_position_m.size(); ++k) {
+          if (frame.truth_marker_body[k] == t.star && (frame.truth_position_m[k] - points[static_cast<std::size_t>(p)]).norm() < 0.001) body = t.star;
+        }
         other = other || (body >= 0 && body != t.star);
         own = own || body == t.star;
       }
       if (other || !own) {
-        std::cerr << "WRONG frame " << f << " star " << t.star << " seen " << t.markers_seen << " followed " << t.frames_followed << " rms " << t.rms_m*1000 << " points";
-        for (const int p : t.point) std::cerr << " " << (p < 0 ? -9 : point_body[static_cast<std::size_t>(p)]);
-        std::cerr << "\n";
         ++wrong;
         continue;
       }
@@ -320,9 +322,6 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
       sum_position2 += (t.world_from_star.translation - truth.translation).squaredNorm();
       const double angle = Eigen::AngleAxisd(t.world_from_star.rotation * truth.rotation.conjugate()).angle();
       sum_rotation2 += angle * angle;
-      if (angle > 0.1) { std::cerr << "BIGROT " << angle*57.3 << " deg seen " << t.markers_seen << " rms " << t.rms_m*1000 << " pos_mm " << 1000*(t.world_from_star.translation - truth.translation).norm() << " pts";
-        for (const int p : t.point) std::cerr << " " << (p < 0 ? -9 : point_body[static_cast<std::size_t>(p)]);
-        std::cerr << "\n"; }
       ++posed;
     }
     if (frames >= 20 && (f + 1) % (frames / 10) == 0) std::cerr << "rhot-eval: frame " << f + 1 << " of " << frames << "\n";

@@ -3,35 +3,49 @@
 #include <cmath>
 
 #include <Eigen/Geometry>
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
 namespace rhot {
 
 std::optional<RigidFit> fit_rigid(std::span<const Eigen::Vector3d> from, std::span<const Eigen::Vector3d> to) {
-  const auto n = static_cast<Eigen::Index>(from.size());
-  if (from.size() != to.size() || n < 3) return std::nullopt;
-  Eigen::Matrix3Xd a(3, n), b(3, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    a.col(i) = from[static_cast<std::size_t>(i)];
-    b.col(i) = to[static_cast<std::size_t>(i)];
+  const std::size_t n = from.size();
+  if (to.size() != n || n < 3) return std::nullopt;
+  Eigen::Vector3d mean_a = Eigen::Vector3d::Zero(), mean_b = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!from[i].allFinite() || !to[i].allFinite()) return std::nullopt;
+    mean_a += from[i];
+    mean_b += to[i];
   }
-  if (!a.allFinite() || !b.allFinite()) return std::nullopt;
+  mean_a /= static_cast<double>(n);
+  mean_b /= static_cast<double>(n);
+  Eigen::Matrix3d spread_a = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();  // sum (a - mean_a)(b - mean_b)^T
+  double var_a = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d a = from[i] - mean_a;
+    const Eigen::Vector3d b = to[i] - mean_b;
+    spread_a += a * a.transpose();
+    cross += a * b.transpose();
+    var_a += a.squaredNorm();
+  }
   // Collinear points leave the rotation about their line free.
-  const Eigen::Matrix3Xd centred = a.colwise() - a.rowwise().mean();
-  const Eigen::JacobiSVD<Eigen::Matrix3d> spread(centred * centred.transpose());
-  const Eigen::Vector3d s = spread.singularValues();
-  if (!(s(1) > 1e-10 * std::max(s(0), 1e-30))) return std::nullopt;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(spread_a, Eigen::EigenvaluesOnly);
+  if (!(eigen.eigenvalues()(1) > 1e-10 * std::max(eigen.eigenvalues()(2), 1e-30))) return std::nullopt;
 
-  const Eigen::Matrix4d similarity = Eigen::umeyama(a, b, true);
-  const Eigen::Matrix4d rigid = Eigen::umeyama(a, b, false);
+  // Kabsch: the rotation maximising trace(R^T H^T), with the reflection case turned into a rotation.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0) d(2, 2) = -1.0;
+  const Eigen::Matrix3d r = svd.matrixV() * d * svd.matrixU().transpose();
   RigidFit fit;
-  fit.scale = similarity.topLeftCorner<3, 3>().determinant();
-  fit.scale = std::cbrt(fit.scale);
-  const Eigen::Matrix3d r = rigid.topLeftCorner<3, 3>();
   fit.to_from_from.rotation = Eigen::Quaterniond(r).normalized();
-  fit.to_from_from.translation = rigid.topRightCorner<3, 1>();
+  fit.to_from_from.translation = mean_b - r * mean_a;
+  // The similarity fit's scale (Umeyama): sum of the signed singular values over the spread of `from`.
+  fit.scale = (svd.singularValues().array() * d.diagonal().array()).sum() / var_a;
   double sum = 0.0;
-  for (Eigen::Index i = 0; i < n; ++i) sum += (fit.to_from_from * Eigen::Vector3d(a.col(i)) - b.col(i)).squaredNorm();
+  for (std::size_t i = 0; i < n; ++i) sum += (fit.to_from_from * from[i] - to[i]).squaredNorm();
   fit.rms_m = std::sqrt(sum / static_cast<double>(n));
   if (!fit.to_from_from.is_finite() || !std::isfinite(fit.rms_m) || !std::isfinite(fit.scale)) return std::nullopt;
   return fit;

@@ -1,7 +1,7 @@
 #pragma once
-// Least-squares rigid fit between corresponding point sets (Umeyama's closed form, which is Kabsch
-// with the reflection case handled), with the residual that says whether the sets really are one
-// rigid shape, and the scale a similarity fit would need (1 for the right shape).
+// Least-squares rigid fit between corresponding point sets (Kabsch, by one 3x3 SVD, the reflection
+// case turned into the nearest rotation), with the residual that says whether the sets really are
+// one rigid shape, and the scale a similarity fit would need (Umeyama's; 1 for the right shape).
 
 #include <optional>
 #include <span>

@@ -147,6 +147,7 @@ std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span
 
   // Hypotheses from every candidate triangle (i < j < k) that is a face of the set.
   std::vector<IdentifiedStar> hypotheses;
+  std::vector<int> found_by;  // per hypothesis: faces that found it
   for (std::size_t i = 0; i < n; ++i) {
     const auto& ni = neighbours[i];
     for (std::size_t x = 0; x < ni.size(); ++x) {
@@ -164,6 +165,15 @@ std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span
         if (face == nullptr) continue;
         std::array<int, 4> point{-1, -1, -1, -1};
         for (std::size_t e = 0; e < 3; ++e) point[static_cast<std::size_t>(face->marker[e])] = opposite[e].second;
+        // Another face of a star already found with these markers: more support, no new fit.
+        bool known = false;
+        for (std::size_t h = 0; h < hypotheses.size() && !known; ++h) {
+          if (hypotheses[h].star != face->star || hypotheses[h].markers_seen != 4) continue;
+          known = true;
+          for (std::size_t m = 0; m < 4; ++m) known = known && (point[m] < 0 || point[m] == hypotheses[h].point[m]);
+          if (known) ++found_by[h];
+        }
+        if (known) continue;
         auto three = fit_star(library, face->star, point, points);
         if (!three) continue;
         // The fourth marker where the three put it.
@@ -184,28 +194,33 @@ std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span
           four[missing] = best;
           if (auto full = fit_star(library, face->star, four, points)) {
             hypotheses.push_back(*full);
+            found_by.push_back(1);
             continue;
           }
         }
         hypotheses.push_back(*three);
+        found_by.push_back(1);
       }
     }
   }
 
   // A star in view is found from each of its faces whose edges are within the tolerance: the
   // number of faces that found a hypothesis is its support. A chance match rarely has more than one.
-  std::sort(hypotheses.begin(), hypotheses.end(), [](const IdentifiedStar& a, const IdentifiedStar& b) {
-    return std::tie(a.star, a.point) < std::tie(b.star, b.point);
+  std::vector<std::size_t> order(hypotheses.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return std::tie(hypotheses[a].star, hypotheses[a].point) < std::tie(hypotheses[b].star, hypotheses[b].point);
   });
   std::vector<IdentifiedStar> unique;
   std::vector<int> support;
-  for (const IdentifiedStar& x : hypotheses) {
+  for (const std::size_t k : order) {
+    const IdentifiedStar& x = hypotheses[k];
     if (!unique.empty() && unique.back().star == x.star && unique.back().point == x.point) {
-      ++support.back();
+      support.back() += found_by[k];
       continue;
     }
     unique.push_back(x);
-    support.push_back(1);
+    support.push_back(found_by[k]);
   }
   hypotheses = std::move(unique);
 

@@ -71,11 +71,13 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
   for (std::size_t s = 0; s < stars_.size(); ++s) {
     if (!recent(stars_[s])) continue;
     predicted[s] = predict(stars_[s], time_s);
+    const double since = time_s - stars_[s].last_seen_s;
+    const double gate = settings_.gate_m + 0.5 * settings_.max_acceleration_m_s2 * since * since;
     for (int m = 0; m < 4; ++m) {
       const Eigen::Vector3d at = predicted[s] * library_.stars()[s].markers_m[static_cast<std::size_t>(m)];
       for (std::size_t q = 0; q < n; ++q) {
         const double d = (points[q] - at).norm();
-        if (d <= settings_.gate_m) pairings.push_back({d, static_cast<int>(s), m, static_cast<int>(q)});
+        if (d <= gate) pairings.push_back({d, static_cast<int>(s), m, static_cast<int>(q)});
       }
     }
   }

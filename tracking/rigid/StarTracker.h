@@ -24,7 +24,10 @@
 namespace rhot {
 
 struct StarTrackerSettings {
-  double gate_m = 0.01;          // how far a point may be from a predicted marker
+  // How far a point may be from a predicted marker: gate_m, plus what an unforeseen acceleration of
+  // max_acceleration_m_s2 moves it since the star was last seen.
+  double gate_m = 0.004;
+  double max_acceleration_m_s2 = 20.0;
   int max_coast_frames = 45;     // frames a star is predicted without being seen (0.5 s at 90 Hz)
   double swap_distance_m = 0.03;  // a fresh identification this near another star's prediction is refused
   // How far a star may turn from its predicted orientation: turn_gate_rad plus turn_rate_rad_s per
