@@ -1,7 +1,5 @@
 // Runs the real rhot-demo executable and checks its exit status, output and statistics file.
 
-#include <sys/wait.h>
-
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -11,26 +9,18 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "RunCommand.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct DemoRun {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
+using DemoRun = rhot::test::CommandRun;
 
-// env_prefix: e.g. "env -u DISPLAY" to run the demo in a changed environment.
+// env_prefix: e.g. "env -u DISPLAY" to run the demo in a changed environment. Output: stdout and
+// stderr together.
 DemoRun run_demo(const std::string& args, const std::string& env_prefix = "") {
-  const std::string command = env_prefix + " " + std::string(RHOT_BINARY_DIR) + "/rhot-demo " + args + " 2>&1";
-  DemoRun r;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), static_cast<int>(buffer.size()), pipe) != nullptr) r.output += buffer.data();
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return rhot::test::run_program("rhot-demo", args, "2>&1", env_prefix);
 }
 
 fs::path temp_dir() {

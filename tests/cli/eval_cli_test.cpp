@@ -1,7 +1,5 @@
 // Runs the real rhot-eval and checks its JSON.
 
-#include <sys/wait.h>
-
 #include <array>
 #include <cstdio>
 #include <string>
@@ -9,31 +7,21 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "RunCommand.h"
+
 namespace {
 
-struct EvalRun {
-  int exit_code = -1;
-  std::string out;
-};
+using EvalRun = rhot::test::CommandRun;
 
-EvalRun run_eval(const std::string& args) {
-  const std::string command = std::string(RHOT_BINARY_DIR) + "/rhot-eval " + args + " 2>/dev/null";
-  EvalRun r;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), static_cast<int>(buffer.size()), pipe) != nullptr) r.out += buffer.data();
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+// stdout only: the JSON.
+EvalRun run_eval(const std::string& args) { return rhot::test::run_program("rhot-eval", args, "2>/dev/null"); }
 
 TEST(EvalCli, TriangulationPrintsTheAccuracyJsonForEveryShippedRig) {
   // No volume flags: each rig file's tracking volume is where the markers move.
   for (const char* rig : {"seated-4.yaml", "room-8.yaml", "stereo-2.yaml"}) {
     const EvalRun r = run_eval(std::string("triangulation --rig ") + RHOT_ASSET_DIR + "/rigs/" + rig + " --frames 3 --markers 30 --json");
-    ASSERT_EQ(r.exit_code, 0) << rig << "\n" << r.out;
-    const nlohmann::json j = nlohmann::json::parse(r.out);
+    ASSERT_EQ(r.exit_code, 0) << rig << "\n" << r.output;
+    const nlohmann::json j = nlohmann::json::parse(r.output);
     for (const char* key : {"rms_mm", "crlb_mm", "ratio", "found_fraction", "ghosts", "median_ms", "p99_ms"}) {
       EXPECT_TRUE(j.contains(key)) << rig << " lacks " << key;
     }
@@ -48,16 +36,16 @@ TEST(EvalCli, TriangulationPrintsTheAccuracyJsonForEveryShippedRig) {
 TEST(EvalCli, VolumeFlagsOverrideTheRigFile) {
   const EvalRun r = run_eval(std::string("triangulation --rig ") + RHOT_ASSET_DIR +
                              "/rigs/seated-4.yaml --volume-centre-m 0 1.2 -0.4 --volume-m 0.2 0.3 0.4 --frames 2 --markers 5 --json");
-  ASSERT_EQ(r.exit_code, 0) << r.out;
-  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["volume_centre_m"], nlohmann::json({0.0, 1.2, -0.4}));
   EXPECT_EQ(j["volume_size_m"], nlohmann::json({0.2, 0.3, 0.4}));
 }
 
 TEST(EvalCli, WandLengthIsMeasuredToAboutAMillimetre) {
   const EvalRun r = run_eval(std::string("wand --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --length-mm 195 --frames 40 --json");
-  ASSERT_EQ(r.exit_code, 0) << r.out;
-  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["frames_measured"], 40);
   // Sigma 0.3 px on the seated rig locates each end to about 0.5 mm (see the triangulation
   // numbers), so the length is off by well under 2 mm RMS; a wrong scale or a swapped end is not.
