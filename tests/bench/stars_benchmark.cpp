@@ -36,7 +36,7 @@ const Data& data() {
     }
     rhot::SimulatedRig sim(rig, {}, {});
     sim.set_bodies(bodies);
-    for (int f = 0; f < 512; ++f) {
+    for (int f = 0; f < 128; ++f) {
       const rhot::RigFrame frame = sim.next();
       std::vector<Eigen::Vector3d> pts;
       for (const rhot::MatchedPoint& m : rhot::match_and_triangulate(rig, frame)) pts.push_back(m.point.position_world);

@@ -1,0 +1,158 @@
+#include "tracking/hand/HandSolver.h"
+
+#include <random>
+#include <tuple>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace rhot {
+namespace {
+
+using Tips = std::array<std::optional<Eigen::Vector3d>, kFingerCount>;
+
+Tips tips_of(const HandPose& pose) {
+  Tips t;
+  for (int f = 0; f < kFingerCount; ++f) t[static_cast<std::size_t>(f)] = pose.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(f))[3])];
+  return t;
+}
+
+TEST(HandSolver, TheReferenceHandsTipsGiveBackItsTips) {
+  for (const HandSide side : {HandSide::kLeft, HandSide::kRight}) {
+    const HandPose reference = reference_open_hand(side);
+    HandSolver solver(side, reference);
+    const HandState& s = solver.update(0.0, tips_of(reference));
+    for (int f = 0; f < kFingerCount; ++f) {
+      const auto tip = static_cast<std::size_t>(chain_joints(static_cast<Finger>(f))[3]);
+      EXPECT_LT((s.pose.position_m[tip] - reference.position_m[tip]).norm(), 0.0005) << "finger " << f;
+      EXPECT_EQ(s.confidence[tip], 1.0);
+    }
+    for (int j = 0; j < kHandJointCount; ++j) {
+      EXPECT_TRUE(s.pose.position_m[static_cast<std::size_t>(j)].allFinite());
+      EXPECT_GT(s.confidence[static_cast<std::size_t>(j)], 0.0) << joint_name(static_cast<HandJoint>(j));
+    }
+    EXPECT_FALSE(s.pinch.active);
+    EXPECT_FALSE(s.grip.active);
+  }
+}
+
+TEST(HandSolver, AnUnseenFingerEasesTowardRelaxedAndLosesConfidence) {
+  const HandPose reference = reference_open_hand(HandSide::kRight);
+  HandSolver solver(HandSide::kRight, reference);
+  // Curl the index finger: its tip under the knuckle.
+  Tips tips = tips_of(reference);
+  const std::size_t index_tip = static_cast<std::size_t>(HandJoint::kIndexTip);
+  const Eigen::Vector3d knuckle = reference.position_m[static_cast<std::size_t>(HandJoint::kIndexProximal)];
+  tips[1] = knuckle + Eigen::Vector3d(0.0, -0.045, 0.01);
+  const double curled = solver.update(0.0, tips).angles[1].flexion_rad[1];
+  EXPECT_GT(curled, 0.8);
+  tips[1].reset();
+  double previous = curled;
+  for (int f = 1; f <= 180; ++f) {
+    const HandState& s = solver.update(f / 90.0, tips);
+    EXPECT_LE(s.angles[1].flexion_rad[1], previous + 1e-12) << "eases monotonically";
+    previous = s.angles[1].flexion_rad[1];
+    EXPECT_FALSE(s.tip_seen[1]);
+    if (f == 45) {
+      EXPECT_NEAR(s.confidence[index_tip], 0.9 * std::exp(-0.5 / HandSolver::kRelaxTime_s), 1e-9);
+    }
+  }
+  const HandState& s = solver.state();
+  // After 2 s (four time constants) the finger is within 2 % of relaxed.
+  const double relaxed = HandSolver(HandSide::kRight, reference).state().angles[1].flexion_rad[1];
+  EXPECT_NEAR(s.angles[1].flexion_rad[1], relaxed, 0.02 * std::abs(curled - relaxed) + 1e-9);
+  EXPECT_LT(s.confidence[index_tip], 0.02);
+  EXPECT_EQ(s.confidence[static_cast<std::size_t>(HandJoint::kMiddleTip)], 1.0) << "the other fingers stay seen";
+}
+
+TEST(Gestures, PinchAndGripHaveHysteresis) {
+  const GestureSettings g;
+  Gesture pinch;
+  for (const auto& [gap, seen, active] : std::vector<std::tuple<double, bool, bool>>{
+           {0.030, true, false}, {0.012, true, false}, {0.005, false, false}, {0.009, true, true}, {0.012, true, true},
+           {0.0149, true, true}, {0.016, true, false}, {0.012, true, false}}) {
+    update_pinch(pinch, gap, seen, g);
+    EXPECT_EQ(pinch.active, active) << "gap " << gap;
+  }
+  update_pinch(pinch, 0.005, true, g);
+  EXPECT_EQ(pinch.activation, 1.0);
+  update_pinch(pinch, std::nan(""), true, g);
+  EXPECT_TRUE(pinch.active) << "a NaN gap changes nothing";
+  update_pinch(pinch, 0.025, true, g);
+  EXPECT_NEAR(pinch.activation, 0.5, 1e-12);
+  Gesture grip;
+  for (const auto& [curl, active] : std::vector<std::pair<double, bool>>{{0.3, false}, {0.6, false}, {0.7, true}, {0.5, true}, {0.4, false}}) {
+    update_grip(grip, curl, g);
+    EXPECT_EQ(grip.active, active) << "curl " << curl;
+  }
+}
+
+// Thumb and index tips brought together where both can reach: a pinch; apart: released.
+TEST(HandSolver, TipsTogetherPinch) {
+  const HandPose reference = reference_open_hand(HandSide::kRight);
+  HandSolver solver(HandSide::kRight, reference);
+  const auto chains = solver.chains();
+  // A point the index reaches that the thumb reaches too.
+  std::optional<Eigen::Vector3d> meet;
+  for (double f0 = 0.2; f0 < 1.5 && !meet; f0 += 0.1) {
+    for (double f1 = 0.2; f1 < 1.8 && !meet; f1 += 0.1) {
+      for (double ab = -0.25; ab <= 0.25 && !meet; ab += 0.05) {
+        const Eigen::Vector3d p = finger_forward(chains[1], FingerAngles{ab, {f0, f1, 2.0 / 3.0 * f1}})[3];
+        if (solve_fabrik(chains[0], p, {}, {50, 1e-5}).tip_error_m < 0.0005) meet = p;
+      }
+    }
+  }
+  ASSERT_TRUE(meet.has_value()) << "thumb and index cannot meet";
+  Tips tips = tips_of(reference);
+  tips[0] = *meet;
+  tips[1] = *meet;
+  for (int f = 0; f < 5; ++f) solver.update(f / 90.0, tips);
+  EXPECT_TRUE(solver.state().pinch.active);
+  tips = tips_of(reference);
+  for (int f = 5; f < 10; ++f) solver.update(f / 90.0, tips);
+  EXPECT_FALSE(solver.state().pinch.active);
+}
+
+TEST(HandSolver, RandomAndBrokenInputNeverGivesNaNOrBreaksALimit) {
+  const HandPose reference = reference_open_hand(HandSide::kLeft);
+  HandSolver solver(HandSide::kLeft, reference);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  std::uniform_int_distribution<int> kind(0, 5);
+  for (int f = 0; f < 1000; ++f) {
+    Tips tips;
+    for (auto& t : tips) {
+      switch (kind(rng)) {
+        case 0: break;  // unseen
+        case 1: t = Eigen::Vector3d(std::nan(""), 0, 0); break;
+        case 2: t = Eigen::Vector3d(1e300, -1e300, 0); break;
+        default: t = Eigen::Vector3d(u(rng), u(rng), u(rng));
+      }
+    }
+    const double time = kind(rng) == 0 ? std::nan("") : f / 90.0;
+    const HandState& s = solver.update(time, tips);
+    for (int j = 0; j < kHandJointCount; ++j) {
+      ASSERT_TRUE(s.pose.position_m[static_cast<std::size_t>(j)].allFinite()) << f;
+      ASSERT_TRUE(std::isfinite(s.confidence[static_cast<std::size_t>(j)]));
+    }
+    for (int k = 0; k < kFingerCount; ++k) ASSERT_TRUE(within_limits(solver.chains()[static_cast<std::size_t>(k)].limits, s.angles[static_cast<std::size_t>(k)])) << f;
+    ASSERT_TRUE(std::isfinite(s.pinch.activation) && std::isfinite(s.grip.activation));
+  }
+}
+
+TEST(HandSolver, AFistIsAGrip) {
+  const HandPose reference = reference_open_hand(HandSide::kRight);
+  HandSolver solver(HandSide::kRight, reference);
+  Tips tips = tips_of(reference);
+  for (int f = 2; f < kFingerCount; ++f) {
+    const FingerChain& c = solver.chains()[static_cast<std::size_t>(f)];
+    FingerAngles fist;
+    fist.flexion_rad = {1.4, 1.6, c.limits.coupling * 1.6};
+    tips[static_cast<std::size_t>(f)] = finger_forward(c, fist)[3];
+  }
+  EXPECT_TRUE(solver.update(0.0, tips).grip.active);
+  EXPECT_FALSE(solver.update(0.1, tips_of(reference)).grip.active);
+}
+
+}  // namespace
+}  // namespace rhot

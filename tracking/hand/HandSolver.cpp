@@ -1,0 +1,135 @@
+#include "tracking/hand/HandSolver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace rhot {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+HandJoint joint_at(int index) { return static_cast<HandJoint>(index); }
+
+}  // namespace
+
+std::array<HandJoint, 4> chain_joints(Finger finger) {
+  if (finger == Finger::kThumb) return {HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal, HandJoint::kThumbDistal, HandJoint::kThumbTip};
+  const int base = static_cast<int>(HandJoint::kIndexProximal) + 5 * (static_cast<int>(finger) - 1);
+  return {joint_at(base), joint_at(base + 1), joint_at(base + 2), joint_at(base + 3)};
+}
+
+std::array<FingerChain, kFingerCount> hand_chains(const HandPose& skeleton, HandSide side) {
+  std::array<FingerChain, kFingerCount> chains;
+  for (int f = 0; f < kFingerCount; ++f) {
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    const auto at = [&](HandJoint j) { return skeleton.position_m[static_cast<std::size_t>(j)]; };
+    FingerChain& c = chains[static_cast<std::size_t>(f)];
+    c.root_m = at(joints[0]);
+    // The rest direction: the metacarpal's for a finger; for the thumb, its metacarpal bone's.
+    const Eigen::Vector3d from =
+        f == 0 ? at(HandJoint::kThumbMetacarpal) : at(joint_at(static_cast<int>(joints[0]) - 1));
+    const Eigen::Vector3d to = f == 0 ? at(HandJoint::kThumbProximal) : at(joints[0]);
+    c.rest_direction = (to - from).normalized();
+    // The flexion plane: where the skeleton's own joints bend (toward the palm), else straight down.
+    Eigen::Vector3d bend = Eigen::Vector3d::Zero();
+    for (std::size_t k = 1; k < 4; ++k) {
+      const Eigen::Vector3d v = at(joints[k]) - c.root_m;
+      bend += v - v.dot(c.rest_direction) * c.rest_direction;
+    }
+    if (bend.norm() < 0.002 || bend.dot(Eigen::Vector3d::UnitY()) > 0.0) bend = -Eigen::Vector3d::UnitY();
+    bend -= bend.dot(c.rest_direction) * c.rest_direction;
+    c.up = -bend.normalized();
+    for (std::size_t k = 0; k < 3; ++k) c.length_m[k] = (at(joints[k + 1]) - at(joints[k])).norm();
+    // Both hands flex toward the palm (-Y); positive abduction is toward +X, the little finger's
+    // side on a right hand and the thumb's on a left one (the limits are symmetric).
+    (void)side;
+    if (f == static_cast<int>(Finger::kMiddle)) c.limits.abduction_max_rad = 0.0;
+    if (f == static_cast<int>(Finger::kThumb)) {
+      c.limits.abduction_max_rad = 45.0 * kDeg;
+      c.limits.flexion_min_rad = {-20.0 * kDeg, -20.0 * kDeg, -20.0 * kDeg};
+      c.limits.flexion_max_rad = {60.0 * kDeg, 60.0 * kDeg, 80.0 * kDeg};
+    }
+  }
+  return chains;
+}
+
+void update_pinch(Gesture& pinch, double gap_m, bool tips_seen, const GestureSettings& g) {
+  if (!std::isfinite(gap_m)) return;
+  pinch.activation = std::clamp((g.pinch_zero_m - gap_m) / (g.pinch_zero_m - g.pinch_on_m), 0.0, 1.0);
+  if (gap_m < g.pinch_on_m && tips_seen) pinch.active = true;
+  if (gap_m > g.pinch_off_m) pinch.active = false;
+}
+
+void update_grip(Gesture& grip, double curl, const GestureSettings& g) {
+  if (!std::isfinite(curl)) return;
+  grip.activation = std::clamp(curl / g.grip_on, 0.0, 1.0);
+  if (curl > g.grip_on) grip.active = true;
+  if (curl < g.grip_off) grip.active = false;
+}
+
+HandSolver::HandSolver(HandSide side, const HandPose& skeleton, GestureSettings gestures)
+    : chains_(hand_chains(skeleton, side)), gestures_(gestures) {
+  state_.pose = skeleton;
+  // Relaxed: the skeleton's own pose (a relaxed open hand for the reference skeleton).
+  for (int f = 0; f < kFingerCount; ++f) {
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    IkSettings s;
+    s.max_iterations = 50;
+    relaxed_[static_cast<std::size_t>(f)] =
+        solve_fabrik(chains_[static_cast<std::size_t>(f)], skeleton.position_m[static_cast<std::size_t>(joints[3])], {}, s).angles;
+  }
+  state_.angles = relaxed_;
+  state_.confidence.fill(0.0);
+}
+
+const HandState& HandSolver::update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips) {
+  const double dt = started_ && std::isfinite(time_s) && time_s > time_s_ ? time_s - time_s_ : 0.0;
+  if (std::isfinite(time_s)) time_s_ = std::max(time_s_, time_s);
+  started_ = true;
+  state_.confidence[static_cast<std::size_t>(HandJoint::kPalm)] = 1.0;
+  state_.confidence[static_cast<std::size_t>(HandJoint::kWrist)] = 1.0;
+  for (int f = 0; f < kFingerCount; ++f) {
+    const auto fi = static_cast<std::size_t>(f);
+    const FingerChain& chain = chains_[fi];
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    const bool seen = tips[fi].has_value() && tips[fi]->allFinite();
+    state_.tip_seen[fi] = seen;
+    FingerAngles& a = state_.angles[fi];
+    if (seen) {
+      a = solve_fabrik(chain, *tips[fi], a).angles;
+      last_seen_s_[fi] = time_s_;
+    } else {
+      // Ease toward relaxed: the remaining difference shrinks by exp(-dt / T) each frame.
+      const double keep = std::exp(-dt / kRelaxTime_s);
+      a.abduction_rad = relaxed_[fi].abduction_rad + keep * (a.abduction_rad - relaxed_[fi].abduction_rad);
+      for (std::size_t k = 0; k < 3; ++k) a.flexion_rad[k] = relaxed_[fi].flexion_rad[k] + keep * (a.flexion_rad[k] - relaxed_[fi].flexion_rad[k]);
+      a = clamp_to_limits(chain.limits, a);
+    }
+    const auto p = finger_forward(chain, a);
+    const double confidence = seen ? 0.9 : 0.9 * std::exp(-(time_s_ - last_seen_s_[fi]) / kRelaxTime_s);
+    for (std::size_t k = 0; k < 4; ++k) {
+      // The thumb's metacarpal joint moves with the CMC; the fingers' knuckles are fixed by the hand frame.
+      state_.pose.position_m[static_cast<std::size_t>(joints[k])] = p[k];
+      state_.confidence[static_cast<std::size_t>(joints[k])] = k == 0 && f != 0 ? 1.0 : (k == 3 && seen ? 1.0 : confidence);
+    }
+    if (f != 0) state_.confidence[static_cast<std::size_t>(joints[0]) - 1] = 1.0;  // the metacarpal joint
+  }
+
+  // Gestures.
+  const auto at = [&](HandJoint j) { return state_.pose.position_m[static_cast<std::size_t>(j)]; };
+  const auto radius = [&](HandJoint j) { return state_.pose.radius_m[static_cast<std::size_t>(j)]; };
+  const double gap = (at(HandJoint::kThumbTip) - at(HandJoint::kIndexTip)).norm() - radius(HandJoint::kThumbTip) - radius(HandJoint::kIndexTip);
+  update_pinch(state_.pinch, gap, state_.tip_seen[0] && state_.tip_seen[1], gestures_);
+  double curl = 0.0;
+  for (int f = 2; f < kFingerCount; ++f) {
+    const FingerAngles& a = state_.angles[static_cast<std::size_t>(f)];
+    const FingerLimits& l = chains_[static_cast<std::size_t>(f)].limits;
+    curl += (a.flexion_rad[0] + a.flexion_rad[1] + a.flexion_rad[2]) / (l.flexion_max_rad[0] + l.flexion_max_rad[1] + l.flexion_max_rad[2]);
+  }
+  update_grip(state_.grip, curl / 3.0, gestures_);
+  return state_;
+}
+
+}  // namespace rhot

@@ -1,0 +1,79 @@
+#pragma once
+// A whole hand from its fingertips: the hand frame (from the marker star on the back of the hand)
+// fixes the palm, wrist and metacarpals; each finger's joints come from FABRIK toward its tip
+// marker (FingerIK.h); a finger whose tip is not seen eases from its last angles toward a relaxed
+// pose, its joints' confidence falling; pinch and grip gestures with hysteresis.
+//
+// Joint confidence: 1 for joints fixed by the hand frame and for a seen fingertip; 0.9 for joints
+// placed by IK from a seen tip; for a finger unseen for t seconds, 0.9 exp(-t / 0.5 s).
+
+#include <array>
+#include <optional>
+
+#include "tracking/hand/FingerIK.h"
+#include "tracking/hand/HandJoints.h"
+
+namespace rhot {
+
+enum class Finger : std::uint8_t { kThumb = 0, kIndex, kMiddle, kRing, kLittle };
+inline constexpr int kFingerCount = 5;
+
+// The five chains of a hand with the bone lengths and knuckle positions of `skeleton` (a calibrated
+// hand, or reference_open_hand), with the anatomical limits: seed 002's for the fingers (the middle
+// finger's abduction fixed), and for the thumb (which seed 002 does not give; estimates that let
+// it oppose the fingers) CMC abduction +-45, flexion -20..60, MCP -20..60, IP -20..80 degrees.
+std::array<FingerChain, kFingerCount> hand_chains(const HandPose& skeleton, HandSide side);
+
+// The joints of each chain: root, two hinges, tip.
+std::array<HandJoint, 4> chain_joints(Finger finger);
+
+struct GestureSettings {
+  double pinch_on_m = 0.010;   // thumb and index tips, less their radii, closer than this: pinch
+  double pinch_off_m = 0.015;  // ... further than this: released
+  double pinch_zero_m = 0.040;  // activation falls from 1 at pinch_on to 0 here
+  double grip_on = 0.65;       // mean curl of middle, ring and little (0 straight, 1 fully bent)
+  double grip_off = 0.45;
+};
+
+struct Gesture {
+  bool active = false;
+  double activation = 0.0;  // 0-1
+};
+
+// Pinch from the gap between thumb and index tips (less their radii): on below pinch_on (only
+// while both tips are seen), off above pinch_off, in between as it was. Grip alike from the curl.
+void update_pinch(Gesture& pinch, double gap_m, bool tips_seen, const GestureSettings& settings);
+void update_grip(Gesture& grip, double curl, const GestureSettings& settings);
+
+struct HandState {
+  HandPose pose;  // hand frame
+  std::array<FingerAngles, kFingerCount> angles{};
+  std::array<double, kHandJointCount> confidence{};
+  std::array<bool, kFingerCount> tip_seen{};
+  Gesture pinch;
+  Gesture grip;
+};
+
+class HandSolver {
+ public:
+  HandSolver(HandSide side, const HandPose& skeleton, GestureSettings gestures = {});
+
+  // One frame: fingertip positions in the hand frame (nothing for a tip not seen).
+  const HandState& update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips_hand_m);
+  const HandState& state() const { return state_; }
+  const std::array<FingerChain, kFingerCount>& chains() const { return chains_; }
+
+  // How long a finger takes to relax when unseen (time constant), and its relaxed pose.
+  static constexpr double kRelaxTime_s = 0.5;
+
+ private:
+  std::array<FingerChain, kFingerCount> chains_;
+  std::array<FingerAngles, kFingerCount> relaxed_;
+  std::array<double, kFingerCount> last_seen_s_{};
+  GestureSettings gestures_;
+  HandState state_;
+  double time_s_ = 0.0;
+  bool started_ = false;
+};
+
+}  // namespace rhot
