@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -53,7 +54,9 @@ TEST(StarsCli, WritesAValidSetAMeshPerStarAndAPicture) {
     EXPECT_EQ(fs::file_size(stl), 84u + 50u * triangles);
   }
   std::ifstream svg(dir / "nested" / "set.svg");
-  const std::string picture((std::istreambuf_iterator<char>(svg)), std::istreambuf_iterator<char>());
+  std::ostringstream text;
+  text << svg.rdbuf();
+  const std::string picture = text.str();
   EXPECT_NE(picture.find("<svg"), std::string::npos);
   EXPECT_NE(picture.find("star " + std::to_string(set->stars.back().id) + "<"), std::string::npos) << "every star drawn";
 }

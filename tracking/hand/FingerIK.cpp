@@ -73,7 +73,9 @@ std::array<Eigen::Vector3d, 4> finger_forward(const FingerChain& c, const Finger
   return out;
 }
 
-IkResult solve_fabrik(const FingerChain& c, const Eigen::Vector3d& target, const FingerAngles& start, const IkSettings& s) {
+namespace {
+
+IkResult fabrik_from(const FingerChain& c, const Eigen::Vector3d& target, const FingerAngles& start, const IkSettings& s) {
   IkResult r;
   r.angles = clamp_to_limits(c.limits, start);
   if (!target.allFinite()) {
@@ -132,6 +134,21 @@ IkResult solve_fabrik(const FingerChain& c, const Eigen::Vector3d& target, const
     r.angles = clamp_to_limits(l, FingerAngles{abduction, flexion});
     r.tip_error_m = (finger_forward(c, r.angles)[3] - target).norm();
     if (r.tip_error_m < s.tolerance_m) break;
+  }
+  return r;
+}
+
+}  // namespace
+
+IkResult solve_fabrik(const FingerChain& c, const Eigen::Vector3d& target, const FingerAngles& start, const IkSettings& s) {
+  IkResult r = fabrik_from(c, target, start, s);
+  // Hinges that may also extend (the thumb's) can leave FABRIK bent the wrong way from a poor
+  // start; once it has stalled far from the target, try again from the middle of the ranges.
+  if (r.tip_error_m > 10.0 * s.tolerance_m && target.allFinite()) {
+    FingerAngles middle;
+    for (std::size_t k = 0; k < 3; ++k) middle.flexion_rad[k] = 0.5 * (c.limits.flexion_min_rad[k] + c.limits.flexion_max_rad[k]);
+    const IkResult again = fabrik_from(c, target, middle, s);
+    if (again.tip_error_m < r.tip_error_m) r = IkResult{again.angles, again.tip_error_m, r.iterations + again.iterations};
   }
   return r;
 }
