@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <Eigen/Geometry>
@@ -87,27 +88,33 @@ IkResult fabrik_from(const FingerChain& c, const Eigen::Vector3d& target, const 
   const Eigen::Vector3d to_target = target - c.root_m;
   std::array<double, 3> flexion = r.angles.flexion_rad;
   double abduction = r.angles.abduction_rad;
+  // The chain lies in one plane through the up axis, so the target's direction in the palm plane
+  // is the abduction (its opposite when the finger curls back past its knuckle), limited by the
+  // ellipse for the current root flexion.
+  double along = to_target.dot(c.rest_direction);
+  double across = to_target.dot(lateral);
+  if (along < 0.0) {
+    along = -along;
+    across = -across;
+  }
+  const bool aim = std::hypot(along, across) > 1e-6;
+  const double wanted_abduction = aim ? std::atan2(across, along) : abduction;
+  double plane_abduction = std::numeric_limits<double>::quiet_NaN();
+  Eigen::Vector2d goal = Eigen::Vector2d::Zero();
+  double off_plane2 = 0.0;  // squared distance of the target from the finger's plane
+  std::array<Eigen::Vector2d, 4> p = planar_forward(c.length_m, flexion);
   for (int it = 0; it < s.max_iterations; ++it) {
     r.iterations = it + 1;
-    // Abduction: the target's direction in the palm plane, within the ellipse for the current flexion.
-    // The chain lies in one plane through the up axis, so the target's direction in the palm
-    // plane is the abduction, or its opposite when the finger curls back past its knuckle.
-    double along = to_target.dot(c.rest_direction);
-    double across = to_target.dot(lateral);
-    if (along < 0.0) {
-      along = -along;
-      across = -across;
+    const double limit = abduction_limit(l, flexion[0]);
+    abduction = std::clamp(wanted_abduction, -limit, limit);
+    if (abduction != plane_abduction) {
+      Eigen::Vector3d forward, down;
+      plane_axes(c, abduction, forward, down);
+      goal = {to_target.dot(forward), to_target.dot(down)};
+      off_plane2 = std::max(0.0, to_target.squaredNorm() - goal.squaredNorm());
+      plane_abduction = abduction;
     }
-    if (std::hypot(along, across) > 1e-6) {
-      const double limit = abduction_limit(l, flexion[0]);
-      abduction = std::clamp(std::atan2(across, along), -limit, limit);
-    }
-    Eigen::Vector3d forward, down;
-    plane_axes(c, abduction, forward, down);
-    const Eigen::Vector2d goal(to_target.dot(forward), to_target.dot(down));
-
     // Backward pass from the target, forward pass from the root with each hinge clamped.
-    std::array<Eigen::Vector2d, 4> p = planar_forward(c.length_m, flexion);
     p[3] = goal;
     for (int i = 2; i >= 0; --i) {
       const Eigen::Vector2d d = p[static_cast<std::size_t>(i)] - p[static_cast<std::size_t>(i) + 1];
@@ -130,11 +137,16 @@ IkResult fabrik_from(const FingerChain& c, const Eigen::Vector3d& target, const 
       const double sum = flexion[1] + flexion[2];
       flexion[1] = std::clamp(sum / (1.0 + l.coupling), l.flexion_min_rad[1], l.flexion_max_rad[1]);
       flexion[2] = std::clamp(l.coupling * flexion[1], l.flexion_min_rad[2], l.flexion_max_rad[2]);
+      const double h1 = flexion[0] + flexion[1];
+      const double h2 = h1 + flexion[2];
+      p[2] = p[1] + c.length_m[1] * Eigen::Vector2d(std::cos(h1), std::sin(h1));
+      p[3] = p[2] + c.length_m[2] * Eigen::Vector2d(std::cos(h2), std::sin(h2));
     }
-    r.angles = clamp_to_limits(l, FingerAngles{abduction, flexion});
-    r.tip_error_m = (finger_forward(c, r.angles)[3] - target).norm();
+    r.tip_error_m = std::sqrt((p[3] - goal).squaredNorm() + off_plane2);
     if (r.tip_error_m < s.tolerance_m) break;
   }
+  r.angles = clamp_to_limits(l, FingerAngles{abduction, flexion});
+  r.tip_error_m = (finger_forward(c, r.angles)[3] - target).norm();
   return r;
 }
 
