@@ -2,6 +2,7 @@
 //
 //   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M]
 //                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--sigma PX] [--frames N] --json
 //   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
 //   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
 //                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
@@ -28,6 +29,8 @@
 
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
+#include "tracking/hand/HandMotions.h"
+#include "tracking/hand/HandTracker.h"
 #include "tracking/rigid/StarTracker.h"
 #include "tracking/source/SimulatedRig.h"
 
@@ -348,6 +351,137 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   return 0;
 }
 
+// One or every scripted hand motion through the simulated rig with a hand layout: the hand's
+// markers (its own bones hiding them) matched, triangulated, the hand star tracked, the fingers
+// solved, and every joint compared with the truth.
+nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion, double sigma, int frames,
+                               unsigned seed, const Eigen::Vector3d& centre) {
+  const rhot::HandPose skeleton = rhot::reference_open_hand(layout.side);
+  const auto chains = rhot::hand_chains(skeleton, layout.side);
+  const auto relaxed = rhot::HandSolver(layout.side, skeleton).state().angles;
+  auto truth_at = [&](double t) {
+    const auto frame = *rhot::hand_motion(motion, t, chains, relaxed, centre);
+    return std::make_pair(frame.world_from_hand, rhot::hand_pose_from_angles(skeleton, chains, frame.angles));
+  };
+  auto markers_at = [&](double t) {
+    const auto [world_from_hand, pose] = truth_at(t);
+    std::vector<Eigen::Vector3d> out;
+    for (const Eigen::Vector3d& m : layout.hand_star_m) out.push_back(world_from_hand * m);
+    for (int f = 0; f < rhot::kFingerCount; ++f) {
+      const auto offset = layout.fingertip_offset_m[static_cast<std::size_t>(f)];
+      if (!offset) continue;
+      const auto joints = rhot::chain_joints(static_cast<rhot::Finger>(f));
+      const Eigen::Vector3d tip = pose.position_m[static_cast<std::size_t>(joints[3])];
+      const Eigen::Vector3d along = (tip - pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
+      out.push_back(world_from_hand * (tip + *offset * along));
+    }
+    return out;
+  };
+  rhot::SimulatedRigSettings settings;
+  settings.sigma_px = sigma;
+  settings.seed = seed;
+  rhot::SimulatedRig sim(rig, {}, settings);
+  sim.set_scripted_markers(markers_at);
+  rhot::HandTracker tracker(layout, skeleton);
+
+  std::vector<double> tip_errors, joint_errors, ik_us;
+  long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0;
+  for (int f = 0; f < frames; ++f) {
+    const double t = static_cast<double>(f) / settings.rate_hz;
+    // The hand's own bones hide its markers: capsules a little thinner than the joints' radii.
+    const auto [world_from_hand, pose] = truth_at(t);
+    std::vector<rhot::Occluder> bones;
+    for (int j = 0; j < rhot::kHandJointCount; ++j) {
+      const auto parent = rhot::joint_parent(static_cast<rhot::HandJoint>(j));
+      if (!parent) continue;
+      bones.push_back({world_from_hand * pose.position_m[static_cast<std::size_t>(*parent)], world_from_hand * pose.position_m[static_cast<std::size_t>(j)],
+                       0.8 * pose.radius_m[static_cast<std::size_t>(j)]});
+    }
+    sim.set_occluders(bones);
+    const rhot::RigFrame frame = sim.next();
+    std::vector<Eigen::Vector3d> points;
+    for (const rhot::MatchedPoint& m : rhot::match_and_triangulate(rig, frame)) points.push_back(m.point.position_world);
+    const rhot::TrackedHand& hand = tracker.update(frame.time_s, points);
+    ik_us.push_back(tracker.last_ik_us());
+    ++tip_frames;
+    if (!hand.hand_seen) continue;
+    ++hand_frames;
+    for (int j = 0; j < rhot::kHandJointCount; ++j) {
+      const double e = (hand.joints_world[static_cast<std::size_t>(j)] - world_from_hand * pose.position_m[static_cast<std::size_t>(j)]).norm();
+      joint_errors.push_back(1000.0 * e);
+      ++joint_frames;
+      confident += hand.state.confidence[static_cast<std::size_t>(j)] >= 0.5 ? 1 : 0;
+    }
+    for (int fi = 0; fi < rhot::kFingerCount; ++fi) {
+      if (hand.fingertip_point[static_cast<std::size_t>(fi)] < 0) continue;
+      ++tips_seen;
+      const auto tip = static_cast<std::size_t>(rhot::chain_joints(static_cast<rhot::Finger>(fi))[3]);
+      tip_errors.push_back(1000.0 * (hand.joints_world[tip] - world_from_hand * pose.position_m[tip]).norm());
+    }
+  }
+  auto mean = [](const std::vector<double>& v) {
+    double s = 0.0;
+    for (const double x : v) s += x;
+    return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+  };
+  nlohmann::json j;
+  j["frames"] = frames;
+  j["hand_seen_fraction"] = static_cast<double>(hand_frames) / static_cast<double>(std::max(1L, tip_frames));
+  j["fingertips_seen_fraction"] = static_cast<double>(tips_seen) / static_cast<double>(std::max(1L, 5 * hand_frames));
+  j["fingertip_mean_mm"] = mean(tip_errors);
+  j["fingertip_p95_mm"] = percentile(tip_errors, 0.95);
+  j["joint_mean_mm"] = mean(joint_errors);
+  j["joint_p95_mm"] = percentile(joint_errors, 0.95);
+  j["joints_with_confidence_fraction"] = static_cast<double>(confident) / static_cast<double>(std::max(1L, joint_frames));
+  j["ik_median_us"] = percentile(ik_us, 0.5);
+  j["ik_p99_us"] = percentile(ik_us, 0.99);
+  return j;
+}
+
+int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, double sigma, int frames, unsigned seed,
+          const std::vector<double>& volume_centre) {
+  const auto rig = rhot::load_rig(rig_file);
+  if (!rig) {
+    std::cerr << "rhot-eval: " << rig.error() << "\n";
+    return 1;
+  }
+  const auto layout = rhot::load_hand_layout(layout_file);
+  if (!layout) {
+    std::cerr << "rhot-eval: " << layout.error() << "\n";
+    return 1;
+  }
+  std::vector<std::string_view> motions;
+  for (const std::string_view name : rhot::hand_motion_names()) {
+    if (motion == "all" || motion == name) motions.push_back(name);
+  }
+  if (motions.empty()) {
+    std::string known;
+    for (const std::string_view name : rhot::hand_motion_names()) known += std::string(known.empty() ? "" : ", ") + std::string(name);
+    std::cerr << "rhot-eval: --motion " << motion << ": no such motion (" << known << ", all)\n";
+    return 1;
+  }
+  const Box box = evaluation_box(*rig, {}, volume_centre);
+  nlohmann::json j;
+  j["rig"] = rig_file;
+  j["layout"] = layout_file;
+  j["sigma_px"] = sigma;
+  j["seed"] = seed;
+  j["centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
+  for (const std::string_view name : motions) {
+    std::cerr << "rhot-eval: hand motion " << name << "\n";
+    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, sigma, frames, seed, box.centre);
+  }
+  // Over all motions: the mean of the motions' numbers (each motion weighs alike).
+  for (const char* key : {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",
+                          "ik_p99_us", "hand_seen_fraction", "fingertips_seen_fraction"}) {
+    double sum = 0.0;
+    for (const auto& [name, m] : j["motions"].items()) sum += m[key].get<double>();
+    j[key] = sum / static_cast<double>(motions.size());
+  }
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"rhot-eval: accuracy and speed of rhot's tracking on simulated data, as JSON"};
   app.require_subcommand(1);
@@ -396,8 +530,21 @@ int main(int argc, char** argv) {
   stars_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
   stars_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   stars_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  auto* hands_cmd = app.add_subcommand("hands", "scripted hand motions with a hand layout: every joint against the truth");
+  std::string layout_file = std::string(RHOT_ASSET_DIR) + "/hands/low-cost-right.json";
+  std::string motion = "all";
+  int hand_frames = 450;
+  hands_cmd->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
+  hands_cmd->add_option("--layout", layout_file, "hand marker layout (JSON)")->capture_default_str();
+  hands_cmd->add_option("--motion", motion, "open, fist, pinch, wave, power-grasp, precision-grasp or all")->capture_default_str();
+  hands_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
+  hands_cmd->add_option("--frames", hand_frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));
+  hands_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
+  hands_cmd->add_option("--volume-centre-m", volume_centre, "where the hand moves, X Y Z metres (default: the rig's volume centre)")->expected(3);
+  hands_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
+  if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, sigma, hand_frames, seed, volume_centre);
   if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, sigma, frames, seed, dropout, volume, volume_centre);
   if (wand_cmd->parsed()) return wand(rig_file, length_mm, sigma, frames, seed, dropout, volume, volume_centre);
   return 1;

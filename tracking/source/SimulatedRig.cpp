@@ -133,19 +133,31 @@ RigFrame SimulatedRig::next() {
   frame.time_s = static_cast<double>(frame.index) / settings_.rate_hz;
   std::normal_distribution<double> noise(0.0, settings_.sigma_px);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  const std::size_t marker_count = markers_.size() + body_markers_.size();
-  for (std::size_t m = 0; m < marker_count; ++m) {
+  const std::size_t own_count = markers_.size() + body_markers_.size();
+  for (std::size_t m = 0; m < own_count; ++m) {
     frame.truth_position_m.push_back(marker_at(m, frame.time_s));
     frame.truth_marker_body.push_back(m < markers_.size() ? -1 : body_markers_[m - markers_.size()].first);
   }
+  if (script_) {
+    for (const Eigen::Vector3d& p : script_(frame.time_s)) {
+      frame.truth_position_m.push_back(p);
+      frame.truth_marker_body.push_back(-1);
+    }
+  }
+  const std::size_t marker_count = frame.truth_position_m.size();
   for (const SimulatedBody& b : bodies_) frame.truth_world_from_body.push_back(b.motion.world_from_body(frame.time_s));
   for (std::size_t c = 0; c < rig_.cameras.size(); ++c) {
     CameraFrame cf;
     cf.camera = static_cast<int>(c);
     cf.timestamp_s = frame.time_s + static_cast<double>(c) * settings_.camera_skew_s;
+    std::vector<Eigen::Vector3d> scripted_at_camera;
+    if (script_ && settings_.camera_skew_s != 0.0) scripted_at_camera = script_(cf.timestamp_s);
     for (std::size_t m = 0; m < marker_count; ++m) {
       // Unsynchronised cameras see the marker where it is at their own exposure time.
-      const Eigen::Vector3d p = settings_.camera_skew_s == 0.0 ? frame.truth_position_m[m] : marker_at(m, cf.timestamp_s);
+      const Eigen::Vector3d p = settings_.camera_skew_s == 0.0 ? frame.truth_position_m[m]
+                                : m < own_count                                    ? marker_at(m, cf.timestamp_s)
+                                : m - own_count < scripted_at_camera.size() ? scripted_at_camera[m - own_count]
+                                                                                   : frame.truth_position_m[m];
       // Draw the random numbers whatever happens, so one marker's visibility does not shift the
       // noise of every other: frames stay comparable across settings.
       const double drop = uniform(rng_);

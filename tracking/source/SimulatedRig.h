@@ -5,6 +5,7 @@
 // and seed give the same frames. Ground truth stays in every frame for evaluation.
 
 #include <array>
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -73,6 +74,11 @@ class SimulatedRig {
   // marker numbering: body 0's first, then body 1's, and so on.
   void set_bodies(std::vector<SimulatedBody> bodies);
 
+  // Markers placed by a script, from the next frame on: the function gives every such marker's
+  // position at a time (the same count each call). They follow the loose and the bodies' markers
+  // in each frame's numbering. For motions no trajectory describes, such as a hand's.
+  void set_scripted_markers(std::function<std::vector<Eigen::Vector3d>(double t_s)> script) { script_ = std::move(script); }
+
   // Occluders for the following frames (for example a hand's bones).
   void set_occluders(std::vector<Occluder> occluders) { occluders_ = std::move(occluders); }
 
@@ -93,6 +99,7 @@ class SimulatedRig {
   std::vector<Trajectory> markers_;
   std::vector<SimulatedBody> bodies_;
   std::vector<std::pair<int, int>> body_markers_;  // per body marker: (body, marker of that body)
+  std::function<std::vector<Eigen::Vector3d>(double)> script_;
   SimulatedRigSettings settings_;
   std::vector<Occluder> occluders_;
   std::mt19937_64 rng_;

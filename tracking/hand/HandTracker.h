@@ -1,0 +1,42 @@
+#pragma once
+// A hand from triangulated points, with a layout (HandLayout.h): the hand star gives the hand
+// frame (StarTracker), the points left near each fingertip's predicted marker are its marker
+// (nearest first, each point once), and HandSolver fits the fingers.
+
+#include <span>
+#include <vector>
+
+#include "tracking/hand/HandLayout.h"
+#include "tracking/hand/HandSolver.h"
+#include "tracking/rigid/StarTracker.h"
+
+namespace rhot {
+
+struct TrackedHand {
+  bool hand_seen = false;          // the hand star was seen this frame
+  Rigid3d world_from_hand;         // last known
+  HandState state;                 // hand frame
+  std::array<Eigen::Vector3d, kHandJointCount> joints_world{};
+  std::array<int, kFingerCount> fingertip_point{-1, -1, -1, -1, -1};  // index into the points, -1 for none
+};
+
+class HandTracker {
+ public:
+  HandTracker(const HandLayout& layout, const HandPose& skeleton);
+
+  const TrackedHand& update(double time_s, std::span<const Eigen::Vector3d> points_world);
+  const HandSolver& solver() const { return solver_; }
+  // Time spent in HandSolver::update (the IK) on the last frame.
+  double last_ik_us() const { return last_ik_us_; }
+
+  static constexpr double kFingertipGate_m = 0.04;
+
+ private:
+  HandLayout layout_;
+  StarTracker star_;
+  HandSolver solver_;
+  TrackedHand out_;
+  double last_ik_us_ = 0.0;
+};
+
+}  // namespace rhot
