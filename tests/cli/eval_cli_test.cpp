@@ -59,4 +59,27 @@ TEST(EvalCli, BadRigIsReported) {
   EXPECT_EQ(r.exit_code, 1);
 }
 
+TEST(EvalCli, HandsReportsJointErrorsForEveryMotion) {
+  const EvalRun r = run_eval(std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion all --frames 30 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  for (const char* motion : {"open", "fist", "pinch", "wave", "power-grasp", "precision-grasp"}) {
+    ASSERT_TRUE(j["motions"].contains(motion)) << motion;
+    for (const char* key : {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",
+                            "ik_p99_us"}) {
+      EXPECT_TRUE(j["motions"][motion].contains(key)) << motion << " " << key;
+    }
+  }
+  // The open hand shows every fingertip: millimetre accuracy, and noise is applied.
+  EXPECT_LT(j["motions"]["open"]["fingertip_mean_mm"].get<double>(), 3.0);
+  EXPECT_GT(j["motions"]["open"]["fingertip_mean_mm"].get<double>(), 0.05);
+  EXPECT_EQ(j["motions"]["open"]["hand_seen_fraction"].get<double>(), 1.0);
+}
+
+TEST(EvalCli, UnknownHandMotionIsNamed) {
+  const auto r = rhot::test::run_program("rhot-eval", std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion juggle --json", "2>&1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("--motion juggle: no such motion (open, fist, pinch, wave, power-grasp, precision-grasp, all)"), std::string::npos) << r.output;
+}
+
 }  // namespace

@@ -1,0 +1,131 @@
+#include "tracking/hand/HandTracker.h"
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "tracking/hand/HandCalibration.h"
+#include "tracking/hand/HandMotions.h"
+
+namespace rhot {
+namespace {
+
+namespace fs = std::filesystem;
+
+HandLayout low_cost() {
+  auto layout = load_hand_layout(fs::path(RHOT_ASSET_DIR) / "hands" / "low-cost-right.json");
+  EXPECT_TRUE(layout.has_value()) << (layout ? "" : layout.error());
+  return layout.value_or(HandLayout{});
+}
+
+// The layout's markers for a true hand (world frame), without noise.
+std::vector<Eigen::Vector3d> markers(const HandLayout& layout, const Rigid3d& world_from_hand, const HandPose& pose) {
+  std::vector<Eigen::Vector3d> out;
+  for (const Eigen::Vector3d& m : layout.hand_star_m) out.push_back(world_from_hand * m);
+  for (int f = 0; f < kFingerCount; ++f) {
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    const Eigen::Vector3d tip = pose.position_m[static_cast<std::size_t>(joints[3])];
+    const Eigen::Vector3d along = (tip - pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
+    out.push_back(world_from_hand * (tip + *layout.fingertip_offset_m[static_cast<std::size_t>(f)] * along));
+  }
+  return out;
+}
+
+TEST(HandLayout, TheLowCostLayoutLoads) {
+  const HandLayout layout = low_cost();
+  EXPECT_EQ(layout.name, "low-cost");
+  EXPECT_EQ(layout.side, HandSide::kRight);
+  for (const auto& offset : layout.fingertip_offset_m) ASSERT_TRUE(offset.has_value());
+  EXPECT_DOUBLE_EQ(*layout.fingertip_offset_m[1], 0.008);
+}
+
+std::string layout_error(const std::string& text) {
+  const fs::path file = fs::path(::testing::TempDir()) / "rhot_bad_layout.json";
+  std::ofstream(file) << text;
+  const auto r = load_hand_layout(file);
+  return r ? std::string("loaded") : r.error().substr(file.string().size() + 2);
+}
+
+TEST(HandLayout, BadFilesAreRefusedWithWhatIsWrong) {
+  const std::string head = R"("format": "rhot-hand-layout", "version": 1, "side": "right", "marker_diameter_mm": 6)";
+  const std::string star = R"("hand_star_mm": [[20.1, 17.7, -69.5], [-17.7, 21.9, -17.7], [0.0, 12.4, -56.0], [-4.3, 17.0, -22.4]])";
+  EXPECT_EQ(layout_error("{" + head + ", " + star + "}"), "loaded");
+  EXPECT_EQ(layout_error(R"({"format": "hand"})"), "format: expected \"rhot-hand-layout\"");
+  EXPECT_EQ(layout_error(R"({"format": "rhot-hand-layout", "version": 1, "side": "middle"})"), "side: expected \"left\" or \"right\"");
+  EXPECT_EQ(layout_error("{" + head + "}"), "hand_star_mm: expected four [x, y, z] marker centres");
+  EXPECT_EQ(layout_error("{" + head + ", " + star + R"(, "fingertip_markers": {"index_knuckle": 8})" + "}"),
+            "fingertip_markers.index_knuckle: not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
+  EXPECT_EQ(layout_error("{" + head + R"(, "hand_star_mm": [[0, 0, 0], [10, 0, 0], [0, 10, 0], [0, 0, 30]]})"),
+            "hand_star_mm: edges 10 and 10 mm differ by less than 1.5 mm");
+}
+
+TEST(HandTracker, FollowsAScriptedHandFromItsMarkers) {
+  const HandLayout layout = low_cost();
+  const HandPose skeleton = reference_open_hand(HandSide::kRight);
+  const auto chains = hand_chains(skeleton, HandSide::kRight);
+  const auto relaxed = HandSolver(HandSide::kRight, skeleton).state().angles;
+  HandTracker tracker(layout, skeleton);
+  double worst_tip = 0.0;
+  for (int f = 0; f < 180; ++f) {
+    const double t = f / 90.0;
+    const HandMotionFrame truth = *hand_motion("pinch", t, chains, relaxed, {0.0, 1.1, -0.45});
+    const HandPose pose = hand_pose_from_angles(skeleton, chains, truth.angles);
+    std::vector<Eigen::Vector3d> points = markers(layout, truth.world_from_hand, pose);
+    points.push_back({0.3, 1.0, -0.2});  // a stray marker
+    const TrackedHand& hand = tracker.update(t, points);
+    ASSERT_TRUE(hand.hand_seen) << f;
+    for (int k = 0; k < kFingerCount; ++k) {
+      EXPECT_EQ(hand.fingertip_point[static_cast<std::size_t>(k)], 4 + k) << "frame " << f << " finger " << k;
+      const auto tip = static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3]);
+      worst_tip = std::max(worst_tip, (hand.joints_world[tip] - truth.world_from_hand * pose.position_m[tip]).norm());
+    }
+  }
+  EXPECT_LT(worst_tip, 0.002) << "noise-free markers: the tips within 2 mm (IK tolerance and marker offset)";
+}
+
+}  // namespace
+}  // namespace rhot
+
+namespace rhot {
+namespace {
+
+TEST(HandCalibration, AFlatHandGivesEachFingersLengthAndTheFileKeepsIt) {
+  const HandPose reference = reference_open_hand(HandSide::kRight);
+  const auto chains = hand_chains(reference, HandSide::kRight);
+  // A user whose fingers are 10 % longer (index), 8 % shorter (little), the rest as the reference.
+  const std::array<double, kFingerCount> scale{1.0, 1.1, 1.0, 1.0, 0.92};
+  std::vector<FingertipSample> samples;
+  for (int s = 0; s < 30; ++s) {
+    FingertipSample sample;
+    for (int f = 0; f < kFingerCount; ++f) {
+      FingerChain c = chains[static_cast<std::size_t>(f)];
+      for (double& l : c.length_m) l *= scale[static_cast<std::size_t>(f)];
+      sample[static_cast<std::size_t>(f)] = finger_forward(c, FingerAngles{})[3] + Eigen::Vector3d(0.0002 * (s % 3 - 1), 0.0, 0.0);
+    }
+    samples.push_back(sample);
+  }
+  const auto calibrated = calibrate_flat_hand(reference, HandSide::kRight, samples);
+  ASSERT_TRUE(calibrated.has_value());
+  const auto calibrated_chains = hand_chains(*calibrated, HandSide::kRight);
+  for (int f = 0; f < kFingerCount; ++f) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      EXPECT_NEAR(calibrated_chains[static_cast<std::size_t>(f)].length_m[k], scale[static_cast<std::size_t>(f)] * chains[static_cast<std::size_t>(f)].length_m[k], 2e-4)
+          << "finger " << f << " bone " << k;
+    }
+  }
+  const fs::path file = fs::path(::testing::TempDir()) / "rhot_hand_calibration.json";
+  ASSERT_TRUE(save_hand_calibration(*calibrated, HandSide::kRight, file).has_value());
+  const auto back = load_hand_calibration(file);
+  ASSERT_TRUE(back.has_value()) << back.error();
+  EXPECT_EQ(back->second, HandSide::kRight);
+  for (int j = 0; j < kHandJointCount; ++j) {
+    EXPECT_LT((back->first.position_m[static_cast<std::size_t>(j)] - calibrated->position_m[static_cast<std::size_t>(j)]).norm(), 1e-9);
+  }
+  std::ofstream(file) << R"({"format": "rhot-hand-calibration", "version": 1, "side": "right", "joints_mm": {}})";
+  EXPECT_EQ(load_hand_calibration(file).error(), file.string() + ": joints_mm.palm: expected [x, y, z]");
+  EXPECT_FALSE(calibrate_flat_hand(reference, HandSide::kRight, {}).has_value());
+}
+
+}  // namespace
+}  // namespace rhot
