@@ -355,7 +355,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
 // markers (its own bones hiding them) matched, triangulated, the hand star tracked, the fingers
 // solved, and every joint compared with the truth.
 nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion, double sigma, int frames,
-                               unsigned seed, const Eigen::Vector3d& centre) {
+                               unsigned seed, const Eigen::Vector3d& centre, bool filter) {
   const rhot::HandPose skeleton = rhot::reference_open_hand(layout.side);
   const auto chains = rhot::hand_chains(skeleton, layout.side);
   const auto relaxed = rhot::HandSolver(layout.side, skeleton).state().angles;
@@ -382,7 +382,9 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   settings.seed = seed;
   rhot::SimulatedRig sim(rig, {}, settings);
   sim.set_scripted_markers(markers_at);
-  rhot::HandTracker tracker(layout, skeleton);
+  rhot::HandTrackerSettings tracker_settings;
+  tracker_settings.filter = filter;
+  rhot::HandTracker tracker(layout, skeleton, tracker_settings);
 
   std::vector<double> tip_errors, joint_errors, ik_us;
   long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0;
@@ -439,7 +441,7 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
 }
 
 int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, double sigma, int frames, unsigned seed,
-          const std::vector<double>& volume_centre) {
+          const std::vector<double>& volume_centre, bool filter) {
   const auto rig = rhot::load_rig(rig_file);
   if (!rig) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
@@ -467,9 +469,10 @@ int hands(const std::string& rig_file, const std::string& layout_file, const std
   j["sigma_px"] = sigma;
   j["seed"] = seed;
   j["centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
+  j["filter"] = filter;
   for (const std::string_view name : motions) {
     std::cerr << "rhot-eval: hand motion " << name << "\n";
-    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, sigma, frames, seed, box.centre);
+    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, sigma, frames, seed, box.centre, filter);
   }
   // Over all motions: the mean of the motions' numbers (each motion weighs alike).
   for (const char* key : {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",
@@ -541,10 +544,12 @@ int main(int argc, char** argv) {
   hands_cmd->add_option("--frames", hand_frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));
   hands_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
   hands_cmd->add_option("--volume-centre-m", volume_centre, "where the hand moves, X Y Z metres (default: the rig's volume centre)")->expected(3);
+  bool filter = false;
+  hands_cmd->add_flag("--filter", filter, "1-euro filter the hand frame and the fingertips before the IK");
   hands_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
-  if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, sigma, hand_frames, seed, volume_centre);
+  if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, sigma, hand_frames, seed, volume_centre, filter);
   if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, sigma, frames, seed, dropout, volume, volume_centre);
   if (wand_cmd->parsed()) return wand(rig_file, length_mm, sigma, frames, seed, dropout, volume, volume_centre);
   return 1;

@@ -5,8 +5,13 @@
 
 namespace rhot {
 
-HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton)
-    : layout_(layout), star_(StarLibrary(layout.hand_star_set())), solver_(layout.side, skeleton) {
+HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, HandTrackerSettings settings)
+    : layout_(layout),
+      settings_(settings),
+      star_(StarLibrary(layout.hand_star_set())),
+      hand_filter_(settings.position, settings.rotation),
+      solver_(layout.side, skeleton) {
+  tip_filters_.fill(OneEuroFilter<3>(settings.position));
   out_.state = solver_.state();
 }
 
@@ -16,7 +21,7 @@ const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vec
   out_.fingertip_point.fill(-1);
   std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips{};
   if (out_.hand_seen) {
-    out_.world_from_hand = star.world_from_star;
+    out_.world_from_hand = settings_.filter ? hand_filter_.filter(star.world_from_star, time_s) : star.world_from_star;
     const Rigid3d hand_from_world = out_.world_from_hand.inverse();
     std::vector<bool> taken(points.size(), false);
     for (const int p : star.point) {
@@ -50,6 +55,14 @@ const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vec
       out_.fingertip_point[fi] = pr.point;
       taken[static_cast<std::size_t>(pr.point)] = true;
       tips[fi] = hand_from_world * points[static_cast<std::size_t>(pr.point)] - *layout_.fingertip_offset_m[fi] * along[fi];
+    }
+    for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
+      if (!settings_.filter) break;
+      if (tips[fi]) {
+        tips[fi] = tip_filters_[fi].filter(*tips[fi], time_s);
+      } else {
+        tip_filters_[fi].reset();  // a tip seen again starts afresh, not from where it was lost
+      }
     }
   }
   const auto start = std::chrono::steady_clock::now();

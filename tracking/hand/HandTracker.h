@@ -6,6 +6,7 @@
 #include <span>
 #include <vector>
 
+#include "tracking/filter/OneEuroFilter.h"
 #include "tracking/hand/HandLayout.h"
 #include "tracking/hand/HandSolver.h"
 #include "tracking/rigid/StarTracker.h"
@@ -20,9 +21,16 @@ struct TrackedHand {
   std::array<int, kFingerCount> fingertip_point{-1, -1, -1, -1, -1};  // index into the points, -1 for none
 };
 
+struct HandTrackerSettings {
+  // 1-euro filtering of the hand frame and of each fingertip target (hand frame) before the IK.
+  bool filter = false;
+  OneEuroSettings position;  // for the hand's origin and the fingertips, metres
+  OneEuroSettings rotation{1.0, 2.0, 1.0};
+};
+
 class HandTracker {
  public:
-  HandTracker(const HandLayout& layout, const HandPose& skeleton);
+  HandTracker(const HandLayout& layout, const HandPose& skeleton, HandTrackerSettings settings = {});
 
   const TrackedHand& update(double time_s, std::span<const Eigen::Vector3d> points_world);
   const HandSolver& solver() const { return solver_; }
@@ -33,7 +41,10 @@ class HandTracker {
 
  private:
   HandLayout layout_;
+  HandTrackerSettings settings_;
   StarTracker star_;
+  PoseFilter hand_filter_;
+  std::array<OneEuroFilter<3>, kFingerCount> tip_filters_;
   HandSolver solver_;
   TrackedHand out_;
   double last_ik_us_ = 0.0;
