@@ -76,6 +76,15 @@ TEST(EvalCli, HandsReportsJointErrorsForEveryMotion) {
   EXPECT_EQ(j["motions"]["open"]["hand_seen_fraction"].get<double>(), 1.0);
 }
 
+TEST(EvalCli, TheLeftHandLayoutWorksToo) {
+  const EvalRun r = run_eval(std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --layout " + RHOT_ASSET_DIR +
+                             "/hands/low-cost-left.json --motion open --frames 30 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_LT(j["motions"]["open"]["fingertip_mean_mm"].get<double>(), 3.0);
+  EXPECT_GT(j["motions"]["open"]["fingertips_seen_fraction"].get<double>(), 0.9);
+}
+
 TEST(EvalCli, UnknownHandMotionIsNamed) {
   const auto r = rhot::test::run_program("rhot-eval", std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion juggle --json", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
