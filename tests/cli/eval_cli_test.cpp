@@ -85,6 +85,18 @@ TEST(EvalCli, TheLeftHandLayoutWorksToo) {
   EXPECT_GT(j["motions"]["open"]["fingertips_seen_fraction"].get<double>(), 0.9);
 }
 
+TEST(EvalCli, TheHighFidelityLayoutFollowsAFist) {
+  // Stars on the bones: a fist, which hides the low-cost layout's fingertips, is measured.
+  const EvalRun r = run_eval(std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --layout " + RHOT_ASSET_DIR +
+                             "/hands/high-fidelity-right.json --motion fist --frames 90 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output)["motions"]["fist"];
+  EXPECT_LT(j["joint_mean_mm"].get<double>(), 4.0);
+  EXPECT_GT(j["joint_mean_mm"].get<double>(), 0.1);
+  EXPECT_GT(j["segment_stars_seen_fraction"].get<double>(), 0.6);
+  EXPECT_GT(j["joints_with_confidence_fraction"].get<double>(), 0.95);
+}
+
 TEST(EvalCli, UnknownHandMotionIsNamed) {
   const auto r = rhot::test::run_program("rhot-eval", std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion juggle --json", "2>&1");
   EXPECT_EQ(r.exit_code, 1);

@@ -375,6 +375,11 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
       const Eigen::Vector3d along = (tip - pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
       out.push_back(world_from_hand * (tip + *offset * along));
     }
+    for (const rhot::SegmentStar& s : layout.segment_stars) {
+      const auto finger = static_cast<std::size_t>(rhot::finger_of_bone(s.bone));
+      const rhot::Rigid3d hand_from_star = rhot::hand_from_segment_star(pose, s.bone, chains[finger]);
+      for (const Eigen::Vector3d& m : s.star.markers_mm) out.push_back(world_from_hand * (hand_from_star * (m * 1e-3)));
+    }
     return out;
   };
   rhot::SimulatedRigSettings settings;
@@ -386,8 +391,8 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   tracker_settings.filter = filter;
   rhot::HandTracker tracker(layout, skeleton, tracker_settings);
 
-  std::vector<double> tip_errors, joint_errors, ik_us;
-  long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0;
+  std::vector<double> tip_errors, joint_errors, ik_us, tracker_us;
+  long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0, segment_stars_seen = 0;
   for (int f = 0; f < frames; ++f) {
     const double t = static_cast<double>(f) / settings.rate_hz;
     // The hand's own bones hide its markers: capsules a little thinner than the joints' radii.
@@ -403,11 +408,14 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
     const rhot::RigFrame frame = sim.next();
     std::vector<Eigen::Vector3d> points;
     for (const rhot::MatchedPoint& m : rhot::match_and_triangulate(rig, frame)) points.push_back(m.point.position_world);
+    const auto tracker_start = std::chrono::steady_clock::now();
     const rhot::TrackedHand& hand = tracker.update(frame.time_s, points);
+    tracker_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - tracker_start).count());
     ik_us.push_back(tracker.last_ik_us());
     ++tip_frames;
     if (!hand.hand_seen) continue;
     ++hand_frames;
+    segment_stars_seen += hand.segment_stars_seen;
     for (int j = 0; j < rhot::kHandJointCount; ++j) {
       const double e = (hand.joints_world[static_cast<std::size_t>(j)] - world_from_hand * pose.position_m[static_cast<std::size_t>(j)]).norm();
       joint_errors.push_back(1000.0 * e);
@@ -415,7 +423,8 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
       confident += hand.state.confidence[static_cast<std::size_t>(j)] >= 0.5 ? 1 : 0;
     }
     for (int fi = 0; fi < rhot::kFingerCount; ++fi) {
-      if (hand.fingertip_point[static_cast<std::size_t>(fi)] < 0) continue;
+      // A fingertip measured this frame: its marker found, or its distal bone's star seen.
+      if (!hand.state.tip_seen[static_cast<std::size_t>(fi)]) continue;
       ++tips_seen;
       const auto tip = static_cast<std::size_t>(rhot::chain_joints(static_cast<rhot::Finger>(fi))[3]);
       tip_errors.push_back(1000.0 * (hand.joints_world[tip] - world_from_hand * pose.position_m[tip]).norm());
@@ -430,6 +439,10 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   j["frames"] = frames;
   j["hand_seen_fraction"] = static_cast<double>(hand_frames) / static_cast<double>(std::max(1L, tip_frames));
   j["fingertips_seen_fraction"] = static_cast<double>(tips_seen) / static_cast<double>(std::max(1L, 5 * hand_frames));
+  if (!layout.segment_stars.empty()) {
+    j["segment_stars_seen_fraction"] = static_cast<double>(segment_stars_seen) /
+                                       static_cast<double>(std::max(1L, hand_frames * static_cast<long>(layout.segment_stars.size())));
+  }
   j["fingertip_mean_mm"] = mean(tip_errors);
   j["fingertip_p95_mm"] = percentile(tip_errors, 0.95);
   j["joint_mean_mm"] = mean(joint_errors);
@@ -437,6 +450,8 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   j["joints_with_confidence_fraction"] = static_cast<double>(confident) / static_cast<double>(std::max(1L, joint_frames));
   j["ik_median_us"] = percentile(ik_us, 0.5);
   j["ik_p99_us"] = percentile(ik_us, 0.99);
+  j["tracker_median_us"] = percentile(tracker_us, 0.5);
+  j["tracker_p99_us"] = percentile(tracker_us, 0.99);
   return j;
 }
 
@@ -476,7 +491,7 @@ int hands(const std::string& rig_file, const std::string& layout_file, const std
   }
   // Over all motions: the mean of the motions' numbers (each motion weighs alike).
   for (const char* key : {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",
-                          "ik_p99_us", "hand_seen_fraction", "fingertips_seen_fraction"}) {
+                          "ik_p99_us", "tracker_median_us", "tracker_p99_us", "hand_seen_fraction", "fingertips_seen_fraction"}) {
     double sum = 0.0;
     for (const auto& [name, m] : j["motions"].items()) sum += m[key].get<double>();
     j[key] = sum / static_cast<double>(motions.size());

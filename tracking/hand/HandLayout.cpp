@@ -1,8 +1,12 @@
 #include "tracking/hand/HandLayout.h"
 
+#include "tracking/hand/HandSolver.h"
+
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
 namespace rhot {
@@ -28,6 +32,56 @@ StarSet HandLayout::hand_star_set() const {
   for (std::size_t m = 0; m < 4; ++m) star.markers_mm[m] = hand_star_m[m] * 1000.0;
   set.stars.push_back(star);
   return set;
+}
+
+StarSet HandLayout::segment_star_set() const {
+  StarSet set;
+  set.rules = segment_star_rules;
+  for (const SegmentStar& s : segment_stars) set.stars.push_back(s.star);
+  return set;
+}
+
+double segment_star_lift_m(const HandPose& pose, HandJoint bone) {
+  return pose.radius_m[static_cast<std::size_t>(bone)] + 0.001;
+}
+
+Finger finger_of_bone(HandJoint bone) {
+  if (bone <= HandJoint::kThumbTip) return Finger::kThumb;
+  return static_cast<Finger>((static_cast<int>(bone) - static_cast<int>(HandJoint::kIndexMetacarpal)) / 5 + 1);
+}
+
+Eigen::Vector3d bone_back_normal(const FingerChain& chain, const Eigen::Vector3d& first_bone, const Eigen::Vector3d& bone) {
+  // The finger's plane from its first bone (as angles_from_bones reads it): a root flexed to 90
+  // degrees has no abduction left under the elliptical limit, so a vertical first bone means none.
+  const Eigen::Vector3d lateral = chain.rest_direction.cross(chain.up);
+  double along = first_bone.dot(chain.rest_direction);
+  double across = first_bone.dot(lateral);
+  if (along < 0.0) {
+    along = -along;
+    across = -across;
+  }
+  const double abduction = along * along + across * across > 1e-12 ? std::atan2(across, along) : 0.0;
+  const Eigen::Vector3d forward = std::cos(abduction) * chain.rest_direction + std::sin(abduction) * lateral;
+  const Eigen::Vector3d plane_normal = forward.cross(-chain.up);
+  return bone.normalized().cross(plane_normal).normalized();
+}
+
+Rigid3d hand_from_segment_star(const HandPose& pose, HandJoint bone, const FingerChain& chain) {
+  const auto at = [&](HandJoint j) { return pose.position_m[static_cast<std::size_t>(j)]; };
+  const auto next = [](HandJoint j) { return static_cast<HandJoint>(static_cast<int>(j) + 1); };
+  const HandJoint first = chain_joints(finger_of_bone(bone))[0];
+  const Eigen::Vector3d a = at(bone);
+  const Eigen::Vector3d b = at(next(bone));
+  const Eigen::Vector3d y = (b - a).normalized();
+  const Eigen::Vector3d z = bone_back_normal(chain, at(next(first)) - at(first), y);
+  Eigen::Matrix3d r;
+  r.col(0) = y.cross(z);
+  r.col(1) = y;
+  r.col(2) = z;
+  Rigid3d out;
+  out.rotation = Eigen::Quaterniond(r).normalized();
+  out.translation = 0.5 * (a + b) + segment_star_lift_m(pose, bone) * z;
+  return out;
 }
 
 std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::path& file) {
@@ -68,6 +122,34 @@ std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::p
         }
         if (finger == 5) throw std::runtime_error("fingertip_markers." + name + ": not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
         layout.fingertip_offset_m[finger] = 1e-3 * number(value, "fingertip_markers." + name);
+      }
+    }
+    if (j.contains("segment_stars")) {
+      if (!j.contains("star_set") || !j["star_set"].is_string()) throw std::runtime_error("star_set: expected the path of the segment stars' set");
+      const auto set = load_star_set(file.parent_path() / j["star_set"].get<std::string>());
+      if (!set) throw std::runtime_error("star_set: " + set.error());
+      layout.segment_star_rules = set->rules;
+      if (!j["segment_stars"].is_array()) throw std::runtime_error("segment_stars: expected an array of {bone, star_id}");
+      constexpr std::array<HandJoint, 15> bones{HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal, HandJoint::kThumbDistal,
+                                                HandJoint::kIndexProximal, HandJoint::kIndexIntermediate, HandJoint::kIndexDistal,
+                                                HandJoint::kMiddleProximal, HandJoint::kMiddleIntermediate, HandJoint::kMiddleDistal,
+                                                HandJoint::kRingProximal, HandJoint::kRingIntermediate, HandJoint::kRingDistal,
+                                                HandJoint::kLittleProximal, HandJoint::kLittleIntermediate, HandJoint::kLittleDistal};
+      for (std::size_t i = 0; i < j["segment_stars"].size(); ++i) {
+        const auto& e = j["segment_stars"][i];
+        const std::string where = "segment_stars[" + std::to_string(i) + "]";
+        const std::string bone = e.is_object() ? e.value("bone", std::string()) : std::string();
+        const auto it = std::find_if(bones.begin(), bones.end(), [&](HandJoint b) { return joint_name(b) == bone; });
+        if (it == bones.end()) throw std::runtime_error(where + ".bone: expected a finger bone named by its first joint (index_proximal, thumb_metacarpal, ...)");
+        if (!e.contains("star_id") || !e["star_id"].is_number_integer()) throw std::runtime_error(where + ".star_id: expected an integer");
+        const int id = e["star_id"].get<int>();
+        const auto found = std::find_if(set->stars.begin(), set->stars.end(), [&](const MarkerStar& s) { return s.id == id; });
+        if (found == set->stars.end()) throw std::runtime_error(where + ".star_id: no star " + std::to_string(id) + " in the set");
+        for (const SegmentStar& other : layout.segment_stars) {
+          if (other.bone == *it) throw std::runtime_error(where + ".bone: " + bone + " has a star already");
+          if (other.star.id == id) throw std::runtime_error(where + ".star_id: star " + std::to_string(id) + " is on another bone already");
+        }
+        layout.segment_stars.push_back({*it, *found});
       }
     }
     // The star must be a star: edges distinct, markers apart, faces apart (it sits in the hand's

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/Geometry>
+
 namespace rhot {
 
 namespace {
@@ -84,7 +86,32 @@ HandSolver::HandSolver(HandSide side, const HandPose& skeleton, GestureSettings 
   state_.confidence.fill(0.0);
 }
 
-const HandState& HandSolver::update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips) {
+FingerAngles angles_from_bones(const FingerChain& c, const std::array<Eigen::Vector3d, 3>& b) {
+  const Eigen::Vector3d lateral = c.rest_direction.cross(c.up);
+  double along = b[0].dot(c.rest_direction);
+  double across = b[0].dot(lateral);
+  if (along < 0.0) {
+    along = -along;
+    across = -across;
+  }
+  FingerAngles a;
+  a.abduction_rad = std::atan2(across, along);
+  const Eigen::Vector3d forward = std::cos(a.abduction_rad) * c.rest_direction + std::sin(a.abduction_rad) * lateral;
+  const Eigen::Vector3d down = -c.up;
+  double previous = 0.0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const double heading = std::atan2(b[k].dot(down), b[k].dot(forward));
+    double d = heading - previous;
+    while (d > std::numbers::pi) d -= 2 * std::numbers::pi;
+    while (d < -std::numbers::pi) d += 2 * std::numbers::pi;
+    a.flexion_rad[k] = d;
+    previous = heading;
+  }
+  return clamp_to_limits(c.limits, a);
+}
+
+const HandState& HandSolver::update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips,
+                                    const std::array<std::optional<FingerAngles>, kFingerCount>& measured) {
   const double dt = started_ && std::isfinite(time_s) && time_s > time_s_ ? time_s - time_s_ : 0.0;
   if (std::isfinite(time_s)) time_s_ = std::max(time_s_, time_s);
   started_ = true;
@@ -94,10 +121,14 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
     const auto fi = static_cast<std::size_t>(f);
     const FingerChain& chain = chains_[fi];
     const auto joints = chain_joints(static_cast<Finger>(f));
-    const bool seen = tips[fi].has_value() && tips[fi]->allFinite();
+    const bool bones_seen = measured[fi].has_value();
+    const bool seen = bones_seen || (tips[fi].has_value() && tips[fi]->allFinite());
     state_.tip_seen[fi] = seen;
     FingerAngles& a = state_.angles[fi];
-    if (seen) {
+    if (bones_seen) {
+      a = clamp_to_limits(chain.limits, *measured[fi]);
+      last_seen_s_[fi] = time_s_;
+    } else if (seen) {
       a = solve_fabrik(chain, *tips[fi], a).angles;
       last_seen_s_[fi] = time_s_;
     } else {
@@ -112,7 +143,7 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
     for (std::size_t k = 0; k < 4; ++k) {
       // The thumb's metacarpal joint moves with the CMC; the fingers' knuckles are fixed by the hand frame.
       state_.pose.position_m[static_cast<std::size_t>(joints[k])] = p[k];
-      state_.confidence[static_cast<std::size_t>(joints[k])] = k == 0 && f != 0 ? 1.0 : (k == 3 && seen ? 1.0 : confidence);
+      state_.confidence[static_cast<std::size_t>(joints[k])] = (k == 0 && f != 0) || bones_seen ? 1.0 : (k == 3 && seen ? 1.0 : confidence);
     }
     if (f != 0) state_.confidence[static_cast<std::size_t>(joints[0]) - 1] = 1.0;  // the metacarpal joint
   }

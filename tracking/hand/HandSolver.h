@@ -27,6 +27,9 @@ std::array<FingerChain, kFingerCount> hand_chains(const HandPose& skeleton, Hand
 // The joints of each chain: root, two hinges, tip.
 std::array<HandJoint, 4> chain_joints(Finger finger);
 
+// A chain's angles from its three bones' directions (hand frame), clamped to its limits.
+FingerAngles angles_from_bones(const FingerChain& chain, const std::array<Eigen::Vector3d, 3>& bone_directions);
+
 struct GestureSettings {
   double pinch_on_m = 0.010;   // thumb and index tips, less their radii, closer than this: pinch
   double pinch_off_m = 0.015;  // ... further than this: released
@@ -58,8 +61,10 @@ class HandSolver {
  public:
   HandSolver(HandSide side, const HandPose& skeleton, GestureSettings gestures = {});
 
-  // One frame: fingertip positions in the hand frame (nothing for a tip not seen).
-  const HandState& update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips_hand_m);
+  // One frame: fingertip positions in the hand frame (nothing for a tip not seen), and, where a
+  // finger's every bone was measured (stars on the segments), its angles, which then win.
+  const HandState& update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips_hand_m,
+                          const std::array<std::optional<FingerAngles>, kFingerCount>& measured = {});
   const HandState& state() const { return state_; }
   const std::array<FingerChain, kFingerCount>& chains() const { return chains_; }
 

@@ -12,6 +12,7 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
       hand_filter_(settings.position, settings.rotation),
       solver_(layout.side, skeleton) {
   tip_filters_.fill(OneEuroFilter<3>(settings.position));
+  if (!layout.segment_stars.empty()) segments_.emplace(StarLibrary(layout.segment_star_set()));
   out_.state = solver_.state();
 }
 
@@ -65,8 +66,47 @@ const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vec
       }
     }
   }
+  // Stars on finger bones: each seen star places its bone; a finger whose three bones are placed
+  // has its angles measured, and a seen last bone gives its tip.
+  std::array<std::optional<FingerAngles>, kFingerCount> measured{};
+  out_.segment_stars_seen = 0;
+  if (segments_) {
+    const auto& stars = segments_->update(time_s, points);
+    if (out_.hand_seen) {
+      const Rigid3d hand_from_world = out_.world_from_hand.inverse();
+      const HandPose& skeleton = solver_.state().pose;
+      std::array<std::array<std::optional<Eigen::Vector3d>, 3>, kFingerCount> bone{};
+      for (std::size_t s = 0; s < stars.size(); ++s) {
+        if (!stars[s].seen_now()) continue;
+        ++out_.segment_stars_seen;
+        const HandJoint first = layout_.segment_stars[s].bone;
+        const auto f = static_cast<std::size_t>(finger_of_bone(first));
+        const auto joints = chain_joints(static_cast<Finger>(f));
+        const auto k = static_cast<std::size_t>(std::find(joints.begin(), joints.end(), first) - joints.begin());
+        if (k > 2) continue;  // not a bone of the chain (a finger's metacarpal)
+        const Rigid3d hand_from_star = hand_from_world * stars[s].world_from_star;
+        bone[f][k] = hand_from_star.rotation * Eigen::Vector3d::UnitY();
+        if (k == 2) {
+          const double length = solver_.chains()[f].length_m[k];
+          tips[f] = hand_from_star * Eigen::Vector3d(0.0, 0.5 * length, -segment_star_lift_m(skeleton, first));
+        }
+      }
+      for (int f = 0; f < kFingerCount; ++f) {
+        const auto& b = bone[static_cast<std::size_t>(f)];
+        const FingerChain& chain = solver_.chains()[static_cast<std::size_t>(f)];
+        if (b[0] && b[1] && b[2]) {
+          measured[static_cast<std::size_t>(f)] = angles_from_bones(chain, {*b[0], *b[1], *b[2]});
+        } else if (b[0] && b[1] && !tips[static_cast<std::size_t>(f)]) {
+          // The last bone's star hidden: the first two bones measured, the last hinge coupled.
+          FingerAngles a = angles_from_bones(chain, {*b[0], *b[1], *b[1]});
+          a.flexion_rad[2] = chain.limits.coupling * a.flexion_rad[1];
+          measured[static_cast<std::size_t>(f)] = clamp_to_limits(chain.limits, a);
+        }
+      }
+    }
+  }
   const auto start = std::chrono::steady_clock::now();
-  out_.state = solver_.update(time_s, tips);
+  out_.state = solver_.update(time_s, tips, measured);
   last_ik_us_ = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   for (std::size_t j = 0; j < kHandJointCount; ++j) out_.joints_world[j] = out_.world_from_hand * out_.state.pose.position_m[j];
   return out_;

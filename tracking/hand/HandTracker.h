@@ -3,6 +3,7 @@
 // frame (StarTracker), the points left near each fingertip's predicted marker are its marker
 // (nearest first, each point once), and HandSolver fits the fingers.
 
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -19,6 +20,7 @@ struct TrackedHand {
   HandState state;                 // hand frame
   std::array<Eigen::Vector3d, kHandJointCount> joints_world{};
   std::array<int, kFingerCount> fingertip_point{-1, -1, -1, -1, -1};  // index into the points, -1 for none
+  int segment_stars_seen = 0;
 };
 
 struct HandTrackerSettings {
@@ -43,6 +45,7 @@ class HandTracker {
   HandLayout layout_;
   HandTrackerSettings settings_;
   StarTracker star_;
+  std::optional<StarTracker> segments_;  // the layout's segment stars, if any
   PoseFilter hand_filter_;
   std::array<OneEuroFilter<3>, kFingerCount> tip_filters_;
   HandSolver solver_;

@@ -36,6 +36,41 @@ TEST(HandSolver, TheReferenceHandsTipsGiveBackItsTips) {
   }
 }
 
+TEST(HandSolver, BoneDirectionsGiveBackTheAnglesThatMadeThem) {
+  // What a finger's segment stars measure (three bone directions) inverts forward kinematics,
+  // for random poses within the limits of every chain of both hands.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (const HandSide side : {HandSide::kLeft, HandSide::kRight}) {
+    const auto chains = hand_chains(reference_open_hand(side), side);
+    for (int trial = 0; trial < 200; ++trial) {
+      for (const FingerChain& c : chains) {
+        FingerAngles a;
+        for (std::size_t k = 0; k < 3; ++k) a.flexion_rad[k] = c.limits.flexion_min_rad[k] + u(rng) * (c.limits.flexion_max_rad[k] - c.limits.flexion_min_rad[k]);
+        a.abduction_rad = (2.0 * u(rng) - 1.0) * c.limits.abduction_max_rad;
+        a = clamp_to_limits(c.limits, a);
+        const auto p = finger_forward(c, a);
+        const FingerAngles back = angles_from_bones(c, {p[1] - p[0], p[2] - p[1], p[3] - p[2]});
+        EXPECT_NEAR(back.abduction_rad, a.abduction_rad, 1e-9);
+        for (std::size_t k = 0; k < 3; ++k) EXPECT_NEAR(back.flexion_rad[k], a.flexion_rad[k], 1e-9) << k;
+      }
+    }
+  }
+}
+
+TEST(HandSolver, MeasuredAnglesWinOverTheTipAndAreKeptWithinLimits) {
+  const HandPose reference = reference_open_hand(HandSide::kRight);
+  HandSolver solver(HandSide::kRight, reference);
+  std::array<std::optional<FingerAngles>, kFingerCount> measured{};
+  measured[1] = FingerAngles{0.1, {0.5, 2.5, 0.3}};  // PIP beyond its 110 degrees
+  const HandState& s = solver.update(0.0, tips_of(reference), measured);
+  EXPECT_DOUBLE_EQ(s.angles[1].abduction_rad, 0.1);
+  EXPECT_DOUBLE_EQ(s.angles[1].flexion_rad[0], 0.5);
+  EXPECT_DOUBLE_EQ(s.angles[1].flexion_rad[1], solver.chains()[1].limits.flexion_max_rad[1]);
+  EXPECT_DOUBLE_EQ(s.angles[1].flexion_rad[2], 0.3);
+  EXPECT_TRUE(s.tip_seen[1]);
+}
+
 TEST(HandSolver, AnUnseenFingerEasesTowardRelaxedAndLosesConfidence) {
   const HandPose reference = reference_open_hand(HandSide::kRight);
   HandSolver solver(HandSide::kRight, reference);
