@@ -36,12 +36,44 @@ struct HeadsetSettings {
   EyeFovDeg right_eye{44.0, 52.0, 50.0, 50.0};
 };
 
+// How hands grasp (engine/physics/GraspSystem.h, docs/grasping.md); the scene file's
+// "settings": {"grasp": {...}} overrides any of these.
+struct GraspSettings {
+  double contact_distance_m = 0.003;  // a bone within this of an object touches it
+  double opposing_cos = -0.3;         // anchor and finger normals: cosine below this (over ~107 degrees apart)
+  double min_curl_rad = 0.15;         // an opposing finger is curled at least this much (root to tip)
+  double release_distance_m = 0.012;  // a grasping finger this far out of the surface is open
+  double confident = 0.95;            // joint confidence below this: not measured, never "open"
+  double regrasp_delay_s = 0.2;       // a hand that released cannot grasp again this soon
+  double throw_window_s = 0.05;       // the release velocity is fitted over this window ...
+  double throw_window_end_s = 0.02;   // ... ending this long before the release
+  double max_hold_error_m = 0.1;      // a held object kept this far from the hand (stuck) is dropped
+  double max_object_speed_mps = 20.0;
+  double hover_distance_m = 0.05;     // the palm this close to an object's bounding box: hovering
+};
+
 struct SceneSettings {
   std::optional<std::filesystem::path> rig_file;  // camera rig (OpenCV YAML); none: the built-in rig
   HeadsetSettings headset;
   bool left_hand = true;
   bool right_hand = true;
   glm::vec3 gravity_mps2{0.0f, -9.81f, 0.0f};
+  int physics_substeps = 2;  // Bullet steps per frame
+  GraspSettings grasp;
+};
+
+// An interaction a scene declares: when it happens, a success event carries its name.
+enum class InteractionType {
+  kPlace,     // `object` comes to rest inside `zone` (an entity with a box mesh), not held
+  kHandOver,  // `object` passes from one hand's grasp directly to the other's
+};
+
+struct InteractionDesc {
+  std::string name;
+  InteractionType type = InteractionType::kPlace;
+  std::string object;  // entity names
+  std::string zone;    // kPlace only
+  double dwell_s = 0.25;  // kPlace: at rest inside this long
 };
 
 struct EntityDesc {
@@ -59,6 +91,7 @@ struct SceneDesc {
   std::filesystem::path file;  // where it was read from (empty when parsed from text)
   SceneSettings settings;
   std::vector<EntityDesc> entities;
+  std::vector<InteractionDesc> interactions;
 };
 
 }  // namespace rhot

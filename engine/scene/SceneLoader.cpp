@@ -6,6 +6,7 @@
 #include <set>
 #include <sstream>
 #include <unordered_map>
+#include <variant>
 
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
@@ -326,8 +327,29 @@ HeadsetSettings read_headset(const Node& n) {
   return h;
 }
 
+GraspSettings read_grasp(const Node& n) {
+  n.expect_object({"contact_distance_m", "opposing_cos", "min_curl_rad", "release_distance_m", "confident", "regrasp_delay_s",
+                   "throw_window_s", "throw_window_end_s", "max_hold_error_m", "max_object_speed_mps", "hover_distance_m"});
+  GraspSettings g;
+  const auto set = [&](const char* key, double& value, double lo, double hi, const char* what) {
+    if (auto v = n.optional(key)) value = v->number_in(lo, hi, what);
+  };
+  set("contact_distance_m", g.contact_distance_m, 0.0, 0.05, "a distance from 0 to 0.05 m");
+  set("opposing_cos", g.opposing_cos, -1.0, 1.0, "a cosine from -1 to 1");
+  set("min_curl_rad", g.min_curl_rad, 0.0, 3.2, "an angle from 0 to 3.2 rad");
+  set("release_distance_m", g.release_distance_m, 0.001, 0.2, "a distance from 0.001 to 0.2 m");
+  set("confident", g.confident, 0.0, 1.0, "a confidence from 0 to 1");
+  set("regrasp_delay_s", g.regrasp_delay_s, 0.0, 10.0, "a time from 0 to 10 s");
+  set("throw_window_s", g.throw_window_s, 0.0, 1.0, "a time from 0 to 1 s");
+  set("throw_window_end_s", g.throw_window_end_s, 0.0, 0.2, "a time from 0 to 0.2 s");
+  set("max_hold_error_m", g.max_hold_error_m, 0.01, 10.0, "a distance from 0.01 to 10 m");
+  set("max_object_speed_mps", g.max_object_speed_mps, 0.1, 100.0, "a speed from 0.1 to 100 m/s");
+  set("hover_distance_m", g.hover_distance_m, 0.0, 1.0, "a distance from 0 to 1 m");
+  return g;
+}
+
 SceneSettings read_settings(const Node& n, const std::filesystem::path& base_dir) {
-  n.expect_object({"rig", "headset", "hands", "gravity_mps2"});
+  n.expect_object({"rig", "headset", "hands", "gravity_mps2", "physics_substeps", "grasp"});
   SceneSettings s;
   if (auto rig = n.optional("rig")) s.rig_file = existing_file(*rig, base_dir);
   if (auto h = n.optional("headset")) s.headset = read_headset(*h);
@@ -342,7 +364,62 @@ SceneSettings read_settings(const Node& n, const std::filesystem::path& base_dir
     }
   }
   if (auto g = n.optional("gravity_mps2")) s.gravity_mps2 = g->vec3();
+  if (auto p = n.optional("physics_substeps")) s.physics_substeps = p->integer_in(1, 16);
+  if (auto g = n.optional("grasp")) s.grasp = read_grasp(*g);
   return s;
+}
+
+InteractionDesc read_interaction(const Node& n) {
+  n.expect_object({"name", "type", "object", "zone", "dwell_s"});
+  InteractionDesc d;
+  d.name = n["name"].non_empty_string();
+  const Node type = n["type"];
+  const std::string t = type.string();
+  if (t == "place") {
+    d.type = InteractionType::kPlace;
+  } else if (t == "hand_over") {
+    d.type = InteractionType::kHandOver;
+  } else {
+    type.fail("expected \"place\" or \"hand_over\", got " + describe(type.raw()));
+  }
+  d.object = n["object"].non_empty_string();
+  if (d.type == InteractionType::kPlace) {
+    d.zone = n["zone"].non_empty_string();
+    if (auto w = n.optional("dwell_s")) d.dwell_s = w->number_in(0.0, 60.0, "a time from 0 to 60 s");
+  } else {
+    if (auto z = n.optional("zone")) z->fail("a hand_over has no zone");
+    if (auto w = n.optional("dwell_s")) w->fail("a hand_over has no dwell time");
+  }
+  return d;
+}
+
+void check_interactions(const std::vector<InteractionDesc>& interactions, const std::vector<EntityDesc>& entities) {
+  const auto find = [&](const std::string& name) -> const EntityDesc* {
+    for (const EntityDesc& e : entities) {
+      if (e.name == name) return &e;
+    }
+    return nullptr;
+  };
+  for (std::size_t i = 0; i < interactions.size(); ++i) {
+    const InteractionDesc& d = interactions[i];
+    const std::string path = "/interactions/" + std::to_string(i);
+    for (std::size_t k = 0; k < i; ++k) {
+      if (interactions[k].name == d.name) {
+        throw LoadFailure{path + "/name", "duplicate interaction name \"" + d.name + "\" (also at /interactions/" + std::to_string(k) + "/name)"};
+      }
+    }
+    const EntityDesc* object = find(d.object);
+    if (!object) throw LoadFailure{path + "/object", "no entity is named \"" + d.object + "\""};
+    if (!object->grabbable) throw LoadFailure{path + "/object", "\"" + d.object + "\" is not grabbable"};
+    if (d.type == InteractionType::kPlace) {
+      const EntityDesc* zone = find(d.zone);
+      if (!zone) throw LoadFailure{path + "/zone", "no entity is named \"" + d.zone + "\""};
+      if (!zone->mesh || !std::holds_alternative<BoxShape>(zone->mesh->shape)) {
+        throw LoadFailure{path + "/zone", "zone \"" + d.zone + "\" needs a box mesh (the zone is its box)"};
+      }
+      if (zone->body) throw LoadFailure{path + "/zone", "zone \"" + d.zone + "\" has a physics body; a zone must let objects in"};
+    }
+  }
 }
 
 EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir) {
@@ -476,7 +553,7 @@ std::string line_and_column(std::string_view text, std::size_t byte) {
 
 SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
   const Node n(root, "");
-  n.expect_object({"format", "version", "settings", "entities"});
+  n.expect_object({"format", "version", "settings", "entities", "interactions"});
   if (auto f = n.optional("format"); f && f->string() != "rhot-scene") {
     f->fail("expected \"rhot-scene\", got " + describe(f->raw()));
   }
@@ -487,6 +564,10 @@ SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
     for (const Node& e : list->elements()) scene.entities.push_back(read_entity(e, base_dir));
   }
   check_references(scene.entities);
+  if (auto list = n.optional("interactions")) {
+    for (const Node& i : list->elements()) scene.interactions.push_back(read_interaction(i));
+  }
+  check_interactions(scene.interactions, scene.entities);
   return scene;
 }
 

@@ -20,6 +20,7 @@
 #include <iostream>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "engine/physics/GraspScenarios.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
 #include "tracking/hand/HandMotions.h"
@@ -500,6 +502,77 @@ int hands(const std::string& rig_file, const std::string& layout_file, const std
   return 0;
 }
 
+// Scripted grasp scenarios through the real physics (engine/physics/GraspScenarios.h).
+int grasp(const std::string& scenario) {
+  std::vector<std::string_view> names;
+  for (const std::string_view n : rhot::grasp_scenario_names()) {
+    if (scenario == "all" || scenario == n) names.push_back(n);
+  }
+  if (names.empty()) {
+    std::string list;
+    for (const std::string_view n : rhot::grasp_scenario_names()) list += std::string(n) + ", ";
+    std::cerr << "rhot-eval: --scenario " << scenario << ": no such scenario (" << list << "all)\n";
+    return 1;
+  }
+  nlohmann::json j;
+  std::vector<double> steps;
+  int lifts = 0, lifted = 0;
+  double max_slip = 0.0;
+  std::optional<double> throw_error;
+  for (const std::string_view name : names) {
+    std::cerr << "rhot-eval: grasp scenario " << name << "\n";
+    const auto r = rhot::run_grasp_scenario(name);
+    if (!r) {
+      std::cerr << "rhot-eval: " << r.error() << "\n";
+      return 1;
+    }
+    nlohmann::json s;
+    s["grasped"] = r->grasped;
+    s["lift_mm"] = 1000.0 * r->lift_m;
+    s["max_slip_mm"] = 1000.0 * r->max_slip_m;
+    s["held_s"] = r->held_s;
+    s["released"] = r->released;
+    s["fell_after_release"] = r->fell_after_release;
+    s["handed_over"] = r->handed_over;
+    s["pushed_mm"] = 1000.0 * r->pushed_m;
+    s["successes"] = r->successes;
+    s["frames"] = r->frames;
+    nlohmann::json events = nlohmann::json::array();
+    for (const rhot::InteractionEvent& e : r->events) {
+      if (e.type == rhot::InteractionEventType::kHoverBegin || e.type == rhot::InteractionEventType::kHoverEnd) continue;
+      nlohmann::json ev = {{"t_s", e.time_s}, {"type", rhot::event_name(e.type)}, {"object", e.object.index}};
+      if (e.hand) ev["hand"] = *e.hand == rhot::HandSide::kLeft ? "left" : "right";
+      if (!e.interaction.empty()) ev["interaction"] = e.interaction;
+      events.push_back(ev);
+    }
+    s["events"] = events;
+    s["step_p50_ms"] = percentile(r->step_ms, 0.5);
+    s["step_p99_ms"] = percentile(r->step_ms, 0.99);
+    if (name == "throw") {
+      s["hand_speed_mps"] = r->hand_speed_mps;
+      s["throw_velocity_error_pct"] = 100.0 * r->throw_velocity_error;
+      throw_error = 100.0 * r->throw_velocity_error;
+    }
+    // A lift succeeds when the object rose 10 cm and stayed held 2 s.
+    if (name == "lift" || name == "pinch" || name == "hidden-markers") {
+      ++lifts;
+      const bool ok = r->grasped && r->lift_m >= 0.1 && r->held_s >= 2.0;
+      lifted += ok ? 1 : 0;
+      s["lift_success"] = ok;
+    }
+    if (r->grasped) max_slip = std::max(max_slip, 1000.0 * r->max_slip_m);
+    steps.insert(steps.end(), r->step_ms.begin(), r->step_ms.end());
+    j["scenarios"][std::string(name)] = s;
+  }
+  if (lifts > 0) j["lift_success_fraction"] = static_cast<double>(lifted) / lifts;
+  j["max_slip_mm"] = max_slip;
+  if (throw_error) j["throw_velocity_error_pct"] = *throw_error;
+  j["step_p50_ms"] = percentile(steps, 0.5);
+  j["step_p99_ms"] = percentile(steps, 0.99);
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"rhot-eval: accuracy and speed of rhot's tracking on simulated data, as JSON"};
   app.require_subcommand(1);
@@ -562,7 +635,12 @@ int main(int argc, char** argv) {
   bool filter = false;
   hands_cmd->add_flag("--filter", filter, "1-euro filter the hand frame and the fingertips before the IK");
   hands_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  auto* grasp_cmd = app.add_subcommand("grasp", "scripted grasps through the physics: lift, pinch, throw, push, hand-over, hidden markers, place");
+  std::string scenario = "all";
+  grasp_cmd->add_option("--scenario", scenario, "a scenario name or all")->capture_default_str();
+  grasp_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
+  if (grasp_cmd->parsed()) return grasp(scenario);
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
   if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, sigma, hand_frames, seed, volume_centre, filter);
   if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, sigma, frames, seed, dropout, volume, volume_centre);

@@ -1,0 +1,48 @@
+#pragma once
+// Scripted grasp scenarios: a scene built in code, hands driven by scripted skeletons (no
+// cameras), run through HandPhysics and measured. The physics tests assert on these results and
+// `rhot-eval grasp` prints them.
+//
+//   lift            grasp a 5 cm cube on a pedestal (thumb against index and middle), lift it
+//                   15 cm, hold it 2 s, open the hand; it falls
+//   pinch           the same with a 3 cm sphere between thumb and index
+//   throw           grasp the cube, swing it at 1.5 m/s and open the hand mid-swing
+//   push            a pointing index finger pushes the cube 6 cm along the pedestal
+//   hand-over       the right hand lifts the cube, the left grasps it, the right lets go
+//   hidden-markers  as lift, the hand through the hand solver, every fingertip marker hidden for
+//                   0.5 s while holding
+//   place           grasp the cube, carry it into a zone on a second pedestal, let go: the scene's
+//                   "place" interaction succeeds
+
+#include <expected>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/physics/GraspSystem.h"
+
+namespace rhot {
+
+struct GraspScenarioResult {
+  std::string name;
+  bool grasped = false;            // a grasp event for the object
+  double lift_m = 0.0;             // highest the object rose above where it started
+  double max_slip_m = 0.0;         // while held: largest drift of the object in the hand's frame
+  double held_s = 0.0;             // how long it was held
+  bool released = false;
+  bool fell_after_release = false; // dropped at least 5 cm after the release
+  double hand_speed_mps = 0.0;     // throw: the hand's speed at release
+  double throw_velocity_error = 0.0;  // throw: |v_object - v_hand| / |v_hand| at release
+  double pushed_m = 0.0;           // push: how far the object moved
+  bool handed_over = false;        // a release with handed_over
+  std::vector<std::string> successes;  // interactions that succeeded
+  std::vector<InteractionEvent> events;
+  std::vector<double> step_ms;     // HandPhysics::step per frame
+  long frames = 0;
+};
+
+std::span<const std::string_view> grasp_scenario_names();
+[[nodiscard]] std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name);
+
+}  // namespace rhot

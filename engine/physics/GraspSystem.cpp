@@ -1,0 +1,365 @@
+#include "engine/physics/GraspSystem.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/core/World.h"
+#include "engine/physics/BulletMath.h"
+#include "engine/scene/Components.h"
+#include "tracking/hand/HandSolver.h"
+
+namespace rhot {
+
+namespace {
+
+HandSide side_of(int hand) { return hand == 0 ? HandSide::kLeft : HandSide::kRight; }
+
+// Distance from a point to an axis-aligned box (0 inside).
+double box_distance(const btVector3& p, const btVector3& lo, const btVector3& hi) {
+  btVector3 d(0, 0, 0);
+  for (int i = 0; i < 3; ++i) d[i] = std::max({lo[i] - p[i], btScalar(0), p[i] - hi[i]});
+  return static_cast<double>(d.length());
+}
+
+}  // namespace
+
+const char* event_name(InteractionEventType type) {
+  switch (type) {
+    case InteractionEventType::kHoverBegin: return "hover_begin";
+    case InteractionEventType::kHoverEnd: return "hover_end";
+    case InteractionEventType::kContactBegin: return "contact_begin";
+    case InteractionEventType::kContactEnd: return "contact_end";
+    case InteractionEventType::kGrasp: return "grasp";
+    case InteractionEventType::kRelease: return "release";
+    case InteractionEventType::kSuccess: return "success";
+  }
+  return "?";
+}
+
+GraspSystem::GraspSystem(PhysicsWorld& physics, std::array<HandColliders*, 2> hands, GraspSettings settings)
+    : physics_(physics), hands_(hands), settings_(settings) {}
+
+std::optional<HandSide> GraspSystem::held_by(Entity object) const {
+  const auto it = held_.find(object);
+  if (it == held_.end()) return std::nullopt;
+  return side_of(it->second.hand);
+}
+
+std::optional<Entity> GraspSystem::holding(HandSide hand) const {
+  for (const auto& [e, h] : held_) {
+    if (side_of(h.hand) == hand) return e;
+  }
+  return std::nullopt;
+}
+
+btTransform GraspSystem::target_of(const Held& held) const {
+  const HandColliders* hand = hands_[static_cast<std::size_t>(held.hand)];
+  return to_bt(hand->input().world_from_hand) * held.hand_from_object;
+}
+
+std::optional<btTransform> GraspSystem::grip_target(Entity object) const {
+  const auto it = held_.find(object);
+  if (it == held_.end()) return std::nullopt;
+  return target_of(it->second);
+}
+
+void GraspSystem::emit(InteractionEventType type, Entity object, std::optional<int> hand) {
+  InteractionEvent e{type, physics_.time_s(), object, std::nullopt, {}, false, Eigen::Vector3d::Zero()};
+  if (hand) e.hand = side_of(*hand);
+  events_.push_back(std::move(e));
+}
+
+void GraspSystem::ignore_hand(btRigidBody* object, int hand, bool ignore) {
+  const HandColliders* h = hands_[static_cast<std::size_t>(hand)];
+  if (!h) return;
+  for (int i = 0; i < kHandBoneCount; ++i) {
+    if (h->bone(i)) object->setIgnoreCollisionCheck(h->bone(i), ignore);
+  }
+}
+
+double GraspSystem::curl_rad(int hand, int finger) const {
+  const HandInput& in = hands_[static_cast<std::size_t>(hand)]->input();
+  const auto p = [&](HandJoint j) { return in.joints_world[static_cast<std::size_t>(j)]; };
+  const auto& bones = hand_bones();
+  // The finger's first and last bones: root flexion plus both hinges.
+  Eigen::Vector3d first = Eigen::Vector3d::Zero(), last = Eigen::Vector3d::Zero();
+  bool have_first = false;
+  for (const HandBone& b : bones) {
+    if (b.group != finger) continue;
+    const Eigen::Vector3d d = (p(b.to) - p(b.from)).normalized();
+    if (!have_first) first = d;
+    have_first = true;
+    last = d;
+  }
+  if (finger != 0) {
+    // A finger's root flexion is measured from its metacarpal (a palm bone).
+    for (const HandBone& b : bones) {
+      if (b.group == kPalmGroup && b.to == static_cast<HandJoint>(static_cast<int>(HandJoint::kIndexProximal) + 5 * (finger - 1))) {
+        first = (p(b.to) - p(b.from)).normalized();
+      }
+    }
+  }
+  return std::acos(std::clamp(first.dot(last), -1.0, 1.0));
+}
+
+void GraspSystem::pre_step(World&) {
+  const btScalar dt = static_cast<btScalar>(physics_.step_s());
+  for (auto& [object, held] : held_) {
+    btRigidBody* body = physics_.body(object);
+    if (!body) continue;
+    const btTransform target = target_of(held);
+    held.history.emplace_back(physics_.time_s(), target);
+    while (held.history.size() > 2 && held.history.front().first < physics_.time_s() - 0.25) held.history.pop_front();
+    const btTransform& now = body->getWorldTransform();
+    btVector3 v = (target.getOrigin() - now.getOrigin()) / dt;
+    const btScalar speed = v.length();
+    const btScalar max_speed = static_cast<btScalar>(settings_.max_object_speed_mps);
+    if (speed > max_speed) v *= max_speed / speed;
+    body->activate(true);
+    body->setLinearVelocity(v);
+    body->setAngularVelocity(angular_velocity(now.getRotation(), target.getRotation(), dt));
+  }
+}
+
+void GraspSystem::begin_grasp(World&, int hand, Entity object, const std::vector<Contact>& contacts, const std::vector<int>& groups) {
+  btRigidBody* body = physics_.body(object);
+  HandColliders* h = hands_[static_cast<std::size_t>(hand)];
+  if (const auto it = held_.find(object); it != held_.end()) release(object, true);  // a hand-over
+  Held held;
+  held.hand = hand;
+  const btTransform world_from_object = body->getWorldTransform();
+  held.hand_from_object = to_bt(h->input().world_from_hand).inverse() * world_from_object;
+  const btTransform object_from_world = world_from_object.inverse();
+  for (const Contact& c : contacts) {
+    const int group = hand_bones()[static_cast<std::size_t>(c.bone)].group;
+    if (std::find(groups.begin(), groups.end(), group) == groups.end()) continue;
+    GripPoint g;
+    g.bone = c.bone;
+    g.group = group;
+    g.on_object = object_from_world * c.point;
+    g.normal = object_from_world.getBasis() * c.normal;
+    g.on_bone = h->tracked_bone(c.bone).inverse() * c.point;
+    held.grip.push_back(g);
+  }
+  body->setGravity({0, 0, 0});
+  body->activate(true);
+  ignore_hand(body, hand, true);
+  std::erase_if(reenable_, [&](const auto& r) { return r.first == object && r.second == hand; });
+  held_[object] = std::move(held);
+  emit(InteractionEventType::kGrasp, object, hand);
+}
+
+void GraspSystem::release(Entity object, bool handed_over) {
+  const auto it = held_.find(object);
+  if (it == held_.end()) return;
+  Held& held = it->second;
+  btRigidBody* body = physics_.body(object);
+  InteractionEvent e{InteractionEventType::kRelease, physics_.time_s(), object, side_of(held.hand), {}, handed_over, Eigen::Vector3d::Zero()};
+  if (body && !handed_over) {
+    // The hand's velocity: a least-squares line through the grip's recent positions.
+    const double end = physics_.time_s() - settings_.throw_window_end_s;
+    const double begin = end - settings_.throw_window_s;
+    std::vector<std::pair<double, btTransform>> window;
+    for (const auto& s : held.history) {
+      if (s.first >= begin - 1e-9 && s.first <= end + 1e-9) window.push_back(s);
+    }
+    if (window.size() < 2 && held.history.size() >= 2) window.assign(held.history.end() - 2, held.history.end());
+    btVector3 v(0, 0, 0), w(0, 0, 0);
+    if (window.size() >= 2) {
+      double t_mean = 0.0;
+      btVector3 p_mean(0, 0, 0);
+      for (const auto& s : window) {
+        t_mean += s.first;
+        p_mean += s.second.getOrigin();
+      }
+      t_mean /= static_cast<double>(window.size());
+      p_mean /= static_cast<btScalar>(window.size());
+      double stt = 0.0;
+      btVector3 stp(0, 0, 0);
+      for (const auto& s : window) {
+        const double dt = s.first - t_mean;
+        stt += dt * dt;
+        stp += (s.second.getOrigin() - p_mean) * static_cast<btScalar>(dt);
+      }
+      if (stt > 0.0) v = stp / static_cast<btScalar>(stt);
+      const double span = window.back().first - window.front().first;
+      if (span > 0.0) w = angular_velocity(window.front().second.getRotation(), window.back().second.getRotation(), static_cast<btScalar>(span));
+    }
+    if (!finite(v) || !finite(w)) v = w = btVector3(0, 0, 0);
+    const btScalar max_speed = static_cast<btScalar>(settings_.max_object_speed_mps);
+    if (v.length() > max_speed) v *= max_speed / v.length();
+    body->setLinearVelocity(v);
+    body->setAngularVelocity(w);
+    e.velocity_mps = to_eigen(v);
+  }
+  if (body) {
+    body->setGravity(physics_.bullet().getGravity());
+    body->activate(true);
+    reenable_.emplace_back(object, held.hand);
+  }
+  released_at_s_[static_cast<std::size_t>(held.hand)] = physics_.time_s();
+  held_.erase(it);
+  events_.push_back(std::move(e));
+}
+
+void GraspSystem::post_step(World& world) {
+  events_.clear();
+  // Contacts between hand bones and scene bodies.
+  std::array<std::unordered_map<Entity, std::vector<Contact>>, 2> contacts;
+  btDispatcher* dispatcher = physics_.bullet().getDispatcher();
+  for (int m = 0; m < dispatcher->getNumManifolds(); ++m) {
+    const btPersistentManifold* manifold = dispatcher->getManifoldByIndexInternal(m);
+    const btCollisionObject* a = manifold->getBody0();
+    const btCollisionObject* b = manifold->getBody1();
+    if (!a->checkCollideWith(b) || !b->checkCollideWith(a)) continue;  // ignored pair: stale points
+    for (int hand = 0; hand < 2; ++hand) {
+      HandColliders* h = hands_[static_cast<std::size_t>(hand)];
+      if (!h || !h->active()) continue;
+      auto bone = h->bone_of(a);
+      const btCollisionObject* other = b;
+      bool bone_is_a = true;
+      if (!bone) {
+        bone = h->bone_of(b);
+        other = a;
+        bone_is_a = false;
+      }
+      if (!bone || h->soft(*bone)) continue;
+      const auto object = physics_.entity_of(other);
+      if (!object) continue;
+      for (int k = 0; k < manifold->getNumContacts(); ++k) {
+        const btManifoldPoint& pt = manifold->getContactPoint(k);
+        if (pt.getDistance() > static_cast<btScalar>(settings_.contact_distance_m)) continue;
+        // normalWorldOnB points from body1 toward body0.
+        const btVector3 normal = bone_is_a ? pt.m_normalWorldOnB : -pt.m_normalWorldOnB;
+        const btVector3 point = bone_is_a ? pt.getPositionWorldOnB() : pt.getPositionWorldOnA();
+        contacts[static_cast<std::size_t>(hand)][*object].push_back({*bone, point, normal});
+      }
+    }
+  }
+
+  // Hover and contact events, for every non-static body.
+  for (const Entity object : physics_.entities()) {
+    btRigidBody* body = physics_.body(object);
+    if (body->isStaticObject() && !body->isKinematicObject()) continue;
+    auto& state = pairs_[object];
+    btVector3 lo, hi;
+    body->getAabb(lo, hi);
+    for (int hand = 0; hand < 2; ++hand) {
+      HandColliders* h = hands_[static_cast<std::size_t>(hand)];
+      PairState& s = state[static_cast<std::size_t>(hand)];
+      const bool active = h && h->active();
+      const bool touching = active && contacts[static_cast<std::size_t>(hand)].contains(object);
+      if (touching != s.touching) emit(touching ? InteractionEventType::kContactBegin : InteractionEventType::kContactEnd, object, hand);
+      s.touching = touching;
+      bool hovering = false;
+      if (active) {
+        const double d = box_distance(to_bt(h->input().joints_world[static_cast<std::size_t>(HandJoint::kPalm)]), lo, hi);
+        hovering = d <= settings_.hover_distance_m * (s.hovering ? 1.5 : 1.0);
+      }
+      if (hovering != s.hovering) emit(hovering ? InteractionEventType::kHoverBegin : InteractionEventType::kHoverEnd, object, hand);
+      s.hovering = hovering;
+    }
+  }
+
+  // Releases: fingers opened, or the object stuck far from the hand.
+  std::vector<Entity> to_release;
+  for (auto& [object, held] : held_) {
+    const HandColliders* h = hands_[static_cast<std::size_t>(held.hand)];
+    btRigidBody* body = physics_.body(object);
+    if (!h->active()) continue;  // the hand is lost: keep holding
+    const btTransform target = target_of(held);
+    const double error = static_cast<double>((body->getWorldTransform().getOrigin() - target.getOrigin()).length());
+    if (error > settings_.max_hold_error_m) {
+      if (held.stuck_since_s < 0.0) held.stuck_since_s = physics_.time_s();
+      if (physics_.time_s() - held.stuck_since_s > 0.1) {
+        to_release.push_back(object);
+        continue;
+      }
+    } else {
+      held.stuck_since_s = -1.0;
+    }
+    bool anchor_open = false, any_anchor = false;
+    bool fingers_open = true, any_finger = false;
+    for (const GripPoint& g : held.grip) {
+      const HandBone& bone = hand_bones()[static_cast<std::size_t>(g.bone)];
+      // A finger is measured when its tip is (its other joints are inferred by IK); the palm when
+      // its knuckles are.
+      const HandJoint judge = g.group == kPalmGroup ? bone.to : chain_joints(static_cast<Finger>(g.group))[3];
+      const double confidence = h->input().confidence[static_cast<std::size_t>(judge)];
+      const bool trusted = confidence >= settings_.confident;
+      const btVector3 on_bone = h->tracked_bone(g.bone) * g.on_bone;
+      const btVector3 on_object = target * g.on_object;
+      const btVector3 normal = target.getBasis() * g.normal;
+      const bool open = trusted && static_cast<double>((on_bone - on_object).dot(normal)) > settings_.release_distance_m;
+      if (g.group == 0 || g.group == kPalmGroup) {
+        any_anchor = true;
+        anchor_open = anchor_open || open;
+      } else {
+        any_finger = true;
+        fingers_open = fingers_open && open;
+      }
+    }
+    // The anchor opens when any of its grip points left; fingers when all of theirs did.
+    if ((any_anchor && anchor_open) || (any_finger && fingers_open)) to_release.push_back(object);
+  }
+  for (const Entity object : to_release) release(object, false);
+
+  // New grasps.
+  for (int hand = 0; hand < 2; ++hand) {
+    HandColliders* h = hands_[static_cast<std::size_t>(hand)];
+    if (!h || !h->active()) continue;
+    if (physics_.time_s() - released_at_s_[static_cast<std::size_t>(hand)] < settings_.regrasp_delay_s) continue;
+    if (holding(side_of(hand))) continue;
+    for (const auto& [object, list] : contacts[static_cast<std::size_t>(hand)]) {
+      btRigidBody* body = physics_.body(object);
+      if (!body || body->isStaticOrKinematicObject() || !world.alive(object) || !world.has<Grabbable>(object)) continue;
+      if (const auto it = held_.find(object); it != held_.end() && it->second.hand == hand) continue;
+      // One contact per group: the first (Bullet keeps the deepest first often enough; any will do
+      // for the normal test).
+      std::array<std::optional<Contact>, 6> by_group;
+      for (const Contact& c : list) {
+        const int g = hand_bones()[static_cast<std::size_t>(c.bone)].group;
+        if (!by_group[static_cast<std::size_t>(g)]) by_group[static_cast<std::size_t>(g)] = c;
+      }
+      std::vector<int> groups;
+      for (const int anchor : {0, kPalmGroup}) {
+        const auto& a = by_group[static_cast<std::size_t>(anchor)];
+        if (!a) continue;
+        std::vector<int> opposing;
+        for (int f = 1; f <= 4; ++f) {
+          const auto& c = by_group[static_cast<std::size_t>(f)];
+          if (!c) continue;
+          if (static_cast<double>(a->normal.dot(c->normal)) < settings_.opposing_cos && curl_rad(hand, f) >= settings_.min_curl_rad) opposing.push_back(f);
+        }
+        if (!opposing.empty()) {
+          groups = opposing;
+          groups.push_back(anchor);
+          break;
+        }
+      }
+      if (groups.empty()) continue;
+      begin_grasp(world, hand, object, list, groups);
+      break;  // one object per hand
+    }
+  }
+
+  // Collisions resume once no bone of the releasing hand overlaps the object.
+  std::erase_if(reenable_, [&](const std::pair<Entity, int>& r) {
+    btRigidBody* body = physics_.body(r.first);
+    HandColliders* h = hands_[static_cast<std::size_t>(r.second)];
+    if (!body || !h) return true;
+    if (const auto it = held_.find(r.first); it != held_.end() && it->second.hand == r.second) return true;
+    btVector3 lo, hi;
+    body->getAabb(lo, hi);
+    const btVector3 pad(0.002f, 0.002f, 0.002f);
+    for (int i = 0; i < kHandBoneCount; ++i) {
+      btVector3 blo, bhi;
+      h->bone(i)->getAabb(blo, bhi);
+      if (TestAabbAgainstAabb2(lo - pad, hi + pad, blo, bhi)) return false;
+    }
+    ignore_hand(body, r.second, false);
+    return true;
+  });
+}
+
+}  // namespace rhot

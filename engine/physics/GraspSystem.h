@@ -1,0 +1,113 @@
+#pragma once
+// Grasping through contacts (docs/grasping.md).
+//
+// A grasp begins when the thumb (or the palm) and at least one other finger of one hand touch the
+// same grabbable dynamic object, the finger curled and the two contact normals roughly opposed.
+// The held object then follows the hand: every step its velocity is set to bring it to where the
+// grasp found it relative to the hand frame (a velocity-level constraint that keeps the grip
+// offset, like the hand bones themselves), without gravity and without colliding with that
+// hand's bones (fingers squeezing into it would otherwise push it around); it still collides
+// with everything else.
+//
+// The grasp ends when the fingers open: a grasping finger counts as open when its tracked bone
+// has moved more than `release_distance_m` out of the object's surface from where it touched;
+// the grasp ends when the thumb (or palm) or every opposing finger is open. A finger whose joints
+// are not measured this frame (confidence below `confident`: a hidden fingertip marker, say)
+// never counts as open, so a hand whose curled fingers hide their own markers keeps holding. On
+// release the object takes the hand's velocity, fitted by least squares over a window that ends
+// a little before the release (the hand slows while it opens), and its angular velocity, so it
+// can be thrown. A hand cannot grasp again within `regrasp_delay_s` of releasing. Another hand
+// that grasps a held object takes it over (a hand-over).
+//
+// Collisions between a released object and its hand's bones resume once no bone overlaps it.
+
+#include <array>
+#include <deque>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "engine/core/Entity.h"
+#include "engine/physics/HandColliders.h"
+#include "engine/physics/PhysicsWorld.h"
+#include "engine/scene/SceneDesc.h"
+
+namespace rhot {
+
+class World;
+
+
+enum class InteractionEventType { kHoverBegin, kHoverEnd, kContactBegin, kContactEnd, kGrasp, kRelease, kSuccess };
+const char* event_name(InteractionEventType type);
+
+struct InteractionEvent {
+  InteractionEventType type;
+  double time_s = 0.0;
+  Entity object;                  // the object (for kSuccess: the interaction's object)
+  std::optional<HandSide> hand;   // none for kSuccess
+  std::string interaction;        // kSuccess: the interaction's name
+  bool handed_over = false;       // kRelease: the other hand took the object
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  // kRelease: what the object was given
+};
+
+class GraspSystem {
+ public:
+  GraspSystem(PhysicsWorld& physics, std::array<HandColliders*, 2> hands, GraspSettings settings = {});
+
+  // Before the physics step: held objects are aimed at their grip.
+  void pre_step(World& world);
+  // After the physics step: contacts read, grasps begun and ended, events raised.
+  void post_step(World& world);
+
+  // Events of the last post_step.
+  const std::vector<InteractionEvent>& events() const { return events_; }
+  std::optional<HandSide> held_by(Entity object) const;
+  std::optional<Entity> holding(HandSide hand) const;
+  const GraspSettings& settings() const { return settings_; }
+  // Where the hand holds `object` now (world), if held.
+  std::optional<btTransform> grip_target(Entity object) const;
+
+ private:
+  struct GripPoint {
+    int bone = 0;
+    int group = 0;
+    btVector3 on_object;     // object frame
+    btVector3 normal;        // object frame, outward
+    btVector3 on_bone;       // tracked bone frame
+  };
+  struct Held {
+    int hand = 0;
+    btTransform hand_from_object;
+    std::vector<GripPoint> grip;
+    std::deque<std::pair<double, btTransform>> history;  // (time, target)
+    double stuck_since_s = -1.0;
+  };
+  struct Contact {
+    int bone;
+    btVector3 point;   // world, on the object
+    btVector3 normal;  // world, out of the object toward the bone
+  };
+  struct PairState {
+    bool hovering = false;
+    bool touching = false;
+  };
+
+  void begin_grasp(World& world, int hand, Entity object, const std::vector<Contact>& contacts, const std::vector<int>& groups);
+  void release(Entity object, bool handed_over);
+  btTransform target_of(const Held& held) const;
+  void ignore_hand(btRigidBody* object, int hand, bool ignore);
+  void emit(InteractionEventType type, Entity object, std::optional<int> hand);
+  double curl_rad(int hand, int finger) const;
+
+  PhysicsWorld& physics_;
+  std::array<HandColliders*, 2> hands_;
+  GraspSettings settings_;
+  std::unordered_map<Entity, Held> held_;
+  std::array<double, 2> released_at_s_{-1e9, -1e9};
+  std::vector<std::pair<Entity, int>> reenable_;  // (object, hand) whose collisions resume once clear
+  std::unordered_map<Entity, std::array<PairState, 2>> pairs_;
+  std::vector<InteractionEvent> events_;
+};
+
+}  // namespace rhot

@@ -1,0 +1,198 @@
+#include "engine/physics/HandColliders.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/physics/BulletMath.h"
+#include "tracking/hand/HandTracker.h"
+
+namespace rhot {
+
+namespace {
+
+constexpr std::array<HandBone, kHandBoneCount> kBones{{
+    {HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal, 0},
+    {HandJoint::kThumbProximal, HandJoint::kThumbDistal, 0},
+    {HandJoint::kThumbDistal, HandJoint::kThumbTip, 0},
+    {HandJoint::kIndexMetacarpal, HandJoint::kIndexProximal, kPalmGroup},
+    {HandJoint::kIndexProximal, HandJoint::kIndexIntermediate, 1},
+    {HandJoint::kIndexIntermediate, HandJoint::kIndexDistal, 1},
+    {HandJoint::kIndexDistal, HandJoint::kIndexTip, 1},
+    {HandJoint::kMiddleMetacarpal, HandJoint::kMiddleProximal, kPalmGroup},
+    {HandJoint::kMiddleProximal, HandJoint::kMiddleIntermediate, 2},
+    {HandJoint::kMiddleIntermediate, HandJoint::kMiddleDistal, 2},
+    {HandJoint::kMiddleDistal, HandJoint::kMiddleTip, 2},
+    {HandJoint::kRingMetacarpal, HandJoint::kRingProximal, kPalmGroup},
+    {HandJoint::kRingProximal, HandJoint::kRingIntermediate, 3},
+    {HandJoint::kRingIntermediate, HandJoint::kRingDistal, 3},
+    {HandJoint::kRingDistal, HandJoint::kRingTip, 3},
+    {HandJoint::kLittleMetacarpal, HandJoint::kLittleProximal, kPalmGroup},
+    {HandJoint::kLittleProximal, HandJoint::kLittleIntermediate, 4},
+    {HandJoint::kLittleIntermediate, HandJoint::kLittleDistal, 4},
+    {HandJoint::kLittleDistal, HandJoint::kLittleTip, 4},
+}};
+
+std::size_t at(HandJoint j) { return static_cast<std::size_t>(j); }
+
+bool input_finite(const HandInput& in) {
+  if (!in.world_from_hand.translation.allFinite() || !in.world_from_hand.rotation.coeffs().allFinite()) return false;
+  for (const auto& p : in.joints_world) {
+    if (!p.allFinite()) return false;
+  }
+  for (const double r : in.radius_m) {
+    if (!std::isfinite(r)) return false;
+  }
+  return true;
+}
+
+// A capsule along +Y from a to b.
+btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d d = b - a;
+  const double n = d.norm();
+  const Eigen::Quaterniond q = n > 1e-9 ? Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), d / n) : Eigen::Quaterniond::Identity();
+  return btTransform(to_bt(q), to_bt(0.5 * (a + b)));
+}
+
+}  // namespace
+
+const std::array<HandBone, kHandBoneCount>& hand_bones() { return kBones; }
+
+HandInput hand_input(const TrackedHand& tracked) {
+  HandInput in;
+  in.seen = tracked.hand_seen;
+  in.world_from_hand = tracked.world_from_hand;
+  in.joints_world = tracked.joints_world;
+  in.radius_m = tracked.state.pose.radius_m;
+  in.confidence = tracked.state.confidence;
+  return in;
+}
+
+HandInput hand_input(const Rigid3d& world_from_hand, const HandPose& pose) {
+  HandInput in;
+  in.seen = true;
+  in.world_from_hand = world_from_hand;
+  for (std::size_t j = 0; j < kHandJointCount; ++j) in.joints_world[j] = world_from_hand * pose.position_m[j];
+  in.radius_m = pose.radius_m;
+  in.confidence.fill(1.0);
+  return in;
+}
+
+HandColliders::HandColliders(PhysicsWorld& physics, HandSide side, HandColliderSettings settings)
+    : physics_(physics), side_(side), settings_(settings) {}
+
+HandColliders::~HandColliders() {
+  if (!built_) return;
+  for (Bone& b : bones_) physics_.remove_external(b.body.get());
+}
+
+std::optional<int> HandColliders::bone_of(const btCollisionObject* object) const {
+  if (!built_) return std::nullopt;
+  for (int i = 0; i < kHandBoneCount; ++i) {
+    if (bones_[static_cast<std::size_t>(i)].body.get() == object) return i;
+  }
+  return std::nullopt;
+}
+
+void HandColliders::place(Bone& b, const btTransform& pose) {
+  b.body->setWorldTransform(pose);
+  b.body->getMotionState()->setWorldTransform(pose);
+  b.body->setInterpolationWorldTransform(pose);
+  b.body->setLinearVelocity({0, 0, 0});
+  b.body->setAngularVelocity({0, 0, 0});
+}
+
+void HandColliders::set_soft(Bone& b, bool soft) {
+  if (b.soft == soft) return;
+  b.soft = soft;
+  const int flags = b.body->getCollisionFlags();
+  b.body->setCollisionFlags(soft ? flags | btCollisionObject::CF_NO_CONTACT_RESPONSE : flags & ~btCollisionObject::CF_NO_CONTACT_RESPONSE);
+}
+
+void HandColliders::drive(const HandInput& input) {
+  const bool usable = input.seen && input_finite(input);
+  if (!usable) {
+    // Lost: the bones hold still and stop colliding until the hand is seen again.
+    if (built_) {
+      for (Bone& b : bones_) {
+        b.body->setLinearVelocity({0, 0, 0});
+        b.body->setAngularVelocity({0, 0, 0});
+        set_soft(b, true);
+      }
+    }
+    active_ = false;
+    return;
+  }
+  input_ = input;
+  if (!built_) {
+    for (std::size_t i = 0; i < kBones.size(); ++i) {
+      Bone& b = bones_[i];
+      const auto& def = kBones[i];
+      b.length_m = (input.joints_world[at(def.to)] - input.joints_world[at(def.from)]).norm();
+      const double r = std::max(settings_.min_radius_m, std::min(input.radius_m[at(def.from)], input.radius_m[at(def.to)]));
+      b.shape = std::make_unique<btCapsuleShape>(static_cast<btScalar>(r), static_cast<btScalar>(b.length_m));
+      const btScalar mass = static_cast<btScalar>(settings_.bone_mass_kg);
+      btVector3 inertia;
+      b.shape->calculateLocalInertia(mass, inertia);
+      b.motion = std::make_unique<btDefaultMotionState>(btTransform::getIdentity());
+      btRigidBody::btRigidBodyConstructionInfo info(mass, b.motion.get(), b.shape.get(), inertia);
+      info.m_friction = static_cast<btScalar>(settings_.friction);
+      b.body = std::make_unique<btRigidBody>(info);
+      b.body->setActivationState(DISABLE_DEACTIVATION);
+      b.body->setFlags(b.body->getFlags() | BT_DISABLE_WORLD_GRAVITY);
+      b.body->setCcdMotionThreshold(static_cast<btScalar>(0.5 * r));
+      b.body->setCcdSweptSphereRadius(static_cast<btScalar>(0.8 * r));
+      physics_.add_external(b.body.get(), kHandGroup, kSceneGroup);
+      b.body->setGravity({0, 0, 0});
+    }
+    built_ = true;
+  }
+  const btScalar dt = static_cast<btScalar>(physics_.step_s());
+  for (std::size_t i = 0; i < kBones.size(); ++i) {
+    Bone& b = bones_[i];
+    const auto& def = kBones[i];
+    const Eigen::Vector3d a = input.joints_world[at(def.from)];
+    const Eigen::Vector3d e = input.joints_world[at(def.to)];
+    b.target = bone_pose(a, e);
+    if (!active_) {
+      place(b, b.target);  // seen again (or first seen): no sweep from where it was lost
+      set_soft(b, false);
+      continue;
+    }
+    const btTransform& now = b.body->getWorldTransform();
+    const btVector3 to_target = b.target.getOrigin() - now.getOrigin();
+    const double distance = static_cast<double>(to_target.length());
+    if (distance >= settings_.soft_distance_m) set_soft(b, true);
+    if (b.soft && distance <= settings_.rigid_again_m) set_soft(b, false);
+    btVector3 v = to_target / dt;
+    const btScalar speed = v.length();
+    if (speed > static_cast<btScalar>(settings_.max_speed_mps)) {
+      place(b, b.target);  // a jump, not a motion
+      continue;
+    }
+    b.body->setLinearVelocity(v);
+    b.body->setAngularVelocity(angular_velocity(now.getRotation(), b.target.getRotation(), dt));
+  }
+  active_ = true;
+}
+
+std::array<Eigen::Vector3d, kHandJointCount> HandColliders::physical_joints() const {
+  std::array<Eigen::Vector3d, kHandJointCount> out = input_.joints_world;
+  if (!built_) return out;
+  for (std::size_t i = 0; i < kBones.size(); ++i) {
+    const Bone& b = bones_[i];
+    const btTransform& t = b.body->getWorldTransform();
+    const btVector3 half = t.getBasis() * btVector3(0, static_cast<btScalar>(0.5 * b.length_m), 0);
+    out[at(kBones[i].from)] = to_eigen(t.getOrigin() - half);
+    out[at(kBones[i].to)] = to_eigen(t.getOrigin() + half);
+  }
+  return out;
+}
+
+double HandColliders::largest_offset_m() const {
+  double worst = 0.0;
+  if (!built_) return worst;
+  for (const Bone& b : bones_) worst = std::max(worst, static_cast<double>((b.body->getWorldTransform().getOrigin() - b.target.getOrigin()).length()));
+  return worst;
+}
+
+}  // namespace rhot

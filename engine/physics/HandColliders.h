@@ -1,0 +1,104 @@
+#pragma once
+// A tracked hand in the physics world: one capsule per bone (19: the thumb's three, four per
+// finger including its metacarpal, which together make the palm), each a dynamic body without
+// gravity whose velocity is set every step to reach its tracked pose by the end of the step. So a
+// bone pushes what it meets with the force the solver allows, stops at surfaces instead of
+// sinking into them (the physical hand is then offset from the tracked one: rhot draws the
+// physical hand, the "ghost hand" approach), and cannot tunnel through thin objects (the speed is
+// a velocity, and continuous collision detection sweeps each bone).
+//
+// A bone left 3 cm or more behind its tracked pose (the hand pushed into a static wall, or a
+// tracking jump) goes "soft": it stops colliding and catches up, and collides again once within
+// 1 cm. A hand seen again after being lost is placed at its tracked pose at once.
+
+#include <array>
+#include <optional>
+
+#include <btBulletDynamicsCommon.h>
+
+#include "engine/physics/PhysicsWorld.h"
+#include "tracking/core/Rigid3.h"
+#include "tracking/hand/HandJoints.h"
+
+namespace rhot {
+
+struct TrackedHand;
+
+// One hand's tracking result, in the world frame.
+struct HandInput {
+  bool seen = false;
+  Rigid3d world_from_hand;  // the hand frame (tracking/hand/HandJoints.h)
+  std::array<Eigen::Vector3d, kHandJointCount> joints_world{};
+  std::array<double, kHandJointCount> radius_m{};
+  std::array<double, kHandJointCount> confidence{};  // 1: measured this frame; less: inferred
+};
+
+HandInput hand_input(const TrackedHand& tracked);
+// A hand in a pose, every joint fully confident (scripted hands).
+HandInput hand_input(const Rigid3d& world_from_hand, const HandPose& pose);
+
+inline constexpr int kHandBoneCount = 19;
+inline constexpr int kPalmGroup = 5;  // bone groups: 0 thumb .. 4 little, 5 the palm (metacarpals)
+
+struct HandBone {
+  HandJoint from;
+  HandJoint to;
+  int group;  // finger 0-4 or kPalmGroup
+};
+const std::array<HandBone, kHandBoneCount>& hand_bones();
+
+struct HandColliderSettings {
+  double bone_mass_kg = 0.05;
+  double friction = 1.0;
+  double soft_distance_m = 0.03;     // further than this from its tracked pose: soft
+  double rigid_again_m = 0.01;       // soft bones collide again within this
+  double max_speed_mps = 15.0;       // a bone never moves faster (a tracking jump is a teleport)
+  double min_radius_m = 0.004;
+};
+
+class HandColliders {
+ public:
+  HandColliders(PhysicsWorld& physics, HandSide side, HandColliderSettings settings = {});
+  ~HandColliders();
+  HandColliders(const HandColliders&) = delete;
+  HandColliders& operator=(const HandColliders&) = delete;
+
+  // Before a physics step: aim every bone at its tracked pose (non-finite input is ignored: the
+  // bones hold still, as for a hand not seen).
+  void drive(const HandInput& input);
+
+  HandSide side() const { return side_; }
+  bool active() const { return active_; }  // tracked and in the world
+  const HandInput& input() const { return input_; }
+  btRigidBody* bone(int i) const { return bones_[static_cast<std::size_t>(i)].body.get(); }
+  bool soft(int i) const { return bones_[static_cast<std::size_t>(i)].soft; }
+  std::optional<int> bone_of(const btCollisionObject* object) const;
+  // Tracked pose of bone i (capsule axis along its local +Y, from `from` to `to`).
+  btTransform tracked_bone(int i) const { return bones_[static_cast<std::size_t>(i)].target; }
+  // The physical hand for drawing: joint positions from the bone bodies (tracked where no bone ends).
+  std::array<Eigen::Vector3d, kHandJointCount> physical_joints() const;
+  // How far the physical hand is from the tracked one (largest bone distance), metres.
+  double largest_offset_m() const;
+
+ private:
+  struct Bone {
+    std::unique_ptr<btCapsuleShape> shape;
+    std::unique_ptr<btDefaultMotionState> motion;
+    std::unique_ptr<btRigidBody> body;
+    btTransform target = btTransform::getIdentity();
+    double length_m = 0.0;
+    bool soft = false;
+  };
+  void place(Bone& b, const btTransform& pose);
+  void set_soft(Bone& b, bool soft);
+
+  PhysicsWorld& physics_;
+  HandSide side_;
+  HandColliderSettings settings_;
+  std::array<Bone, kHandBoneCount> bones_;
+  HandInput input_;
+  bool active_ = false;
+  bool built_ = false;
+};
+
+}  // namespace rhot

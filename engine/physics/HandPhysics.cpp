@@ -1,0 +1,36 @@
+#include "engine/physics/HandPhysics.h"
+
+#include "engine/core/World.h"
+
+namespace rhot {
+
+std::expected<std::unique_ptr<HandPhysics>, std::string> HandPhysics::create(World& world, const SceneDesc& scene,
+                                                                             HandColliderSettings hand_settings) {
+  std::unique_ptr<HandPhysics> p(new HandPhysics());
+  PhysicsSettings settings;
+  settings.rate_hz = scene.settings.headset.refresh_hz;
+  settings.substeps = scene.settings.physics_substeps;
+  settings.gravity_mps2 = scene.settings.gravity_mps2;
+  p->physics_ = std::make_unique<PhysicsWorld>(settings);
+  if (auto added = p->physics_->add_scene_bodies(world); !added) return std::unexpected(added.error());
+  auto interactions = Interactions::create(world, scene.interactions);
+  if (!interactions) return std::unexpected(interactions.error());
+  p->interactions_ = std::move(*interactions);
+  p->hands_[0] = std::make_unique<HandColliders>(*p->physics_, HandSide::kLeft, hand_settings);
+  p->hands_[1] = std::make_unique<HandColliders>(*p->physics_, HandSide::kRight, hand_settings);
+  p->grasp_ = std::make_unique<GraspSystem>(*p->physics_, std::array<HandColliders*, 2>{p->hands_[0].get(), p->hands_[1].get()},
+                                            scene.settings.grasp);
+  return p;
+}
+
+void HandPhysics::step(World& world, const std::array<HandInput, 2>& hands) {
+  hands_[0]->drive(hands[0]);
+  hands_[1]->drive(hands[1]);
+  grasp_->pre_step(world);
+  physics_->step(world);
+  grasp_->post_step(world);
+  events_ = grasp_->events();
+  interactions_.update(world, *physics_, *grasp_, events_);
+}
+
+}  // namespace rhot

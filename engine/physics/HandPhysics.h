@@ -1,0 +1,52 @@
+#pragma once
+// Everything physical in a scene, stepped together once per frame: the Bullet world with the
+// scene's bodies, a collider per tracked hand, the grasp system and the scene's interactions.
+// One step():
+//   hand colliders aimed at the tracked hands -> held objects aimed at their grips -> Bullet
+//   steps (with substeps) -> contacts read, grasps begun and ended -> interactions checked.
+
+#include <array>
+#include <expected>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/physics/GraspSystem.h"
+#include "engine/physics/HandColliders.h"
+#include "engine/physics/Interactions.h"
+#include "engine/physics/PhysicsWorld.h"
+#include "engine/scene/SceneDesc.h"
+
+namespace rhot {
+
+class World;
+
+class HandPhysics {
+ public:
+  // `world` holds the scene's instantiated entities. Fails, building nothing, on a bad glTF mesh
+  // or an interaction whose entities are missing.
+  [[nodiscard]] static std::expected<std::unique_ptr<HandPhysics>, std::string> create(World& world, const SceneDesc& scene,
+                                                                                      HandColliderSettings hand_settings = {});
+
+  // One frame: hands[0] the left hand, hands[1] the right (seen = false for a hand not tracked).
+  void step(World& world, const std::array<HandInput, 2>& hands);
+
+  // Events of the last step (grasp system's, then interactions' successes).
+  const std::vector<InteractionEvent>& events() const { return events_; }
+  PhysicsWorld& physics() { return *physics_; }
+  const PhysicsWorld& physics() const { return *physics_; }
+  GraspSystem& grasp() { return *grasp_; }
+  const GraspSystem& grasp() const { return *grasp_; }
+  HandColliders& hand(HandSide side) { return *hands_[side == HandSide::kLeft ? 0 : 1]; }
+  const Interactions& interactions() const { return interactions_; }
+
+ private:
+  HandPhysics() = default;
+  std::unique_ptr<PhysicsWorld> physics_;
+  std::array<std::unique_ptr<HandColliders>, 2> hands_;
+  std::unique_ptr<GraspSystem> grasp_;
+  Interactions interactions_;
+  std::vector<InteractionEvent> events_;
+};
+
+}  // namespace rhot
