@@ -81,16 +81,25 @@ SceneDesc make_scene(bool sphere, double size_m, bool second_pedestal, float ped
 
 std::span<const std::string_view> grasp_scenario_names() { return kNames; }
 
-std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name) {
+std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name, const SceneDesc* given) {
   if (std::find(kNames.begin(), kNames.end(), name) == kNames.end()) return std::unexpected("no grasp scenario \"" + std::string(name) + "\"");
   const bool sphere = name == "pinch";
   const double size = sphere ? 0.03 : 0.05;
-  SceneDesc scene = make_scene(sphere, size, name == "place", name == "push" ? 0.3f : 0.12f);
-  if (name == "place") scene.interactions.push_back({"cube-in-zone", InteractionType::kPlace, "object", "zone", 0.25});
-  if (name == "hand-over") scene.interactions.push_back({"pass-the-cube", InteractionType::kHandOver, "object", "", 0.0});
+  SceneDesc scene;
+  if (given) {
+    scene = *given;
+  } else {
+    scene = make_scene(sphere, size, name == "place", name == "push" ? 0.3f : 0.12f);
+    if (name == "place") scene.interactions.push_back({"cube-in-zone", InteractionType::kPlace, "object", "zone", 0.25});
+    if (name == "hand-over") scene.interactions.push_back({"pass-the-cube", InteractionType::kHandOver, "object", "", 0.0});
+  }
   World world;
   const std::vector<Entity> entities = instantiate(scene, world);
-  const Entity object = entities.back();
+  Entity object;
+  for (std::size_t i = 0; i < scene.entities.size(); ++i) {
+    if (scene.entities[i].name == "object") object = entities[i];
+  }
+  if (object.is_null()) return std::unexpected("the scene has no entity named \"object\"");
   auto created = HandPhysics::create(world, scene);
   if (!created) return std::unexpected(created.error());
   HandPhysics& physics = **created;
@@ -160,6 +169,7 @@ std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_v
   bool have_offset = false;  // object in the holding hand's frame, at the grasp
   Eigen::Vector3d held_offset = Eigen::Vector3d::Zero();
   std::optional<double> released_at;
+  bool measure_throw = false;
   double lowest_after_release = 1e9;
   double height_at_release = 0.0;
   std::array<HandInput, 2> inputs;
@@ -200,6 +210,12 @@ std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_v
     ++result.frames;
 
     const Eigen::Vector3d p = to_eigen(body->getWorldTransform().getOrigin());
+    if (measure_throw && released_at && t > *released_at) {
+      // The step after the release: the object flies on its own.
+      result.hand_speed_mps = swing_velocity.norm();
+      result.throw_velocity_error = (to_eigen(body->getLinearVelocity()) - swing_velocity).norm() / swing_velocity.norm();
+      measure_throw = false;
+    }
     for (const InteractionEvent& e : physics.events()) {
       result.events.push_back(e);
       if (e.object != object) continue;
@@ -213,10 +229,7 @@ std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_v
         released_at = t;
         height_at_release = p.y();
         lowest_after_release = p.y();
-        if (name == "throw") {
-          result.hand_speed_mps = swing_velocity.norm();
-          result.throw_velocity_error = (e.velocity_mps - swing_velocity).norm() / swing_velocity.norm();
-        }
+        measure_throw = name == "throw";
       }
       if (e.type == InteractionEventType::kSuccess) result.successes.push_back(e.interaction);
     }

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "engine/physics/GraspSystem.h"
+#include "engine/scene/SceneDesc.h"
 
 namespace rhot {
 
@@ -33,7 +34,8 @@ struct GraspScenarioResult {
   bool released = false;
   bool fell_after_release = false; // dropped at least 5 cm after the release
   double hand_speed_mps = 0.0;     // throw: the hand's speed at release
-  double throw_velocity_error = 0.0;  // throw: |v_object - v_hand| / |v_hand| at release
+  double throw_velocity_error = 0.0;  // throw: |v_object - v_hand| / |v_hand|, the object's velocity
+                                      // measured one step after the release (gravity included)
   double pushed_m = 0.0;           // push: how far the object moved
   bool handed_over = false;        // a release with handed_over
   std::vector<std::string> successes;  // interactions that succeeded
@@ -43,6 +45,9 @@ struct GraspScenarioResult {
 };
 
 std::span<const std::string_view> grasp_scenario_names();
-[[nodiscard]] std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name);
+// `scene`: the scene to run in instead of the one built in code (its grasped entity must be named
+// "object", where the built scene has it; "place" also needs "zone"); its interactions raise
+// the success events.
+[[nodiscard]] std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name, const SceneDesc* scene = nullptr);
 
 }  // namespace rhot

@@ -152,6 +152,7 @@ void HandColliders::drive(const HandInput& input) {
     const auto& def = kBones[i];
     const Eigen::Vector3d a = input.joints_world[at(def.from)];
     const Eigen::Vector3d e = input.joints_world[at(def.to)];
+    const btVector3 previous_target = b.target.getOrigin();
     b.target = bone_pose(a, e);
     if (!active_) {
       place(b, b.target);  // seen again (or first seen): no sweep from where it was lost
@@ -160,9 +161,11 @@ void HandColliders::drive(const HandInput& input) {
     }
     const btTransform& now = b.body->getWorldTransform();
     const btVector3 to_target = b.target.getOrigin() - now.getOrigin();
-    const double distance = static_cast<double>(to_target.length());
-    if (distance >= settings_.soft_distance_m) set_soft(b, true);
-    if (b.soft && distance <= settings_.rigid_again_m) set_soft(b, false);
+    // How far the bone was held back last step: from where it was sent to where it got (not how
+    // far the hand moves this frame, which may be more than the soft distance at speed).
+    const double lag = static_cast<double>((previous_target - now.getOrigin()).length());
+    if (lag >= settings_.soft_distance_m) set_soft(b, true);
+    if (b.soft && lag <= settings_.rigid_again_m) set_soft(b, false);
     btVector3 v = to_target / dt;
     const btScalar speed = v.length();
     if (speed > static_cast<btScalar>(settings_.max_speed_mps)) {

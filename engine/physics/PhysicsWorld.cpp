@@ -81,6 +81,8 @@ std::expected<void, std::string> make_shape(const Mesh& mesh, const glm::vec3& s
     } else {
       shape = std::move(cloud);
     }
+    // Bullet's default margin (4 cm) would float a hull that far above what it rests on.
+    shape->setMargin(0.001f);
     btVector3 lo, hi;
     shape->getAabb(btTransform::getIdentity(), lo, hi);
     if (!((hi - lo).length() > btScalar(1e-4))) return std::unexpected(name + ": " + file.string() + ": the mesh has no extent to collide with");
@@ -100,6 +102,11 @@ PhysicsWorld::PhysicsWorld(PhysicsSettings settings)
   if (!(settings_.rate_hz > 0.0) || !std::isfinite(settings_.rate_hz)) settings_.rate_hz = 90.0;
   settings_.substeps = std::max(1, settings_.substeps);
   world_->setGravity(to_bt(settings_.gravity_mps2));
+  // Push penetrations out without adding energy (split impulse) from 1 mm deep, not Bullet's
+  // default 4 cm: hand bones pressing on a surface would otherwise sit millimetres inside it.
+  btContactSolverInfo& info = world_->getSolverInfo();
+  info.m_splitImpulse = 1;
+  info.m_splitImpulsePenetrationThreshold = -0.001f;
 }
 
 PhysicsWorld::~PhysicsWorld() {

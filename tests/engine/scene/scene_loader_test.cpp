@@ -140,7 +140,7 @@ TEST_F(SceneFiles, UnknownKey) {
             "/entities/0/bodyy: unknown key \"bodyy\"; expected one of: name, parent, transform, mesh, material, "
             "body, grabbable, tracked_by");
   EXPECT_EQ(error_of(R"({"entities": [], "setings": {}})"),
-            "/setings: unknown key \"setings\"; expected one of: format, version, settings, entities");
+            "/setings: unknown key \"setings\"; expected one of: format, version, settings, entities, interactions");
 }
 
 TEST_F(SceneFiles, WrongTypes) {
@@ -252,6 +252,60 @@ TEST_F(SceneFiles, OutOfRangeValues) {
             "/entities/0/mesh/radius_m: expected a number greater than 0 (and within float range), got 1e-50");
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "transform": {"position": [1e50, 0, 0]}})")),
             "/entities/0/transform/position/0: expected a number within float range (magnitude up to 3.4e38), got 1e+50");
+}
+
+TEST_F(SceneFiles, ShippedInteractionScenesLoad) {
+  for (const char* name : {"interaction-place.json", "interaction-hand-over.json"}) {
+    const auto scene = load_scene_file(fs::path(RHOT_ASSET_DIR) / "scenes" / name);
+    ASSERT_TRUE(scene.has_value()) << scene.error().to_string();
+    ASSERT_EQ(scene->interactions.size(), 1U) << name;
+  }
+  const auto place = load_scene_file(fs::path(RHOT_ASSET_DIR) / "scenes" / "interaction-place.json");
+  EXPECT_EQ(place->interactions[0].type, InteractionType::kPlace);
+  EXPECT_EQ(place->interactions[0].zone, "bin");
+  EXPECT_DOUBLE_EQ(place->settings.grasp.release_distance_m, 0.012);
+}
+
+TEST_F(SceneFiles, GraspSettingsAndSubsteps) {
+  const auto scene = parse_scene(R"({"settings": {"physics_substeps": 4, "grasp": {"regrasp_delay_s": 0.5, "opposing_cos": -0.5}}, "entities": []})", dir_);
+  ASSERT_TRUE(scene.has_value());
+  EXPECT_EQ(scene->settings.physics_substeps, 4);
+  EXPECT_DOUBLE_EQ(scene->settings.grasp.regrasp_delay_s, 0.5);
+  EXPECT_DOUBLE_EQ(scene->settings.grasp.opposing_cos, -0.5);
+  EXPECT_DOUBLE_EQ(scene->settings.grasp.release_distance_m, GraspSettings{}.release_distance_m);
+  EXPECT_EQ(error_of(R"({"settings": {"grasp": {"release_distance_m": 0}}})"),
+            "/settings/grasp/release_distance_m: expected a distance from 0.001 to 0.2 m, got 0");
+  EXPECT_EQ(error_of(R"({"settings": {"grasp": {"stickiness": 1}}})").substr(0, 52), "/settings/grasp/stickiness: unknown key \"stickiness\"");
+  EXPECT_EQ(error_of(R"({"settings": {"physics_substeps": 0}})"), "/settings/physics_substeps: expected an integer from 1 to 16, got 0");
+}
+
+TEST_F(SceneFiles, BadInteractionsAreNamed) {
+  const std::string zone = R"({"name": "bin", "mesh": {"shape": "box", "size_m": [0.1, 0.1, 0.1]}})";
+  const std::string grabbable = R"({"name": "cube", "mesh": {"shape": "box", "size_m": [0.1, 0.1, 0.1]},
+                                   "body": {"type": "dynamic", "mass_kg": 0.2}, "grabbable": true})";
+  const auto with = [&](const std::string& interactions) {
+    const std::string crate = R"({"name": "crate", "mesh": {"shape": "box", "size_m": [0.3, 0.3, 0.3]}, "body": {"type": "static"}})";
+    return R"({"entities": [)" + grabbable + ", " + zone + ", " + crate + R"(], "interactions": [)" + interactions + "]}";
+  };
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "place", "object": "cube", "zone": "bin"})")), "");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "hand_over", "object": "cube"})")), "");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "stack", "object": "cube"})")),
+            "/interactions/0/type: expected \"place\" or \"hand_over\", got \"stack\"");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "place", "object": "mug", "zone": "bin"})")),
+            "/interactions/0/object: no entity is named \"mug\"");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "place", "object": "cube", "zone": "shelf"})")),
+            "/interactions/0/zone: no entity is named \"shelf\"");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "hand_over", "object": "cube-2"})")),
+            "/interactions/0/object: no entity is named \"cube-2\"");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "place", "object": "bin", "zone": "bin"})")),
+            "/interactions/0/object: \"bin\" is not grabbable");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "place", "object": "cube", "zone": "crate"})")),
+            "/interactions/0/zone: zone \"crate\" has a physics body; a zone must let objects in");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "place", "object": "cube"})")), "/interactions/0: missing required key \"zone\"");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "hand_over", "object": "cube", "zone": "bin"})")),
+            "/interactions/0/zone: a hand_over has no zone");
+  EXPECT_EQ(error_of(with(R"({"name": "a", "type": "hand_over", "object": "cube"}, {"name": "a", "type": "hand_over", "object": "cube"})")),
+            "/interactions/1/name: duplicate interaction name \"a\" (also at /interactions/0/name)");
 }
 
 TEST_F(SceneFiles, FailedLoadLeavesTheWorldUntouched) {
