@@ -1,0 +1,153 @@
+// One physics frame with two tracked hands and 20 objects (issue 7's target: at most 0.4 ms p99),
+// beside the bare-Bullet baseline the issue measured: 38 kinematic finger capsules and 20 resting
+// objects, stepped with nothing else.
+//
+//   build/release/tests/bench/physics_benchmark --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//
+// Each iteration is one 90 Hz frame; p50 and p99 over the run are reported as counters (ms).
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+#include <btBulletDynamicsCommon.h>
+
+#include "engine/core/World.h"
+#include "engine/physics/BulletMath.h"
+#include "engine/physics/HandPhysics.h"
+#include "engine/physics/ScriptedHands.h"
+#include "engine/scene/SceneLoader.h"
+
+namespace rhot {
+namespace {
+
+constexpr int kObjects = 20;
+constexpr float kTableTop = 0.75f;
+
+SceneDesc bench_scene() {
+  SceneDesc scene;
+  EntityDesc floor;
+  floor.name = "floor";
+  floor.mesh = Mesh{PlaneShape{}};
+  floor.body = PhysicsBody{BodyType::kStatic, 0.0f, 0.8f, 0.0f};
+  scene.entities.push_back(floor);
+  EntityDesc table;
+  table.name = "table";
+  table.transform.position = {0.0f, kTableTop - 0.02f, -0.5f};
+  table.mesh = Mesh{BoxShape{{1.2f, 0.04f, 0.8f}}};
+  table.body = PhysicsBody{BodyType::kStatic, 0.0f, 0.7f, 0.0f};
+  scene.entities.push_back(table);
+  for (int i = 0; i < kObjects; ++i) {
+    EntityDesc o;
+    o.name = "object-" + std::to_string(i);
+    const float x = -0.45f + 0.1f * static_cast<float>(i % 10);
+    const float z = -0.65f + 0.3f * static_cast<float>(i / 10);
+    if (i % 2 == 0) {
+      o.mesh = Mesh{BoxShape{glm::vec3(0.05f)}};
+      o.transform.position = {x, kTableTop + 0.025f, z};
+    } else {
+      o.mesh = Mesh{SphereShape{0.025f}};
+      o.transform.position = {x, kTableTop + 0.025f, z};
+    }
+    o.body = PhysicsBody{BodyType::kDynamic, 0.1f, 0.8f, 0.0f};
+    o.grabbable = true;
+    scene.entities.push_back(o);
+  }
+  return scene;
+}
+
+// Both hands sweep over the table through the objects, opening and closing every 2 s.
+std::array<HandInput, 2> hands_at(const std::array<GraspPose, 2>& grasps, double t) {
+  std::array<HandInput, 2> in;
+  for (std::size_t h = 0; h < 2; ++h) {
+    const double phase = t * 0.6 + static_cast<double>(h) * std::numbers::pi;
+    const Eigen::Vector3d centre(0.3 * std::cos(phase), static_cast<double>(kTableTop) + 0.03 + 0.02 * std::sin(2.0 * phase), -0.5 + 0.2 * std::sin(phase));
+    const double closure = 0.5 - 0.5 * std::cos(std::numbers::pi * t);
+    in[h] = hand_input(grasps[h].place(centre, h == 0 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX()), grasps[h].pose(closure));
+  }
+  return in;
+}
+
+void report(benchmark::State& state, std::vector<double>& ms) {
+  std::sort(ms.begin(), ms.end());
+  const auto at = [&](double q) { return ms.empty() ? 0.0 : ms[std::min(ms.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ms.size())))]; };
+  state.counters["p50_ms"] = at(0.5);
+  state.counters["p99_ms"] = at(0.99);
+}
+
+// rhot's frame: hand colliders driven, grasp logic, Bullet step (2 substeps by default, 1 for
+// comparison), interactions.
+void BM_HandPhysicsFrame(benchmark::State& state) {
+  SceneDesc scene = bench_scene();
+  scene.settings.physics_substeps = static_cast<int>(state.range(0));
+  const std::array<GraspPose, 2> grasps{make_grasp(HandSide::kLeft, 0.05), make_grasp(HandSide::kRight, 0.05)};
+  std::vector<double> ms;
+  auto world = std::make_unique<World>();
+  instantiate(scene, *world);
+  auto physics = std::move(*HandPhysics::create(*world, scene));
+  long frame = 0;
+  for (auto _ : state) {
+    if (frame == 900) {  // every 10 s a fresh scene, so objects pushed off the table come back
+      state.PauseTiming();
+      physics.reset();
+      world = std::make_unique<World>();
+      instantiate(scene, *world);
+      physics = std::move(*HandPhysics::create(*world, scene));
+      frame = 0;
+      state.ResumeTiming();
+    }
+    const auto in = hands_at(grasps, static_cast<double>(frame) / 90.0);
+    const auto begin = std::chrono::steady_clock::now();
+    physics->step(*world, in);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count());
+    ++frame;
+  }
+  report(state, ms);
+}
+BENCHMARK(BM_HandPhysicsFrame)->ArgName("substeps")->Arg(2)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(3.0);
+
+// The baseline: a bare Bullet world, 38 kinematic capsules following the same hands, 20 objects.
+void BM_BareBulletKinematicFingers(benchmark::State& state) {
+  const SceneDesc scene = bench_scene();
+  const std::array<GraspPose, 2> grasps{make_grasp(HandSide::kLeft, 0.05), make_grasp(HandSide::kRight, 0.05)};
+  std::vector<double> ms;
+  auto world = std::make_unique<World>();
+  instantiate(scene, *world);
+  auto physics = std::make_unique<PhysicsWorld>(PhysicsSettings{90.0, 1, {0.0f, -9.81f, 0.0f}});
+  (void)physics->add_scene_bodies(*world);
+  std::vector<std::unique_ptr<btCapsuleShape>> shapes;
+  std::vector<std::unique_ptr<btDefaultMotionState>> motions;
+  std::vector<std::unique_ptr<btRigidBody>> capsules;
+  for (int i = 0; i < 2 * kHandBoneCount; ++i) {
+    shapes.push_back(std::make_unique<btCapsuleShape>(0.008f, 0.03f));
+    motions.push_back(std::make_unique<btDefaultMotionState>());
+    capsules.push_back(std::make_unique<btRigidBody>(0.0f, motions.back().get(), shapes.back().get()));
+    capsules.back()->setCollisionFlags(capsules.back()->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+    capsules.back()->setActivationState(DISABLE_DEACTIVATION);
+    physics->bullet().addRigidBody(capsules.back().get());
+  }
+  long frame = 0;
+  for (auto _ : state) {
+    const auto in = hands_at(grasps, static_cast<double>(frame % 900) / 90.0);
+    const auto begin = std::chrono::steady_clock::now();
+    for (std::size_t h = 0; h < 2; ++h) {
+      for (int b = 0; b < kHandBoneCount; ++b) {
+        const HandBone& bone = hand_bones()[static_cast<std::size_t>(b)];
+        const Eigen::Vector3d c = 0.5 * (in[h].joints_world[static_cast<std::size_t>(bone.from)] + in[h].joints_world[static_cast<std::size_t>(bone.to)]);
+        motions[h * kHandBoneCount + static_cast<std::size_t>(b)]->setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(c)));
+      }
+    }
+    physics->bullet().stepSimulation(static_cast<btScalar>(1.0 / 90.0), 0);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count());
+    ++frame;
+  }
+  for (auto& c : capsules) physics->bullet().removeRigidBody(c.get());
+  report(state, ms);
+}
+BENCHMARK(BM_BareBulletKinematicFingers)->Unit(benchmark::kMicrosecond)->MinTime(3.0);
+
+}  // namespace
+}  // namespace rhot
