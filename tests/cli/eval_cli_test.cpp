@@ -97,6 +97,23 @@ TEST(EvalCli, TheHighFidelityLayoutFollowsAFist) {
   EXPECT_GT(j["joints_with_confidence_fraction"].get<double>(), 0.95);
 }
 
+TEST(EvalCli, GraspPrintsTheScenarioJson) {
+  const EvalRun r = run_eval("grasp --scenario lift --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  for (const char* key : {"lift_success_fraction", "max_slip_mm", "step_p50_ms", "step_p99_ms"}) EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["lift_success_fraction"].get<double>(), 1.0);
+  EXPECT_LT(j["max_slip_mm"].get<double>(), 5.0);
+  EXPECT_TRUE(j["scenarios"]["lift"]["grasped"].get<bool>());
+  const EvalRun t = run_eval("grasp --scenario throw --json");
+  ASSERT_EQ(t.exit_code, 0) << t.output;
+  EXPECT_LT(nlohmann::json::parse(t.output)["throw_velocity_error_pct"].get<double>(), 10.0);
+  const auto bad = rhot::test::run_program("rhot-eval", "grasp --scenario juggle --json", "2>&1");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("--scenario juggle: no such scenario (lift, pinch, throw, push, hand-over, hidden-markers, place, all)"), std::string::npos)
+      << bad.output;
+}
+
 TEST(EvalCli, UnknownHandMotionIsNamed) {
   const auto r = rhot::test::run_program("rhot-eval", std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion juggle --json", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
