@@ -314,22 +314,24 @@ void GraspSystem::post_step(World& world) {
       btRigidBody* body = physics_.body(object);
       if (!body || body->isStaticOrKinematicObject() || !world.alive(object) || !world.has<Grabbable>(object)) continue;
       if (const auto it = held_.find(object); it != held_.end() && it->second.hand == hand) continue;
-      // One contact per group: the first (Bullet keeps the deepest first often enough; any will do
-      // for the normal test).
-      std::array<std::optional<Contact>, 6> by_group;
-      for (const Contact& c : list) {
-        const int g = hand_bones()[static_cast<std::size_t>(c.bone)].group;
-        if (!by_group[static_cast<std::size_t>(g)]) by_group[static_cast<std::size_t>(g)] = c;
-      }
+      // Contacts by group; an anchor and a finger oppose when any pair of their contacts does
+      // (the thumb's tip may be on the far side while its base touches the near face).
+      std::array<std::vector<const Contact*>, 6> by_group;
+      for (const Contact& c : list) by_group[static_cast<std::size_t>(hand_bones()[static_cast<std::size_t>(c.bone)].group)].push_back(&c);
+      const auto oppose = [&](int a, int b) {
+        for (const Contact* x : by_group[static_cast<std::size_t>(a)]) {
+          for (const Contact* y : by_group[static_cast<std::size_t>(b)]) {
+            if (static_cast<double>(x->normal.dot(y->normal)) < settings_.opposing_cos) return true;
+          }
+        }
+        return false;
+      };
       std::vector<int> groups;
       for (const int anchor : {0, kPalmGroup}) {
-        const auto& a = by_group[static_cast<std::size_t>(anchor)];
-        if (!a) continue;
+        if (by_group[static_cast<std::size_t>(anchor)].empty()) continue;
         std::vector<int> opposing;
         for (int f = 1; f <= 4; ++f) {
-          const auto& c = by_group[static_cast<std::size_t>(f)];
-          if (!c) continue;
-          if (static_cast<double>(a->normal.dot(c->normal)) < settings_.opposing_cos && curl_rad(hand, f) >= settings_.min_curl_rad) opposing.push_back(f);
+          if (!by_group[static_cast<std::size_t>(f)].empty() && curl_rad(hand, f) >= settings_.min_curl_rad && oppose(anchor, f)) opposing.push_back(f);
         }
         if (!opposing.empty()) {
           groups = opposing;

@@ -23,7 +23,7 @@ GraspPose make_grasp(HandSide side, double width_m, double squeeze_m, int finger
   // From open (thumb out, fingers nearly straight) toward a pinch where the thumb and index tips
   // meet; the grasping fingers close along that path until their tips, less their radii, are
   // `squeeze_m` inside the object's width on each side.
-  g.open = {angles(-0.2, 0.0, 0.0, 0.0), angles(0.0, 0.1, 0.1, 0.07), angles(0.0, 0.1, 0.1, 0.07), relaxed[3], relaxed[4]};
+  g.open = {angles(-0.6, -0.3, 0.0, 0.0), angles(0.0, 0.1, 0.1, 0.07), angles(0.0, 0.1, 0.1, 0.07), relaxed[3], relaxed[4]};
   std::array<FingerAngles, kFingerCount> pinch{angles(0.55, 0.45, 0.35, 0.35), angles(-0.1, 0.75, 0.85, 0.57), relaxed[2], relaxed[3], relaxed[4]};
   if (fingers >= 2) pinch[2] = angles(0.0, 0.75, 0.85, 0.57);
   // Abduction turns toward the chain's lateral axis (+X of the hand frame for both hands): the

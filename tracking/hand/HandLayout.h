@@ -66,6 +66,9 @@ Rigid3d hand_from_segment_star(const HandPose& pose, HandJoint bone, const Finge
 // The back of a finger's bone pointing along `bone`, for a finger whose first bone points along
 // `first_bone` (both hand frame).
 Eigen::Vector3d bone_back_normal(const FingerChain& chain, const Eigen::Vector3d& first_bone, const Eigen::Vector3d& bone);
+// Every marker of a layout on a hand in `pose` (hand star, fingertip markers, segment stars), world.
+std::vector<Eigen::Vector3d> layout_markers(const HandLayout& layout, const Rigid3d& world_from_hand, const HandPose& pose);
+
 // The finger a bone (named by its first joint) belongs to.
 Finger finger_of_bone(HandJoint bone);
 // How far a segment star's base is above its bone's axis.

@@ -36,6 +36,7 @@ class HandTracker {
 
   const TrackedHand& update(double time_s, std::span<const Eigen::Vector3d> points_world);
   const HandSolver& solver() const { return solver_; }
+  const TrackedHand& last() const { return out_; }  // the last update's result
   // Time spent in HandSolver::update (the IK) on the last frame.
   double last_ik_us() const { return last_ik_us_; }
 

@@ -1,0 +1,126 @@
+#include "engine/pipeline/DemoScript.h"
+
+#include <algorithm>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include <cmath>
+
+namespace rhot {
+
+namespace {
+
+Rigid3d pose_of(const EntityDesc& e) {
+  // Scene-file transforms of root entities (the script's objects are roots).
+  Rigid3d r;
+  r.translation = Eigen::Vector3d(e.transform.position.x, e.transform.position.y, e.transform.position.z);
+  r.rotation = Eigen::Quaterniond(e.transform.rotation.w, e.transform.rotation.x, e.transform.rotation.y, e.transform.rotation.z).normalized();
+  return r;
+}
+
+// The width a hand grasps an object by, across world X.
+double grip_width(const EntityDesc& e) {
+  if (!e.mesh) return 0.05;
+  const double scale = static_cast<double>(e.transform.scale.x);
+  if (const auto* b = std::get_if<BoxShape>(&e.mesh->shape)) return static_cast<double>(b->size_m.x) * scale;
+  if (const auto* s = std::get_if<SphereShape>(&e.mesh->shape)) return 2.0 * static_cast<double>(s->radius_m) * scale;
+  if (const auto* c = std::get_if<CapsuleShape>(&e.mesh->shape)) return 2.0 * static_cast<double>(c->radius_m) * scale;
+  return 0.05;
+}
+
+// Where a hand closes on an object: its centre, or for a tall object 2.5 cm below its top (the
+// palm would land on the top otherwise).
+Eigen::Vector3d grip_point(const EntityDesc& e) {
+  Eigen::Vector3d c(e.transform.position.x, e.transform.position.y, e.transform.position.z);
+  double half = 0.0;
+  if (e.mesh) {
+    const double sy = static_cast<double>(e.transform.scale.y);
+    if (const auto* b = std::get_if<BoxShape>(&e.mesh->shape)) half = 0.5 * static_cast<double>(b->size_m.y) * sy;
+    if (const auto* k = std::get_if<CapsuleShape>(&e.mesh->shape)) half = 0.5 * static_cast<double>(k->height_m) * sy;
+  }
+  c.y() += std::max(0.0, half - 0.025);
+  return c;
+}
+
+const EntityDesc* find(const SceneDesc& scene, const std::string& name) {
+  for (const EntityDesc& e : scene.entities) {
+    if (e.name == name && e.parent.empty()) return &e;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+DemoScript::DemoScript(const SceneDesc& scene) {
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+  // Hands rest above the table in front of the user when they have nothing to do.
+  scripts_[0] = {HandSide::kLeft, {{0.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0}}, 0.05, -Eigen::Vector3d::UnitX()};
+  scripts_[1] = {HandSide::kRight, {{0.0, Eigen::Vector3d(0.25, 0.95, -0.3), 0.0}}, 0.05, Eigen::Vector3d::UnitX()};
+  for (const EntityDesc& e : scene.entities) {
+    if (e.tracked_by) objects_at_start_[*e.tracked_by] = pose_of(e);
+  }
+  if (const EntityDesc* cube = find(scene, "cube-red"); cube && cube->grabbable) {
+    right_target_ = cube->name;
+    const Eigen::Vector3d c = grip_point(*cube);
+    const Eigen::Vector3d place = c + Eigen::Vector3d(0.15, 0.0, -0.1);
+    scripts_[1].width_m = grip_width(*cube);
+    scripts_[1].keys = {{0.0, c + 0.15 * up, 0.0},     {0.8, c + 0.15 * up, 0.0},   {1.6, c, 0.0},
+                        {2.2, c, 1.0},                 {3.2, c + 0.15 * up, 1.0},  {4.4, place + 0.15 * up, 1.0},
+                        {5.4, place + 0.002 * up, 1.0}, {5.8, place + 0.002 * up, 0.0}, {6.6, place + 0.15 * up, 0.0},
+                        {7.6, Eigen::Vector3d(0.25, 0.95, -0.3), 0.0}};
+  }
+  if (const EntityDesc* mug = find(scene, "tracked-mug"); mug && mug->tracked_by) {
+    left_target_ = mug->name;
+    carried_star_ = *mug->tracked_by;
+    const Eigen::Vector3d c = grip_point(*mug);
+    const Eigen::Vector3d moved = c + Eigen::Vector3d(-0.05, 0.0, 0.1);
+    scripts_[0].width_m = grip_width(*mug);
+    // After the right hand is done with the cube.
+    scripts_[0].keys = {{0.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0}, {5.0, c + 0.15 * up, 0.0}, {6.0, c, 0.0}, {6.5, c, 1.0},
+                        {7.5, c + 0.12 * up, 1.0},  {9.0, moved + 0.12 * up, 1.0}, {10.0, moved, 1.0},    {10.5, moved, 0.0},
+                        {11.3, moved + 0.15 * up, 0.0}};
+    carry_from_s_ = 6.5;
+    carry_to_s_ = 10.0;
+  }
+}
+
+HandTruth DemoScript::hand_at(const HandScript& s, double t) const {
+  Eigen::Vector3d centre = s.keys.back().centre;
+  double closure = s.keys.back().closure;
+  if (t <= s.keys.front().t) {
+    centre = s.keys.front().centre;
+    closure = s.keys.front().closure;
+  }
+  for (std::size_t i = 1; i < s.keys.size(); ++i) {
+    if (t > s.keys[i - 1].t && t <= s.keys[i].t) {
+      // Smooth within each segment: hands start and stop gently.
+      double u = (t - s.keys[i - 1].t) / (s.keys[i].t - s.keys[i - 1].t);
+      u = u * u * (3.0 - 2.0 * u);
+      centre = s.keys[i - 1].centre + u * (s.keys[i].centre - s.keys[i - 1].centre);
+      closure = s.keys[i - 1].closure + u * (s.keys[i].closure - s.keys[i - 1].closure);
+      break;
+    }
+  }
+  // A grasp pose per hand and width, built once.
+  const auto key = std::make_pair(static_cast<int>(s.side), std::lround(s.width_m * 1e5));
+  auto it = grasps_.find(key);
+  if (it == grasps_.end()) it = grasps_.emplace(key, make_grasp(s.side, s.width_m)).first;
+  return {it->second.place(centre, s.axis), it->second.pose(closure)};
+}
+
+SceneTruth DemoScript::at(double t) const {
+  SceneTruth truth;
+  truth.hands[0] = hand_at(scripts_[0], t);
+  truth.hands[1] = hand_at(scripts_[1], t);
+  truth.world_from_object = objects_at_start_;
+  if (carried_star_ && t > carry_from_s_) {
+    // Carried rigidly by the left hand from the moment it closed until it opens.
+    const double until = std::min(t, carry_to_s_);
+    const Rigid3d at_grasp = hand_at(scripts_[0], carry_from_s_).world_from_hand;
+    const Rigid3d now = hand_at(scripts_[0], until).world_from_hand;
+    truth.world_from_object[*carried_star_] = now * at_grasp.inverse() * objects_at_start_.at(*carried_star_);
+  }
+  return truth;
+}
+
+}  // namespace rhot

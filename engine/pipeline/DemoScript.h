@@ -1,0 +1,65 @@
+#pragma once
+// The simulated world behind the demo: where the user's hands and the star-tracked objects truly
+// are at each moment. The simulated camera rig sees this; tracking has to recover it.
+//
+// In the default scene (assets/scenes/default.json) the right hand reaches for the red cube,
+// grasps it, lifts it 15 cm, carries it 18 cm to the right and back, sets it down and lets go;
+// then the left hand picks up the star-tracked mug, lifts it, moves it and puts it back down (the mug is a real
+// object: it moves because the hand carries it, and tracking sees its star move). In other scenes
+// a hand whose object is missing rests above the table.
+
+#include <array>
+#include <map>
+#include <optional>
+#include <vector>
+
+#include "engine/core/Entity.h"
+#include "engine/physics/ScriptedHands.h"
+#include "engine/scene/SceneDesc.h"
+#include "tracking/core/Rigid3.h"
+#include "tracking/hand/HandJoints.h"
+
+namespace rhot {
+
+struct HandTruth {
+  Rigid3d world_from_hand;
+  HandPose pose;  // hand frame
+};
+
+struct SceneTruth {
+  std::array<HandTruth, 2> hands;               // 0 left, 1 right
+  std::map<int, Rigid3d> world_from_object;      // by marker-star id, for objects tracked by a star
+};
+
+class DemoScript {
+ public:
+  explicit DemoScript(const SceneDesc& scene);
+  SceneTruth at(double t_s) const;
+  double duration_s() const { return 12.0; }
+  // The entity names the script acts on ("" when the scene lacks them).
+  const std::string& right_target() const { return right_target_; }
+  const std::string& left_target() const { return left_target_; }
+
+ private:
+  struct Key {
+    double t;
+    Eigen::Vector3d centre;
+    double closure;
+  };
+  struct HandScript {
+    HandSide side;
+    std::vector<Key> keys;
+    double width_m = 0.05;
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitX();
+  };
+  HandTruth hand_at(const HandScript& s, double t) const;
+
+  std::array<HandScript, 2> scripts_;
+  std::string right_target_, left_target_;
+  std::map<int, Rigid3d> objects_at_start_;
+  std::optional<int> carried_star_;  // the left hand carries this star's object ...
+  double carry_from_s_ = 0.0, carry_to_s_ = 0.0;  // ... between these times
+  mutable std::map<std::pair<int, long>, GraspPose> grasps_;  // per hand and width (0.01 mm), built once
+};
+
+}  // namespace rhot

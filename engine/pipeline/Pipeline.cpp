@@ -1,0 +1,155 @@
+#include "engine/pipeline/Pipeline.h"
+
+#include <numbers>
+
+#include <Eigen/Geometry>
+#include <glm/gtc/quaternion.hpp>
+
+#include "engine/core/Transform.h"
+#include "engine/core/World.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/geometry/Matching.h"
+#include "tracking/rigid/StarSet.h"
+
+namespace rhot {
+
+namespace {
+
+// Where an object's star stands: on the side facing away from the user (-Z), 4 mm clear of the
+// surface, its tall side pointing out (the hand closes on the object from above and from the
+// user's side, so a star on top or in front would be under the palm).
+double star_offset(const Mesh* mesh, const glm::vec3& scale) {
+  if (!mesh) return 0.05;
+  const double sz = static_cast<double>(scale.z);
+  if (const auto* b = std::get_if<BoxShape>(&mesh->shape)) return 0.5 * static_cast<double>(b->size_m.z) * sz + 0.004;
+  if (const auto* s = std::get_if<SphereShape>(&mesh->shape)) return static_cast<double>(s->radius_m) * sz + 0.004;
+  if (const auto* c = std::get_if<CapsuleShape>(&mesh->shape)) return static_cast<double>(c->radius_m) * sz + 0.004;
+  return 0.05;
+}
+
+void add_bones(std::vector<Occluder>& out, const HandTruth& hand) {
+  for (int j = 0; j < kHandJointCount; ++j) {
+    const auto parent = joint_parent(static_cast<HandJoint>(j));
+    if (!parent) continue;
+    out.push_back({hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(*parent)],
+                   hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(j)], 0.8 * hand.pose.radius_m[static_cast<std::size_t>(j)]});
+  }
+}
+
+}  // namespace
+
+std::expected<std::unique_ptr<Pipeline>, std::string> Pipeline::create(World& world, const SceneDesc& scene, PipelineSettings settings) {
+  std::unique_ptr<Pipeline> p(new Pipeline(scene));
+  p->settings_ = settings;
+  const std::filesystem::path rig_file =
+      !settings.rig_file.empty() ? settings.rig_file : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
+  auto rig = load_rig(rig_file);
+  if (!rig) return std::unexpected(rig.error());
+  const std::filesystem::path set_file = !settings.star_set.empty() ? settings.star_set : settings.asset_dir / "stars" / "seed-case.json";
+  auto set = load_star_set(set_file);
+  if (!set) return std::unexpected(set.error());
+
+  // The objects' stars: the set's stars that some entity is tracked by.
+  StarSet used;
+  used.rules = set->rules;
+  std::string error;
+  world.view<TrackedBy, Transform>().each([&](Entity e, TrackedBy& by, Transform& t) {
+    const auto it = std::find_if(set->stars.begin(), set->stars.end(), [&](const MarkerStar& s) { return s.id == by.star_id; });
+    if (it == set->stars.end()) {
+      const Name* name = world.find<Name>(e);
+      error = (name ? name->value : std::string("an entity")) + ": tracked by star " + std::to_string(by.star_id) + ", which " +
+              set_file.string() + " does not have";
+      return;
+    }
+    used.stars.push_back(*it);
+    p->tracked_.emplace_back(e, by.star_id);
+    Rigid3d object_from_star;
+    object_from_star.translation = Eigen::Vector3d(0.0, 0.0, -star_offset(world.find<Mesh>(e), t.scale));
+    object_from_star.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitY()));
+    p->object_from_star_[by.star_id] = object_from_star;
+  });
+  if (!error.empty()) return std::unexpected(error);
+  p->star_tracker_ = std::make_unique<StarTracker>(StarLibrary(used));
+
+  for (int h = 0; h < 2; ++h) {
+    const auto file = settings.asset_dir / "hands" / (h == 0 ? "low-cost-left.json" : "low-cost-right.json");
+    auto layout = load_hand_layout(file);
+    if (!layout) return std::unexpected(layout.error());
+    p->layouts_[static_cast<std::size_t>(h)] = *layout;
+    p->hand_trackers_[static_cast<std::size_t>(h)] = std::make_unique<HandTracker>(*layout, reference_open_hand(layout->side));
+  }
+
+  SimulatedRigSettings sim;
+  sim.sigma_px = settings.sigma_px;
+  sim.seed = settings.seed;
+  sim.rate_hz = scene.settings.headset.refresh_hz;
+  p->sim_ = std::make_unique<SimulatedRig>(*rig, std::vector<Trajectory>{}, sim);
+  Pipeline* self = p.get();
+  p->sim_->set_scripted_markers([self](double) {
+    std::vector<Eigen::Vector3d> markers;
+    for (int h = 0; h < 2; ++h) {
+      const HandTruth& hand = self->truth_.hands[static_cast<std::size_t>(h)];
+      for (const Eigen::Vector3d& m : layout_markers(self->layouts_[static_cast<std::size_t>(h)], hand.world_from_hand, hand.pose)) markers.push_back(m);
+    }
+    for (const StarLibrary::Star& star : self->star_tracker_->library().stars()) {
+      const auto at = self->truth_.world_from_object.find(star.id);
+      if (at == self->truth_.world_from_object.end()) continue;
+      const Rigid3d world_from_star = at->second * self->object_from_star_.at(star.id);
+      for (const Eigen::Vector3d& m : star.markers_m) markers.push_back(world_from_star * m);
+    }
+    return markers;
+  });
+
+  auto physics = HandPhysics::create(world, scene);
+  if (!physics) return std::unexpected(physics.error());
+  p->physics_ = std::move(*physics);
+  return p;
+}
+
+void Pipeline::source(double t_s) {
+  time_s_ = t_s;
+  truth_ = script_.at(t_s);
+  std::vector<Occluder> bones;
+  add_bones(bones, truth_.hands[0]);
+  add_bones(bones, truth_.hands[1]);
+  sim_->set_occluders(std::move(bones));
+  frame_ = sim_->next();
+  counts_ = {};
+  for (const auto& camera : frame_.cameras) counts_.detections += camera.detections.size();
+}
+
+void Pipeline::matching() {
+  points_.clear();
+  for (const MatchedPoint& m : match_and_triangulate(sim_->rig(), frame_)) points_.push_back(m.point.position_world);
+  counts_.points = points_.size();
+}
+
+void Pipeline::stars(World& world) {
+  const auto& stars = star_tracker_->update(time_s_, points_);
+  for (const auto& [entity, id] : tracked_) {
+    for (const TrackedStar& s : stars) {
+      if (s.id != id || !s.seen_now() || !world.alive(entity)) continue;
+      ++counts_.stars_seen;
+      counts_.seen_star_ids.push_back(id);
+      const Rigid3d world_from_object = s.world_from_star * object_from_star_.at(id).inverse();
+      if (!world_from_object.translation.allFinite() || !world_from_object.rotation.coeffs().allFinite()) continue;
+      Transform& t = world.get<Transform>(entity);
+      t.position = glm::vec3(world_from_object.translation.cast<float>().x(), world_from_object.translation.cast<float>().y(),
+                             world_from_object.translation.cast<float>().z());
+      const Eigen::Quaterniond& q = world_from_object.rotation;
+      t.rotation = glm::normalize(glm::quat(static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())));
+    }
+  }
+}
+
+void Pipeline::hands() {
+  for (std::size_t h = 0; h < 2; ++h) {
+    const TrackedHand& tracked = hand_trackers_[h]->update(time_s_, points_);
+    inputs_[h] = settings_.perfect_hands ? hand_input(truth_.hands[h].world_from_hand, truth_.hands[h].pose) : hand_input(tracked);
+    counts_.hands_seen[h] = tracked.hand_seen;
+  }
+}
+
+void Pipeline::physics(World& world) { physics_->step(world, inputs_); }
+
+}  // namespace rhot

@@ -1,0 +1,94 @@
+#pragma once
+// One frame of rhot, tracking to physics (the renderer draws what it leaves in the world):
+//
+//   source    the simulated camera rig photographs the true hands' and objects' markers
+//             (DemoScript), with pixel noise, the hands' bones hiding markers
+//   matching  detections matched across cameras and triangulated
+//   stars     objects' marker stars identified and tracked; each entity tracked by a star
+//             (`tracked_by`) gets the tracked pose in its Transform
+//   hands     each hand's star and fingertip markers -> a 26-joint hand (HandTracker)
+//   physics   hand colliders, grasping, Bullet (HandPhysics)
+//
+// Each stage is a separate call so the frame loop can time it.
+
+#include <array>
+#include <expected>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/core/Entity.h"
+#include "engine/physics/HandPhysics.h"
+#include "engine/pipeline/DemoScript.h"
+#include "engine/scene/SceneDesc.h"
+#include "tracking/camera/Camera.h"
+#include "tracking/hand/HandTracker.h"
+#include "tracking/rigid/StarTracker.h"
+#include "tracking/source/SimulatedRig.h"
+
+namespace rhot {
+
+class World;
+
+struct PipelineSettings {
+  std::filesystem::path asset_dir;   // where the defaults below are found
+  std::filesystem::path rig_file;    // empty: the scene's rig, else assets/rigs/seated-4.yaml
+  std::filesystem::path star_set;    // empty: assets/stars/seed-case.json (the objects' stars)
+  double sigma_px = 0.3;
+  unsigned seed = 1;
+  bool perfect_hands = false;  // physics gets the true hands, not the tracked ones (to tell tracking from physics)
+};
+
+struct PipelineCounts {
+  std::size_t detections = 0;  // over all cameras
+  std::size_t points = 0;      // triangulated
+  int stars_seen = 0;          // objects' stars measured this frame
+  std::vector<int> seen_star_ids;
+  std::array<bool, 2> hands_seen{};
+};
+
+class Pipeline {
+ public:
+  // `world` holds `scene` instantiated. Fails on a missing rig, star set or hand layout, a
+  // `tracked_by` star missing from the set, or a physics error.
+  [[nodiscard]] static std::expected<std::unique_ptr<Pipeline>, std::string> create(World& world, const SceneDesc& scene,
+                                                                                   PipelineSettings settings);
+
+  void source(double t_s);
+  void matching();
+  void stars(World& world);
+  void hands();
+  void physics(World& world);
+
+  const SceneTruth& truth() const { return truth_; }
+  const PipelineCounts& counts() const { return counts_; }
+  const std::array<HandInput, 2>& hand_inputs() const { return inputs_; }
+  const TrackedHand& tracked_hand(HandSide side) const { return hand_trackers_[side == HandSide::kLeft ? 0 : 1]->last(); }
+  HandPhysics& hand_physics() { return *physics_; }
+  const std::vector<Eigen::Vector3d>& points() const { return points_; }
+  const CameraRig& rig() const { return sim_->rig(); }
+  const DemoScript& script() const { return script_; }
+
+ private:
+  explicit Pipeline(const SceneDesc& scene) : script_(scene) {}
+  PipelineSettings settings_;
+
+  DemoScript script_;
+  SceneTruth truth_;
+  std::unique_ptr<SimulatedRig> sim_;
+  RigFrame frame_;
+  std::vector<Eigen::Vector3d> points_;
+  std::unique_ptr<StarTracker> star_tracker_;
+  std::map<int, Rigid3d> object_from_star_;          // by star id: where the star sits on its object
+  std::vector<std::pair<Entity, int>> tracked_;       // entity, star id
+  std::array<HandLayout, 2> layouts_;
+  std::array<std::unique_ptr<HandTracker>, 2> hand_trackers_;
+  std::array<HandInput, 2> inputs_;
+  std::unique_ptr<HandPhysics> physics_;
+  PipelineCounts counts_;
+  double time_s_ = 0.0;
+};
+
+}  // namespace rhot
