@@ -1,5 +1,6 @@
-// rhot-demo: the VR demo. Loads a scene, runs the frame loop at a fixed 90 Hz step, and reports
-// frame statistics. Later layers add tracking, hands, physics and the renderer to the same loop.
+// rhot-demo: the VR demo. Loads a scene, runs one frame after another at a fixed 90 Hz step:
+// simulated cameras -> tracking (markers, marker stars, hands) -> physics (hand colliders,
+// grasping) -> both eyes rendered to a window or PNG files; reports frame statistics per stage.
 
 #include <atomic>
 #include <csignal>
@@ -17,6 +18,7 @@
 #include "engine/app/FrameLoop.h"
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
+#include "engine/demo/DemoRuntime.h"
 #include "engine/render/Renderer.h"
 #include "engine/render/SceneRenderer.h"
 #include "engine/render/Window.h"
@@ -87,6 +89,17 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "multiview", "two-pass"}));
   cli.add_flag("--validation,!--no-validation", render.validation,
                "Vulkan validation layer (default: on in debug builds; or set RHOT_VK_VALIDATION=1)");
+  std::string source = "sim";
+  rhot::DemoOptions demo;
+  demo.pipeline.asset_dir = RHOT_ASSET_DIR;
+  cli.add_option("--source", source, "Where the cameras' images come from: sim (the built-in simulated rig)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"sim"}));
+  cli.add_option("--rig", demo.pipeline.rig_file, "Camera rig (OpenCV YAML; default: the scene's, else assets/rigs/seated-4.yaml)")
+      ->check(CLI::ExistingFile);
+  cli.add_option("--sigma", demo.pipeline.sigma_px, "Simulated pixel noise, standard deviation")->capture_default_str()->check(CLI::Range(0.0, 50.0));
+  cli.add_option("--seed", demo.pipeline.seed, "Simulation seed")->capture_default_str();
+  cli.add_flag("--points", demo.draw_points, "Draw the triangulated marker points");
   CLI11_PARSE(cli, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
 
@@ -142,26 +155,21 @@ int main(int argc, char** argv) {
     return EXIT_FAILURE;
   }
 
-  rhot::World world;
-  const auto entities = rhot::instantiate(*scene, world);
-  spdlog::info("scene {}: {} entities", scene_path, entities.size());
-
-  rhot::SceneRenderer scene_renderer(**renderer);
-  const rhot::StereoViews views = rhot::stereo_views(rhot::default_world_from_head(), headset);
-  const auto hands = rhot::reference_hands();
-  std::vector<rhot::HandDrawInput> shown_hands;
-  if (scene->settings.left_hand) shown_hands.push_back(hands[0]);
-  if (scene->settings.right_hand) shown_hands.push_back(hands[1]);
+  auto runtime = rhot::DemoRuntime::create(*scene, renderer->get(), demo);
+  if (!runtime) {
+    spdlog::error("cannot start the demo: {}", runtime.error());
+    return EXIT_FAILURE;
+  }
+  rhot::World& world = (*runtime)->world();
+  spdlog::info("scene {}: tracking {} cameras, {} star-tracked objects", scene_path, (*runtime)->pipeline().rig().cameras.size(),
+               world.view<rhot::TrackedBy>().size_hint());
   bool capture_failed = false;
 
   rhot::Systems systems;
   systems.add({"window-events", {}, {}, [&](rhot::World&, const rhot::FrameContext&) {
                  if (window) window->poll_events();
                }});
-  systems.add({"transforms", {"window-events"}, {}, [](rhot::World& w, const rhot::FrameContext&) { rhot::update_world_transforms(w); }});
-  systems.add({"render", {"transforms"}, {}, [&](rhot::World& w, const rhot::FrameContext&) {
-                 (*renderer)->render(scene_renderer.build(w, views, shown_hands));
-               }});
+  (*runtime)->add_systems(systems, "window-events");
   systems.add({"capture", {"render"}, {}, [&](rhot::World&, const rhot::FrameContext& f) {
                  if (capture_dir.empty() || capture_failed) return;
                  char stem[32];

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <thread>
 
 #define GLFW_INCLUDE_NONE
 #include <vulkan/vulkan.h>
@@ -97,6 +98,16 @@ bool multiview_self_test(const vk::Context& context) {
 
 std::expected<std::unique_ptr<Renderer>, std::string> Renderer::create(const RendererSettings& settings, Window* window) {
   if (auto ok = settings.check(); !ok) return std::unexpected(ok.error());
+  // Mesa's CPU driver rasterises on worker threads and the frame waits for them. On two cores
+  // those threads fight tracking and physics for the CPU, and the hand-off costs more than the
+  // parallelism gains (measured: 540 x 600 per eye, the whole frame 11.9 ms p50 with workers,
+  // 6.6 ms drawing on the frame's own thread; docs/PERFORMANCE.md). So on a machine with two
+  // cores or fewer the driver draws on the calling thread, unless LP_NUM_THREADS says otherwise.
+  // (It must be set before the driver loads; it changes nothing for GPU drivers.)
+  if (std::getenv("LP_NUM_THREADS") == nullptr && std::thread::hardware_concurrency() <= 2) {
+    setenv("LP_NUM_THREADS", "0", 0);
+    spdlog::info("two CPU cores or fewer: a CPU Vulkan driver draws on the frame's thread (LP_NUM_THREADS=0)");
+  }
   auto impl = std::make_unique<Impl>();
   vk::Context::Options options;
   options.device = settings.device;

@@ -25,10 +25,15 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "engine/app/FrameLoop.h"
+#include "engine/demo/DemoRuntime.h"
 #include "engine/physics/GraspScenarios.h"
+#include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
 #include "tracking/hand/HandMotions.h"
@@ -574,6 +579,64 @@ int grasp(const std::string& scenario) {
   return 0;
 }
 
+// The demo's whole frame, headless: simulated cameras, tracking, physics and both eyes rendered
+// offscreen, every stage timed (engine/demo/DemoRuntime.h).
+int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device) {
+  // stdout carries the JSON only: the log goes to stderr.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));
+  const auto scene = rhot::load_scene_file(scene_file);
+  if (!scene) {
+    std::cerr << "rhot-eval: " << scene.error().to_string() << "\n";
+    return 1;
+  }
+  rhot::RendererSettings render;
+  render.eye_width_px = scene->settings.headset.eye_width_px;
+  render.eye_height_px = scene->settings.headset.eye_height_px;
+  render.device = device;
+  if (!eye.empty()) {
+    char x = 0, rest = 0;
+    if (std::sscanf(eye.c_str(), "%d%c%d%c", &render.eye_width_px, &x, &render.eye_height_px, &rest) != 3 || (x != 'x' && x != 'X') ||
+        render.eye_width_px < 16 || render.eye_height_px < 16 || render.eye_width_px > 8192 || render.eye_height_px > 8192) {
+      std::cerr << "rhot-eval: --eye: expected WIDTHxHEIGHT, each 16 to 8192 pixels, such as 1080x1200, got \"" << eye << "\"\n";
+      return 1;
+    }
+  }
+  auto renderer = rhot::Renderer::create(render);
+  if (!renderer) {
+    std::cerr << "rhot-eval: cannot start the renderer: " << renderer.error() << "\n";
+    return 1;
+  }
+  rhot::DemoOptions options;
+  options.pipeline.asset_dir = RHOT_ASSET_DIR;
+  auto runtime = rhot::DemoRuntime::create(*scene, renderer->get(), options);
+  if (!runtime) {
+    std::cerr << "rhot-eval: " << runtime.error() << "\n";
+    return 1;
+  }
+  rhot::Systems systems;
+  (*runtime)->add_systems(systems, "");
+  if (const auto built = systems.build(); !built) {
+    std::cerr << "rhot-eval: " << built.error() << "\n";
+    return 1;
+  }
+  rhot::FrameLoopSettings loop;
+  loop.rate_hz = scene->settings.headset.refresh_hz;
+  loop.budget_ms = 1000.0 / loop.rate_hz;
+  rhot::FrameLoop frame_loop((*runtime)->world(), systems, loop);
+  for (int f = 0; f < frames; ++f) {
+    frame_loop.step();
+    if ((f + 1) % 90 == 0) std::cerr << "rhot-eval: frame " << (f + 1) << " of " << frames << "\n";
+  }
+  nlohmann::json j = frame_loop.stats().to_json();
+  j["scene"] = scene_file;
+  j["eye_px"] = {(*renderer)->eye_width_px(), (*renderer)->eye_height_px()};
+  j["device"] = (*renderer)->info().device_name;
+  j["cpu_device"] = (*renderer)->info().cpu_device;
+  j["stereo"] = (*renderer)->info().mode == rhot::StereoMode::kMultiview ? "multiview" : "two-pass";
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"rhot-eval: accuracy and speed of rhot's tracking on simulated data, as JSON"};
   app.require_subcommand(1);
@@ -640,8 +703,19 @@ int main(int argc, char** argv) {
   std::string scenario = "all";
   grasp_cmd->add_option("--scenario", scenario, "a scenario name or all")->capture_default_str();
   grasp_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  auto* frame_cmd = app.add_subcommand("frame", "the demo's whole frame headless (cameras, tracking, physics, both eyes): p50, p99, budget misses, per stage");
+  std::string scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
+  std::string eye;
+  int frame_count = 900;
+  std::string device = "auto";
+  frame_cmd->add_option("--scene", scene_file, "scene file (JSON)")->capture_default_str();
+  frame_cmd->add_option("--eye", eye, "pixels per eye, WxH (default: the scene's headset, 1080x1200)");
+  frame_cmd->add_option("--frames", frame_count, "frames to run")->capture_default_str()->check(CLI::Range(1, 1000000));
+  frame_cmd->add_option("--device", device, "Vulkan device: auto, gpu, cpu, an index or part of its name")->capture_default_str();
+  frame_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
   if (grasp_cmd->parsed()) return grasp(scenario);
+  if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device);
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
   if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, sigma, hand_frames, seed, volume_centre, filter);
   if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, sigma, frames, seed, dropout, volume, volume_centre);
