@@ -92,9 +92,10 @@ int main(int argc, char** argv) {
   std::string source = "sim";
   rhot::DemoOptions demo;
   demo.pipeline.asset_dir = RHOT_ASSET_DIR;
-  cli.add_option("--source", source, "Where the cameras' images come from: sim (the built-in simulated rig)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"sim"}));
+  cli.add_option("--source", source, "sim (the built-in simulated camera rig) or replay:FILE (a recording made with --record)")
+      ->capture_default_str();
+  cli.add_option("--speed", demo.pipeline.speed, "Replay speed (with --source replay:FILE)")->capture_default_str()->check(CLI::Range(0.01, 100.0));
+  cli.add_option("--record", demo.pipeline.record, "Record every frame's hands and tracked objects to FILE (JSON Lines, docs/recording-format.md)");
   cli.add_option("--rig", demo.pipeline.rig_file, "Camera rig (OpenCV YAML; default: the scene's, else assets/rigs/seated-4.yaml)")
       ->check(CLI::ExistingFile);
   cli.add_option("--sigma", demo.pipeline.sigma_px, "Simulated pixel noise, standard deviation")->capture_default_str()->check(CLI::Range(0.0, 50.0));
@@ -102,6 +103,12 @@ int main(int argc, char** argv) {
   cli.add_flag("--points", demo.draw_points, "Draw the triangulated marker points");
   CLI11_PARSE(cli, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
+  if (source.rfind("replay:", 0) == 0 && source.size() > 7) {
+    demo.pipeline.replay = source.substr(7);
+  } else if (source != "sim") {
+    spdlog::error("--source: expected sim or replay:FILE, got \"{}\"", source);
+    return EXIT_FAILURE;
+  }
 
   if (!eye_size.empty() && !parse_size(eye_size, render.eye_width_px, render.eye_height_px)) {
     spdlog::error("--eye: expected WIDTHxHEIGHT in pixels, such as 1080x1200, got \"{}\"", eye_size);

@@ -5,6 +5,10 @@
 #include <Eigen/Geometry>
 #include <glm/gtc/quaternion.hpp>
 
+#include <cmath>
+
+#include <spdlog/spdlog.h>
+
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "tracking/camera/RigFile.h"
@@ -63,6 +67,7 @@ std::expected<std::unique_ptr<Pipeline>, std::string> Pipeline::create(World& wo
     }
     used.stars.push_back(*it);
     p->tracked_.emplace_back(e, by.star_id);
+    if (const Name* name = world.find<Name>(e)) p->name_of_star_[by.star_id] = name->value;
     Rigid3d object_from_star;
     object_from_star.translation = Eigen::Vector3d(0.0, 0.0, -star_offset(world.find<Mesh>(e), t.scale));
     object_from_star.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitY()));
@@ -103,28 +108,61 @@ std::expected<std::unique_ptr<Pipeline>, std::string> Pipeline::create(World& wo
   auto physics = HandPhysics::create(world, scene);
   if (!physics) return std::unexpected(physics.error());
   p->physics_ = std::move(*physics);
+  if (!settings.replay.empty()) {
+    auto recording = load_recording(settings.replay);
+    if (!recording) return std::unexpected(recording.error());
+    if (!(settings.speed > 0.0) || !std::isfinite(settings.speed)) return std::unexpected("replay speed must be a positive number");
+    p->replay_ = std::move(*recording);
+  }
+  if (!settings.record.empty()) {
+    std::vector<std::string> names;
+    for (const auto& [id, name] : p->name_of_star_) names.push_back(name);
+    auto writer = RecordingWriter::open(settings.record, sim.rate_hz, names);
+    if (!writer) return std::unexpected(writer.error());
+    p->recorder_ = std::move(*writer);
+  }
   return p;
 }
 
 void Pipeline::source(double t_s) {
   time_s_ = t_s;
+  counts_ = {};
+  if (replay_) {
+    replayed_ = replay_->at(t_s * settings_.speed);
+    return;
+  }
   truth_ = script_.at(t_s);
   std::vector<Occluder> bones;
   add_bones(bones, truth_.hands[0]);
   add_bones(bones, truth_.hands[1]);
   sim_->set_occluders(std::move(bones));
   frame_ = sim_->next();
-  counts_ = {};
   for (const auto& camera : frame_.cameras) counts_.detections += camera.detections.size();
 }
 
 void Pipeline::matching() {
   points_.clear();
+  if (replay_) return;
   for (const MatchedPoint& m : match_and_triangulate(sim_->rig(), frame_)) points_.push_back(m.point.position_world);
   counts_.points = points_.size();
 }
 
 void Pipeline::stars(World& world) {
+  if (replay_) {
+    for (const auto& [entity, id] : tracked_) {
+      const auto name = name_of_star_.find(id);
+      if (name == name_of_star_.end() || !world.alive(entity)) continue;
+      const auto pose = replayed_.objects.find(name->second);
+      if (pose == replayed_.objects.end()) continue;
+      Transform& t = world.get<Transform>(entity);
+      t.position = glm::vec3(pose->second.translation.cast<float>().x(), pose->second.translation.cast<float>().y(), pose->second.translation.cast<float>().z());
+      const Eigen::Quaterniond& q = pose->second.rotation;
+      t.rotation = glm::normalize(glm::quat(static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())));
+      ++counts_.stars_seen;
+      counts_.seen_star_ids.push_back(id);
+    }
+    return;
+  }
   const auto& stars = star_tracker_->update(time_s_, points_);
   for (const auto& [entity, id] : tracked_) {
     for (const TrackedStar& s : stars) {
@@ -133,6 +171,7 @@ void Pipeline::stars(World& world) {
       counts_.seen_star_ids.push_back(id);
       const Rigid3d world_from_object = s.world_from_star * object_from_star_.at(id).inverse();
       if (!world_from_object.translation.allFinite() || !world_from_object.rotation.coeffs().allFinite()) continue;
+      if (const auto name = name_of_star_.find(id); name != name_of_star_.end()) object_poses_[name->second] = world_from_object;
       Transform& t = world.get<Transform>(entity);
       t.position = glm::vec3(world_from_object.translation.cast<float>().x(), world_from_object.translation.cast<float>().y(),
                              world_from_object.translation.cast<float>().z());
@@ -143,10 +182,25 @@ void Pipeline::stars(World& world) {
 }
 
 void Pipeline::hands() {
+  if (replay_) {
+    inputs_ = replayed_.hands;
+    counts_.hands_seen = {inputs_[0].seen, inputs_[1].seen};
+    return;
+  }
   for (std::size_t h = 0; h < 2; ++h) {
     const TrackedHand& tracked = hand_trackers_[h]->update(time_s_, points_);
     inputs_[h] = settings_.perfect_hands ? hand_input(truth_.hands[h].world_from_hand, truth_.hands[h].pose) : hand_input(tracked);
     counts_.hands_seen[h] = tracked.hand_seen;
+  }
+  if (recorder_) {
+    RecordedFrame f;
+    f.t_s = time_s_;
+    f.hands = inputs_;
+    f.objects = object_poses_;
+    if (auto written = recorder_->write(f); !written) {
+      spdlog::error("recording stopped: {}", written.error());
+      recorder_.reset();
+    }
   }
 }
 

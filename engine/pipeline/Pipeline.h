@@ -9,6 +9,10 @@
 //   hands     each hand's star and fingertip markers -> a 26-joint hand (HandTracker)
 //   physics   hand colliders, grasping, Bullet (HandPhysics)
 //
+// Replaying a recording (PipelineSettings::replay), source reads the recorded frame instead and
+// matching does nothing; stars and hands take the recorded poses. Recording
+// (PipelineSettings::record) writes each frame's hands and tracked objects as the hands stage ends.
+//
 // Each stage is a separate call so the frame loop can time it.
 
 #include <array>
@@ -22,6 +26,7 @@
 #include "engine/core/Entity.h"
 #include "engine/physics/HandPhysics.h"
 #include "engine/pipeline/DemoScript.h"
+#include "engine/pipeline/Recording.h"
 #include "engine/scene/SceneDesc.h"
 #include "tracking/camera/Camera.h"
 #include "tracking/hand/HandTracker.h"
@@ -39,6 +44,9 @@ struct PipelineSettings {
   double sigma_px = 0.3;
   unsigned seed = 1;
   bool perfect_hands = false;  // physics gets the true hands, not the tracked ones (to tell tracking from physics)
+  std::filesystem::path replay;  // play this recording instead of simulating cameras and tracking
+  double speed = 1.0;            // replay speed (2: twice as fast)
+  std::filesystem::path record;  // write every frame's hands and tracked objects here
 };
 
 struct PipelineCounts {
@@ -70,10 +78,17 @@ class Pipeline {
   const std::vector<Eigen::Vector3d>& points() const { return points_; }
   const CameraRig& rig() const { return sim_->rig(); }
   const DemoScript& script() const { return script_; }
+  bool replaying() const { return replay_.has_value(); }
+  const Recording* replay() const { return replay_ ? &*replay_ : nullptr; }
 
  private:
   explicit Pipeline(const SceneDesc& scene) : script_(scene) {}
   PipelineSettings settings_;
+  std::optional<Recording> replay_;
+  RecordedFrame replayed_;
+  std::optional<RecordingWriter> recorder_;
+  std::map<std::string, Rigid3d> object_poses_;  // tracked objects by entity name, as last tracked
+  std::map<int, std::string> name_of_star_;
 
   DemoScript script_;
   SceneTruth truth_;

@@ -1,6 +1,7 @@
 // The whole frame from simulated cameras to physics, headless and deterministic.
 
 #include <algorithm>
+#include <fstream>
 
 #include <gtest/gtest.h>
 
@@ -95,6 +96,82 @@ TEST(Pipeline, WithPerfectHandsTooTheBlockIsLifted) {
   const DemoRun r = run_default_scene(1080, true);
   EXPECT_EQ(r.right_grasps_of_block, 1);
   EXPECT_GE(r.block_lift_m, 0.10);
+}
+
+TEST(Pipeline, ARecordingReplaysToThePosesItRecorded) {
+  const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
+  ASSERT_TRUE(scene.has_value());
+  const std::string file = ::testing::TempDir() + "rhot_pipeline_recording.jsonl";
+  constexpr int kFrames = 300;
+  std::vector<std::array<HandInput, 2>> recorded_hands;
+  std::vector<glm::vec3> recorded_mug;
+  {
+    World world;
+    instantiate(*scene, world);
+    PipelineSettings settings;
+    settings.asset_dir = RHOT_ASSET_DIR;
+    settings.record = file;
+    auto p = Pipeline::create(world, *scene, settings);
+    ASSERT_TRUE(p.has_value()) << p.error();
+    const Entity mug = named(world, "tracked-mug");
+    for (int f = 0; f < kFrames; ++f) {
+      (*p)->source(f / 90.0);
+      (*p)->matching();
+      (*p)->stars(world);
+      (*p)->hands();
+      recorded_hands.push_back((*p)->hand_inputs());
+      recorded_mug.push_back(world.get<Transform>(mug).position);
+    }
+  }
+  const auto recording = load_recording(file);
+  ASSERT_TRUE(recording.has_value()) << recording.error();
+  EXPECT_EQ(recording->frames.size(), static_cast<std::size_t>(kFrames));
+  EXPECT_EQ(recording->objects, (std::vector<std::string>{"tracked-mug", "tracked-screwdriver", "tracked-part"}));
+
+  World world;
+  instantiate(*scene, world);
+  PipelineSettings settings;
+  settings.asset_dir = RHOT_ASSET_DIR;
+  settings.replay = file;
+  auto p = Pipeline::create(world, *scene, settings);
+  ASSERT_TRUE(p.has_value()) << p.error();
+  ASSERT_TRUE((*p)->replaying());
+  const Entity mug = named(world, "tracked-mug");
+  double worst_joint = 0.0;
+  float worst_mug = 0.0f;
+  for (int f = 0; f < kFrames; ++f) {
+    (*p)->source(f / 90.0);
+    (*p)->matching();
+    (*p)->stars(world);
+    (*p)->hands();
+    for (std::size_t h = 0; h < 2; ++h) {
+      ASSERT_EQ((*p)->hand_inputs()[h].seen, recorded_hands[static_cast<std::size_t>(f)][h].seen) << f;
+      for (std::size_t j = 0; j < kHandJointCount; ++j) {
+        worst_joint = std::max(worst_joint, ((*p)->hand_inputs()[h].joints_world[j] - recorded_hands[static_cast<std::size_t>(f)][h].joints_world[j]).norm());
+      }
+    }
+    if (f > 0) worst_mug = std::max(worst_mug, glm::distance(world.get<Transform>(mug).position, recorded_mug[static_cast<std::size_t>(f)]));
+  }
+  EXPECT_LT(worst_joint, 1e-9);
+  EXPECT_LT(worst_mug, 1e-6f);
+}
+
+TEST(Pipeline, BrokenRecordingsAreRefusedNamingTheLine) {
+  const std::string file = ::testing::TempDir() + "rhot_bad_recording.jsonl";
+  {
+    std::ofstream out(file);
+    out << R"({"format": "rhot-recording", "version": 1, "rate_hz": 90, "objects": []})" << "\n";
+    out << R"({"t": 0.0, "hands": [], "objects": {}})" << "\n";
+  }
+  const auto r = load_recording(file);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error(), file + ":2: hands: expected [left, right]");
+  {
+    std::ofstream out(file);
+    out << R"({"format": "rhot-recording", "version": 2, "rate_hz": 90})" << "\n";
+  }
+  EXPECT_EQ(load_recording(file).error(), file + ":1: version: expected 1");
+  EXPECT_EQ(load_recording(file + ".missing").error(), file + ".missing: cannot read the recording");
 }
 
 }  // namespace
