@@ -114,6 +114,23 @@ TEST(EvalCli, GraspPrintsTheScenarioJson) {
       << bad.output;
 }
 
+TEST(EvalCli, FramePrintsTheWholeFrameAndEveryStage) {
+  const EvalRun r = run_eval("frame --eye 64x64 --frames 20 --device cpu --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  for (const char* key : {"p50_ms", "p99_ms", "budget_miss_fraction"}) EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["frames"].get<int>(), 20);
+  EXPECT_EQ(j["eye_px"], nlohmann::json::array({64, 64}));
+  for (const char* stage : {"source", "matching", "stars", "hands", "transforms", "physics", "render"}) {
+    ASSERT_TRUE(j["stages"].contains(stage)) << stage;
+    EXPECT_GT(j["stages"][stage]["p50_ms"].get<double>(), 0.0) << stage;
+    EXPECT_LE(j["stages"][stage]["p50_ms"].get<double>(), j["p99_ms"].get<double>()) << stage;
+  }
+  const auto bad = rhot::test::run_program("rhot-eval", "frame --eye 64by64 --json", "2>&1");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("--eye: expected WIDTHxHEIGHT, each 16 to 8192 pixels, such as 1080x1200, got \"64by64\""), std::string::npos) << bad.output;
+}
+
 TEST(EvalCli, UnknownHandMotionIsNamed) {
   const auto r = rhot::test::run_program("rhot-eval", std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion juggle --json", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
