@@ -2,7 +2,8 @@
 // Grasping through contacts (docs/grasping.md).
 //
 // A grasp begins when the thumb (or the palm) and at least one other finger of one hand touch the
-// same grabbable dynamic object, the finger curled and the two contact normals roughly opposed.
+// same grabbable dynamic object, the finger curled and some pair of their contacts' normals
+// roughly opposed.
 // The held object then follows the hand: every step its velocity is set to bring it to where the
 // grasp found it relative to the hand frame (a velocity-level constraint that keeps the grip
 // offset, like the hand bones themselves), without gravity and without colliding with that
