@@ -8,8 +8,10 @@ target_compile_options(rhot_options INTERFACE
   -Wold-style-cast -Wnull-dereference -Wdouble-promotion
   $<$<BOOL:${RHOT_WERROR}>:-Werror>)
 if(RHOT_SANITIZE)
+  # -O1, as AddressSanitizer's authors advise: the checks stay, the tests (which run the whole
+  # pipeline for thousands of frames) take a third of the time they take at -O0.
   target_compile_options(rhot_options INTERFACE
-    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+    -O1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   target_link_options(rhot_options INTERFACE -fsanitize=address,undefined)
 endif()
 

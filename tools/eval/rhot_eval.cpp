@@ -372,22 +372,7 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   };
   auto markers_at = [&](double t) {
     const auto [world_from_hand, pose] = truth_at(t);
-    std::vector<Eigen::Vector3d> out;
-    for (const Eigen::Vector3d& m : layout.hand_star_m) out.push_back(world_from_hand * m);
-    for (int f = 0; f < rhot::kFingerCount; ++f) {
-      const auto offset = layout.fingertip_offset_m[static_cast<std::size_t>(f)];
-      if (!offset) continue;
-      const auto joints = rhot::chain_joints(static_cast<rhot::Finger>(f));
-      const Eigen::Vector3d tip = pose.position_m[static_cast<std::size_t>(joints[3])];
-      const Eigen::Vector3d along = (tip - pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
-      out.push_back(world_from_hand * (tip + *offset * along));
-    }
-    for (const rhot::SegmentStar& s : layout.segment_stars) {
-      const auto finger = static_cast<std::size_t>(rhot::finger_of_bone(s.bone));
-      const rhot::Rigid3d hand_from_star = rhot::hand_from_segment_star(pose, s.bone, chains[finger]);
-      for (const Eigen::Vector3d& m : s.star.markers_mm) out.push_back(world_from_hand * (hand_from_star * (m * 1e-3)));
-    }
-    return out;
+    return rhot::layout_markers(layout, world_from_hand, pose);
   };
   rhot::SimulatedRigSettings settings;
   settings.sigma_px = sigma;

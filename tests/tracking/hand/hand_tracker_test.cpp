@@ -25,21 +25,7 @@ HandLayout low_cost() { return shipped_layout("low-cost-right"); }
 
 // The layout's markers for a true hand (world frame), without noise.
 std::vector<Eigen::Vector3d> markers(const HandLayout& layout, const Rigid3d& world_from_hand, const HandPose& pose) {
-  std::vector<Eigen::Vector3d> out;
-  for (const Eigen::Vector3d& m : layout.hand_star_m) out.push_back(world_from_hand * m);
-  for (int f = 0; f < kFingerCount; ++f) {
-    const auto joints = chain_joints(static_cast<Finger>(f));
-    const Eigen::Vector3d tip = pose.position_m[static_cast<std::size_t>(joints[3])];
-    const Eigen::Vector3d along = (tip - pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
-    const auto offset = layout.fingertip_offset_m[static_cast<std::size_t>(f)];
-    if (offset) out.push_back(world_from_hand * (tip + *offset * along));
-  }
-  const auto chains = hand_chains(reference_open_hand(layout.side), layout.side);
-  for (const SegmentStar& s : layout.segment_stars) {
-    const Rigid3d hand_from_star = hand_from_segment_star(pose, s.bone, chains[static_cast<std::size_t>(finger_of_bone(s.bone))]);
-    for (const Eigen::Vector3d& m : s.star.markers_mm) out.push_back(world_from_hand * (hand_from_star * (1e-3 * m)));
-  }
-  return out;
+  return layout_markers(layout, world_from_hand, pose);
 }
 
 TEST(HandLayout, TheLowCostLayoutLoads) {
