@@ -5,18 +5,13 @@
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "engine/scene/Components.h"
+#include "engine/scene/SceneLoader.h"
 
 namespace rhot {
 
 std::expected<Interactions, std::string> Interactions::create(World& world, const std::vector<InteractionDesc>& list) {
   Interactions out;
-  const auto find = [&](const std::string& name) {
-    Entity found;
-    world.view<Name>().each([&](Entity e, Name& n) {
-      if (n.value == name) found = e;
-    });
-    return found;
-  };
+  const auto find = [&](const std::string& name) { return find_named(world, name); };
   for (const InteractionDesc& d : list) {
     Item item;
     item.desc = d;

@@ -20,25 +20,16 @@ Rigid3d pose_of(const EntityDesc& e) {
 
 // The width a hand grasps an object by, across world X.
 double grip_width(const EntityDesc& e) {
-  if (!e.mesh) return 0.05;
-  const double scale = static_cast<double>(e.transform.scale.x);
-  if (const auto* b = std::get_if<BoxShape>(&e.mesh->shape)) return static_cast<double>(b->size_m.x) * scale;
-  if (const auto* s = std::get_if<SphereShape>(&e.mesh->shape)) return 2.0 * static_cast<double>(s->radius_m) * scale;
-  if (const auto* c = std::get_if<CapsuleShape>(&e.mesh->shape)) return 2.0 * static_cast<double>(c->radius_m) * scale;
-  return 0.05;
+  const auto half = e.mesh ? shape_half_extents(e.mesh->shape) : std::nullopt;
+  return half ? 2.0 * static_cast<double>(half->x * e.transform.scale.x) : 0.05;
 }
 
 // Where a hand closes on an object: its centre, or for a tall object 2.5 cm below its top (the
 // palm would land on the top otherwise).
 Eigen::Vector3d grip_point(const EntityDesc& e) {
   Eigen::Vector3d c(e.transform.position.x, e.transform.position.y, e.transform.position.z);
-  double half = 0.0;
-  if (e.mesh) {
-    const double sy = static_cast<double>(e.transform.scale.y);
-    if (const auto* b = std::get_if<BoxShape>(&e.mesh->shape)) half = 0.5 * static_cast<double>(b->size_m.y) * sy;
-    if (const auto* k = std::get_if<CapsuleShape>(&e.mesh->shape)) half = 0.5 * static_cast<double>(k->height_m) * sy;
-  }
-  c.y() += std::max(0.0, half - 0.025);
+  const auto half = e.mesh ? shape_half_extents(e.mesh->shape) : std::nullopt;
+  if (half) c.y() += std::max(0.0, static_cast<double>(half->y * e.transform.scale.y) - 0.025);
   return c;
 }
 

@@ -23,12 +23,8 @@ namespace {
 // surface, its tall side pointing out (the hand closes on the object from above and from the
 // user's side, so a star on top or in front would be under the palm).
 double star_offset(const Mesh* mesh, const glm::vec3& scale) {
-  if (!mesh) return 0.05;
-  const double sz = static_cast<double>(scale.z);
-  if (const auto* b = std::get_if<BoxShape>(&mesh->shape)) return 0.5 * static_cast<double>(b->size_m.z) * sz + 0.004;
-  if (const auto* s = std::get_if<SphereShape>(&mesh->shape)) return static_cast<double>(s->radius_m) * sz + 0.004;
-  if (const auto* c = std::get_if<CapsuleShape>(&mesh->shape)) return static_cast<double>(c->radius_m) * sz + 0.004;
-  return 0.05;
+  const auto half = mesh ? shape_half_extents(mesh->shape) : std::nullopt;
+  return half ? static_cast<double>(half->z * scale.z) + 0.004 : 0.05;
 }
 
 void add_bones(std::vector<Occluder>& out, const HandTruth& hand) {

@@ -3,6 +3,7 @@
 // Plain data: the physics and render systems of later layers read them.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <variant>
 
@@ -36,6 +37,16 @@ using MeshShape = std::variant<BoxShape, SphereShape, CapsuleShape, PlaneShape, 
 struct Mesh {
   MeshShape shape;
 };
+
+// Half a shape's extent along its local x, y and z (before the entity's scale); nothing for a
+// glTF mesh, whose extent is in its file.
+inline std::optional<glm::vec3> shape_half_extents(const MeshShape& shape) {
+  if (const auto* b = std::get_if<BoxShape>(&shape)) return 0.5f * b->size_m;
+  if (const auto* s = std::get_if<SphereShape>(&shape)) return glm::vec3(s->radius_m);
+  if (const auto* c = std::get_if<CapsuleShape>(&shape)) return glm::vec3(c->radius_m, 0.5f * c->height_m, c->radius_m);
+  if (const auto* p = std::get_if<PlaneShape>(&shape)) return glm::vec3(0.5f * p->size_m.x, 0.0f, 0.5f * p->size_m.y);
+  return std::nullopt;
+}
 
 struct Material {
   glm::vec4 color{0.8f, 0.8f, 0.8f, 1.0f};  // linear RGBA in [0, 1], as glTF's baseColorFactor

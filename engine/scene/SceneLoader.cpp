@@ -656,4 +656,12 @@ std::vector<Entity> instantiate(const SceneDesc& scene, World& world) {
   return created;
 }
 
+Entity find_named(World& world, std::string_view name) {
+  Entity found;
+  world.view<Name>().each([&](Entity e, Name& n) {
+    if (found.is_null() && n.value == name) found = e;
+  });
+  return found;
+}
+
 }  // namespace rhot

@@ -42,4 +42,7 @@ struct SceneError {
 // loader. Precondition: the world is not iterating; names and parents are valid.
 std::vector<Entity> instantiate(const SceneDesc& scene, World& world);
 
+// The entity with this Name, or a null entity. Linear in the number of named entities.
+Entity find_named(World& world, std::string_view name);
+
 }  // namespace rhot

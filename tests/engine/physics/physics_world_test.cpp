@@ -35,13 +35,7 @@ std::unique_ptr<HandPhysics> physics_for(World& world, const SceneDesc& scene) {
   return p ? std::move(*p) : nullptr;
 }
 
-Entity named(World& world, const std::string& name) {
-  Entity found;
-  world.view<Name>().each([&](Entity e, Name& n) {
-    if (n.value == name) found = e;
-  });
-  return found;
-}
+Entity named(World& world, const std::string& name) { return find_named(world, name); }
 
 TEST(PhysicsWorld, ADroppedBoxComesToRestOnTheFloorAndItsEntityFollows) {
   const SceneDesc scene = parse(std::string(R"({"entities": [)") + kFloor + R"(,

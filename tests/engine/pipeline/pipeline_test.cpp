@@ -13,13 +13,7 @@
 namespace rhot {
 namespace {
 
-Entity named(World& world, const std::string& name) {
-  Entity found;
-  world.view<Name>().each([&](Entity e, Name& n) {
-    if (n.value == name) found = e;
-  });
-  return found;
-}
+Entity named(World& world, const std::string& name) { return find_named(world, name); }
 
 struct DemoRun {
   double block_lift_m = 0.0;
