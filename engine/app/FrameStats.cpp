@@ -81,4 +81,14 @@ nlohmann::json FrameStats::to_json() const {
   return j;
 }
 
+std::vector<double> FrameStats::recent_frame_ms(std::size_t n) const {
+  const std::size_t k = std::min(n, frame_.window.size());
+  return {frame_.window.end() - static_cast<std::ptrdiff_t>(k), frame_.window.end()};
+}
+
+double FrameStats::last_stage_ms(std::size_t stage) const {
+  RHOT_PRECONDITION(stage < stages_.size(), "FrameStats::last_stage_ms: no such stage");
+  return stages_[stage].window.empty() ? 0.0 : stages_[stage].window.back();
+}
+
 }  // namespace rhot

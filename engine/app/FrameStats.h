@@ -37,6 +37,10 @@ class FrameStats {
   const std::vector<std::string>& stage_names() const { return names_; }
 
   TimingSummary frame_summary() const;
+  // The whole frame's times of the last `n` frames (fewer at the start), oldest first.
+  std::vector<double> recent_frame_ms(std::size_t n) const;
+  // A stage's time in the last frame (0 before the first).
+  double last_stage_ms(std::size_t stage) const;
   TimingSummary stage_summary(std::size_t stage) const;
 
   // {"frames", "budget_ms", "frames_over_budget", "budget_miss_fraction", "p50_ms", "p99_ms",

@@ -10,14 +10,21 @@
 #include <fstream>
 #include <memory>
 #include <string>
+#include <vector>
 
+// GCC 12 at -O2 sees a "potential null pointer dereference" inside CLI11's option parsing
+// (libstdc++'s string move); the pragma covers only CLI11's lines.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wnull-dereference"
 #include <CLI/CLI.hpp>
+#pragma GCC diagnostic pop
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
 #include "engine/app/FrameLoop.h"
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
+#include "engine/demo/DemoOverlay.h"
 #include "engine/demo/DemoRuntime.h"
 #include "engine/render/Renderer.h"
 #include "engine/render/SceneRenderer.h"
@@ -100,8 +107,22 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   cli.add_option("--sigma", demo.pipeline.sigma_px, "Simulated pixel noise, standard deviation")->capture_default_str()->check(CLI::Range(0.0, 50.0));
   cli.add_option("--seed", demo.pipeline.seed, "Simulation seed")->capture_default_str();
-  cli.add_flag("--points", demo.draw_points, "Draw the triangulated marker points");
+  std::vector<std::string> debug_views;
+  cli.add_option("--debug-views", debug_views, "Debug views on from the start: markers, rays, frusta, colliders (comma-separated)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"markers", "rays", "frusta", "colliders"}));
+  cli.add_flag("--points", demo.debug.markers, "Draw the triangulated marker points (as --debug-views markers)");
+  std::string window_capture;
+  cli.add_option("--window-capture", window_capture, "With a window and --frames: write what it shows on the last frame (both eyes and the overlay) as PNG");
+  bool no_overlay = false;
+  cli.add_flag("--no-overlay", no_overlay, "No Dear ImGui overlay in the window");
   CLI11_PARSE(cli, argc, argv);
+  for (const std::string& v : debug_views) {
+    if (v == "markers") demo.debug.markers = true;
+    if (v == "rays") demo.debug.rays = true;
+    if (v == "frusta") demo.debug.frusta = true;
+    if (v == "colliders") demo.debug.colliders = true;
+  }
   spdlog::set_level(spdlog::level::from_str(log_level));
   if (source.rfind("replay:", 0) == 0 && source.size() > 7) {
     demo.pipeline.replay = source.substr(7);
@@ -173,8 +194,10 @@ int main(int argc, char** argv) {
   bool capture_failed = false;
 
   rhot::Systems systems;
-  systems.add({"window-events", {}, {}, [&](rhot::World&, const rhot::FrameContext&) {
-                 if (window) window->poll_events();
+  systems.add({"window-events", {}, {}, [&](rhot::World&, const rhot::FrameContext& f) {
+                 if (!window) return;
+                 window->poll_events();
+                 if (!window_capture.empty() && frames > 0 && f.frame_index + 1 == frames) (void)(*renderer)->capture_window();
                }});
   (*runtime)->add_systems(systems, "window-events");
   systems.add({"capture", {"render"}, {}, [&](rhot::World&, const rhot::FrameContext& f) {
@@ -204,8 +227,36 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   loop.real_time = !headless;
   rhot::FrameLoop frame_loop(world, systems, loop);
+  std::unique_ptr<rhot::DemoOverlay> overlay;
+  if (window && !no_overlay) {
+    if (const auto enabled = (*renderer)->enable_overlay(); enabled) {
+      overlay = std::make_unique<rhot::DemoOverlay>(
+          **runtime, frame_loop.stats(),
+          rhot::OverlayInfo{scene_path, source, (*renderer)->info().device_name, render.eye_width_px, render.eye_height_px});
+      (*runtime)->set_overlay([&overlay] { overlay->build(); });
+    } else {
+      spdlog::warn("no overlay: {}", enabled.error());
+    }
+  }
   const std::uint64_t ran =
       frame_loop.run(frames, [&] { return !g_interrupted.load() && !(window && window->should_close()); });
+
+  if (!window_capture.empty()) {
+    if (!window) {
+      spdlog::error("--window-capture: there is no window (headless)");
+      return EXIT_FAILURE;
+    }
+    const rhot::Image& shown = (*renderer)->window_image();
+    if (shown.width == 0) {
+      spdlog::error("--window-capture: no frame was captured (it needs --frames N, and a window that is not minimised)");
+      return EXIT_FAILURE;
+    }
+    if (const auto written = rhot::write_png(shown, window_capture); !written) {
+      spdlog::error("--window-capture: {}", written.error());
+      return EXIT_FAILURE;
+    }
+    spdlog::info("window written to {}", window_capture);
+  }
 
   const rhot::FrameStats& stats = frame_loop.stats();
   const rhot::TimingSummary whole = stats.frame_summary();

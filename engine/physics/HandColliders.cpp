@@ -191,6 +191,18 @@ std::array<Eigen::Vector3d, kHandJointCount> HandColliders::physical_joints() co
   return out;
 }
 
+std::vector<HandColliders::Capsule> HandColliders::capsules() const {
+  std::vector<Capsule> out;
+  if (!built_) return out;
+  out.reserve(bones_.size());
+  for (const Bone& b : bones_) {
+    const btTransform& t = b.body->getWorldTransform();
+    const btVector3 half = t.getBasis() * btVector3(0, static_cast<btScalar>(0.5 * b.length_m), 0);
+    out.push_back({to_eigen(t.getOrigin() - half), to_eigen(t.getOrigin() + half), static_cast<double>(b.shape->getRadius()), b.soft});
+  }
+  return out;
+}
+
 double HandColliders::largest_offset_m() const {
   double worst = 0.0;
   if (!built_) return worst;

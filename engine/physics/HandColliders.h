@@ -13,6 +13,7 @@
 
 #include <array>
 #include <optional>
+#include <vector>
 
 #include <btBulletDynamicsCommon.h>
 
@@ -77,6 +78,15 @@ class HandColliders {
   btTransform tracked_bone(int i) const { return bones_[static_cast<std::size_t>(i)].target; }
   // The physical hand for drawing: joint positions from the bone bodies (tracked where no bone ends).
   std::array<Eigen::Vector3d, kHandJointCount> physical_joints() const;
+  // The bones' capsules where the physics has them, for debug drawing (empty before the hand is
+  // first tracked).
+  struct Capsule {
+    Eigen::Vector3d a_world{0, 0, 0};
+    Eigen::Vector3d b_world{0, 0, 0};
+    double radius_m = 0.0;
+    bool soft = false;  // held back, not colliding (see HandColliderSettings)
+  };
+  std::vector<Capsule> capsules() const;
   // How far the physical hand is from the tracked one (largest bone distance), metres.
   double largest_offset_m() const;
 

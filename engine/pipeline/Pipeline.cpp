@@ -12,6 +12,7 @@
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "tracking/camera/RigFile.h"
+#include "tracking/core/Check.h"
 #include "tracking/geometry/Matching.h"
 #include "tracking/rigid/StarSet.h"
 
@@ -124,7 +125,11 @@ void Pipeline::source(double t_s) {
   time_s_ = t_s;
   counts_ = {};
   if (replay_) {
-    replayed_ = replay_->at(t_s * settings_.speed);
+    // The recording's clock runs at the replay speed, which may change between frames.
+    replay_clock_s_ = replay_started_ ? replay_clock_s_ + (t_s - replay_last_t_s_) * settings_.speed : t_s * settings_.speed;
+    replay_started_ = true;
+    replay_last_t_s_ = t_s;
+    replayed_ = replay_->at(replay_clock_s_);
     return;
   }
   truth_ = script_.at(t_s);
@@ -136,11 +141,23 @@ void Pipeline::source(double t_s) {
   for (const auto& camera : frame_.cameras) counts_.detections += camera.detections.size();
 }
 
+void Pipeline::set_speed(double speed) {
+  RHOT_PRECONDITION(std::isfinite(speed) && speed > 0.0, "Pipeline::set_speed: speed must be finite and positive");
+  settings_.speed = speed;
+}
+
 void Pipeline::matching() {
   points_.clear();
+  point_cameras_.clear();
   if (replay_) return;
-  for (const MatchedPoint& m : match_and_triangulate(sim_->rig(), frame_)) points_.push_back(m.point.position_world);
+  double sum_rms = 0.0;
+  for (const MatchedPoint& m : match_and_triangulate(sim_->rig(), frame_)) {
+    points_.push_back(m.point.position_world);
+    point_cameras_.push_back(m.point.cameras);
+    sum_rms += m.point.reprojection_rms_px;
+  }
   counts_.points = points_.size();
+  counts_.mean_reprojection_rms_px = points_.empty() ? 0.0 : sum_rms / static_cast<double>(points_.size());
 }
 
 void Pipeline::stars(World& world) {

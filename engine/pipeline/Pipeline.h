@@ -52,6 +52,7 @@ struct PipelineSettings {
 struct PipelineCounts {
   std::size_t detections = 0;  // over all cameras
   std::size_t points = 0;      // triangulated
+  double mean_reprojection_rms_px = 0.0;  // over the triangulated points
   int stars_seen = 0;          // objects' stars measured this frame
   std::vector<int> seen_star_ids;
   std::array<bool, 2> hands_seen{};
@@ -76,6 +77,13 @@ class Pipeline {
   const TrackedHand& tracked_hand(HandSide side) const { return hand_trackers_[side == HandSide::kLeft ? 0 : 1]->last(); }
   HandPhysics& hand_physics() { return *physics_; }
   const std::vector<Eigen::Vector3d>& points() const { return points_; }
+  // Per triangulated point: the cameras that saw it.
+  const std::vector<std::vector<int>>& point_cameras() const { return point_cameras_; }
+  // The last frame's detections per camera (empty when replaying).
+  const RigFrame& frame() const { return frame_; }
+  double speed() const { return settings_.speed; }
+  // Replay speed from the next frame on (precondition: finite and > 0).
+  void set_speed(double speed);
   const CameraRig& rig() const { return sim_->rig(); }
   const DemoScript& script() const { return script_; }
   bool replaying() const { return replay_.has_value(); }
@@ -95,6 +103,7 @@ class Pipeline {
   std::unique_ptr<SimulatedRig> sim_;
   RigFrame frame_;
   std::vector<Eigen::Vector3d> points_;
+  std::vector<std::vector<int>> point_cameras_;
   std::unique_ptr<StarTracker> star_tracker_;
   std::map<int, Rigid3d> object_from_star_;          // by star id: where the star sits on its object
   std::vector<std::pair<Entity, int>> tracked_;       // entity, star id
@@ -104,6 +113,9 @@ class Pipeline {
   std::unique_ptr<HandPhysics> physics_;
   PipelineCounts counts_;
   double time_s_ = 0.0;
+  double replay_clock_s_ = 0.0;
+  double replay_last_t_s_ = 0.0;
+  bool replay_started_ = false;
 };
 
 }  // namespace rhot

@@ -16,6 +16,28 @@ void DebugDraw::ray(const glm::vec3& origin, const glm::vec3& direction, float l
   line(origin, origin + direction * (length_m / n), color);
 }
 
+void DebugDraw::capsule(const glm::vec3& a, const glm::vec3& b, float radius_m, const glm::vec4& color) {
+  line(a, b, color);
+  const glm::vec3 axis = b - a;
+  const float length = glm::length(axis);
+  if (!(length > 0.0f) || !(radius_m > 0.0f)) return;
+  const glm::vec3 z = axis / length;
+  // Any unit vector across the axis, then the third by the cross product.
+  const glm::vec3 helper = std::abs(z.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+  const glm::vec3 x = glm::normalize(glm::cross(helper, z));
+  const glm::vec3 y = glm::cross(z, x);
+  constexpr int kSegments = 12;
+  for (int i = 0; i < kSegments; ++i) {
+    const float t0 = 6.2831853f * static_cast<float>(i) / kSegments;
+    const float t1 = 6.2831853f * static_cast<float>(i + 1) / kSegments;
+    const glm::vec3 r0 = radius_m * (std::cos(t0) * x + std::sin(t0) * y);
+    const glm::vec3 r1 = radius_m * (std::cos(t1) * x + std::sin(t1) * y);
+    line(a + r0, a + r1, color);
+    line(b + r0, b + r1, color);
+    if (i % (kSegments / 4) == 0) line(a + r0, b + r0, color);
+  }
+}
+
 void DebugDraw::point(const glm::vec3& p, float radius_m, const glm::vec4& color) { points_.push_back({p, radius_m, color}); }
 
 void DebugDraw::axes(const glm::mat4& world_from_frame, float length_m) {

@@ -22,6 +22,9 @@ class DebugDraw {
   void line(const glm::vec3& a, const glm::vec3& b, const glm::vec4& color);
   void ray(const glm::vec3& origin, const glm::vec3& direction, float length_m, const glm::vec4& color);
   void point(const glm::vec3& p, float radius_m, const glm::vec4& color);
+  // A capsule's outline: its axis from a to b, a ring of its radius at each end and four lines
+  // joining the rings.
+  void capsule(const glm::vec3& a, const glm::vec3& b, float radius_m, const glm::vec4& color);
   // The frame's axes from its origin: x red, y green, z blue.
   void axes(const glm::mat4& world_from_frame, float length_m);
   // A pinhole camera's viewing pyramid out to depth_m. The camera frame is OpenCV's (x right,

@@ -12,6 +12,7 @@
 
 #include "engine/render/Window.h"
 #include "engine/render/vk/StereoPass.h"
+#include "engine/render/vk/Overlay.h"
 #include "engine/render/vk/Swapchain.h"
 #include "engine/render/vk/VulkanContext.h"
 
@@ -44,16 +45,22 @@ struct Renderer::Impl {
   std::vector<vk::GpuMesh> meshes;
   std::unique_ptr<vk::StereoPass> pass;
   std::unique_ptr<vk::Swapchain> swapchain;
+  std::unique_ptr<vk::Overlay> overlay;
   Window* window = nullptr;
+  bool capture_window = false;
+  vk::Buffer window_buffer;
+  Image window_image;
   RendererInfo info;
   double last_render_ms = 0.0;
   bool warned_non_finite = false;
 
   ~Impl() {
+    overlay.reset();
     swapchain.reset();
     pass.reset();
     if (context) {
       vkDeviceWaitIdle(context->device());
+      context->destroy(window_buffer);
       for (vk::GpuMesh& m : meshes) context->destroy(m);
     }
   }
@@ -187,13 +194,36 @@ void Renderer::render(const FrameInput& frame) {
   Impl& m = *impl_;
   std::size_t skipped = 0;
   bool presented = false;
+  if (m.overlay) m.overlay->end_frame();
   if (m.swapchain && m.swapchain->prepare(m.window->framebuffer_size())) {
     if (m.swapchain->acquire()) {
-      vk::SubmitSync sync{m.swapchain->acquired_semaphore(), VK_PIPELINE_STAGE_TRANSFER_BIT, m.swapchain->ready_semaphore()};
+      // The blit (and the overlay) wait for the acquired image at the transfer stage; the
+      // overlay's colour writes come after the blit in the same command buffer.
+      const VkPipelineStageFlags wait = m.overlay ? VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT
+                                                  : VK_PIPELINE_STAGE_TRANSFER_BIT;
+      vk::SubmitSync sync{m.swapchain->acquired_semaphore(), wait, m.swapchain->ready_semaphore()};
       const int w = m.pass->width();
       const int h = m.pass->height();
-      skipped = m.pass->render(frame, m.meshes, [&](VkCommandBuffer cmd, VkImage eyes) { m.swapchain->record_blit(cmd, eyes, w, h); },
-                               sync);
+      const auto [sw, sh] = m.swapchain->extent();
+      const bool capture = m.capture_window && m.swapchain->copy_supported();
+      const auto capture_bytes = static_cast<VkDeviceSize>(sw) * static_cast<VkDeviceSize>(sh) * 4;
+      if (capture && m.window_buffer.size < capture_bytes) {
+        m.context->destroy(m.window_buffer);
+        m.window_buffer = m.context->create_buffer(capture_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, /*host_visible=*/true);
+      }
+      skipped = m.pass->render(
+          frame, m.meshes,
+          [&](VkCommandBuffer cmd, VkImage eyes) {
+            m.swapchain->record_blit(cmd, eyes, w, h, m.overlay != nullptr);
+            if (m.overlay) m.overlay->record(cmd, *m.swapchain);
+            if (capture) m.swapchain->record_copy(cmd, m.window_buffer);
+          },
+          sync);
+      if (capture) {
+        m.window_image = Image(sw, sh);
+        m.swapchain->read_copy(m.window_buffer, m.window_image.rgba);
+        m.capture_window = false;
+      }
       m.swapchain->present();
       presented = true;
     }
@@ -212,6 +242,35 @@ Image Renderer::read_eye(int eye) {
   RHOT_PRECONDITION(eye == kLeftEye || eye == kRightEye, "Renderer::read_eye: eye is 0 (left) or 1 (right)");
   return std::move(read_eyes()[static_cast<std::size_t>(eye)]);
 }
+
+std::expected<void, std::string> Renderer::enable_overlay() {
+  Impl& m = *impl_;
+  if (m.overlay) return {};
+  if (!m.swapchain) return std::unexpected(std::string("the overlay needs a window (the renderer is offscreen)"));
+  auto overlay = vk::Overlay::create(*m.context, static_cast<GLFWwindow*>(m.window->native_handle()), m.swapchain->format());
+  if (!overlay) return std::unexpected(overlay.error());
+  m.overlay = std::move(*overlay);
+  return {};
+}
+
+std::expected<void, std::string> Renderer::capture_window() {
+  Impl& m = *impl_;
+  if (!m.swapchain) return std::unexpected(std::string("no window to capture (the renderer is offscreen)"));
+  m.capture_window = true;
+  return {};
+}
+
+const Image& Renderer::window_image() const { return impl_->window_image; }
+
+bool Renderer::overlay_enabled() const { return impl_->overlay != nullptr; }
+
+bool Renderer::begin_overlay() {
+  if (!impl_->overlay) return false;
+  impl_->overlay->begin_frame();
+  return true;
+}
+
+std::uint64_t Renderer::overlay_vertices() const { return impl_->overlay ? impl_->overlay->last_vertex_count() : 0; }
 
 std::uint64_t Renderer::swapchain_recreations() const { return impl_->swapchain ? impl_->swapchain->recreations() : 0; }
 

@@ -122,6 +122,23 @@ class Renderer {
   // Time of the last render(): recording, submitting and waiting for the fence.
   double last_render_ms() const;
 
+  // With a window: Dear ImGui over the desktop window, taking the window's mouse and keyboard.
+  // The eyes (and PNG captures) never contain it. Fails without a window or where Dear ImGui
+  // cannot start (one overlay per process).
+  [[nodiscard]] std::expected<void, std::string> enable_overlay();
+  bool overlay_enabled() const;
+  // Starts the overlay's next frame: Dear ImGui calls (imgui.h) may follow until render(), which
+  // draws them over the window. Returns false, and starts nothing, without the overlay.
+  bool begin_overlay();
+  // Vertices the overlay drew into the last presented frame.
+  std::uint64_t overlay_vertices() const;
+
+  // With a window: the next presented frame is also copied to the CPU as the window shows it (both
+  // eyes side by side and the overlay); window_image() holds it afterwards. Fails without a
+  // window or where the window's surface cannot be read back.
+  [[nodiscard]] std::expected<void, std::string> capture_window();
+  const Image& window_image() const;
+
   // With a window: how often its swapchain was (re)created, and its current size in pixels.
   std::uint64_t swapchain_recreations() const;
   std::pair<int, int> swapchain_extent() const;

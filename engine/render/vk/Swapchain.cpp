@@ -7,6 +7,29 @@
 namespace rhot::vk {
 
 Swapchain::Swapchain(const Context& context) : ctx_(context) {
+  const VkPhysicalDevice gpu = ctx_.physical_device();
+  const VkSurfaceKHR surface = ctx_.surface();
+  std::uint32_t count = 0;
+  vkGetPhysicalDeviceSurfaceFormatsKHR(gpu, surface, &count, nullptr);
+  std::vector<VkSurfaceFormatKHR> formats(count);
+  vkGetPhysicalDeviceSurfaceFormatsKHR(gpu, surface, &count, formats.data());
+  RHOT_ASSERT(!formats.empty(), "the window surface offers no formats");
+  // An sRGB format that can be a blit destination keeps colours as rendered.
+  const auto blit_dst = [&](VkFormat f) {
+    VkFormatProperties p;
+    vkGetPhysicalDeviceFormatProperties(gpu, f, &p);
+    return (p.optimalTilingFeatures & VK_FORMAT_FEATURE_BLIT_DST_BIT) != 0;
+  };
+  VkSurfaceFormatKHR chosen = formats[0];
+  for (const VkSurfaceFormatKHR& f : formats) {
+    if ((f.format == VK_FORMAT_B8G8R8A8_SRGB || f.format == VK_FORMAT_R8G8B8A8_SRGB) && blit_dst(f.format)) {
+      chosen = f;
+      break;
+    }
+  }
+  RHOT_ASSERT(blit_dst(chosen.format), "the window's swapchain format cannot be a blit destination");
+  surface_format_ = chosen;
+  format_ = chosen.format;
   VkSemaphoreCreateInfo sci{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
   RHOT_VK_CHECK(vkCreateSemaphore(ctx_.device(), &sci, nullptr, &acquired_));
   RHOT_VK_CHECK(vkCreateSemaphore(ctx_.device(), &sci, nullptr, &ready_));
@@ -31,26 +54,6 @@ void Swapchain::create(VkExtent2D wanted) {
   const VkSurfaceKHR surface = ctx_.surface();
   VkSurfaceCapabilitiesKHR caps;
   RHOT_VK_CHECK(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(gpu, surface, &caps));
-  std::uint32_t count = 0;
-  vkGetPhysicalDeviceSurfaceFormatsKHR(gpu, surface, &count, nullptr);
-  std::vector<VkSurfaceFormatKHR> formats(count);
-  vkGetPhysicalDeviceSurfaceFormatsKHR(gpu, surface, &count, formats.data());
-  RHOT_ASSERT(!formats.empty(), "the window surface offers no formats");
-  // An sRGB format that can be a blit destination keeps colours as rendered.
-  const auto blit_dst = [&](VkFormat f) {
-    VkFormatProperties p;
-    vkGetPhysicalDeviceFormatProperties(gpu, f, &p);
-    return (p.optimalTilingFeatures & VK_FORMAT_FEATURE_BLIT_DST_BIT) != 0;
-  };
-  VkSurfaceFormatKHR chosen = formats[0];
-  for (const VkSurfaceFormatKHR& f : formats) {
-    if ((f.format == VK_FORMAT_B8G8R8A8_SRGB || f.format == VK_FORMAT_R8G8B8A8_SRGB) && blit_dst(f.format)) {
-      chosen = f;
-      break;
-    }
-  }
-  RHOT_ASSERT(blit_dst(chosen.format), "the window's swapchain format cannot be a blit destination");
-  format_ = chosen.format;
 
   VkExtent2D extent = caps.currentExtent;
   if (extent.width == 0xffffffffu) extent = wanted;
@@ -60,11 +63,15 @@ void Swapchain::create(VkExtent2D wanted) {
   VkSwapchainCreateInfoKHR sci{VK_STRUCTURE_TYPE_SWAPCHAIN_CREATE_INFO_KHR};
   sci.surface = surface;
   sci.minImageCount = caps.maxImageCount == 0 ? caps.minImageCount + 1 : std::min(caps.minImageCount + 1, caps.maxImageCount);
-  sci.imageFormat = chosen.format;
-  sci.imageColorSpace = chosen.colorSpace;
+  sci.imageFormat = surface_format_.format;
+  sci.imageColorSpace = surface_format_.colorSpace;
   sci.imageExtent = extent;
   sci.imageArrayLayers = 1;
-  sci.imageUsage = VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  // Blitted into; the overlay draws into it as a colour attachment (which every surface supports).
+  sci.imageUsage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+  // Read back for window captures where the surface allows it.
+  copy_supported_ = (caps.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_SRC_BIT) != 0;
+  if (copy_supported_) sci.imageUsage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
   sci.imageSharingMode = VK_SHARING_MODE_EXCLUSIVE;
   sci.preTransform = caps.currentTransform;
   sci.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
@@ -76,6 +83,7 @@ void Swapchain::create(VkExtent2D wanted) {
   destroy_swapchain();
   swapchain_ = next;
   extent_ = extent;
+  std::uint32_t count = 0;
   vkGetSwapchainImagesKHR(ctx_.device(), swapchain_, &count, nullptr);
   images_.resize(count);
   vkGetSwapchainImagesKHR(ctx_.device(), swapchain_, &count, images_.data());
@@ -105,19 +113,37 @@ bool Swapchain::acquire() {
   return true;
 }
 
-void Swapchain::record_blit(VkCommandBuffer cmd, VkImage eyes, int eye_width_px, int eye_height_px) const {
-  const VkImage target = images_[image_index_];
-  VkImageMemoryBarrier to_dst{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-  to_dst.srcAccessMask = 0;
-  to_dst.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-  to_dst.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-  to_dst.newLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-  to_dst.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  to_dst.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  to_dst.image = target;
-  to_dst.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0, nullptr, 1, &to_dst);
+namespace {
 
+// One layout transition of a swapchain image's colour, with its access and stage masks.
+struct Transition {
+  VkImageLayout from;
+  VkImageLayout to;
+  VkAccessFlags src_access;
+  VkAccessFlags dst_access;
+  VkPipelineStageFlags src_stage;
+  VkPipelineStageFlags dst_stage;
+};
+
+void transition(VkCommandBuffer cmd, VkImage image, const Transition& t) {
+  VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+  b.srcAccessMask = t.src_access;
+  b.dstAccessMask = t.dst_access;
+  b.oldLayout = t.from;
+  b.newLayout = t.to;
+  b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image;
+  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  vkCmdPipelineBarrier(cmd, t.src_stage, t.dst_stage, 0, 0, nullptr, 0, nullptr, 1, &b);
+}
+
+}  // namespace
+
+void Swapchain::record_blit(VkCommandBuffer cmd, VkImage eyes, int eye_width_px, int eye_height_px, bool overlay_follows) const {
+  const VkImage target = images_[image_index_];
+  transition(cmd, target, {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 0, VK_ACCESS_TRANSFER_WRITE_BIT,
+                           VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT});
   const auto half = static_cast<std::int32_t>(extent_.width / 2);
   const auto height = static_cast<std::int32_t>(extent_.height);
   for (std::uint32_t eye = 0; eye < 2; ++eye) {
@@ -130,14 +156,50 @@ void Swapchain::record_blit(VkCommandBuffer cmd, VkImage eyes, int eye_width_px,
     vkCmdBlitImage(cmd, eyes, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
                    VK_FILTER_LINEAR);
   }
+  if (overlay_follows) {
+    transition(cmd, target, {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_ACCESS_TRANSFER_WRITE_BIT,
+                             VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                             VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT});
+  } else {
+    transition(cmd, target, {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, VK_ACCESS_TRANSFER_WRITE_BIT, 0,
+                             VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT});
+  }
+}
 
-  VkImageMemoryBarrier to_present = to_dst;
-  to_present.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-  to_present.dstAccessMask = 0;
-  to_present.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-  to_present.newLayout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0, 0, nullptr, 0, nullptr, 1,
-                       &to_present);
+bool Swapchain::record_copy(VkCommandBuffer cmd, const Buffer& buffer) const {
+  if (!copy_supported_) return false;
+  const VkImage image = images_[image_index_];
+  transition(cmd, image, {VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                          VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT,
+                          VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT});
+  VkBufferImageCopy region{};
+  region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  region.imageExtent = {extent_.width, extent_.height, 1};
+  vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.buffer, 1, &region);
+  transition(cmd, image, {VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, VK_ACCESS_TRANSFER_READ_BIT, 0,
+                          VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT});
+  VkBufferMemoryBarrier host{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER};
+  host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  host.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  host.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  host.buffer = buffer.buffer;
+  host.size = VK_WHOLE_SIZE;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1, &host, 0, nullptr);
+  return true;
+}
+
+void Swapchain::read_copy(const Buffer& buffer, std::vector<std::uint8_t>& rgba) const {
+  const std::size_t bytes = static_cast<std::size_t>(extent_.width) * extent_.height * 4;
+  rgba.resize(bytes);
+  const auto* src = static_cast<const std::uint8_t*>(buffer.mapped);
+  const bool bgra = format_ == VK_FORMAT_B8G8R8A8_SRGB || format_ == VK_FORMAT_B8G8R8A8_UNORM;
+  for (std::size_t i = 0; i < bytes; i += 4) {
+    rgba[i + 0] = src[i + (bgra ? 2 : 0)];
+    rgba[i + 1] = src[i + 1];
+    rgba[i + 2] = src[i + (bgra ? 0 : 2)];
+    rgba[i + 3] = 255;  // the window is opaque
+  }
 }
 
 void Swapchain::present() {

@@ -54,6 +54,17 @@ TEST(FrameStats, PercentilesCoverTheWindowAndMaxTheWholeRun) {
   EXPECT_EQ(s.to_json()["window_frames"], 10);
 }
 
+TEST(FrameStats, RecentFramesOldestFirstAndLastStageTimes) {
+  FrameStats s({"a", "b"}, 11.1, 4);
+  EXPECT_TRUE(s.recent_frame_ms(10).empty());
+  EXPECT_EQ(s.last_stage_ms(1), 0.0);
+  for (int i = 1; i <= 6; ++i) s.record(i, {0.5 * i, 0.25 * i});
+  EXPECT_EQ(s.recent_frame_ms(2), (std::vector<double>{5.0, 6.0}));
+  EXPECT_EQ(s.recent_frame_ms(100), (std::vector<double>{3.0, 4.0, 5.0, 6.0}));  // the window holds 4
+  EXPECT_EQ(s.last_stage_ms(0), 3.0);
+  EXPECT_EQ(s.last_stage_ms(1), 1.5);
+}
+
 TEST(FrameStatsDeathTest, RejectsNonFiniteTimes) {
   FrameStats s({"a"}, 11.1);
   EXPECT_DEATH(s.record(1.0, {std::numeric_limits<double>::quiet_NaN()}), "times must be finite and >= 0");
