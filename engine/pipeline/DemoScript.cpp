@@ -55,10 +55,15 @@ DemoScript::DemoScript(const SceneDesc& scene) {
     const Eigen::Vector3d c = grip_point(*cube);
     const Eigen::Vector3d place = c + Eigen::Vector3d(0.15, 0.0, -0.1);
     scripts_[1].width_m = grip_width(*cube);
+    // Out to `place`, then (after the left hand's first turn) back to where the cube started, so
+    // the loop begins again where it began.
     scripts_[1].keys = {{0.0, c + 0.15 * up, 0.0},     {0.8, c + 0.15 * up, 0.0},   {1.6, c, 0.0},
                         {2.2, c, 1.0},                 {3.2, c + 0.15 * up, 1.0},  {4.4, place + 0.15 * up, 1.0},
                         {5.4, place + 0.002 * up, 1.0}, {5.8, place + 0.002 * up, 0.0}, {6.6, place + 0.15 * up, 0.0},
-                        {7.6, Eigen::Vector3d(0.25, 0.95, -0.3), 0.0}};
+                        {7.6, Eigen::Vector3d(0.25, 0.95, -0.3), 0.0},
+                        {11.5, Eigen::Vector3d(0.25, 0.95, -0.3), 0.0}, {12.5, place + 0.15 * up, 0.0}, {13.3, place, 0.0},
+                        {13.9, place, 1.0},            {14.9, place + 0.15 * up, 1.0}, {16.1, c + 0.15 * up, 1.0},
+                        {17.1, c + 0.002 * up, 1.0},   {17.5, c + 0.002 * up, 0.0},  {18.3, c + 0.15 * up, 0.0}};
   }
   if (const EntityDesc* mug = find(scene, "tracked-mug"); mug && mug->tracked_by) {
     left_target_ = mug->name;
@@ -67,11 +72,14 @@ DemoScript::DemoScript(const SceneDesc& scene) {
     const Eigen::Vector3d moved = c + Eigen::Vector3d(-0.05, 0.0, 0.1);
     scripts_[0].width_m = grip_width(*mug);
     // After the right hand is done with the cube.
+    // ... and, after the right hand brought the cube back, carries the mug back and returns to rest.
     scripts_[0].keys = {{0.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0}, {5.0, c + 0.15 * up, 0.0}, {6.0, c, 0.0}, {6.5, c, 1.0},
                         {7.5, c + 0.12 * up, 1.0},  {9.0, moved + 0.12 * up, 1.0}, {10.0, moved, 1.0},    {10.5, moved, 0.0},
-                        {11.3, moved + 0.15 * up, 0.0}};
-    carry_from_s_ = 6.5;
-    carry_to_s_ = 10.0;
+                        {11.3, moved + 0.15 * up, 0.0},
+                        {18.5, moved + 0.15 * up, 0.0}, {19.3, moved, 0.0}, {19.8, moved, 1.0}, {20.8, moved + 0.12 * up, 1.0},
+                        {22.3, c + 0.12 * up, 1.0},  {23.3, c, 1.0},       {23.8, c, 0.0},     {24.6, c + 0.15 * up, 0.0},
+                        {26.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0}};
+    carries_ = {{6.5, 10.0}, {19.8, 23.3}};
   }
 }
 
@@ -99,17 +107,23 @@ HandTruth DemoScript::hand_at(const HandScript& s, double t) const {
   return {it->second.place(centre, s.axis), it->second.pose(closure)};
 }
 
-SceneTruth DemoScript::at(double t) const {
+SceneTruth DemoScript::at(double t_s) const {
+  // The script repeats; each round ends where it began.
+  const double t = t_s >= 0.0 ? std::fmod(t_s, duration_s()) : 0.0;
   SceneTruth truth;
   truth.hands[0] = hand_at(scripts_[0], t);
   truth.hands[1] = hand_at(scripts_[1], t);
   truth.world_from_object = objects_at_start_;
-  if (carried_star_ && t > carry_from_s_) {
-    // Carried rigidly by the left hand from the moment it closed until it opens.
-    const double until = std::min(t, carry_to_s_);
-    const Rigid3d at_grasp = hand_at(scripts_[0], carry_from_s_).world_from_hand;
-    const Rigid3d now = hand_at(scripts_[0], until).world_from_hand;
-    truth.world_from_object[*carried_star_] = now * at_grasp.inverse() * objects_at_start_.at(*carried_star_);
+  if (carried_star_) {
+    // Carried rigidly by the left hand from the moment it closes until it opens, each time.
+    Rigid3d pose = objects_at_start_.at(*carried_star_);
+    for (const auto& [from, to] : carries_) {
+      if (t <= from) break;
+      const Rigid3d at_grasp = hand_at(scripts_[0], from).world_from_hand;
+      const Rigid3d now = hand_at(scripts_[0], std::min(t, to)).world_from_hand;
+      pose = now * at_grasp.inverse() * pose;
+    }
+    truth.world_from_object[*carried_star_] = pose;
   }
   return truth;
 }

@@ -3,10 +3,11 @@
 // are at each moment. The simulated camera rig sees this; tracking has to recover it.
 //
 // In the default scene (assets/scenes/default.json) the right hand reaches for the red cube,
-// grasps it, lifts it 15 cm, carries it 18 cm to the right and back, sets it down and lets go;
-// then the left hand picks up the star-tracked mug, lifts it, moves it and puts it back down (the mug is a real
-// object: it moves because the hand carries it, and tracking sees its star move). In other scenes
-// a hand whose object is missing rests above the table.
+// grasps it, lifts it 15 cm, carries it 18 cm across the table, sets it down and lets go; then
+// the left hand picks up the star-tracked mug, lifts it, moves it 11 cm and puts it down (the mug
+// is a real object: it moves because the hand carries it, and tracking sees its star move). Then
+// each hand carries its object back (12-26 s), and the 26 s script starts again. In other
+// scenes a hand whose object is missing rests above the table.
 
 #include <array>
 #include <map>
@@ -35,7 +36,8 @@ class DemoScript {
  public:
   explicit DemoScript(const SceneDesc& scene);
   SceneTruth at(double t_s) const;
-  double duration_s() const { return 12.0; }
+  // One round of the script; at() repeats it.
+  double duration_s() const { return 26.0; }
   // The entity names the script acts on ("" when the scene lacks them).
   const std::string& right_target() const { return right_target_; }
   const std::string& left_target() const { return left_target_; }
@@ -58,7 +60,7 @@ class DemoScript {
   std::string right_target_, left_target_;
   std::map<int, Rigid3d> objects_at_start_;
   std::optional<int> carried_star_;  // the left hand carries this star's object ...
-  double carry_from_s_ = 0.0, carry_to_s_ = 0.0;  // ... between these times
+  std::vector<std::pair<double, double>> carries_;  // ... between these times
   mutable std::map<std::pair<int, long>, GraspPose> grasps_;  // per hand and width (0.01 mm), built once
 };
 
