@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <numeric>
 
 #include <imgui.h>
@@ -35,7 +36,7 @@ void DemoOverlay::build() {
   ImGui::SetNextWindowSizeConstraints(ImVec2(200, 100), ImVec2(io.DisplaySize.x, std::max(100.0f, io.DisplaySize.y - 16.0f)));
   ImGui::SetNextWindowBgAlpha(0.85f);
   if (ImGui::Begin("rhot")) {
-    ImGui::Text("%s  |  %s", info_.source.c_str(), info_.scene.c_str());
+    ImGui::Text("%s  |  %s", info_.source.c_str(), std::filesystem::path(info_.scene).filename().c_str());
     ImGui::Text("%s, %d x %d per eye", info_.device.c_str(), info_.eye_width_px, info_.eye_height_px);
     ImGui::Text("t = %.2f s, frame %llu%s", demo_.demo_time_s(), static_cast<unsigned long long>(demo_.demo_frames()),
                 demo_.paused() ? "  (paused)" : "");

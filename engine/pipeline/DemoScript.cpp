@@ -55,15 +55,12 @@ DemoScript::DemoScript(const SceneDesc& scene) {
     const Eigen::Vector3d c = grip_point(*cube);
     const Eigen::Vector3d place = c + Eigen::Vector3d(0.15, 0.0, -0.1);
     scripts_[1].width_m = grip_width(*cube);
-    // Out to `place`, then (after the left hand's first turn) back to where the cube started, so
-    // the loop begins again where it began.
-    scripts_[1].keys = {{0.0, c + 0.15 * up, 0.0},     {0.8, c + 0.15 * up, 0.0},   {1.6, c, 0.0},
-                        {2.2, c, 1.0},                 {3.2, c + 0.15 * up, 1.0},  {4.4, place + 0.15 * up, 1.0},
-                        {5.4, place + 0.002 * up, 1.0}, {5.8, place + 0.002 * up, 0.0}, {6.6, place + 0.15 * up, 0.0},
-                        {7.6, Eigen::Vector3d(0.25, 0.95, -0.3), 0.0},
-                        {11.5, Eigen::Vector3d(0.25, 0.95, -0.3), 0.0}, {12.5, place + 0.15 * up, 0.0}, {13.3, place, 0.0},
-                        {13.9, place, 1.0},            {14.9, place + 0.15 * up, 1.0}, {16.1, c + 0.15 * up, 1.0},
-                        {17.1, c + 0.002 * up, 1.0},   {17.5, c + 0.002 * up, 0.0},  {18.3, c + 0.15 * up, 0.0}};
+    cube_home_ = c;
+    cube_place_ = place;
+    cube_pickup_ = c;
+    cube_return_pickup_ = place;
+    cube_grip_offset_ = c - pose_of(*cube).translation;
+    build_right_keys();
   }
   if (const EntityDesc* mug = find(scene, "tracked-mug"); mug && mug->tracked_by) {
     left_target_ = mug->name;
@@ -81,6 +78,38 @@ DemoScript::DemoScript(const SceneDesc& scene) {
                         {26.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0}};
     carries_ = {{6.5, 10.0}, {19.8, 23.3}};
   }
+}
+
+void DemoScript::build_right_keys() {
+  // Out to `place` and, after the left hand's first turn, back home; then over to where the cube
+  // lies for the next round's pickup. Pickups aim where the cube was last seen lying (reaim()).
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d rest(0.25, 0.95, -0.3);
+  const Eigen::Vector3d& c = cube_pickup_;
+  const Eigen::Vector3d& back = cube_return_pickup_;
+  const Eigen::Vector3d& home = cube_home_;
+  const Eigen::Vector3d& place = cube_place_;
+  scripts_[1].keys = {{0.0, c + 0.15 * up, 0.0},           {0.8, c + 0.15 * up, 0.0},      {1.6, c, 0.0},
+                      {2.2, c, 1.0},                       {3.2, c + 0.15 * up, 1.0},      {4.4, place + 0.15 * up, 1.0},
+                      {5.4, place + 0.002 * up, 1.0},      {5.8, place + 0.002 * up, 0.0}, {6.6, place + 0.15 * up, 0.0},
+                      {7.6, rest, 0.0},                    {11.5, rest, 0.0},              {12.5, back + 0.15 * up, 0.0},
+                      {13.3, back, 0.0},                   {13.9, back, 1.0},              {14.9, back + 0.15 * up, 1.0},
+                      {16.1, home + 0.15 * up, 1.0},       {17.1, home + 0.002 * up, 1.0}, {17.5, home + 0.002 * up, 0.0},
+                      {18.3, home + 0.15 * up, 0.0},       {25.9, c + 0.15 * up, 0.0}};
+}
+
+void DemoScript::reaim(double t_s, const Eigen::Vector3d& cube_position) {
+  if (right_target_.empty() || !cube_position.allFinite()) return;
+  const double t = std::fmod(std::max(0.0, t_s), duration_s());
+  const double before = last_reaim_t_;
+  last_reaim_t_ = t;
+  const auto crossed = [&](double mark) { return before < mark && t >= mark; };
+  // While the right hand rests (7.6-11.5 s) and while it waits above home (18.3-25.9 s), it looks
+  // where the cube lies: those keys are still ahead, so the hand's path stays continuous.
+  if (crossed(10.0)) cube_return_pickup_ = cube_position + cube_grip_offset_;
+  else if (crossed(20.0)) cube_pickup_ = cube_position + cube_grip_offset_;
+  else return;
+  build_right_keys();
 }
 
 HandTruth DemoScript::hand_at(const HandScript& s, double t) const {

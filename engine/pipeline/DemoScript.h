@@ -36,6 +36,12 @@ class DemoScript {
  public:
   explicit DemoScript(const SceneDesc& scene);
   SceneTruth at(double t_s) const;
+  // Tells the script where the cube lies (its entity's position, after the physics step at t_s).
+  // Like a user looking before reaching, the right hand's next pickup aims there: the return
+  // pickup is aimed at 10 s into each round (the hand resting), the next round's at 20 s (the hand
+  // waiting above home). Without this each round would start from the last round's small
+  // placement errors.
+  void reaim(double t_s, const Eigen::Vector3d& cube_position);
   // One round of the script; at() repeats it.
   double duration_s() const { return 26.0; }
   // The entity names the script acts on ("" when the scene lacks them).
@@ -55,12 +61,18 @@ class DemoScript {
     Eigen::Vector3d axis = Eigen::Vector3d::UnitX();
   };
   HandTruth hand_at(const HandScript& s, double t) const;
+  void build_right_keys();
 
   std::array<HandScript, 2> scripts_;
   std::string right_target_, left_target_;
   std::map<int, Rigid3d> objects_at_start_;
   std::optional<int> carried_star_;  // the left hand carries this star's object ...
   std::vector<std::pair<double, double>> carries_;  // ... between these times
+  // The right hand's cube: where it starts (and is brought back to), where it is carried, where
+  // the next pickups aim, and the grip point's offset from the cube's origin.
+  Eigen::Vector3d cube_home_{0, 0, 0}, cube_place_{0, 0, 0}, cube_pickup_{0, 0, 0}, cube_return_pickup_{0, 0, 0};
+  Eigen::Vector3d cube_grip_offset_{0, 0, 0};
+  double last_reaim_t_ = 0.0;
   mutable std::map<std::pair<int, long>, GraspPose> grasps_;  // per hand and width (0.01 mm), built once
 };
 

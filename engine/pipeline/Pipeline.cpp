@@ -11,6 +11,7 @@
 
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
+#include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/core/Check.h"
 #include "tracking/geometry/Matching.h"
@@ -217,6 +218,11 @@ void Pipeline::hands() {
   }
 }
 
-void Pipeline::physics(World& world) { physics_->step(world, inputs_); }
+void Pipeline::physics(World& world) {
+  physics_->step(world, inputs_);
+  if (replay_ || script_.right_target().empty()) return;
+  const Entity cube = find_named(world, script_.right_target());
+  if (const Transform* t = world.find<Transform>(cube)) script_.reaim(time_s_, Eigen::Vector3d(t->position.x, t->position.y, t->position.z));
+}
 
 }  // namespace rhot

@@ -135,6 +135,12 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
              (predicted[o].translation - found.world_from_star.translation).norm() < settings_.swap_distance_m;
     }
     if (swap) continue;
+    const TrackedStar& before = stars_[s];
+    if (before.confirmed && before.frames_since_seen >= 0 &&
+        (found.world_from_star.translation - before.world_from_star.translation).norm() >
+            settings_.gate_m + settings_.max_speed_m_s * (time_s - before.last_seen_s)) {
+      continue;
+    }
     // Found afresh from three markers, not where and how it was heading: tentative again.
     if (found.markers_seen < 4 && !(recent(stars_[s]) && near_prediction(stars_[s], predicted[s], found.world_from_star, time_s))) {
       stars_[s].confirmed = false;

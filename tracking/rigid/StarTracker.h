@@ -35,6 +35,10 @@ struct StarTrackerSettings {
   double turn_gate_rad = 0.35;
   double turn_rate_rad_s = 6.0;
   int confirm_frames = 3;        // frames a star found from three markers must be followed before it counts
+  // A star found afresh farther from where it was last seen than gate_m plus this speed times the
+  // time since is refused: another constellation that happens to match its edges, since nothing a
+  // hand carries moves that fast. (Once it has not been seen for a while, anywhere is reachable.)
+  double max_speed_m_s = 5.0;
 };
 
 struct TrackedStar {

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include <gtest/gtest.h>
 
@@ -36,8 +37,11 @@ std::size_t heap_in_use_bytes() {
 }
 
 TEST(DemoSoak, RunsTenThousandFramesWithoutGrowingOrLeaking) {
-  constexpr std::uint64_t kFrames = RHOT_SOAK_SANITIZED ? 10000 : 900;
-  constexpr std::uint64_t kWarmUp = RHOT_SOAK_SANITIZED ? 2400 : 300;  // past the first round's grasps (26 s = 2340 frames)
+  // RHOT_SOAK_FRAMES overrides the count (for longer soaks by hand).
+  const char* override_frames = std::getenv("RHOT_SOAK_FRAMES");
+  const std::uint64_t kFrames = override_frames != nullptr ? std::strtoull(override_frames, nullptr, 10) : RHOT_SOAK_SANITIZED ? 10000 : 900;
+  // Past the first round of the script (26 s = 2340 frames) where there is room for it.
+  const std::uint64_t kWarmUp = kFrames >= 5000 ? 2400 : kFrames / 3;
   const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
   ASSERT_TRUE(scene.has_value());
   DemoOptions options;
@@ -70,10 +74,10 @@ TEST(DemoSoak, RunsTenThousandFramesWithoutGrowingOrLeaking) {
   }
   const std::size_t at_end = heap_in_use_bytes();
   std::printf("heap in use after warm-up %zu, largest since %zu, at the end %zu bytes\n", after_warm_up, largest, at_end);
-  // Both hands grasp in every round of the script (at least once each; the first ten seconds
-  // alone hold two grasps).
+  // The right hand grasps the cube twice in every round of the script (out and back), once in
+  // its first 2.2 s. (The mug is star-tracked, a kinematic body: carried, not grasped.)
   const std::uint64_t rounds = kFrames / 2340;
-  EXPECT_GE(grasps, rounds >= 1 ? 4 * rounds : 1);
+  EXPECT_GE(grasps, rounds >= 1 ? 2 * rounds : 1);
   // No growth: the heap after the last frame within a few kilobytes of the heap after the
   // warm-up (allocator bookkeeping and containers sized to their largest use move it a little).
   EXPECT_LT(static_cast<double>(at_end), static_cast<double>(after_warm_up) + 64.0 * 1024.0);

@@ -243,5 +243,39 @@ TEST(StarTracker, RefusesALabelSwapWhereAnotherStarIsPredicted) {
   }
 }
 
+TEST(StarTracker, RefusesAStarFoundAfreshFartherThanItCouldHaveMoved) {
+  // A one-star library, as a hand tracker has: any four points matching its edges would do. The
+  // star is followed, vanishes, and a matching constellation shows 40 cm away a frame later (in
+  // the demo: other markers that happened to match while a hand closed on an object).
+  const StarLibrary library(first(seed_case(), 1));
+  StarTracker tracker(library);
+  std::mt19937_64 rng(3);
+  const Rigid3d here = random_pose(rng, {0, 1.1, -0.45}, 0.0);
+  Rigid3d there = here;
+  there.translation += Eigen::Vector3d(0.4, 0.0, 0.0);
+  std::vector<std::pair<int, int>> truth;
+  for (int f = 0; f < 10; ++f) {
+    std::vector<Eigen::Vector3d> points;
+    place(library, 0, here, points, truth, 0.0, rng);
+    ASSERT_TRUE(tracker.update(f / 90.0, points)[0].seen_now()) << "frame " << f;
+  }
+  // 40 cm in 1/90 s (36 m/s), then in the frames after: refused while 0.4 m is beyond
+  // 4 mm + 5 m/s times the time since it was last seen (frame 9), that is up to frame 16.
+  int f = 10;
+  for (; f < 17; ++f) {
+    std::vector<Eigen::Vector3d> points;
+    place(library, 0, there, points, truth, 0.0, rng);
+    const TrackedStar& s = tracker.update(f / 90.0, points)[0];
+    EXPECT_FALSE(s.seen_now()) << "frame " << f;
+    EXPECT_LT((s.world_from_star.translation - here.translation).norm(), 1e-9) << "frame " << f;
+  }
+  // 8/90 s after it was last seen 0.4 m is within reach (0.448 m): found there.
+  std::vector<Eigen::Vector3d> points;
+  place(library, 0, there, points, truth, 0.0, rng);
+  tracker.update(f / 90.0, points);
+  EXPECT_TRUE(tracker.stars()[0].seen_now());
+  EXPECT_LT((tracker.stars()[0].world_from_star.translation - there.translation).norm(), 1e-6);
+}
+
 }  // namespace
 }  // namespace rhot
