@@ -7,13 +7,16 @@
 // for leaks when the program exits.
 
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 
 #include <gtest/gtest.h>
 
 #if defined(__SANITIZE_ADDRESS__)
-#include <sanitizer/allocator_interface.h>
+// AddressSanitizer's allocator statistics (declared in LLVM's sanitizer/allocator_interface.h,
+// which GCC does not ship; libasan defines it).
+extern "C" std::size_t __sanitizer_get_current_allocated_bytes();
 #define RHOT_SOAK_SANITIZED 1
 #else
 #include <malloc.h>
