@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
   # toolchain
-  build-essential cmake ninja-build pkg-config git
+  build-essential cmake ninja-build pkg-config git lld
   # core libraries
   nlohmann-json3-dev libspdlog-dev libfmt-dev libcli11-dev libglm-dev libeigen3-dev
   # tests and benchmarks
