@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 
 #include <opencv2/core.hpp>
 
@@ -28,12 +27,10 @@ cv::Mat draw_blobs(const CameraIntrinsics& camera, const CameraFrame& frame, con
     }
   }
   if (s.noise_sigma > 0.0) {
-    std::mt19937_64 rng(s.seed);
-    std::normal_distribution<double> noise(0.0, s.noise_sigma);
-    for (int y = 0; y < light.rows; ++y) {
-      auto* row = light.ptr<double>(y);
-      for (int x = 0; x < light.cols; ++x) row[x] += noise(rng);
-    }
+    cv::RNG rng(s.seed);  // OpenCV's generator: the same seed gives the same noise
+    cv::Mat noise(light.size(), CV_64FC1);
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, s.noise_sigma);
+    light += noise;
   }
   cv::Mat image;
   light.convertTo(image, CV_8UC1);  // rounds and saturates to 0-255
