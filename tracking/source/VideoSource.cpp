@@ -75,8 +75,16 @@ std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, 
     const std::string& device = devices[c];
     cv::VideoCapture capture;
     const bool live = is_device_index(device);
-    const bool opened = live ? capture.open(std::stoi(device))
-                             : capture.open(device, device.find('%') != std::string::npos ? cv::CAP_IMAGES : cv::CAP_ANY);
+    bool opened = false;
+    if (live) {
+      opened = capture.open(std::stoi(device));
+    } else if (device.find('%') != std::string::npos) {
+      opened = capture.open(device, cv::CAP_IMAGES);
+    } else {
+      // Video files through the backends that read files, not CAP_ANY: its probe also wakes camera
+      // plugins (USB enumeration and the like), which a file has no use for.
+      opened = capture.open(device, cv::CAP_FFMPEG) || capture.open(device, cv::CAP_GSTREAMER);
+    }
     if (!opened || !capture.isOpened()) {
       return std::unexpected("video source: " + camera_text(rig, c) + ": cannot open " + (live ? "capture device " + device : "\"" + device + "\""));
     }

@@ -2,7 +2,7 @@
 // Frames from real cameras: one OpenCV capture per camera of a rig, in rig order, each image
 // turned into detections by the blob detector (tracking/detect/BlobDetector.h).
 //
-// A device is a capture device's index ("0") or a file: a video file, or an image sequence
+// A device is a capture device's index ("0") or a file: a video file (FFmpeg, else GStreamer), or an image sequence
 // whose name holds a printf pattern ("cams/cam0_%04d.png", OpenCV's CAP_IMAGES, numbered from 0
 // or the first number present). Timestamps: for files, frame i is at i / rate_hz (image sequences
 // carry no time of their own); for devices, the steady clock's time of the grab, from open().
