@@ -1,5 +1,5 @@
 // rhot-demo: the VR demo. Loads a scene, runs one frame after another at a fixed 90 Hz step:
-// simulated cameras -> tracking (markers, marker stars, hands) -> physics (hand colliders,
+// simulated (or real: --source video:...) cameras -> tracking (markers, marker stars, hands) -> physics (hand colliders,
 // grasping) -> both eyes rendered to a window or PNG files; reports frame statistics per stage.
 
 #include <atomic>
@@ -99,8 +99,15 @@ int main(int argc, char** argv) {
   std::string source = "sim";
   rhot::DemoOptions demo;
   demo.pipeline.asset_dir = RHOT_ASSET_DIR;
-  cli.add_option("--source", source, "sim (the built-in simulated camera rig) or replay:FILE (a recording made with --record)")
+  cli.add_option("--source", source,
+                 "sim (the built-in simulated camera rig), replay:FILE (a recording made with --record), or video:DEV[,DEV...] "
+                 "(real cameras, one per camera of --rig in rig order: a capture device index such as 0, a video file, or an image "
+                 "sequence such as cams/cam0_%04d.png; docs/demo.md)")
       ->capture_default_str();
+  cli.add_option("--blob-threshold", demo.pipeline.detector.threshold,
+                 "With --source video: grey level above which pixels are marker (-1: automatic, background + 5 sigma, at least 40)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 254));
   cli.add_option("--speed", demo.pipeline.speed, "Replay speed (with --source replay:FILE)")->capture_default_str()->check(CLI::Range(0.01, 100.0));
   cli.add_option("--record", demo.pipeline.record, "Record every frame's hands and tracked objects to FILE (JSON Lines, docs/recording-format.md)");
   cli.add_option("--rig", demo.pipeline.rig_file, "Camera rig (OpenCV YAML; default: the scene's, else assets/rigs/seated-4.yaml)")
@@ -126,8 +133,15 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::from_str(log_level));
   if (source.rfind("replay:", 0) == 0 && source.size() > 7) {
     demo.pipeline.replay = source.substr(7);
+  } else if (source.rfind("video:", 0) == 0) {
+    auto devices = rhot::parse_video_devices(source.substr(6));
+    if (!devices) {
+      spdlog::error("--source: {}", devices.error());
+      return EXIT_FAILURE;
+    }
+    demo.pipeline.video_devices = std::move(*devices);
   } else if (source != "sim") {
-    spdlog::error("--source: expected sim or replay:FILE, got \"{}\"", source);
+    spdlog::error("--source: expected sim, replay:FILE or video:DEV[,DEV...], got \"{}\"", source);
     return EXIT_FAILURE;
   }
 
@@ -238,8 +252,16 @@ int main(int argc, char** argv) {
       spdlog::warn("no overlay: {}", enabled.error());
     }
   }
-  const std::uint64_t ran =
-      frame_loop.run(frames, [&] { return !g_interrupted.load() && !(window && window->should_close()); });
+  rhot::Pipeline& pipeline = (*runtime)->pipeline();
+  const std::uint64_t ran = frame_loop.run(
+      frames, [&] { return !g_interrupted.load() && !(window && window->should_close()) && !pipeline.source_ended(); });
+  if (const rhot::VideoSource* video = pipeline.video()) {
+    for (std::size_t c = 0; c < video->stats().size(); ++c) {
+      const rhot::VideoCameraStats& s = video->stats()[c];
+      spdlog::info("video camera {} ({}): {} frames, {} bad images, {} failed reads", c, video->devices()[c], s.frames, s.bad_images,
+                   s.failed_reads);
+    }
+  }
 
   if (!window_capture.empty()) {
     if (!window) {

@@ -47,6 +47,10 @@ std::expected<std::unique_ptr<Pipeline>, std::string> Pipeline::create(World& wo
       !settings.rig_file.empty() ? settings.rig_file : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
   auto rig = load_rig(rig_file);
   if (!rig) return std::unexpected(rig.error());
+  p->rig_ = *rig;
+  const bool video = !settings.video_devices.empty();
+  if (video && settings.perfect_hands) return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
+  if (video && !settings.replay.empty()) return std::unexpected(std::string("choose video devices or a replay, not both"));
   const std::filesystem::path set_file = !settings.star_set.empty() ? settings.star_set : settings.asset_dir / "stars" / "seed-case.json";
   auto set = load_star_set(set_file);
   if (!set) return std::unexpected(set.error());
@@ -86,22 +90,32 @@ std::expected<std::unique_ptr<Pipeline>, std::string> Pipeline::create(World& wo
   sim.sigma_px = settings.sigma_px;
   sim.seed = settings.seed;
   sim.rate_hz = scene.settings.headset.refresh_hz;
-  p->sim_ = std::make_unique<SimulatedRig>(*rig, std::vector<Trajectory>{}, sim);
-  Pipeline* self = p.get();
-  p->sim_->set_scripted_markers([self](double) {
-    std::vector<Eigen::Vector3d> markers;
-    for (int h = 0; h < 2; ++h) {
-      const HandTruth& hand = self->truth_.hands[static_cast<std::size_t>(h)];
-      for (const Eigen::Vector3d& m : layout_markers(self->layouts_[static_cast<std::size_t>(h)], hand.world_from_hand, hand.pose)) markers.push_back(m);
-    }
-    for (const StarLibrary::Star& star : self->star_tracker_->library().stars()) {
-      const auto at = self->truth_.world_from_object.find(star.id);
-      if (at == self->truth_.world_from_object.end()) continue;
-      const Rigid3d world_from_star = at->second * self->object_from_star_.at(star.id);
-      for (const Eigen::Vector3d& m : star.markers_m) markers.push_back(world_from_star * m);
-    }
-    return markers;
-  });
+  if (video) {
+    VideoSourceSettings vs;
+    vs.detector = settings.detector;
+    vs.rate_hz = sim.rate_hz;
+    auto source = VideoSource::open(*rig, settings.video_devices, vs);
+    if (!source) return std::unexpected(rig_file.string() + ": " + source.error());
+    p->video_ = std::move(*source);
+    p->video_logged_.resize(rig->cameras.size());
+  } else {
+    p->sim_ = std::make_unique<SimulatedRig>(*rig, std::vector<Trajectory>{}, sim);
+    Pipeline* self = p.get();
+    p->sim_->set_scripted_markers([self](double) {
+      std::vector<Eigen::Vector3d> markers;
+      for (int h = 0; h < 2; ++h) {
+        const HandTruth& hand = self->truth_->hands[static_cast<std::size_t>(h)];
+        for (const Eigen::Vector3d& m : layout_markers(self->layouts_[static_cast<std::size_t>(h)], hand.world_from_hand, hand.pose)) markers.push_back(m);
+      }
+      for (const StarLibrary::Star& star : self->star_tracker_->library().stars()) {
+        const auto at = self->truth_->world_from_object.find(star.id);
+        if (at == self->truth_->world_from_object.end()) continue;
+        const Rigid3d world_from_star = at->second * self->object_from_star_.at(star.id);
+        for (const Eigen::Vector3d& m : star.markers_m) markers.push_back(world_from_star * m);
+      }
+      return markers;
+    });
+  }
 
   auto physics = HandPhysics::create(world, scene);
   if (!physics) return std::unexpected(physics.error());
@@ -133,12 +147,16 @@ void Pipeline::source(double t_s) {
     replayed_ = replay_->at(replay_clock_s_);
     return;
   }
-  truth_ = script_.at(t_s);
-  std::vector<Occluder> bones;
-  add_bones(bones, truth_.hands[0]);
-  add_bones(bones, truth_.hands[1]);
-  sim_->set_occluders(std::move(bones));
-  frame_ = sim_->next();
+  if (video_) {
+    read_video();
+  } else {
+    truth_ = script_.at(t_s);
+    std::vector<Occluder> bones;
+    add_bones(bones, truth_->hands[0]);
+    add_bones(bones, truth_->hands[1]);
+    sim_->set_occluders(std::move(bones));
+    frame_ = sim_->next();
+  }
   for (const auto& camera : frame_.cameras) counts_.detections += camera.detections.size();
 }
 
@@ -147,12 +165,39 @@ void Pipeline::set_speed(double speed) {
   settings_.speed = speed;
 }
 
+void Pipeline::read_video() {
+  if (auto frame = video_->next()) {
+    frame_ = std::move(*frame);
+  } else {
+    if (!source_ended_) spdlog::info("video: the stream has ended after {} frames", frame_.cameras.empty() ? 0 : frame_.index + 1);
+    source_ended_ = true;
+    frame_.cameras.assign(rig_.cameras.size(), CameraFrame{});
+    for (std::size_t c = 0; c < frame_.cameras.size(); ++c) frame_.cameras[c].camera = static_cast<int>(c);
+  }
+  // A camera's failed reads and bad images are logged at the 1st, 10th, 100th ... of each kind.
+  const auto milestone = [](std::uint64_t before, std::uint64_t now) {
+    for (std::uint64_t m = 1; m <= now; m *= 10) {
+      if (m > before) return true;
+    }
+    return false;
+  };
+  for (std::size_t c = 0; c < video_logged_.size(); ++c) {
+    const VideoCameraStats& now = video_->stats()[c];
+    VideoCameraStats& logged = video_logged_[c];
+    if (milestone(logged.bad_images, now.bad_images) || milestone(logged.failed_reads, now.failed_reads)) {
+      spdlog::warn("video: camera {} ({}): {} bad image(s), {} failed read(s) so far; last: {}", c, rig_.cameras[c].name, now.bad_images,
+                   now.failed_reads, now.last_problem);
+      logged = now;
+    }
+  }
+}
+
 void Pipeline::matching() {
   points_.clear();
   point_cameras_.clear();
   if (replay_) return;
   double sum_rms = 0.0;
-  for (const MatchedPoint& m : match_and_triangulate(sim_->rig(), frame_)) {
+  for (const MatchedPoint& m : match_and_triangulate(rig_, frame_)) {
     points_.push_back(m.point.position_world);
     point_cameras_.push_back(m.point.cameras);
     sum_rms += m.point.reprojection_rms_px;
@@ -203,7 +248,7 @@ void Pipeline::hands() {
   }
   for (std::size_t h = 0; h < 2; ++h) {
     const TrackedHand& tracked = hand_trackers_[h]->update(time_s_, points_);
-    inputs_[h] = settings_.perfect_hands ? hand_input(truth_.hands[h].world_from_hand, truth_.hands[h].pose) : hand_input(tracked);
+    inputs_[h] = settings_.perfect_hands && truth_ ? hand_input(truth_->hands[h].world_from_hand, truth_->hands[h].pose) : hand_input(tracked);
     counts_.hands_seen[h] = tracked.hand_seen;
   }
   if (recorder_) {
@@ -220,7 +265,7 @@ void Pipeline::hands() {
 
 void Pipeline::physics(World& world) {
   physics_->step(world, inputs_);
-  if (replay_ || script_.right_target().empty()) return;
+  if (replay_ || video_ || script_.right_target().empty()) return;  // only the simulated user looks
   const Entity cube = find_named(world, script_.right_target());
   if (const Transform* t = world.find<Transform>(cube)) script_.reaim(time_s_, Eigen::Vector3d(t->position.x, t->position.y, t->position.z));
 }

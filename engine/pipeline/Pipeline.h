@@ -9,6 +9,11 @@
 //   hands     each hand's star and fingertip markers -> a 26-joint hand (HandTracker)
 //   physics   hand colliders, grasping, Bullet (HandPhysics)
 //
+// With video devices (PipelineSettings::video_devices), source reads one image per camera of the
+// rig from OpenCV captures and detects their blobs (tracking/source/VideoSource.h) instead of
+// simulating; there is no ground truth then (truth() is empty), and source_ended() turns true when
+// the stream is over.
+//
 // Replaying a recording (PipelineSettings::replay), source reads the recorded frame instead and
 // matching does nothing; stars and hands take the recorded poses. Recording
 // (PipelineSettings::record) writes each frame's hands and tracked objects as the hands stage ends.
@@ -32,6 +37,7 @@
 #include "tracking/hand/HandTracker.h"
 #include "tracking/rigid/StarTracker.h"
 #include "tracking/source/SimulatedRig.h"
+#include "tracking/source/VideoSource.h"
 
 namespace rhot {
 
@@ -47,6 +53,10 @@ struct PipelineSettings {
   std::filesystem::path replay;  // play this recording instead of simulating cameras and tracking
   double speed = 1.0;            // replay speed (2: twice as fast)
   std::filesystem::path record;  // write every frame's hands and tracked objects here
+  // Real cameras instead of the simulated rig: one OpenCV device per rig camera, in rig order (an
+  // index such as "0", a video file, or an image sequence such as "cams/cam0_%04d.png").
+  std::vector<std::string> video_devices;
+  BlobDetectorSettings detector;  // for video_devices
 };
 
 struct PipelineCounts {
@@ -61,7 +71,8 @@ struct PipelineCounts {
 class Pipeline {
  public:
   // `world` holds `scene` instantiated. Fails on a missing rig, star set or hand layout, a
-  // `tracked_by` star missing from the set, or a physics error.
+  // `tracked_by` star missing from the set, a physics error, or video devices that cannot be
+  // opened or do not fit the rig (VideoSource::open), or video with perfect_hands or replay.
   [[nodiscard]] static std::expected<std::unique_ptr<Pipeline>, std::string> create(World& world, const SceneDesc& scene,
                                                                                    PipelineSettings settings);
 
@@ -71,7 +82,13 @@ class Pipeline {
   void hands();
   void physics(World& world);
 
-  const SceneTruth& truth() const { return truth_; }
+  // The script's true hands and objects this frame; empty with video devices (no truth) and in replay.
+  const std::optional<SceneTruth>& truth() const { return truth_; }
+  // This frame's camera detections (empty in replay).
+  const RigFrame& frame() const { return frame_; }
+  // Whether the video stream is over (never for the simulated rig or a replay).
+  bool source_ended() const { return source_ended_; }
+  const VideoSource* video() const { return video_ ? &*video_ : nullptr; }
   const PipelineCounts& counts() const { return counts_; }
   const std::array<HandInput, 2>& hand_inputs() const { return inputs_; }
   const TrackedHand& tracked_hand(HandSide side) const { return hand_trackers_[side == HandSide::kLeft ? 0 : 1]->last(); }
@@ -79,18 +96,17 @@ class Pipeline {
   const std::vector<Eigen::Vector3d>& points() const { return points_; }
   // Per triangulated point: the cameras that saw it.
   const std::vector<std::vector<int>>& point_cameras() const { return point_cameras_; }
-  // The last frame's detections per camera (empty when replaying).
-  const RigFrame& frame() const { return frame_; }
   double speed() const { return settings_.speed; }
   // Replay speed from the next frame on (precondition: finite and > 0).
   void set_speed(double speed);
-  const CameraRig& rig() const { return sim_->rig(); }
+  const CameraRig& rig() const { return rig_; }
   const DemoScript& script() const { return script_; }
   bool replaying() const { return replay_.has_value(); }
   const Recording* replay() const { return replay_ ? &*replay_ : nullptr; }
 
  private:
   explicit Pipeline(const SceneDesc& scene) : script_(scene) {}
+  void read_video();
   PipelineSettings settings_;
   std::optional<Recording> replay_;
   RecordedFrame replayed_;
@@ -99,8 +115,12 @@ class Pipeline {
   std::map<int, std::string> name_of_star_;
 
   DemoScript script_;
-  SceneTruth truth_;
-  std::unique_ptr<SimulatedRig> sim_;
+  std::optional<SceneTruth> truth_;
+  CameraRig rig_;
+  std::unique_ptr<SimulatedRig> sim_;  // the source, unless video_
+  std::optional<VideoSource> video_;
+  std::vector<VideoCameraStats> video_logged_;  // the counts last logged, per camera
+  bool source_ended_ = false;
   RigFrame frame_;
   std::vector<Eigen::Vector3d> points_;
   std::vector<std::vector<int>> point_cameras_;

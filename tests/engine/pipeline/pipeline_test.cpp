@@ -58,7 +58,7 @@ DemoRun run_default_scene(int frames, bool perfect_hands = false) {
     }
     r.block_lift_m = std::max(r.block_lift_m, static_cast<double>(world.get<Transform>(block).position.y - block_y0));
     const glm::vec3 m = world.get<Transform>(mug).position;
-    const Eigen::Vector3d truth = p.truth().world_from_object.at(0).translation;
+    const Eigen::Vector3d truth = p.truth()->world_from_object.at(0).translation;
     const auto& seen_ids = p.counts().seen_star_ids;
     if (std::find(seen_ids.begin(), seen_ids.end(), 0) != seen_ids.end()) {
       ++r.mug_seen_frames;

@@ -1,0 +1,95 @@
+// rhot-simvideo: the demo's simulated cameras written as image sequences, one per camera
+// (DIR/cam<i>_%04d.png, 8-bit grey), each marker a Gaussian spot. rhot-demo reads them back as
+// real cameras would be read: --rig FILE --source video:DIR/cam0_%04d.png,DIR/cam1_%04d.png,...
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+// GCC 12 reports -Wnull-dereference inside CLI11's option parsing (a false positive through
+// libstdc++'s string move); the pragma covers only CLI11's lines.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+#include <CLI/CLI.hpp>
+#pragma GCC diagnostic pop
+#include <opencv2/imgcodecs.hpp>
+
+#include "engine/core/World.h"
+#include "engine/pipeline/Pipeline.h"
+#include "engine/scene/SceneLoader.h"
+#include "tracking/source/SyntheticImages.h"
+
+#ifndef RHOT_ASSET_DIR
+#error "RHOT_ASSET_DIR must name the assets folder"
+#endif
+
+int main(int argc, char** argv) {
+  CLI::App cli{"rhot-simvideo: renders the demo's simulated camera frames (the script's hands and objects seen by the rig) as PNG\n"
+               "image sequences DIR/cam<i>_%04d.png, one per camera, for rhot-demo --source video:..."};
+  std::string scene_path = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
+  std::string out_dir;
+  int frames = 1080;
+  rhot::PipelineSettings settings;
+  settings.asset_dir = RHOT_ASSET_DIR;
+  settings.sigma_px = 0.0;
+  rhot::SyntheticImageSettings draw;
+  draw.noise_sigma = 2.0;
+  cli.add_option("--rig", settings.rig_file, "Camera rig (OpenCV YAML; default: the scene's, else assets/rigs/seated-4.yaml)")
+      ->check(CLI::ExistingFile);
+  cli.add_option("--out", out_dir, "Folder for the images (created if missing)")->required();
+  cli.add_option("--frames", frames, "Frames to render (90 per second of the script)")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cli.add_option("--scene", scene_path, "Scene file (JSON)")->capture_default_str();
+  cli.add_option("--blob-sigma", draw.blob_sigma_px, "Each marker's spot: Gaussian standard deviation, pixels")
+      ->capture_default_str()
+      ->check(CLI::Range(0.3, 20.0));
+  cli.add_option("--peak", draw.peak, "A spot's peak above the background, grey levels")->capture_default_str()->check(CLI::Range(1.0, 255.0));
+  cli.add_option("--noise", draw.noise_sigma, "Image noise, standard deviation in grey levels")->capture_default_str()->check(CLI::Range(0.0, 50.0));
+  cli.add_option("--sigma", settings.sigma_px, "Noise on each marker's pixel position before drawing, pixels")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 50.0));
+  cli.add_option("--seed", settings.seed, "Seed for both noises")->capture_default_str();
+  CLI11_PARSE(cli, argc, argv);
+
+  const auto scene = rhot::load_scene_file(scene_path);
+  if (!scene) {
+    std::fprintf(stderr, "rhot-simvideo: cannot load scene: %s\n", scene.error().to_string().c_str());
+    return EXIT_FAILURE;
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) {
+    std::fprintf(stderr, "rhot-simvideo: cannot create %s: %s\n", out_dir.c_str(), ec.message().c_str());
+    return EXIT_FAILURE;
+  }
+  rhot::World world;
+  rhot::instantiate(*scene, world);
+  auto pipeline = rhot::Pipeline::create(world, *scene, settings);
+  if (!pipeline) {
+    std::fprintf(stderr, "rhot-simvideo: %s\n", pipeline.error().c_str());
+    return EXIT_FAILURE;
+  }
+  rhot::Pipeline& p = **pipeline;
+  const std::size_t cameras = p.rig().cameras.size();
+  const double rate_hz = scene->settings.headset.refresh_hz;
+  const std::filesystem::path dir(out_dir);
+  for (int f = 0; f < frames; ++f) {
+    p.source(f / rate_hz);  // the simulated rig photographs the script's markers (no tracking needed)
+    for (std::size_t c = 0; c < cameras; ++c) {
+      draw.seed = settings.seed * 1000003ULL + static_cast<std::uint64_t>(f) * cameras + c;
+      char name[64];
+      std::snprintf(name, sizeof(name), "cam%zu_%04d.png", c, f);
+      const std::string file = (dir / name).string();
+      if (!cv::imwrite(file, rhot::draw_blobs(p.rig().cameras[c].intrinsics, p.frame().cameras[c], draw), {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+        std::fprintf(stderr, "rhot-simvideo: cannot write %s\n", file.c_str());
+        return EXIT_FAILURE;
+      }
+    }
+    if ((f + 1) % 90 == 0 || f + 1 == frames) std::fprintf(stderr, "rhot-simvideo: %d/%d frames\n", f + 1, frames);
+  }
+  std::string source = "video:";
+  for (std::size_t c = 0; c < cameras; ++c) source += (c ? "," : "") + (dir / ("cam" + std::to_string(c) + "_%04d.png")).string();
+  std::fprintf(stderr, "rhot-simvideo: %zu cameras x %d frames in %s; play them with\n", cameras, frames, out_dir.c_str());
+  std::printf("--source %s\n", source.c_str());
+  return EXIT_SUCCESS;
+}

@@ -1,0 +1,173 @@
+#include "tracking/source/VideoSource.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
+
+namespace rhot {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+bool is_device_index(const std::string& device) {
+  return !device.empty() && device.size() <= 6 && std::all_of(device.begin(), device.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+}
+
+std::string size_text(int width, int height) { return std::to_string(width) + "x" + std::to_string(height); }
+
+std::string camera_text(const CameraRig& rig, std::size_t c) {
+  return "camera " + std::to_string(c) + (rig.cameras[c].name.empty() ? "" : " (" + rig.cameras[c].name + ")");
+}
+
+}  // namespace
+
+struct VideoSource::Impl {
+  CameraRig rig;
+  std::vector<std::string> devices;
+  VideoSourceSettings settings;
+  std::vector<cv::VideoCapture> captures;
+  std::vector<bool> live;
+  std::vector<cv::Mat> pending;  // the first frames, read by open() to check their size
+  std::vector<VideoCameraStats> stats;
+  Clock::time_point opened = Clock::now();
+  std::uint64_t index = 0;
+  bool ended = false;
+};
+
+std::expected<std::vector<std::string>, std::string> parse_video_devices(const std::string& list) {
+  std::vector<std::string> devices;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = list.find(',', start);
+    devices.push_back(list.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (devices.back().empty()) {
+      return std::unexpected("video source: empty device in \"" + list + "\" (expected DEV[,DEV...], one per camera: an index such as 0, or a file)");
+    }
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return devices;
+}
+
+VideoSource::VideoSource(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+VideoSource::VideoSource(VideoSource&&) noexcept = default;
+VideoSource& VideoSource::operator=(VideoSource&&) noexcept = default;
+VideoSource::~VideoSource() = default;
+
+std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, const std::vector<std::string>& devices, VideoSourceSettings settings) {
+  if (devices.size() != rig.cameras.size()) {
+    return std::unexpected("video source: " + std::to_string(devices.size()) + (devices.size() == 1 ? " device" : " devices") +
+                           " for a rig of " + std::to_string(rig.cameras.size()) + (rig.cameras.size() == 1 ? " camera" : " cameras") +
+                           " (one per camera, in rig order)");
+  }
+  if (auto ok = check(settings.detector); !ok) return std::unexpected("video source: " + ok.error());
+  if (!(settings.rate_hz > 0.0) || !std::isfinite(settings.rate_hz)) return std::unexpected(std::string("video source: rate_hz must be a positive number"));
+  auto impl = std::make_unique<Impl>();
+  impl->rig = rig;
+  impl->devices = devices;
+  impl->settings = settings;
+  impl->stats.resize(devices.size());
+  for (std::size_t c = 0; c < devices.size(); ++c) {
+    const std::string& device = devices[c];
+    cv::VideoCapture capture;
+    const bool live = is_device_index(device);
+    bool opened = false;
+    if (live) {
+      opened = capture.open(std::stoi(device));
+    } else if (device.find('%') != std::string::npos) {
+      opened = capture.open(device, cv::CAP_IMAGES);
+    } else {
+      // Video files through the backends that read files, not CAP_ANY: its probe also wakes camera
+      // plugins (USB enumeration and the like), which a file has no use for.
+      opened = capture.open(device, cv::CAP_FFMPEG) || capture.open(device, cv::CAP_GSTREAMER);
+    }
+    if (!opened || !capture.isOpened()) {
+      return std::unexpected("video source: " + camera_text(rig, c) + ": cannot open " + (live ? "capture device " + device : "\"" + device + "\""));
+    }
+    cv::Mat first;
+    if (!capture.read(first) || first.empty()) {
+      return std::unexpected("video source: " + camera_text(rig, c) + ": \"" + device + "\" gives no image");
+    }
+    const CameraIntrinsics& k = rig.cameras[c].intrinsics;
+    if (first.cols != k.width_px || first.rows != k.height_px) {
+      return std::unexpected("video source: " + camera_text(rig, c) + ": \"" + device + "\" gives " + size_text(first.cols, first.rows) +
+                             " images, the rig calibrates it at " + size_text(k.width_px, k.height_px));
+    }
+    impl->captures.push_back(std::move(capture));
+    impl->live.push_back(live);
+    impl->pending.push_back(std::move(first));
+  }
+  impl->opened = Clock::now();
+  return VideoSource(std::move(impl));
+}
+
+std::optional<RigFrame> VideoSource::next() {
+  Impl& s = *impl_;
+  if (s.ended) return std::nullopt;
+  const std::size_t n = s.captures.size();
+  // Grab every camera first, decode after: the exposures stay as close together as the devices allow.
+  std::vector<bool> grabbed(n, false);
+  std::vector<double> grab_time_s(n, 0.0);
+  for (std::size_t c = 0; c < n; ++c) {
+    grabbed[c] = !s.pending[c].empty() || s.captures[c].grab();
+    grab_time_s[c] = std::chrono::duration<double>(Clock::now() - s.opened).count();
+  }
+  std::vector<cv::Mat> images(n);
+  bool any = false;
+  for (std::size_t c = 0; c < n; ++c) {
+    if (!s.pending[c].empty()) {
+      images[c] = std::move(s.pending[c]);
+      s.pending[c] = cv::Mat();
+    } else if (grabbed[c]) {
+      s.captures[c].retrieve(images[c]);
+    }
+    any = any || !images[c].empty();
+  }
+  if (!any) {
+    s.ended = true;
+    return std::nullopt;
+  }
+
+  RigFrame frame;
+  frame.index = s.index++;
+  frame.time_s = static_cast<double>(frame.index) / s.settings.rate_hz;
+  frame.cameras.resize(n);
+  for (std::size_t c = 0; c < n; ++c) {
+    CameraFrame& cf = frame.cameras[c];
+    cf.camera = static_cast<int>(c);
+    cf.timestamp_s = s.live[c] ? grab_time_s[c] : frame.time_s;
+    VideoCameraStats& st = s.stats[c];
+    const cv::Mat& image = images[c];
+    if (image.empty()) {
+      ++st.failed_reads;
+      st.last_problem = "frame " + std::to_string(frame.index) + ": no image from \"" + s.devices[c] + "\"";
+      continue;
+    }
+    const CameraIntrinsics& k = s.rig.cameras[c].intrinsics;
+    if (image.cols != k.width_px || image.rows != k.height_px) {
+      ++st.bad_images;
+      st.last_problem = "frame " + std::to_string(frame.index) + ": \"" + s.devices[c] + "\" gave a " + size_text(image.cols, image.rows) +
+                        " image, the rig calibrates it at " + size_text(k.width_px, k.height_px);
+      continue;
+    }
+    auto detections = detect_blobs(image, s.settings.detector);
+    if (!detections) {
+      ++st.bad_images;
+      st.last_problem = "frame " + std::to_string(frame.index) + ": \"" + s.devices[c] + "\": " + detections.error();
+      continue;
+    }
+    ++st.frames;
+    cf.detections = std::move(*detections);
+  }
+  return frame;
+}
+
+bool VideoSource::ended() const { return impl_->ended; }
+const std::vector<VideoCameraStats>& VideoSource::stats() const { return impl_->stats; }
+const std::vector<std::string>& VideoSource::devices() const { return impl_->devices; }
+
+}  // namespace rhot
