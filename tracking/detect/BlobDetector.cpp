@@ -31,14 +31,18 @@ struct Background {
 };
 
 // The background's level and noise from the image's histogram: robust, so however many markers
-// (up to half the pixels) do not move it.
+// (up to half the pixels) do not move it. Every second pixel of every second row is enough for a
+// median (230 000 samples at 1280 x 720) and reads a quarter of the image.
 Background background(const cv::Mat& gray) {
   std::array<std::int64_t, 256> histogram{};
-  for (int y = 0; y < gray.rows; ++y) {
+  const int step = gray.rows >= 64 && gray.cols >= 64 ? 2 : 1;
+  std::int64_t samples = 0;
+  for (int y = 0; y < gray.rows; y += step) {
     const auto* g = gray.ptr<std::uint8_t>(y);
-    for (int x = 0; x < gray.cols; ++x) ++histogram[g[x]];
+    for (int x = 0; x < gray.cols; x += step) ++histogram[g[x]];
+    samples += (gray.cols + step - 1) / step;
   }
-  const std::int64_t half = (static_cast<std::int64_t>(gray.rows) * gray.cols + 1) / 2;
+  const std::int64_t half = (samples + 1) / 2;
   const auto median_of = [&](const std::array<std::int64_t, 256>& h) {
     std::int64_t below = 0;
     for (int v = 0; v < 256; ++v) {
@@ -148,16 +152,25 @@ std::expected<std::vector<Detection>, std::string> detect_blobs(const cv::Mat& i
   }
   cv::Mat mask;
   cv::threshold(gray, mask, threshold, 255, cv::THRESH_BINARY);
-  cv::Mat labels, stats, centroids;
-  const int count = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
+  // The 8-connected components by their outer contours: markers cover a tiny part of the image,
+  // and tracing their borders (cv::findContours) is some 25 times faster here than labelling
+  // every pixel of the image (cv::connectedComponentsWithStats writes a 32-bit label per pixel);
+  // measured in tests/bench/detect_benchmark.cpp. Each component's pixels are then its filled
+  // contour within the thresholded image, inside its bounding box.
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
 
   std::vector<Blob> blobs;
-  for (int i = 1; i < count; ++i) {
-    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+  cv::Mat component;
+  for (std::vector<cv::Point>& contour : contours) {
+    const cv::Rect box = cv::boundingRect(contour);
+    if (box.area() < s.min_area_px) continue;
+    component = cv::Mat::zeros(box.size(), CV_8UC1);
+    for (cv::Point& p : contour) p -= box.tl();
+    cv::drawContours(component, std::vector<std::vector<cv::Point>>{contour}, 0, cv::Scalar(255), cv::FILLED);
+    component &= mask(box);
+    const int area = cv::countNonZero(component);
     if (area < s.min_area_px || area > s.max_area_px) continue;
-    const cv::Rect box(stats.at<int>(i, cv::CC_STAT_LEFT), stats.at<int>(i, cv::CC_STAT_TOP), stats.at<int>(i, cv::CC_STAT_WIDTH),
-                       stats.at<int>(i, cv::CC_STAT_HEIGHT));
-    const cv::Mat component = labels(box) == i;
     resolve(gray(box), component, box.tl(), threshold, s.split_depth, s, blobs);
   }
   if (static_cast<int>(blobs.size()) > s.max_blobs) {
