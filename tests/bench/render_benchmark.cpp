@@ -95,6 +95,18 @@ void BM_Cubes500(benchmark::State& state, rhot::StereoMode mode) {
   run_frames(state, *renderer, cubes_frame(*renderer, 500), false);
 }
 
+// Nothing drawn: clearing and storing both eyes' colour and depth, submitting and waiting. The
+// floor under every frame at that size; BM_DefaultScene minus this is what the scene's triangles
+// cost.
+void BM_EmptyFrame(benchmark::State& state, rhot::StereoMode mode) {
+  auto renderer = make_renderer(state, mode);
+  if (!renderer) return;
+  rhot::FrameInput frame;
+  rhot::HeadsetSettings headset;
+  frame.views = rhot::stereo_views(rhot::default_world_from_head(), headset);
+  run_frames(state, *renderer, frame, false);
+}
+
 // Render plus copying both eyes to the CPU, as --capture does; subtract BM_DefaultScene.
 void BM_DefaultSceneWithReadBack(benchmark::State& state) {
   auto renderer = make_renderer(state, rhot::StereoMode::kAuto);
@@ -127,6 +139,7 @@ BENCHMARK_CAPTURE(BM_DefaultScene, two_pass, rhot::StereoMode::kTwoPass)->Apply(
 BENCHMARK_CAPTURE(BM_Cubes500, multiview, rhot::StereoMode::kMultiview)->Apply(sizes);
 BENCHMARK_CAPTURE(BM_Cubes500, two_pass, rhot::StereoMode::kTwoPass)->Apply(sizes);
 BENCHMARK(BM_DefaultSceneWithReadBack)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_EmptyFrame, two_pass, rhot::StereoMode::kTwoPass)->Apply(sizes);
 BENCHMARK(BM_BuildFrameFromWorld)->Args({1080, 1200})->Unit(benchmark::kMicrosecond);
 
 }  // namespace
