@@ -114,6 +114,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   cli.add_option("--sigma", demo.pipeline.sigma_px, "Simulated pixel noise, standard deviation")->capture_default_str()->check(CLI::Range(0.0, 50.0));
   cli.add_option("--seed", demo.pipeline.seed, "Simulation seed")->capture_default_str();
+  cli.add_flag("--filter", demo.pipeline.filter_hands, "1-euro filter the tracked hands (steadier at rest, some lag)");
   std::vector<std::string> debug_views;
   cli.add_option("--debug-views", debug_views, "Debug views on from the start: markers, rays, frusta, colliders (comma-separated)")
       ->delimiter(',')

@@ -83,7 +83,10 @@ std::expected<std::unique_ptr<Pipeline>, std::string> Pipeline::create(World& wo
     auto layout = load_hand_layout(file);
     if (!layout) return std::unexpected(layout.error());
     p->layouts_[static_cast<std::size_t>(h)] = *layout;
-    p->hand_trackers_[static_cast<std::size_t>(h)] = std::make_unique<HandTracker>(*layout, reference_open_hand(layout->side));
+    HandTrackerSettings tracker_settings;
+    tracker_settings.filter = settings.filter_hands;
+    p->hand_trackers_[static_cast<std::size_t>(h)] =
+        std::make_unique<HandTracker>(*layout, reference_open_hand(layout->side), tracker_settings);
   }
 
   SimulatedRigSettings sim;

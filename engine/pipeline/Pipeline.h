@@ -49,6 +49,9 @@ struct PipelineSettings {
   std::filesystem::path star_set;    // empty: assets/stars/seed-case.json (the objects' stars)
   double sigma_px = 0.3;
   unsigned seed = 1;
+  // 1-euro filtering of each hand's frame and fingertips before the IK (HandTrackerSettings):
+  // steadier hands at rest, some lag in fast moves. Off by default (docs/tracking.md).
+  bool filter_hands = false;
   bool perfect_hands = false;  // physics gets the true hands, not the tracked ones (to tell tracking from physics)
   std::filesystem::path replay;  // play this recording instead of simulating cameras and tracking
   double speed = 1.0;            // replay speed (2: twice as fast)
