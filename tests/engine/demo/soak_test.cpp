@@ -1,14 +1,18 @@
-// The demo's frame (simulated cameras, tracking, hand physics and grasping; no renderer, so that
-// LeakSanitizer can watch: see RHOT_VULKAN_TEST_ENV in tests/CMakeLists.txt) run for many frames:
+// The demo's frame (simulated cameras, tracking, hand physics and grasping) run for many frames:
 // 10,000 under the sanitizers (the asan preset), fewer in a plain debug build. The script loops
-// every 26 s, so 10,000 frames (111 s) grasp, carry and release each object eight times.
+// every 26 s, so 10,000 frames (111 s) go through four rounds of grasping and carrying.
 //
-// Heap in use is sampled after a warm-up and at the end; it must not grow. LeakSanitizer checks
-// for leaks when the program exits.
+// Built twice (tests/CMakeLists.txt): engine_soak_test without the renderer, so that
+// LeakSanitizer can watch (it cannot attribute Mesa's own allocations: see RHOT_VULKAN_TEST_ENV),
+// and engine_render_soak_test (RHOT_SOAK_RENDER) with both eyes drawn by the CPU driver at 64 x 72
+// each, whose heap (Mesa's included: ASan counts every malloc) must not grow either.
+//
+// Heap in use is sampled every frame after a warm-up; its low point must not rise.
 
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 
 #include <gtest/gtest.h>
@@ -35,11 +39,25 @@ std::size_t heap_in_use_bytes() {
 #if RHOT_SOAK_SANITIZED
   return __sanitizer_get_current_allocated_bytes();
 #else
-  return mallinfo2().uordblks;
+  // Both what the arenas hand out and what glibc maps for large blocks: glibc moves its threshold
+  // for mapping large blocks as they are freed, so either figure alone jumps with no change in use.
+  const struct mallinfo2 info = mallinfo2();
+  return info.uordblks + info.hblkhd;
 #endif
 }
 
-TEST(DemoSoak, RunsTenThousandFramesWithoutGrowingOrLeaking) {
+#ifdef RHOT_SOAK_RENDER
+#define RHOT_SOAK_TEST_NAME RendersTenThousandFramesWithoutGrowing
+#else
+#define RHOT_SOAK_TEST_NAME RunsTenThousandFramesWithoutGrowingOrLeaking
+#endif
+
+TEST(DemoSoak, RHOT_SOAK_TEST_NAME) {
+#if defined(RHOT_SOAK_RENDER) && !RHOT_SOAK_SANITIZED
+  // The CPU driver compiles shader variants as new states first appear, which keeps its heap
+  // rising for longer than a plain debug build's short run: this one runs under the sanitizers.
+  if (std::getenv("RHOT_SOAK_FRAMES") == nullptr) GTEST_SKIP() << "the renderer's soak runs in the asan preset (or set RHOT_SOAK_FRAMES)";
+#endif
   // RHOT_SOAK_FRAMES overrides the count (for longer soaks by hand).
   const char* override_frames = std::getenv("RHOT_SOAK_FRAMES");
   const std::uint64_t kFrames = override_frames != nullptr ? std::strtoull(override_frames, nullptr, 10) : RHOT_SOAK_SANITIZED ? 10000 : 900;
@@ -49,7 +67,17 @@ TEST(DemoSoak, RunsTenThousandFramesWithoutGrowingOrLeaking) {
   ASSERT_TRUE(scene.has_value());
   DemoOptions options;
   options.pipeline.asset_dir = RHOT_ASSET_DIR;
-  auto runtime = DemoRuntime::create(*scene, nullptr, options);
+  std::unique_ptr<Renderer> renderer;
+#ifdef RHOT_SOAK_RENDER
+  RendererSettings render;
+  render.eye_width_px = 64;
+  render.eye_height_px = 72;
+  render.device = "cpu";
+  auto created = Renderer::create(render);
+  ASSERT_TRUE(created.has_value()) << created.error();
+  renderer = std::move(*created);
+#endif
+  auto runtime = DemoRuntime::create(*scene, renderer.get(), options);
   ASSERT_TRUE(runtime.has_value()) << runtime.error();
   DemoRuntime& demo = **runtime;
   Systems systems;
@@ -59,8 +87,13 @@ TEST(DemoSoak, RunsTenThousandFramesWithoutGrowingOrLeaking) {
   settings.stats_window_frames = 200;  // the statistics keep a bounded window, full before the warm-up ends
   FrameLoop loop(demo.world(), systems, settings);
 
+  // The heap's low point over a window of frames just after the warm-up and over the last frames:
+  // a leak raises the low point; blocks that come and go (the renderer has one of about 400 KB
+  // now and then) do not.
+  const std::uint64_t window = std::min<std::uint64_t>(500, (kFrames - kWarmUp) / 3);
   std::size_t grasps = 0;
-  std::size_t after_warm_up = 0;
+  std::size_t low_after_warm_up = SIZE_MAX;
+  std::size_t low_at_end = SIZE_MAX;
   std::size_t largest = 0;
   const Entity cube = find_named(demo.world(), "cube-red");
   while (loop.frame_index() < kFrames) {
@@ -68,23 +101,24 @@ TEST(DemoSoak, RunsTenThousandFramesWithoutGrowingOrLeaking) {
     for (const InteractionEvent& e : demo.pipeline().hand_physics().events()) grasps += e.type == InteractionEventType::kGrasp ? 1 : 0;
     const glm::vec3 p = demo.world().get<Transform>(cube).position;
     ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) << "frame " << loop.frame_index();
-    if (loop.frame_index() == kWarmUp) after_warm_up = heap_in_use_bytes();
-    if (loop.frame_index() > kWarmUp) largest = std::max(largest, heap_in_use_bytes());
-    if (loop.frame_index() % 1000 == 0) {
-      std::printf("frame %llu: heap in use %zu bytes, %zu grasps so far\n", static_cast<unsigned long long>(loop.frame_index()),
-                  heap_in_use_bytes(), grasps);
-    }
+    const std::uint64_t f = loop.frame_index();
+    if (f <= kWarmUp) continue;
+    const std::size_t heap = heap_in_use_bytes();
+    if (f <= kWarmUp + window) low_after_warm_up = std::min(low_after_warm_up, heap);
+    if (f > kFrames - window) low_at_end = std::min(low_at_end, heap);
+    largest = std::max(largest, heap);
+    if (f % 1000 == 0) std::printf("frame %llu: heap in use %zu bytes, %zu grasps so far\n", static_cast<unsigned long long>(f), heap, grasps);
   }
-  const std::size_t at_end = heap_in_use_bytes();
-  std::printf("heap in use after warm-up %zu, largest since %zu, at the end %zu bytes\n", after_warm_up, largest, at_end);
+  std::printf("heap in use: low point after the warm-up %zu, low point at the end %zu, largest %zu bytes (windows of %llu frames)\n",
+              low_after_warm_up, low_at_end, largest, static_cast<unsigned long long>(window));
   // The right hand grasps the cube twice in every round of the script (out and back), once in
   // its first 2.2 s. (The mug is star-tracked, a kinematic body: carried, not grasped.)
   const std::uint64_t rounds = kFrames / 2340;
   EXPECT_GE(grasps, rounds >= 1 ? 2 * rounds : 1);
-  // No growth: the heap after the last frame within a few kilobytes of the heap after the
-  // warm-up (allocator bookkeeping and containers sized to their largest use move it a little).
-  EXPECT_LT(static_cast<double>(at_end), static_cast<double>(after_warm_up) + 64.0 * 1024.0);
-  EXPECT_LT(static_cast<double>(largest), static_cast<double>(after_warm_up) + 256.0 * 1024.0);
+  // No growth: the low points within a few kilobytes (allocator bookkeeping, containers sized to
+  // their largest use); no peak more than 1 MiB above (the renderer's transient block included).
+  EXPECT_LT(static_cast<double>(low_at_end), static_cast<double>(low_after_warm_up) + 64.0 * 1024.0);
+  EXPECT_LT(static_cast<double>(largest), static_cast<double>(low_after_warm_up) + 1024.0 * 1024.0);
 }
 
 }  // namespace
