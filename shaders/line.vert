@@ -1,8 +1,12 @@
 #version 450
 // Unlit lines for the ground grid and the debug-draw layer, for both eyes (see mesh.vert).
+// With RHOT_ENCODE_SRGB the colour is sRGB-encoded here, for a _UNORM view of the target.
+#extension GL_GOOGLE_include_directive : require
 #ifdef RHOT_MULTIVIEW
 #extension GL_EXT_multiview : require
 #endif
+
+#include "srgb.glsl"
 
 layout(set = 0, binding = 0) uniform Frame {
   mat4 clip_from_world[2];
@@ -26,5 +30,9 @@ void main() {
   uint eye = push.eye;
 #endif
   gl_Position = frame.clip_from_world[eye] * vec4(in_position, 1.0);
+#ifdef RHOT_ENCODE_SRGB
+  out_color = vec4(srgb_from_linear(in_color.rgb), in_color.a);
+#else
   out_color = in_color;
+#endif
 }

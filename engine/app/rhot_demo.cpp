@@ -94,6 +94,10 @@ int main(int argc, char** argv) {
   cli.add_option("--stereo", stereo, "auto (multiview where the driver passes a self-test), multiview or two-pass")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "multiview", "two-pass"}));
+  std::string shading = "auto";
+  cli.add_option("--shading", shading, "light per pixel, per vertex, or auto (per vertex on a CPU driver, where it halves the frame)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
   cli.add_flag("--validation,!--no-validation", render.validation,
                "Vulkan validation layer (default: on in debug builds; or set RHOT_VK_VALIDATION=1)");
   std::string source = "sim";
@@ -169,6 +173,7 @@ int main(int argc, char** argv) {
   render.stereo = stereo == "multiview" ? rhot::StereoMode::kMultiview
                   : stereo == "two-pass" ? rhot::StereoMode::kTwoPass
                                          : rhot::StereoMode::kAuto;
+  render.shading = *rhot::shading_from_string(shading);  // checked by the option
   if (!capture_dir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(capture_dir, ec);
@@ -247,7 +252,9 @@ int main(int argc, char** argv) {
     if (const auto enabled = (*renderer)->enable_overlay(); enabled) {
       overlay = std::make_unique<rhot::DemoOverlay>(
           **runtime, frame_loop.stats(),
-          rhot::OverlayInfo{scene_path, source, (*renderer)->info().device_name, render.eye_width_px, render.eye_height_px});
+          rhot::OverlayInfo{scene_path, source,
+                            (*renderer)->info().device_name + ", lit per " + rhot::to_string((*renderer)->info().shading),
+                            render.eye_width_px, render.eye_height_px});
       (*runtime)->set_overlay([&overlay] { overlay->build(); });
     } else {
       spdlog::warn("no overlay: {}", enabled.error());

@@ -23,7 +23,7 @@ namespace rhot {
 struct OverlayInfo {
   std::string scene;   // the scene file
   std::string source;  // "sim", "replay:FILE", ...
-  std::string device;  // the Vulkan device
+  std::string device;  // the Vulkan device (and how it shades)
   int eye_width_px = 0;
   int eye_height_px = 0;
 };

@@ -27,6 +27,22 @@ const char* to_string(StereoMode mode) {
   return "?";
 }
 
+const char* to_string(Shading shading) {
+  switch (shading) {
+    case Shading::kAuto: return "auto";
+    case Shading::kPerPixel: return "pixel";
+    case Shading::kPerVertex: return "vertex";
+  }
+  return "?";
+}
+
+std::optional<Shading> shading_from_string(std::string_view name) {
+  for (const Shading s : {Shading::kAuto, Shading::kPerPixel, Shading::kPerVertex}) {
+    if (name == to_string(s)) return s;
+  }
+  return std::nullopt;
+}
+
 std::expected<void, std::string> RendererSettings::check() const {
   if (eye_width_px < 16 || eye_width_px > 8192 || eye_height_px < 16 || eye_height_px > 8192) {
     return std::unexpected("eye size must be 16 to 8192 pixels each way, got " + std::to_string(eye_width_px) + "x" +
@@ -72,7 +88,7 @@ namespace {
 // the sides of the frustum, in a multiview pass, and compares the two layers. Mesa's lavapipe in
 // Debian 12 (22.3.6) drops such geometry from view 1; a correct driver gives identical layers.
 bool multiview_self_test(const vk::Context& context) {
-  vk::StereoPass probe(context, 64, 64, /*multiview=*/true, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+  vk::StereoPass probe(context, 64, 64, /*multiview=*/true, /*vertex_lit=*/false, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
   MeshData triangle;
   triangle.vertices = {{{-50.0f, -1.0f, -2.0f}, {0, 0, 1}}, {{50.0f, -1.0f, -2.0f}, {0, 0, 1}}, {{0.0f, 1.0f, -2.0f}, {0, 0, 1}}};
   triangle.indices = {0, 1, 2};
@@ -159,13 +175,17 @@ std::expected<std::unique_ptr<Renderer>, std::string> Renderer::create(const Ren
     return std::unexpected(info.device_name + " has no multiview support (VK_KHR_multiview); use two-pass");
   }
   info.mode = multiview ? StereoMode::kMultiview : StereoMode::kTwoPass;
+  info.shading = settings.shading != Shading::kAuto ? settings.shading
+                 : info.cpu_device                  ? Shading::kPerVertex
+                                                    : Shading::kPerPixel;
   impl->pass = std::make_unique<vk::StereoPass>(*impl->context, settings.eye_width_px, settings.eye_height_px, multiview,
-                                                settings.clear_color);
+                                                info.shading == Shading::kPerVertex, settings.clear_color);
   if (window != nullptr) {
     impl->window = window;
     impl->swapchain = std::make_unique<vk::Swapchain>(*impl->context);
   }
-  spdlog::info("renderer: {} x {} per eye, {}", settings.eye_width_px, settings.eye_height_px, to_string(info.mode));
+  spdlog::info("renderer: {} x {} per eye, {}, lit per {}", settings.eye_width_px, settings.eye_height_px,
+               to_string(info.mode), to_string(info.shading));
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 

@@ -12,8 +12,10 @@
 #include <cstdint>
 #include <expected>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -33,6 +35,17 @@ enum class StereoMode {
   kTwoPass,    // one render pass per eye
 };
 
+// Where the Lambert lighting is evaluated. On a CPU driver (lavapipe) the per-pixel work is most
+// of a frame: lighting per vertex, and encoding sRGB in the shader rather than in the target,
+// halves a 1080 x 1200 frame there (docs/PERFORMANCE.md). Flat faces (the table, the floor,
+// boxes) come out the same either way, within one level of rounding; curved ones get the diffuse
+// term interpolated across each triangle (Gouraud shading) rather than evaluated per pixel.
+enum class Shading {
+  kAuto,       // per vertex on a CPU driver, per pixel on a GPU
+  kPerPixel,   // lit per pixel; the _SRGB render target encodes
+  kPerVertex,  // lit and sRGB-encoded per vertex, drawn through a _UNORM view of the same target
+};
+
 struct RendererSettings {
   int eye_width_px = 1080;
   int eye_height_px = 1200;
@@ -42,6 +55,7 @@ struct RendererSettings {
   // variable RHOT_VK_DEVICE, if set, chooses instead.
   std::string device = "auto";
   StereoMode stereo = StereoMode::kAuto;
+  Shading shading = Shading::kAuto;
   // Enable VK_LAYER_KHRONOS_validation and count its messages (validation_messages()). Also
   // switched on by the environment variable RHOT_VK_VALIDATION=1.
   bool validation = false;
@@ -88,6 +102,7 @@ struct RendererInfo {
   bool multiview_supported = false;
   bool multiview_self_test_passed = false;  // meaningful where multiview_supported
   StereoMode mode = StereoMode::kTwoPass;   // what is actually used: kMultiview or kTwoPass
+  Shading shading = Shading::kPerPixel;     // what is actually used: kPerPixel or kPerVertex
 };
 
 class Renderer {
@@ -150,5 +165,8 @@ class Renderer {
 };
 
 const char* to_string(StereoMode mode);
+const char* to_string(Shading shading);  // "auto", "pixel" or "vertex"
+// The inverse of to_string(Shading), for command lines; nullopt for anything else.
+std::optional<Shading> shading_from_string(std::string_view name);
 
 }  // namespace rhot

@@ -1,6 +1,7 @@
 // Stereo rendering cost: the default scene (table, 13 objects, two hands, ground grid) and 500
 // lit cubes, drawn for both eyes and waited for (submit to fence), with multiview and with one
-// pass per eye; and the cost of reading a frame back. Each benchmark reports p50_ms and p99_ms
+// pass per eye, lit per pixel and per vertex (the renderer's "auto" picks per vertex on a CPU
+// driver); and the cost of reading a frame back. Each benchmark reports p50_ms and p99_ms
 // over its frames. Results: docs/PERFORMANCE.md.
 //
 // The device is "auto" (a GPU where there is one) unless RHOT_VK_DEVICE says otherwise.
@@ -24,18 +25,21 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::unique_ptr<rhot::Renderer> make_renderer(benchmark::State& state, rhot::StereoMode mode) {
+std::unique_ptr<rhot::Renderer> make_renderer(benchmark::State& state, rhot::StereoMode mode,
+                                              rhot::Shading shading = rhot::Shading::kAuto) {
   spdlog::set_level(spdlog::level::warn);
   rhot::RendererSettings s;
   s.eye_width_px = static_cast<int>(state.range(0));
   s.eye_height_px = static_cast<int>(state.range(1));
   s.stereo = mode;
+  s.shading = shading;
   auto r = rhot::Renderer::create(s);
   if (!r) {
     state.SkipWithError(r.error().c_str());
     return nullptr;
   }
-  state.SetLabel((*r)->info().device_name + ", " + rhot::to_string((*r)->info().mode));
+  state.SetLabel((*r)->info().device_name + ", " + rhot::to_string((*r)->info().mode) + ", lit per " +
+                 rhot::to_string((*r)->info().shading));
   return std::move(*r);
 }
 
@@ -80,8 +84,8 @@ void run_frames(benchmark::State& state, rhot::Renderer& renderer, const rhot::F
   report(state, ms);
 }
 
-void BM_DefaultScene(benchmark::State& state, rhot::StereoMode mode) {
-  auto renderer = make_renderer(state, mode);
+void BM_DefaultScene(benchmark::State& state, rhot::StereoMode mode, rhot::Shading shading) {
+  auto renderer = make_renderer(state, mode, shading);
   if (!renderer) return;
   rhot::World world;
   rhot::SceneRenderer scene_renderer(*renderer);
@@ -89,8 +93,8 @@ void BM_DefaultScene(benchmark::State& state, rhot::StereoMode mode) {
   run_frames(state, *renderer, frame, false);
 }
 
-void BM_Cubes500(benchmark::State& state, rhot::StereoMode mode) {
-  auto renderer = make_renderer(state, mode);
+void BM_Cubes500(benchmark::State& state, rhot::StereoMode mode, rhot::Shading shading) {
+  auto renderer = make_renderer(state, mode, shading);
   if (!renderer) return;
   run_frames(state, *renderer, cubes_frame(*renderer, 500), false);
 }
@@ -134,10 +138,16 @@ void sizes(benchmark::internal::Benchmark* b) {
   b->Args({1080, 1200})->Args({720, 800})->Args({540, 600})->Args({432, 480})->Args({64, 64})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
-BENCHMARK_CAPTURE(BM_DefaultScene, multiview, rhot::StereoMode::kMultiview)->Apply(sizes);
-BENCHMARK_CAPTURE(BM_DefaultScene, two_pass, rhot::StereoMode::kTwoPass)->Apply(sizes);
-BENCHMARK_CAPTURE(BM_Cubes500, multiview, rhot::StereoMode::kMultiview)->Apply(sizes);
-BENCHMARK_CAPTURE(BM_Cubes500, two_pass, rhot::StereoMode::kTwoPass)->Apply(sizes);
+using rhot::Shading;
+using rhot::StereoMode;
+BENCHMARK_CAPTURE(BM_DefaultScene, multiview, StereoMode::kMultiview, Shading::kAuto)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_DefaultScene, two_pass, StereoMode::kTwoPass, Shading::kAuto)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_DefaultScene, two_pass_pixel_lit, StereoMode::kTwoPass, Shading::kPerPixel)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_DefaultScene, two_pass_vertex_lit, StereoMode::kTwoPass, Shading::kPerVertex)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_Cubes500, multiview, StereoMode::kMultiview, Shading::kAuto)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_Cubes500, two_pass, StereoMode::kTwoPass, Shading::kAuto)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_Cubes500, two_pass_pixel_lit, StereoMode::kTwoPass, Shading::kPerPixel)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_Cubes500, two_pass_vertex_lit, StereoMode::kTwoPass, Shading::kPerVertex)->Apply(sizes);
 BENCHMARK(BM_DefaultSceneWithReadBack)->Apply(sizes);
 BENCHMARK_CAPTURE(BM_EmptyFrame, two_pass, rhot::StereoMode::kTwoPass)->Apply(sizes);
 BENCHMARK(BM_BuildFrameFromWorld)->Args({1080, 1200})->Unit(benchmark::kMicrosecond);

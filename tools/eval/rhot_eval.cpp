@@ -566,7 +566,7 @@ int grasp(const std::string& scenario) {
 
 // The demo's whole frame, headless: simulated cameras, tracking, physics and both eyes rendered
 // offscreen, every stage timed (engine/demo/DemoRuntime.h).
-int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device) {
+int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, rhot::Shading shading) {
   // stdout carries the JSON only: the log goes to stderr.
   spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));
   const auto scene = rhot::load_scene_file(scene_file);
@@ -578,6 +578,7 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   render.eye_width_px = scene->settings.headset.eye_width_px;
   render.eye_height_px = scene->settings.headset.eye_height_px;
   render.device = device;
+  render.shading = shading;
   if (!eye.empty()) {
     char x = 0, rest = 0;
     if (std::sscanf(eye.c_str(), "%d%c%d%c", &render.eye_width_px, &x, &render.eye_height_px, &rest) != 3 || (x != 'x' && x != 'X') ||
@@ -618,6 +619,7 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   j["device"] = (*renderer)->info().device_name;
   j["cpu_device"] = (*renderer)->info().cpu_device;
   j["stereo"] = (*renderer)->info().mode == rhot::StereoMode::kMultiview ? "multiview" : "two-pass";
+  j["shading"] = rhot::to_string((*renderer)->info().shading);
   std::cout << j.dump(2) << "\n";
   return 0;
 }
@@ -697,10 +699,14 @@ int main(int argc, char** argv) {
   frame_cmd->add_option("--eye", eye, "pixels per eye, WxH (default: the scene's headset, 1080x1200)");
   frame_cmd->add_option("--frames", frame_count, "frames to run")->capture_default_str()->check(CLI::Range(1, 1000000));
   frame_cmd->add_option("--device", device, "Vulkan device: auto, gpu, cpu, an index or part of its name")->capture_default_str();
+  std::string shading = "auto";
+  frame_cmd->add_option("--shading", shading, "light per pixel, per vertex, or auto (per vertex on a CPU driver)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
   frame_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
   if (grasp_cmd->parsed()) return grasp(scenario);
-  if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device);
+  if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading));
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
   if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, sigma, hand_frames, seed, volume_centre, filter);
   if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, sigma, frames, seed, dropout, volume, volume_centre);

@@ -1,5 +1,6 @@
 #include "engine/render/vk/StereoPass.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -11,6 +12,7 @@ namespace rhot::vk {
 namespace {
 
 constexpr VkFormat kColourFormat = VK_FORMAT_R8G8B8A8_SRGB;
+constexpr VkFormat kColourFormatUnorm = VK_FORMAT_R8G8B8A8_UNORM;  // the same bytes, not encoded on store
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 
 // Per-instance data, matching mesh.vert's locations 2 to 9.
@@ -38,10 +40,25 @@ bool finite(const glm::mat4& m) {
 }
 bool finite(const glm::vec4& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w); }
 
+// shaders/srgb.glsl on the CPU, for the clear colour.
+float srgb_from_linear(float linear) {
+  const float c = std::clamp(linear, 0.0f, 1.0f);
+  return c < 0.0031308f ? c * 12.92f : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+
 }  // namespace
 
-StereoPass::StereoPass(const Context& context, int eye_width_px, int eye_height_px, bool multiview, glm::vec4 clear_color)
-    : ctx_(context), width_(eye_width_px), height_(eye_height_px), multiview_(multiview), clear_color_(clear_color) {
+StereoPass::StereoPass(const Context& context, int eye_width_px, int eye_height_px, bool multiview, bool vertex_lit,
+                       glm::vec4 clear_color)
+    : ctx_(context),
+      width_(eye_width_px),
+      height_(eye_height_px),
+      multiview_(multiview),
+      vertex_lit_(vertex_lit),
+      attachment_format_(vertex_lit ? kColourFormatUnorm : kColourFormat),
+      clear_color_(vertex_lit ? glm::vec4(srgb_from_linear(clear_color.r), srgb_from_linear(clear_color.g),
+                                          srgb_from_linear(clear_color.b), clear_color.a)
+                              : clear_color) {
   RHOT_PRECONDITION(!multiview || context.multiview_supported(), "StereoPass: the device has no multiview");
   create_targets();
   create_render_pass();
@@ -88,7 +105,9 @@ void StereoPass::create_targets() {
   ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
   ici.format = kColourFormat;
   ici.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  if (vertex_lit_) ici.flags = VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT;  // drawn through a _UNORM view
   colour_ = ctx_.create_image(ici);
+  ici.flags = 0;
   ici.format = kDepthFormat;
   ici.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
   depth_ = ctx_.create_image(ici);
@@ -105,11 +124,11 @@ void StereoPass::create_targets() {
     return view;
   };
   if (multiview_) {
-    colour_views_[0] = make_view(colour_.image, kColourFormat, VK_IMAGE_ASPECT_COLOR_BIT, 0, 2);
+    colour_views_[0] = make_view(colour_.image, attachment_format_, VK_IMAGE_ASPECT_COLOR_BIT, 0, 2);
     depth_views_[0] = make_view(depth_.image, kDepthFormat, VK_IMAGE_ASPECT_DEPTH_BIT, 0, 2);
   } else {
     for (std::uint32_t eye = 0; eye < 2; ++eye) {
-      colour_views_[eye] = make_view(colour_.image, kColourFormat, VK_IMAGE_ASPECT_COLOR_BIT, eye, 1);
+      colour_views_[eye] = make_view(colour_.image, attachment_format_, VK_IMAGE_ASPECT_COLOR_BIT, eye, 1);
       depth_views_[eye] = make_view(depth_.image, kDepthFormat, VK_IMAGE_ASPECT_DEPTH_BIT, eye, 1);
     }
   }
@@ -117,7 +136,7 @@ void StereoPass::create_targets() {
 
 void StereoPass::create_render_pass() {
   std::array<VkAttachmentDescription, 2> attachments{};
-  attachments[0].format = kColourFormat;
+  attachments[0].format = attachment_format_;
   attachments[0].samples = VK_SAMPLE_COUNT_1_BIT;
   attachments[0].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
   attachments[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
@@ -302,13 +321,14 @@ void StereoPass::create_pipelines() {
   write.pBufferInfo = &info;
   vkUpdateDescriptorSets(d, 1, &write, 0, nullptr);
 
-  if (multiview_) {
-    mesh_pipeline_ = create_pipeline(shaders::kMeshVertMultiview, shaders::kMeshFrag, false);
-    line_pipeline_ = create_pipeline(shaders::kLineVertMultiview, shaders::kLineFrag, true);
-  } else {
-    mesh_pipeline_ = create_pipeline(shaders::kMeshVert, shaders::kMeshFrag, false);
-    line_pipeline_ = create_pipeline(shaders::kLineVert, shaders::kLineFrag, true);
-  }
+  using Spirv = std::span<const std::uint32_t>;
+  const auto pick = [this](Spirv two_pass, Spirv multiview) { return multiview_ ? multiview : two_pass; };
+  // Vertex-lit meshes need only the interpolated colour passed through: line.frag does that.
+  mesh_pipeline_ = vertex_lit_ ? create_pipeline(pick(shaders::kMeshVertLit, shaders::kMeshVertLitMultiview), shaders::kLineFrag, false)
+                               : create_pipeline(pick(shaders::kMeshVert, shaders::kMeshVertMultiview), shaders::kMeshFrag, false);
+  line_pipeline_ = create_pipeline(vertex_lit_ ? pick(shaders::kLineVertSrgb, shaders::kLineVertSrgbMultiview)
+                                               : pick(shaders::kLineVert, shaders::kLineVertMultiview),
+                                   shaders::kLineFrag, true);
 }
 
 void StereoPass::ensure_capacity(Buffer& buffer, VkDeviceSize bytes, VkBufferUsageFlags usage) {

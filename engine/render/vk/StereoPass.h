@@ -1,6 +1,9 @@
 #pragma once
 // Both eyes' render targets and the passes that fill them. The colour target is one image with
 // two array layers (0: left eye, 1: right eye) in R8G8B8A8_SRGB, plus a two-layer depth image.
+// Lit per pixel, the passes draw into it as _SRGB and the target encodes; lit per vertex (see
+// shaders/mesh.vert), they draw through an R8G8B8A8_UNORM view and the shaders encode. Either
+// way reading back or blitting the image sees sRGB-encoded bytes.
 // In multiview mode one render pass draws both layers (the shaders pick the eye by
 // gl_ViewIndex); in two-pass mode the same draws run once per layer with the eye in a push
 // constant. Either way, after a frame the colour image is in TRANSFER_SRC_OPTIMAL layout, ready to
@@ -24,7 +27,9 @@ struct SubmitSync {
 
 class StereoPass {
  public:
-  StereoPass(const Context& context, int eye_width_px, int eye_height_px, bool multiview, glm::vec4 clear_color);
+  // clear_color is linear RGBA.
+  StereoPass(const Context& context, int eye_width_px, int eye_height_px, bool multiview, bool vertex_lit,
+             glm::vec4 clear_color);
   ~StereoPass();
   StereoPass(const StereoPass&) = delete;
   StereoPass& operator=(const StereoPass&) = delete;
@@ -42,6 +47,7 @@ class StereoPass {
   int width() const { return width_; }
   int height() const { return height_; }
   bool multiview() const { return multiview_; }
+  bool vertex_lit() const { return vertex_lit_; }
 
  private:
   void create_targets();
@@ -55,7 +61,9 @@ class StereoPass {
   int width_;
   int height_;
   bool multiview_;
-  glm::vec4 clear_color_;
+  bool vertex_lit_;
+  VkFormat attachment_format_;  // the format the passes draw through
+  glm::vec4 clear_color_;       // as the attachment takes it: encoded when vertex-lit
 
   ImageMemory colour_;
   ImageMemory depth_;
