@@ -71,6 +71,7 @@ struct Renderer::Impl {
   bool warned_non_finite = false;
 
   ~Impl() {
+    if (pass) pass->finish();  // the frame in flight may use the overlay's and swapchain's objects
     overlay.reset();
     swapchain.reset();
     pass.reset();
@@ -214,6 +215,9 @@ void Renderer::render(const FrameInput& frame) {
   Impl& m = *impl_;
   std::size_t skipped = 0;
   bool presented = false;
+  // The previous frame must be drawn before its swapchain semaphores, overlay buffers or
+  // (after a resize) swapchain images are touched again.
+  m.pass->finish();
   if (m.overlay) m.overlay->end_frame();
   if (m.swapchain && m.swapchain->prepare(m.window->framebuffer_size())) {
     if (m.swapchain->acquire()) {
@@ -240,6 +244,7 @@ void Renderer::render(const FrameInput& frame) {
           },
           sync);
       if (capture) {
+        m.pass->finish();
         m.window_image = Image(sw, sh);
         m.swapchain->read_copy(m.window_buffer, m.window_image.rgba);
         m.capture_window = false;
@@ -257,6 +262,8 @@ void Renderer::render(const FrameInput& frame) {
 }
 
 std::array<Image, 2> Renderer::read_eyes() { return impl_->pass->read_back(); }
+
+void Renderer::finish() { impl_->pass->finish(); }
 
 Image Renderer::read_eye(int eye) {
   RHOT_PRECONDITION(eye == kLeftEye || eye == kRightEye, "Renderer::read_eye: eye is 0 (left) or 1 (right)");

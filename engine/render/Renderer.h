@@ -123,18 +123,25 @@ class Renderer {
   // Uploads a mesh. Precondition: a valid MeshData (indices in range, three per triangle).
   MeshHandle upload_mesh(const MeshData& mesh);
 
-  // Draws both eyes and waits for the GPU to finish (submit to fence). With a window, also shows
-  // both eyes side by side in it (unless it is minimised).
+  // Draws both eyes: waits for the previous frame to be drawn, then records and submits this one
+  // and returns without waiting for it, so the caller's next frame (tracking, physics) runs while
+  // the driver draws this one. One frame is in flight at most: the next render(), read_eyes(),
+  // read_eye() or finish() waits for it. With a window, also shows both eyes side by side in it
+  // (unless it is minimised).
   void render(const FrameInput& frame);
 
-  // Copies the last rendered frame of one eye (or both) to the CPU.
+  // Waits until the last rendered frame has been drawn (and presented, with a window).
+  void finish();
+
+  // Copies the last rendered frame of one eye (or both) to the CPU, waiting for it first.
   Image read_eye(int eye);
   std::array<Image, 2> read_eyes();
 
   // Validation-layer warnings and errors so far (0 when validation is off).
   std::uint64_t validation_messages() const;
 
-  // Time of the last render(): recording, submitting and waiting for the fence.
+  // Time of the last render(): waiting for the frame before it, recording and submitting (not
+  // drawing it: that overlaps the caller's next frame).
   double last_render_ms() const;
 
   // With a window: Dear ImGui over the desktop window, taking the window's mouse and keyboard.

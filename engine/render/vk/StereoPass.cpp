@@ -342,7 +342,8 @@ void StereoPass::ensure_capacity(Buffer& buffer, VkDeviceSize bytes, VkBufferUsa
 std::size_t StereoPass::render(const FrameInput& frame, std::span<const GpuMesh> meshes,
                                const std::function<void(VkCommandBuffer, VkImage)>& extra, const SubmitSync& sync) {
   std::size_t skipped = 0;
-  // ---- frame data into host-visible buffers (the previous frame has finished: we waited).
+  // ---- frame data into host-visible buffers, once the previous frame no longer reads them.
+  finish();
   FrameUniforms u{};
   for (int eye = 0; eye < 2; ++eye) u.clip_from_world[eye] = frame.views.clip_from_world(eye);
   u.light_dir_world = glm::vec4(glm::normalize(frame.light_dir_world), 0.0f);
@@ -452,9 +453,15 @@ std::size_t StereoPass::render(const FrameInput& frame, std::span<const GpuMesh>
     submit.pSignalSemaphores = &sync.signal;
   }
   RHOT_VK_CHECK(vkQueueSubmit(ctx_.queue(), 1, &submit, fence_));
+  in_flight_ = true;
+  return skipped;
+}
+
+void StereoPass::finish() {
+  if (!in_flight_) return;
   wait_for_fence();
   RHOT_VK_CHECK(vkResetFences(ctx_.device(), 1, &fence_));
-  return skipped;
+  in_flight_ = false;
 }
 
 void StereoPass::wait_for_fence() {
@@ -470,6 +477,7 @@ void StereoPass::wait_for_fence() {
 }
 
 std::array<Image, 2> StereoPass::read_back() {
+  finish();
   const auto w = static_cast<std::uint32_t>(width_);
   const auto h = static_cast<std::uint32_t>(height_);
   ctx_.run_once([&](VkCommandBuffer cmd) {

@@ -35,12 +35,16 @@ class StereoPass {
   StereoPass& operator=(const StereoPass&) = delete;
 
   // Records one frame (and then whatever `extra` records into the same command buffer, such as a
-  // blit to a window), submits it and waits for the fence. Instances and lines that are not
-  // finite are skipped. Returns the number skipped.
+  // blit to a window) and submits it, first waiting for the previous frame (finish()). Returns
+  // without waiting for this one: one frame is in flight until the next render(), read_back() or
+  // finish(). Instances and lines that are not finite are skipped. Returns the number skipped.
   std::size_t render(const FrameInput& frame, std::span<const GpuMesh> meshes,
                      const std::function<void(VkCommandBuffer, VkImage)>& extra = {}, const SubmitSync& sync = {});
 
-  // Copies both layers to the CPU (submit and wait).
+  // Waits until the frame last submitted has been drawn (and whatever `extra` recorded has run).
+  void finish();
+
+  // Copies both layers to the CPU (finish, then submit and wait).
   std::array<Image, 2> read_back();
 
   VkImage colour_image() const { return colour_.image; }
@@ -85,6 +89,7 @@ class StereoPass {
   Buffer readback_;
   VkCommandBuffer cmd_ = VK_NULL_HANDLE;
   VkFence fence_ = VK_NULL_HANDLE;
+  bool in_flight_ = false;  // cmd_ submitted, fence_ not yet waited for
 };
 
 }  // namespace rhot::vk

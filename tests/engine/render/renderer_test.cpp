@@ -111,6 +111,45 @@ TEST_F(RendererTest, BothEyesSeeTheSameLargeGeometry) {
   }
 }
 
+// render() returns with the frame in flight; the next render() must wait for it before reusing
+// (or, when it grows, replacing) the instance buffer, and read_eyes() must show the last frame.
+// Without those waits the validation layer reports a destroyed buffer still in use, or the
+// picture mixes the frames.
+TEST_F(RendererTest, BackToBackFramesNeverTouchTheFrameInFlight) {
+  auto renderer = make(test_settings(96, 96));
+  ASSERT_NE(renderer, nullptr);
+  HeadsetSettings headset;
+  headset.eye_width_px = headset.eye_height_px = 96;
+  const StereoViews views = stereo_views(default_world_from_head(), headset);
+  const MeshHandle box = renderer->upload_mesh(make_box(glm::vec3(0.01f)));
+  const auto frame_of = [&](int count, glm::vec4 color) {
+    FrameInput f = flat_frame(views);
+    MeshBatch batch{box, {}};
+    for (int i = 0; i < count; ++i) {
+      const float x = -0.2f + 0.4f * static_cast<float>(i % 64) / 64.0f;
+      const float y = 0.7f + 0.3f * static_cast<float>(i / 64) / 64.0f;
+      batch.instances.push_back({glm::translate(glm::mat4(1.0f), {x, y, -0.6f}), color});
+    }
+    f.batches.push_back(std::move(batch));
+    return f;
+  };
+  // 1, then 4096 instances (the instance buffer is replaced while the first frame may be drawn),
+  // then 2 in another colour: only the last frame's colour may be in the picture.
+  renderer->render(frame_of(1, glm::vec4(1, 0, 0, 1)));
+  renderer->render(frame_of(4096, glm::vec4(0, 0, 1, 1)));
+  renderer->render(frame_of(2, glm::vec4(0, 1, 0, 1)));
+  const auto eyes = renderer->read_eyes();
+  for (int eye = 0; eye < 2; ++eye) {
+    EXPECT_GT(count_colour(eyes[eye], {0, 255, 0}), 0) << "eye " << eye;
+    EXPECT_EQ(count_colour(eyes[eye], {255, 0, 0}), 0) << "eye " << eye;
+    EXPECT_EQ(count_colour(eyes[eye], {0, 0, 255}), 0) << "eye " << eye;
+  }
+  renderer->render(frame_of(4096, glm::vec4(0, 0, 1, 1)));
+  renderer->finish();
+  EXPECT_GT(count_colour(renderer->read_eye(kLeftEye), {0, 0, 255}), 200);  // about 400
+  EXPECT_NO_VALIDATION_MESSAGES(renderer);
+}
+
 // Per-pixel channel differences between two same-sized images: the count of pixels whose largest
 // RGB difference exceeds each of 0, 1, 2, 4, 8, 16, 32, 64 levels, and the largest difference.
 struct ChannelDiffs {
