@@ -15,9 +15,7 @@ namespace rhot {
 using Clock = std::chrono::steady_clock;
 
 namespace {
-double wall_seconds() {
-  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-}
+double wall_seconds() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
 }  // namespace
 
 std::expected<void, std::string> FrameLoopSettings::check() const {
@@ -58,10 +56,10 @@ void FrameLoop::step() {
       const auto slowest = std::max_element(stage_ms_.begin(), stage_ms_.end());
       const std::string stage =
           slowest == stage_ms_.end() ? "none" : systems_.names()[static_cast<std::size_t>(slowest - stage_ms_.begin())];
-      spdlog::warn("frame {} took {:.2f} ms, over its {:.2f} ms budget (slowest stage: {} {:.2f} ms); {} frame(s) "
-                   "over budget since the last warning",
-                   frame.frame_index, frame_ms, settings_.budget_ms, stage,
-                   slowest == stage_ms_.end() ? 0.0 : *slowest, misses_since_warning_);
+      spdlog::warn(
+          "frame {} took {:.2f} ms, over its {:.2f} ms budget (slowest stage: {} {:.2f} ms); {} frame(s) "
+          "over budget since the last warning",
+          frame.frame_index, frame_ms, settings_.budget_ms, stage, slowest == stage_ms_.end() ? 0.0 : *slowest, misses_since_warning_);
       last_warning_s_ = now;
       misses_since_warning_ = 0;
     }

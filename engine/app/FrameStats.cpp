@@ -71,8 +71,7 @@ nlohmann::json FrameStats::to_json() const {
   j["frames"] = frames();
   j["budget_ms"] = budget_ms_;
   j["frames_over_budget"] = over_budget_;
-  j["budget_miss_fraction"] =
-      frames() == 0 ? 0.0 : static_cast<double>(over_budget_) / static_cast<double>(frames());
+  j["budget_miss_fraction"] = frames() == 0 ? 0.0 : static_cast<double>(over_budget_) / static_cast<double>(frames());
   j["window_frames"] = std::min<std::uint64_t>(frames(), window_);
   put(j, frame_summary());
   nlohmann::json stages = nlohmann::json::object();

@@ -16,16 +16,15 @@ namespace rhot {
 struct TimingSummary {
   std::uint64_t count = 0;  // samples over the whole run
   double mean_ms = 0.0;
-  double p50_ms = 0.0;      // over the window
-  double p99_ms = 0.0;      // over the window
-  double max_ms = 0.0;      // over the whole run
+  double p50_ms = 0.0;  // over the window
+  double p99_ms = 0.0;  // over the window
+  double max_ms = 0.0;  // over the whole run
 };
 
 class FrameStats {
  public:
   // Precondition: budget_ms > 0, window_frames > 0.
-  explicit FrameStats(std::vector<std::string> stage_names, double budget_ms = 11.1,
-                      std::size_t window_frames = 65536);
+  explicit FrameStats(std::vector<std::string> stage_names, double budget_ms = 11.1, std::size_t window_frames = 65536);
 
   // Records one frame: the whole frame's time and each stage's (indexed like stage_names).
   // Precondition: stage_ms.size() == number of stages; times finite and >= 0.

@@ -58,8 +58,9 @@ bool parse_size(const std::string& text, int& w, int& h) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App cli{"rhot-demo: tracked hands and objects in VR, drawn for both eyes of a headset.\n"
-               "With no arguments it runs the default scene; with no display it runs headless."};
+  CLI::App cli{
+      "rhot-demo: tracked hands and objects in VR, drawn for both eyes of a headset.\n"
+      "With no arguments it runs the default scene; with no display it runs headless."};
   std::string scene_path = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
   bool headless = false;
   std::uint64_t frames = 0;
@@ -88,8 +89,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"eyes", "side-by-side"}));
   cli.add_option("--eye", eye_size, "Pixels per eye, WxH (default: the scene's headset, 1080x1200)");
-  cli.add_option("--device", render.device,
-                 "Vulkan device: auto, gpu, cpu, an index or part of its name (or set RHOT_VK_DEVICE)")
+  cli.add_option("--device", render.device, "Vulkan device: auto, gpu, cpu, an index or part of its name (or set RHOT_VK_DEVICE)")
       ->capture_default_str();
   cli.add_option("--stereo", stereo, "auto (multiview where the driver passes a self-test), multiview or two-pass")
       ->capture_default_str()
@@ -112,11 +112,16 @@ int main(int argc, char** argv) {
                  "With --source video: grey level above which pixels are marker (-1: automatic, background + 5 sigma, at least 40)")
       ->capture_default_str()
       ->check(CLI::Range(-1, 254));
-  cli.add_option("--speed", demo.pipeline.speed, "Replay speed (with --source replay:FILE)")->capture_default_str()->check(CLI::Range(0.01, 100.0));
-  cli.add_option("--record", demo.pipeline.record, "Record every frame's hands and tracked objects to FILE (JSON Lines, docs/recording-format.md)");
+  cli.add_option("--speed", demo.pipeline.speed, "Replay speed (with --source replay:FILE)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 100.0));
+  cli.add_option("--record", demo.pipeline.record,
+                 "Record every frame's hands and tracked objects to FILE (JSON Lines, docs/recording-format.md)");
   cli.add_option("--rig", demo.pipeline.rig_file, "Camera rig (OpenCV YAML; default: the scene's, else assets/rigs/seated-4.yaml)")
       ->check(CLI::ExistingFile);
-  cli.add_option("--sigma", demo.pipeline.sigma_px, "Simulated pixel noise, standard deviation")->capture_default_str()->check(CLI::Range(0.0, 50.0));
+  cli.add_option("--sigma", demo.pipeline.sigma_px, "Simulated pixel noise, standard deviation")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 50.0));
   cli.add_option("--seed", demo.pipeline.seed, "Simulation seed")->capture_default_str();
   cli.add_flag("--filter", demo.pipeline.filter_hands, "1-euro filter the tracked hands (steadier at rest, some lag)");
   std::vector<std::string> debug_views;
@@ -125,7 +130,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"markers", "rays", "frusta", "colliders"}));
   cli.add_flag("--points", demo.debug.markers, "Draw the triangulated marker points (as --debug-views markers)");
   std::string window_capture;
-  cli.add_option("--window-capture", window_capture, "With a window and --frames: write what it shows on the last frame (both eyes and the overlay) as PNG");
+  cli.add_option("--window-capture", window_capture,
+                 "With a window and --frames: write what it shows on the last frame (both eyes and the overlay) as PNG");
   bool no_overlay = false;
   cli.add_flag("--no-overlay", no_overlay, "No Dear ImGui overlay in the window");
   CLI11_PARSE(cli, argc, argv);
@@ -170,7 +176,7 @@ int main(int argc, char** argv) {
     render.eye_width_px = headset.eye_width_px;
     render.eye_height_px = headset.eye_height_px;
   }
-  render.stereo = stereo == "multiview" ? rhot::StereoMode::kMultiview
+  render.stereo = stereo == "multiview"  ? rhot::StereoMode::kMultiview
                   : stereo == "two-pass" ? rhot::StereoMode::kTwoPass
                                          : rhot::StereoMode::kAuto;
   render.shading = *rhot::shading_from_string(shading);  // checked by the option
@@ -187,8 +193,8 @@ int main(int argc, char** argv) {
   if (!headless) {
     // Both eyes side by side, scaled to fit a desktop.
     const double scale = std::min(1.0, 1600.0 / (2.0 * render.eye_width_px));
-    auto created = rhot::Window::create("rhot", static_cast<int>(2.0 * render.eye_width_px * scale),
-                                        static_cast<int>(render.eye_height_px * scale));
+    auto created =
+        rhot::Window::create("rhot", static_cast<int>(2.0 * render.eye_width_px * scale), static_cast<int>(render.eye_height_px * scale));
     if (created) {
       window = std::move(*created);
     } else {
@@ -261,8 +267,8 @@ int main(int argc, char** argv) {
     }
   }
   rhot::Pipeline& pipeline = (*runtime)->pipeline();
-  const std::uint64_t ran = frame_loop.run(
-      frames, [&] { return !g_interrupted.load() && !(window && window->should_close()) && !pipeline.source_ended(); });
+  const std::uint64_t ran =
+      frame_loop.run(frames, [&] { return !g_interrupted.load() && !(window && window->should_close()) && !pipeline.source_ended(); });
   if (const rhot::VideoSource* video = pipeline.video()) {
     for (std::size_t c = 0; c < video->stats().size(); ++c) {
       const rhot::VideoCameraStats& s = video->stats()[c];
@@ -290,10 +296,10 @@ int main(int argc, char** argv) {
 
   const rhot::FrameStats& stats = frame_loop.stats();
   const rhot::TimingSummary whole = stats.frame_summary();
-  spdlog::info("{} frames ({:.1f} s simulated): frame p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms; {} over the "
-               "{:.1f} ms budget",
-               ran, frame_loop.time_s(), whole.p50_ms, whole.p99_ms, whole.max_ms, stats.frames_over_budget(),
-               stats.budget_ms());
+  spdlog::info(
+      "{} frames ({:.1f} s simulated): frame p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms; {} over the "
+      "{:.1f} ms budget",
+      ran, frame_loop.time_s(), whole.p50_ms, whole.p99_ms, whole.max_ms, stats.frames_over_budget(), stats.budget_ms());
 
   if (!stats_path.empty()) {
     nlohmann::json j = stats.to_json();

@@ -30,8 +30,7 @@ class ComponentPool final : public ComponentPoolBase {
   static constexpr std::uint32_t kAbsent = 0xffffffffu;
 
   bool contains(Entity e) const override {
-    return e.index < sparse_.size() && sparse_[e.index] != kAbsent &&
-           entities_[sparse_[e.index]] == e;
+    return e.index < sparse_.size() && sparse_[e.index] != kAbsent && entities_[sparse_[e.index]] == e;
   }
 
   // Adds the component, or replaces the value an entity already has.

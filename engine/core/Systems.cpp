@@ -30,8 +30,8 @@ std::expected<void, std::string> Systems::build() {
     auto link = [&](const std::string& other, bool other_first) -> std::expected<void, std::string> {
       const auto it = index.find(other);
       if (it == index.end()) {
-        return std::unexpected("system '" + systems_[i].name + "' must run " +
-                               (other_first ? "after" : "before") + " unknown system '" + other + "'");
+        return std::unexpected("system '" + systems_[i].name + "' must run " + (other_first ? "after" : "before") + " unknown system '" +
+                               other + "'");
       }
       const std::size_t first = other_first ? it->second : i;
       const std::size_t then = other_first ? i : it->second;

@@ -24,9 +24,9 @@ struct FrameContext {
 };
 
 struct SystemDesc {
-  std::string name;                  // unique; used in logs, statistics and dependencies
-  std::vector<std::string> after;    // systems that must run before this one
-  std::vector<std::string> before;   // systems that must run after this one
+  std::string name;                 // unique; used in logs, statistics and dependencies
+  std::vector<std::string> after;   // systems that must run before this one
+  std::vector<std::string> before;  // systems that must run after this one
   std::function<void(World&, const FrameContext&)> run;
 };
 
@@ -50,8 +50,8 @@ class Systems {
   std::size_t size() const { return systems_.size(); }
 
  private:
-  std::vector<SystemDesc> systems_;         // in the order added
-  std::vector<std::size_t> order_;          // indices into systems_, run order
+  std::vector<SystemDesc> systems_;  // in the order added
+  std::vector<std::size_t> order_;   // indices into systems_, run order
   std::vector<std::string> ordered_names_;
   bool built_ = false;
 };

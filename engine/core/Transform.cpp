@@ -30,8 +30,8 @@ std::expected<void, std::string> set_parent(World& world, Entity child, Entity p
   }
   for (Entity a = parent; !a.is_null() && world.alive(a);) {
     if (a == child) {
-      return std::unexpected("set_parent: making " + detail::describe_entity(parent) + " the parent of " +
-                             detail::describe_entity(child) + " would create a cycle");
+      return std::unexpected("set_parent: making " + detail::describe_entity(parent) + " the parent of " + detail::describe_entity(child) +
+                             " would create a cycle");
     }
     const Parent* p = world.find<Parent>(a);
     a = p != nullptr ? p->entity : kNullEntity;

@@ -29,12 +29,12 @@ Entity World::create() {
 }
 
 bool World::alive(Entity e) const {
-  return e.index < generations_.size() && generations_[e.index] == e.generation &&
-         e.generation != kRetired;
+  return e.index < generations_.size() && generations_[e.index] == e.generation && e.generation != kRetired;
 }
 
 void World::require_alive(Entity e, const char* operation) const {
-  if (alive(e)) [[likely]] return;
+  if (alive(e)) [[likely]]
+    return;
   RHOT_PRECONDITION(false, std::string("World::") + operation + ": " + detail::describe_entity(e) +
                                (e.is_null() ? "" : " is stale (destroyed, or from another world)"));
 }

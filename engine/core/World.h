@@ -301,9 +301,9 @@ void View<Ts...>::each_multi(Fn& fn, std::index_sequence<K...>) {
   std::array<std::uint32_t, sizeof...(Ts)> at{};
   for (std::size_t i = 0; i < entities.size(); ++i) {
     const Entity e = entities[i];
-    const bool all = ((at[K] = (K == lead ? static_cast<std::uint32_t>(i) : std::get<K>(pools_)->index_of(e, i)),
-                       at[K] != ComponentPool<Ts>::kAbsent) &&
-                      ...);
+    const bool all =
+        ((at[K] = (K == lead ? static_cast<std::uint32_t>(i) : std::get<K>(pools_)->index_of(e, i)), at[K] != ComponentPool<Ts>::kAbsent) &&
+         ...);
     if (!all) continue;
     if constexpr (std::is_invocable_v<Fn&, Entity, Ts&...>) {
       fn(e, std::get<K>(pools_)->components()[at[K]]...);

@@ -170,7 +170,8 @@ void DemoOverlay::controls_panel() {
   Pipeline& p = demo_.pipeline();
   if (p.replaying()) {
     auto speed = static_cast<float>(p.speed());
-    if (ImGui::SliderFloat("speed", &speed, 0.05f, 4.0f, "%.2f x", ImGuiSliderFlags_Logarithmic)) p.set_speed(std::clamp(static_cast<double>(speed), 0.05, 4.0));
+    if (ImGui::SliderFloat("speed", &speed, 0.05f, 4.0f, "%.2f x", ImGuiSliderFlags_Logarithmic))
+      p.set_speed(std::clamp(static_cast<double>(speed), 0.05, 4.0));
   }
   DebugViews& v = demo_.debug_views();
   ImGui::Checkbox("markers", &v.markers);

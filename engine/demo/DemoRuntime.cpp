@@ -6,7 +6,8 @@
 
 namespace rhot {
 
-std::expected<std::unique_ptr<DemoRuntime>, std::string> DemoRuntime::create(const SceneDesc& scene, Renderer* renderer, DemoOptions options) {
+std::expected<std::unique_ptr<DemoRuntime>, std::string> DemoRuntime::create(const SceneDesc& scene, Renderer* renderer,
+                                                                             DemoOptions options) {
   std::unique_ptr<DemoRuntime> d(new DemoRuntime());
   d->scene_ = scene;
   d->options_ = options;

@@ -42,7 +42,7 @@ class DemoRuntime {
   // `renderer` may be null (no render stage). Fails naming what is wrong (rig, stars, layouts,
   // physics).
   [[nodiscard]] static std::expected<std::unique_ptr<DemoRuntime>, std::string> create(const SceneDesc& scene, Renderer* renderer,
-                                                                                      DemoOptions options);
+                                                                                       DemoOptions options);
 
   // Adds the demo's systems; `after` names a system they run after ("" for none).
   void add_systems(Systems& systems, const std::string& after);
@@ -85,7 +85,7 @@ class DemoRuntime {
   bool step_requested_ = false;
   bool advancing_ = true;  // this frame runs source to physics
   bool advancing_started_ = false;
-  double demo_time_s_ = 0.0;   // of the frame that ran last
+  double demo_time_s_ = 0.0;  // of the frame that ran last
   double next_time_s_ = 0.0;
   std::uint64_t demo_frames_ = 0;
 };

@@ -34,7 +34,8 @@ std::pair<Eigen::Vector3d, double> at_time(const std::vector<Key>& keys, double 
   for (std::size_t i = 1; i < keys.size(); ++i) {
     if (t <= keys[i].t) {
       const double s = (t - keys[i - 1].t) / (keys[i].t - keys[i - 1].t);
-      return {keys[i - 1].centre + s * (keys[i].centre - keys[i - 1].centre), keys[i - 1].closure + s * (keys[i].closure - keys[i - 1].closure)};
+      return {keys[i - 1].centre + s * (keys[i].centre - keys[i - 1].centre),
+              keys[i - 1].closure + s * (keys[i].closure - keys[i - 1].closure)};
     }
   }
   return {keys.back().centre, keys.back().closure};
@@ -58,10 +59,12 @@ SceneDesc make_scene(bool sphere, double size_m, bool second_pedestal, float ped
   floor.body = PhysicsBody{BodyType::kStatic, 0.0f, 0.8f, 0.0f};
   scene.entities.push_back(floor);
   const PhysicsBody fixed{BodyType::kStatic, 0.0f, 0.8f, 0.0f};
-  scene.entities.push_back(box_entity("pedestal", {0.0f, 0.5f * kPedestalTopF, 0.0f}, {pedestal_width_m, kPedestalTopF, pedestal_width_m}, fixed));
+  scene.entities.push_back(
+      box_entity("pedestal", {0.0f, 0.5f * kPedestalTopF, 0.0f}, {pedestal_width_m, kPedestalTopF, pedestal_width_m}, fixed));
   if (second_pedestal) {
     scene.entities.push_back(box_entity("pedestal-2", {0.3f, 0.5f * kPedestalTopF, 0.0f}, {0.12f, kPedestalTopF, 0.12f}, fixed));
-    scene.entities.push_back(box_entity("zone", {0.3f, static_cast<float>(kPedestalTop) + 0.05f, 0.0f}, {0.12f, 0.1f, 0.12f}, std::nullopt));
+    scene.entities.push_back(
+        box_entity("zone", {0.3f, static_cast<float>(kPedestalTop) + 0.05f, 0.0f}, {0.12f, 0.1f, 0.12f}, std::nullopt));
   }
   EntityDesc object;
   object.name = "object";
@@ -82,7 +85,8 @@ SceneDesc make_scene(bool sphere, double size_m, bool second_pedestal, float ped
 std::span<const std::string_view> grasp_scenario_names() { return kNames; }
 
 std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name, const SceneDesc* given) {
-  if (std::find(kNames.begin(), kNames.end(), name) == kNames.end()) return std::unexpected("no grasp scenario \"" + std::string(name) + "\"");
+  if (std::find(kNames.begin(), kNames.end(), name) == kNames.end())
+    return std::unexpected("no grasp scenario \"" + std::string(name) + "\"");
   const bool sphere = name == "pinch";
   const double size = sphere ? 0.03 : 0.05;
   SceneDesc scene;
@@ -113,16 +117,27 @@ std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_v
   double duration = 0.0;
   Eigen::Vector3d swing_velocity = Eigen::Vector3d::Zero();
   if (name == "lift" || name == "pinch" || name == "hidden-markers") {
-    right_keys = {{0.0, start + 0.15 * up, 0.0}, {0.3, start + 0.15 * up, 0.0}, {0.8, start, 0.0}, {1.3, start, 1.0}, {2.3, start + 0.15 * up, 1.0},
-                  {4.3, start + 0.15 * up, 1.0}, {4.5, start + 0.15 * up, 0.0}, {4.6, start + 0.25 * up, 0.0}};
+    right_keys = {{0.0, start + 0.15 * up, 0.0},
+                  {0.3, start + 0.15 * up, 0.0},
+                  {0.8, start, 0.0},
+                  {1.3, start, 1.0},
+                  {2.3, start + 0.15 * up, 1.0},
+                  {4.3, start + 0.15 * up, 1.0},
+                  {4.5, start + 0.15 * up, 0.0},
+                  {4.6, start + 0.25 * up, 0.0}};
     duration = 5.5;
   } else if (name == "throw") {
     swing_velocity = Eigen::Vector3d(1.5, 0.0, 0.0);
     const Eigen::Vector3d lifted = start + 0.1 * up;
     // Back 0.15 m, then accelerate over 0.2 s to 1.5 m/s (0.15 m) and swing on at that speed.
     const Eigen::Vector3d back = lifted - Eigen::Vector3d(0.3, 0.0, 0.0);
-    right_keys = {{0.0, start + 0.15 * up, 0.0}, {0.3, start + 0.15 * up, 0.0}, {0.8, start, 0.0}, {1.3, start, 1.0}, {1.8, lifted, 1.0},
-                  {2.3, back, 1.0}, {2.5, back, 1.0}};
+    right_keys = {{0.0, start + 0.15 * up, 0.0},
+                  {0.3, start + 0.15 * up, 0.0},
+                  {0.8, start, 0.0},
+                  {1.3, start, 1.0},
+                  {1.8, lifted, 1.0},
+                  {2.3, back, 1.0},
+                  {2.5, back, 1.0}};
     // Constant acceleration from rest at 2.5 s is not linear: sample it into keys.
     for (int i = 1; i <= 20; ++i) {
       const double t = 0.2 * i / 20.0;
@@ -137,14 +152,21 @@ std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_v
     duration = 2.0;
   } else if (name == "hand-over") {
     const Eigen::Vector3d held = start + 0.15 * up;
-    right_keys = {{0.0, start + 0.15 * up, 0.0}, {0.3, start + 0.15 * up, 0.0}, {0.8, start, 0.0}, {1.3, start, 1.0}, {2.3, held, 1.0},
-                  {3.8, held, 1.0}, {4.0, held, 0.0}, {4.5, held + 0.15 * up, 0.0}};
+    right_keys = {{0.0, start + 0.15 * up, 0.0},
+                  {0.3, start + 0.15 * up, 0.0},
+                  {0.8, start, 0.0},
+                  {1.3, start, 1.0},
+                  {2.3, held, 1.0},
+                  {3.8, held, 1.0},
+                  {4.0, held, 0.0},
+                  {4.5, held + 0.15 * up, 0.0}};
     left_keys = {{0.0, held + 0.3 * up, 0.0}, {2.5, held + 0.3 * up, 0.0}, {3.0, held, 0.0}, {3.5, held, 1.0}, {5.0, held, 1.0}};
     duration = 5.0;
   } else if (name == "place") {
     const Eigen::Vector3d target(0.3, kPedestalTop + 0.5 * size + 0.005, 0.0);
-    right_keys = {{0.0, start + 0.15 * up, 0.0}, {0.3, start + 0.15 * up, 0.0}, {0.8, start, 0.0}, {1.3, start, 1.0}, {1.8, start + 0.1 * up, 1.0},
-                  {2.6, target + 0.1 * up, 1.0}, {3.0, target, 1.0}, {3.2, target, 0.0}, {3.6, target + 0.15 * up, 0.0}};
+    right_keys = {{0.0, start + 0.15 * up, 0.0}, {0.3, start + 0.15 * up, 0.0}, {0.8, start, 0.0},  {1.3, start, 1.0},
+                  {1.8, start + 0.1 * up, 1.0},  {2.6, target + 0.1 * up, 1.0}, {3.0, target, 1.0}, {3.2, target, 0.0},
+                  {3.6, target + 0.15 * up, 0.0}};
     duration = 4.5;
   }
 
@@ -185,7 +207,8 @@ std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_v
         std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips;
         const bool hidden = t >= 2.8 && t < 3.3;
         for (int k = 0; k < kFingerCount; ++k) {
-          if (!hidden) tips[static_cast<std::size_t>(k)] = truth.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3])];
+          if (!hidden)
+            tips[static_cast<std::size_t>(k)] = truth.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3])];
         }
         const HandState& s = solver.update(t, tips);
         inputs[1] = hand_input(world_from_hand, s.pose);

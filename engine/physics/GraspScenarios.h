@@ -27,20 +27,20 @@ namespace rhot {
 
 struct GraspScenarioResult {
   std::string name;
-  bool grasped = false;            // a grasp event for the object
-  double lift_m = 0.0;             // highest the object rose above where it started
-  double max_slip_m = 0.0;         // while held: largest drift of the object in the hand's frame
-  double held_s = 0.0;             // how long it was held
+  bool grasped = false;     // a grasp event for the object
+  double lift_m = 0.0;      // highest the object rose above where it started
+  double max_slip_m = 0.0;  // while held: largest drift of the object in the hand's frame
+  double held_s = 0.0;      // how long it was held
   bool released = false;
-  bool fell_after_release = false; // dropped at least 5 cm after the release
-  double hand_speed_mps = 0.0;     // throw: the hand's speed at release
-  double throw_velocity_error = 0.0;  // throw: |v_object - v_hand| / |v_hand|, the object's velocity
-                                      // measured one step after the release (gravity included)
-  double pushed_m = 0.0;           // push: how far the object moved
-  bool handed_over = false;        // a release with handed_over
+  bool fell_after_release = false;     // dropped at least 5 cm after the release
+  double hand_speed_mps = 0.0;         // throw: the hand's speed at release
+  double throw_velocity_error = 0.0;   // throw: |v_object - v_hand| / |v_hand|, the object's velocity
+                                       // measured one step after the release (gravity included)
+  double pushed_m = 0.0;               // push: how far the object moved
+  bool handed_over = false;            // a release with handed_over
   std::vector<std::string> successes;  // interactions that succeeded
   std::vector<InteractionEvent> events;
-  std::vector<double> step_ms;     // HandPhysics::step per frame
+  std::vector<double> step_ms;  // HandPhysics::step per frame
   long frames = 0;
 };
 

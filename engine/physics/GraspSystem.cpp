@@ -25,13 +25,20 @@ double box_distance(const btVector3& p, const btVector3& lo, const btVector3& hi
 
 const char* event_name(InteractionEventType type) {
   switch (type) {
-    case InteractionEventType::kHoverBegin: return "hover_begin";
-    case InteractionEventType::kHoverEnd: return "hover_end";
-    case InteractionEventType::kContactBegin: return "contact_begin";
-    case InteractionEventType::kContactEnd: return "contact_end";
-    case InteractionEventType::kGrasp: return "grasp";
-    case InteractionEventType::kRelease: return "release";
-    case InteractionEventType::kSuccess: return "success";
+    case InteractionEventType::kHoverBegin:
+      return "hover_begin";
+    case InteractionEventType::kHoverEnd:
+      return "hover_end";
+    case InteractionEventType::kContactBegin:
+      return "contact_begin";
+    case InteractionEventType::kContactEnd:
+      return "contact_end";
+    case InteractionEventType::kGrasp:
+      return "grasp";
+    case InteractionEventType::kRelease:
+      return "release";
+    case InteractionEventType::kSuccess:
+      return "success";
   }
   return "?";
 }
@@ -154,7 +161,8 @@ void GraspSystem::release(Entity object, bool handed_over) {
   if (it == held_.end()) return;
   Held& held = it->second;
   btRigidBody* body = physics_.body(object);
-  InteractionEvent e{InteractionEventType::kRelease, physics_.time_s(), object, side_of(held.hand), {}, handed_over, Eigen::Vector3d::Zero()};
+  InteractionEvent e{InteractionEventType::kRelease, physics_.time_s(), object, side_of(held.hand), {}, handed_over,
+                     Eigen::Vector3d::Zero()};
   if (body && !handed_over) {
     // The hand's velocity: a least-squares line through the grip's recent positions.
     const double end = physics_.time_s() - settings_.throw_window_end_s;
@@ -183,7 +191,8 @@ void GraspSystem::release(Entity object, bool handed_over) {
       }
       if (stt > 0.0) v = stp / static_cast<btScalar>(stt);
       const double span = window.back().first - window.front().first;
-      if (span > 0.0) w = angular_velocity(window.front().second.getRotation(), window.back().second.getRotation(), static_cast<btScalar>(span));
+      if (span > 0.0)
+        w = angular_velocity(window.front().second.getRotation(), window.back().second.getRotation(), static_cast<btScalar>(span));
     }
     if (!finite(v) || !finite(w)) v = w = btVector3(0, 0, 0);
     const btScalar max_speed = static_cast<btScalar>(settings_.max_object_speed_mps);
@@ -331,7 +340,8 @@ void GraspSystem::post_step(World& world) {
         if (by_group[static_cast<std::size_t>(anchor)].empty()) continue;
         std::vector<int> opposing;
         for (int f = 1; f <= 4; ++f) {
-          if (!by_group[static_cast<std::size_t>(f)].empty() && curl_rad(hand, f) >= settings_.min_curl_rad && oppose(anchor, f)) opposing.push_back(f);
+          if (!by_group[static_cast<std::size_t>(f)].empty() && curl_rad(hand, f) >= settings_.min_curl_rad && oppose(anchor, f))
+            opposing.push_back(f);
         }
         if (!opposing.empty()) {
           groups = opposing;

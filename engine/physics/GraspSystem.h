@@ -38,17 +38,16 @@ namespace rhot {
 
 class World;
 
-
 enum class InteractionEventType { kHoverBegin, kHoverEnd, kContactBegin, kContactEnd, kGrasp, kRelease, kSuccess };
 const char* event_name(InteractionEventType type);
 
 struct InteractionEvent {
   InteractionEventType type;
   double time_s = 0.0;
-  Entity object;                  // the object (for kSuccess: the interaction's object)
-  std::optional<HandSide> hand;   // none for kSuccess
-  std::string interaction;        // kSuccess: the interaction's name
-  bool handed_over = false;       // kRelease: the other hand took the object
+  Entity object;                                           // the object (for kSuccess: the interaction's object)
+  std::optional<HandSide> hand;                            // none for kSuccess
+  std::string interaction;                                 // kSuccess: the interaction's name
+  bool handed_over = false;                                // kRelease: the other hand took the object
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  // kRelease: what the object was given
 };
 
@@ -73,9 +72,9 @@ class GraspSystem {
   struct GripPoint {
     int bone = 0;
     int group = 0;
-    btVector3 on_object;     // object frame
-    btVector3 normal;        // object frame, outward
-    btVector3 on_bone;       // tracked bone frame
+    btVector3 on_object;  // object frame
+    btVector3 normal;     // object frame, outward
+    btVector3 on_bone;    // tracked bone frame
   };
   struct Held {
     int hand = 0;

@@ -49,7 +49,8 @@ bool input_finite(const HandInput& in) {
 btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const Eigen::Vector3d d = b - a;
   const double n = d.norm();
-  const Eigen::Quaterniond q = n > 1e-9 ? Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), d / n) : Eigen::Quaterniond::Identity();
+  const Eigen::Quaterniond q =
+      n > 1e-9 ? Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), d / n) : Eigen::Quaterniond::Identity();
   return btTransform(to_bt(q), to_bt(0.5 * (a + b)));
 }
 
@@ -206,7 +207,8 @@ std::vector<HandColliders::Capsule> HandColliders::capsules() const {
 double HandColliders::largest_offset_m() const {
   double worst = 0.0;
   if (!built_) return worst;
-  for (const Bone& b : bones_) worst = std::max(worst, static_cast<double>((b.body->getWorldTransform().getOrigin() - b.target.getOrigin()).length()));
+  for (const Bone& b : bones_)
+    worst = std::max(worst, static_cast<double>((b.body->getWorldTransform().getOrigin() - b.target.getOrigin()).length()));
   return worst;
 }
 

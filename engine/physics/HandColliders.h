@@ -51,9 +51,9 @@ const std::array<HandBone, kHandBoneCount>& hand_bones();
 struct HandColliderSettings {
   double bone_mass_kg = 0.05;
   double friction = 1.0;
-  double soft_distance_m = 0.03;     // further than this from its tracked pose: soft
-  double rigid_again_m = 0.01;       // soft bones collide again within this
-  double max_speed_mps = 15.0;       // a bone never moves faster (a tracking jump is a teleport)
+  double soft_distance_m = 0.03;  // further than this from its tracked pose: soft
+  double rigid_again_m = 0.01;    // soft bones collide again within this
+  double max_speed_mps = 15.0;    // a bone never moves faster (a tracking jump is a teleport)
   double min_radius_m = 0.004;
 };
 

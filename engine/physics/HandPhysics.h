@@ -26,7 +26,7 @@ class HandPhysics {
   // `world` holds the scene's instantiated entities. Fails, building nothing, on a bad glTF mesh
   // or an interaction whose entities are missing.
   [[nodiscard]] static std::expected<std::unique_ptr<HandPhysics>, std::string> create(World& world, const SceneDesc& scene,
-                                                                                      HandColliderSettings hand_settings = {});
+                                                                                       HandColliderSettings hand_settings = {});
 
   // One frame: hands[0] the left hand, hands[1] the right (seen = false for a hand not tracked).
   void step(World& world, const std::array<HandInput, 2>& hands);

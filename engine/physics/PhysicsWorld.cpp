@@ -44,7 +44,8 @@ Decomposed decompose(const glm::mat4& m) {
   }
   d.rotation = glm::normalize(glm::quat_cast(r));
   for (int i = 0; i < 3; ++i) d.finite = d.finite && std::isfinite(d.position[i]) && std::isfinite(d.scale[i]) && d.scale[i] != 0.0f;
-  d.finite = d.finite && std::isfinite(d.rotation.w) && std::isfinite(d.rotation.x) && std::isfinite(d.rotation.y) && std::isfinite(d.rotation.z);
+  d.finite =
+      d.finite && std::isfinite(d.rotation.w) && std::isfinite(d.rotation.x) && std::isfinite(d.rotation.y) && std::isfinite(d.rotation.z);
   return d;
 }
 
@@ -85,7 +86,8 @@ std::expected<void, std::string> make_shape(const Mesh& mesh, const glm::vec3& s
     shape->setMargin(0.001f);
     btVector3 lo, hi;
     shape->getAabb(btTransform::getIdentity(), lo, hi);
-    if (!((hi - lo).length() > btScalar(1e-4))) return std::unexpected(name + ": " + file.string() + ": the mesh has no extent to collide with");
+    if (!((hi - lo).length() > btScalar(1e-4)))
+      return std::unexpected(name + ": " + file.string() + ": the mesh has no extent to collide with");
   }
   return {};
 }
@@ -212,8 +214,8 @@ void PhysicsWorld::step(World& world) {
     if (!t || !wt) continue;
     const btTransform& pose = b->getWorldTransform();
     const glm::vec3 scale = decompose(wt->world_from_local).scale;
-    const glm::mat4 world_from_local = glm::translate(glm::mat4(1.0f), to_glm(pose.getOrigin())) * glm::mat4_cast(to_glm(pose.getRotation())) *
-                                       glm::scale(glm::mat4(1.0f), scale);
+    const glm::mat4 world_from_local = glm::translate(glm::mat4(1.0f), to_glm(pose.getOrigin())) *
+                                       glm::mat4_cast(to_glm(pose.getRotation())) * glm::scale(glm::mat4(1.0f), scale);
     wt->world_from_local = world_from_local;
     glm::mat4 local = world_from_local;
     if (const Parent* p = world.find<Parent>(e); p && world.alive(p->entity)) {

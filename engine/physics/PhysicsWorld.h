@@ -29,8 +29,8 @@ namespace rhot {
 class World;
 
 struct PhysicsSettings {
-  double rate_hz = 90.0;   // one step() advances 1 / rate_hz seconds
-  int substeps = 2;        // Bullet steps per step()
+  double rate_hz = 90.0;  // one step() advances 1 / rate_hz seconds
+  int substeps = 2;       // Bullet steps per step()
   glm::vec3 gravity_mps2{0.0f, -9.81f, 0.0f};
 };
 

@@ -24,7 +24,8 @@ GraspPose make_grasp(HandSide side, double width_m, double squeeze_m, int finger
   // meet; the grasping fingers close along that path until their tips, less their radii, are
   // `squeeze_m` inside the object's width on each side.
   g.open = {angles(-0.6, -0.3, 0.0, 0.0), angles(0.0, 0.1, 0.1, 0.07), angles(0.0, 0.1, 0.1, 0.07), relaxed[3], relaxed[4]};
-  std::array<FingerAngles, kFingerCount> pinch{angles(0.55, 0.45, 0.35, 0.35), angles(-0.1, 0.75, 0.85, 0.57), relaxed[2], relaxed[3], relaxed[4]};
+  std::array<FingerAngles, kFingerCount> pinch{angles(0.55, 0.45, 0.35, 0.35), angles(-0.1, 0.75, 0.85, 0.57), relaxed[2], relaxed[3],
+                                               relaxed[4]};
   if (fingers >= 2) pinch[2] = angles(0.0, 0.75, 0.85, 0.57);
   // Abduction turns toward the chain's lateral axis (+X of the hand frame for both hands): the
   // angles above are a right hand's, a left hand mirrors them.
@@ -38,7 +39,8 @@ GraspPose make_grasp(HandSide side, double width_m, double squeeze_m, int finger
     std::array<FingerAngles, kFingerCount> a;
     for (std::size_t f = 0; f < kFingerCount; ++f) {
       a[f].abduction_rad = g.open[f].abduction_rad + s * (pinch[f].abduction_rad - g.open[f].abduction_rad);
-      for (std::size_t k = 0; k < 3; ++k) a[f].flexion_rad[k] = g.open[f].flexion_rad[k] + s * (pinch[f].flexion_rad[k] - g.open[f].flexion_rad[k]);
+      for (std::size_t k = 0; k < 3; ++k)
+        a[f].flexion_rad[k] = g.open[f].flexion_rad[k] + s * (pinch[f].flexion_rad[k] - g.open[f].flexion_rad[k]);
       a[f] = clamp_to_limits(g.chains[f].limits, a[f]);
     }
     return a;
@@ -67,7 +69,8 @@ HandPose GraspPose::pose(double closure) const {
   std::array<FingerAngles, kFingerCount> a;
   for (std::size_t f = 0; f < kFingerCount; ++f) {
     a[f].abduction_rad = open[f].abduction_rad + s * (closed[f].abduction_rad - open[f].abduction_rad);
-    for (std::size_t k = 0; k < 3; ++k) a[f].flexion_rad[k] = open[f].flexion_rad[k] + s * (closed[f].flexion_rad[k] - open[f].flexion_rad[k]);
+    for (std::size_t k = 0; k < 3; ++k)
+      a[f].flexion_rad[k] = open[f].flexion_rad[k] + s * (closed[f].flexion_rad[k] - open[f].flexion_rad[k]);
     a[f] = clamp_to_limits(chains[f].limits, a[f]);
   }
   return hand_pose_from_angles(skeleton, chains, a);

@@ -14,11 +14,11 @@ struct GraspPose {
   HandSide side = HandSide::kRight;
   HandPose skeleton;
   std::array<FingerChain, kFingerCount> chains;
-  std::array<FingerAngles, kFingerCount> open{};    // thumb out, fingers nearly straight
-  std::array<FingerAngles, kFingerCount> closed{};  // grasping tips `squeeze_m` inside the object
+  std::array<FingerAngles, kFingerCount> open{};         // thumb out, fingers nearly straight
+  std::array<FingerAngles, kFingerCount> closed{};       // grasping tips `squeeze_m` inside the object
   Eigen::Vector3d grip_point = Eigen::Vector3d::Zero();  // object centre, hand frame
   Eigen::Vector3d grip_axis = Eigen::Vector3d::UnitX();  // unit, thumb toward the fingers, hand frame
-  double reach_error_m = 0.0;  // how far the closed tips' gap is from the one wanted (a too wide object)
+  double reach_error_m = 0.0;                            // how far the closed tips' gap is from the one wanted (a too wide object)
 
   // The hand at a closure (0 open .. 1 closed), hand frame.
   HandPose pose(double closure) const;

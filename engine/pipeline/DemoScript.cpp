@@ -14,7 +14,8 @@ Rigid3d pose_of(const EntityDesc& e) {
   // Scene-file transforms of root entities (the script's objects are roots).
   Rigid3d r;
   r.translation = Eigen::Vector3d(e.transform.position.x, e.transform.position.y, e.transform.position.z);
-  r.rotation = Eigen::Quaterniond(e.transform.rotation.w, e.transform.rotation.x, e.transform.rotation.y, e.transform.rotation.z).normalized();
+  r.rotation =
+      Eigen::Quaterniond(e.transform.rotation.w, e.transform.rotation.x, e.transform.rotation.y, e.transform.rotation.z).normalized();
   return r;
 }
 
@@ -70,11 +71,23 @@ DemoScript::DemoScript(const SceneDesc& scene) {
     scripts_[0].width_m = grip_width(*mug);
     // After the right hand is done with the cube.
     // ... and, after the right hand brought the cube back, carries the mug back and returns to rest.
-    scripts_[0].keys = {{0.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0}, {5.0, c + 0.15 * up, 0.0}, {6.0, c, 0.0}, {6.5, c, 1.0},
-                        {7.5, c + 0.12 * up, 1.0},  {9.0, moved + 0.12 * up, 1.0}, {10.0, moved, 1.0},    {10.5, moved, 0.0},
+    scripts_[0].keys = {{0.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0},
+                        {5.0, c + 0.15 * up, 0.0},
+                        {6.0, c, 0.0},
+                        {6.5, c, 1.0},
+                        {7.5, c + 0.12 * up, 1.0},
+                        {9.0, moved + 0.12 * up, 1.0},
+                        {10.0, moved, 1.0},
+                        {10.5, moved, 0.0},
                         {11.3, moved + 0.15 * up, 0.0},
-                        {18.5, moved + 0.15 * up, 0.0}, {19.3, moved, 0.0}, {19.8, moved, 1.0}, {20.8, moved + 0.12 * up, 1.0},
-                        {22.3, c + 0.12 * up, 1.0},  {23.3, c, 1.0},       {23.8, c, 0.0},     {24.6, c + 0.15 * up, 0.0},
+                        {18.5, moved + 0.15 * up, 0.0},
+                        {19.3, moved, 0.0},
+                        {19.8, moved, 1.0},
+                        {20.8, moved + 0.12 * up, 1.0},
+                        {22.3, c + 0.12 * up, 1.0},
+                        {23.3, c, 1.0},
+                        {23.8, c, 0.0},
+                        {24.6, c + 0.15 * up, 0.0},
                         {26.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0}};
     carries_ = {{6.5, 10.0}, {19.8, 23.3}};
   }
@@ -89,13 +102,26 @@ void DemoScript::build_right_keys() {
   const Eigen::Vector3d& back = cube_return_pickup_;
   const Eigen::Vector3d& home = cube_home_;
   const Eigen::Vector3d& place = cube_place_;
-  scripts_[1].keys = {{0.0, c + 0.15 * up, 0.0},           {0.8, c + 0.15 * up, 0.0},      {1.6, c, 0.0},
-                      {2.2, c, 1.0},                       {3.2, c + 0.15 * up, 1.0},      {4.4, place + 0.15 * up, 1.0},
-                      {5.4, place + 0.002 * up, 1.0},      {5.8, place + 0.002 * up, 0.0}, {6.6, place + 0.15 * up, 0.0},
-                      {7.6, rest, 0.0},                    {11.5, rest, 0.0},              {12.5, back + 0.15 * up, 0.0},
-                      {13.3, back, 0.0},                   {13.9, back, 1.0},              {14.9, back + 0.15 * up, 1.0},
-                      {16.1, home + 0.15 * up, 1.0},       {17.1, home + 0.002 * up, 1.0}, {17.5, home + 0.002 * up, 0.0},
-                      {18.3, home + 0.15 * up, 0.0},       {25.9, c + 0.15 * up, 0.0}};
+  scripts_[1].keys = {{0.0, c + 0.15 * up, 0.0},
+                      {0.8, c + 0.15 * up, 0.0},
+                      {1.6, c, 0.0},
+                      {2.2, c, 1.0},
+                      {3.2, c + 0.15 * up, 1.0},
+                      {4.4, place + 0.15 * up, 1.0},
+                      {5.4, place + 0.002 * up, 1.0},
+                      {5.8, place + 0.002 * up, 0.0},
+                      {6.6, place + 0.15 * up, 0.0},
+                      {7.6, rest, 0.0},
+                      {11.5, rest, 0.0},
+                      {12.5, back + 0.15 * up, 0.0},
+                      {13.3, back, 0.0},
+                      {13.9, back, 1.0},
+                      {14.9, back + 0.15 * up, 1.0},
+                      {16.1, home + 0.15 * up, 1.0},
+                      {17.1, home + 0.002 * up, 1.0},
+                      {17.5, home + 0.002 * up, 0.0},
+                      {18.3, home + 0.15 * up, 0.0},
+                      {25.9, c + 0.15 * up, 0.0}};
 }
 
 void DemoScript::reaim(double t_s, const Eigen::Vector3d& cube_position) {
@@ -106,9 +132,12 @@ void DemoScript::reaim(double t_s, const Eigen::Vector3d& cube_position) {
   const auto crossed = [&](double mark) { return before < mark && t >= mark; };
   // While the right hand rests (7.6-11.5 s) and while it waits above home (18.3-25.9 s), it looks
   // where the cube lies: those keys are still ahead, so the hand's path stays continuous.
-  if (crossed(10.0)) cube_return_pickup_ = cube_position + cube_grip_offset_;
-  else if (crossed(20.0)) cube_pickup_ = cube_position + cube_grip_offset_;
-  else return;
+  if (crossed(10.0))
+    cube_return_pickup_ = cube_position + cube_grip_offset_;
+  else if (crossed(20.0))
+    cube_pickup_ = cube_position + cube_grip_offset_;
+  else
+    return;
   build_right_keys();
 }
 

@@ -28,8 +28,8 @@ struct HandTruth {
 };
 
 struct SceneTruth {
-  std::array<HandTruth, 2> hands;               // 0 left, 1 right
-  std::map<int, Rigid3d> world_from_object;      // by marker-star id, for objects tracked by a star
+  std::array<HandTruth, 2> hands;            // 0 left, 1 right
+  std::map<int, Rigid3d> world_from_object;  // by marker-star id, for objects tracked by a star
 };
 
 class DemoScript {
@@ -66,7 +66,7 @@ class DemoScript {
   std::array<HandScript, 2> scripts_;
   std::string right_target_, left_target_;
   std::map<int, Rigid3d> objects_at_start_;
-  std::optional<int> carried_star_;  // the left hand carries this star's object ...
+  std::optional<int> carried_star_;                 // the left hand carries this star's object ...
   std::vector<std::pair<double, double>> carries_;  // ... between these times
   // The right hand's cube: where it starts (and is brought back to), where it is carried, where
   // the next pickups aim, and the grip point's offset from the cube's origin.

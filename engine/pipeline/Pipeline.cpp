@@ -34,7 +34,8 @@ void add_bones(std::vector<Occluder>& out, const HandTruth& hand) {
     const auto parent = joint_parent(static_cast<HandJoint>(j));
     if (!parent) continue;
     out.push_back({hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(*parent)],
-                   hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(j)], 0.8 * hand.pose.radius_m[static_cast<std::size_t>(j)]});
+                   hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(j)],
+                   0.8 * hand.pose.radius_m[static_cast<std::size_t>(j)]});
   }
 }
 
@@ -49,7 +50,8 @@ std::expected<std::unique_ptr<Pipeline>, std::string> Pipeline::create(World& wo
   if (!rig) return std::unexpected(rig.error());
   p->rig_ = *rig;
   const bool video = !settings.video_devices.empty();
-  if (video && settings.perfect_hands) return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
+  if (video && settings.perfect_hands)
+    return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
   if (video && !settings.replay.empty()) return std::unexpected(std::string("choose video devices or a replay, not both"));
   const std::filesystem::path set_file = !settings.star_set.empty() ? settings.star_set : settings.asset_dir / "stars" / "seed-case.json";
   auto set = load_star_set(set_file);
@@ -108,7 +110,8 @@ std::expected<std::unique_ptr<Pipeline>, std::string> Pipeline::create(World& wo
       std::vector<Eigen::Vector3d> markers;
       for (int h = 0; h < 2; ++h) {
         const HandTruth& hand = self->truth_->hands[static_cast<std::size_t>(h)];
-        for (const Eigen::Vector3d& m : layout_markers(self->layouts_[static_cast<std::size_t>(h)], hand.world_from_hand, hand.pose)) markers.push_back(m);
+        for (const Eigen::Vector3d& m : layout_markers(self->layouts_[static_cast<std::size_t>(h)], hand.world_from_hand, hand.pose))
+          markers.push_back(m);
       }
       for (const StarLibrary::Star& star : self->star_tracker_->library().stars()) {
         const auto at = self->truth_->world_from_object.find(star.id);
@@ -217,9 +220,11 @@ void Pipeline::stars(World& world) {
       const auto pose = replayed_.objects.find(name->second);
       if (pose == replayed_.objects.end()) continue;
       Transform& t = world.get<Transform>(entity);
-      t.position = glm::vec3(pose->second.translation.cast<float>().x(), pose->second.translation.cast<float>().y(), pose->second.translation.cast<float>().z());
+      t.position = glm::vec3(pose->second.translation.cast<float>().x(), pose->second.translation.cast<float>().y(),
+                             pose->second.translation.cast<float>().z());
       const Eigen::Quaterniond& q = pose->second.rotation;
-      t.rotation = glm::normalize(glm::quat(static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())));
+      t.rotation = glm::normalize(
+          glm::quat(static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())));
       ++counts_.stars_seen;
       counts_.seen_star_ids.push_back(id);
     }
@@ -238,7 +243,8 @@ void Pipeline::stars(World& world) {
       t.position = glm::vec3(world_from_object.translation.cast<float>().x(), world_from_object.translation.cast<float>().y(),
                              world_from_object.translation.cast<float>().z());
       const Eigen::Quaterniond& q = world_from_object.rotation;
-      t.rotation = glm::normalize(glm::quat(static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())));
+      t.rotation = glm::normalize(
+          glm::quat(static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())));
     }
   }
 }
@@ -251,7 +257,8 @@ void Pipeline::hands() {
   }
   for (std::size_t h = 0; h < 2; ++h) {
     const TrackedHand& tracked = hand_trackers_[h]->update(time_s_, points_);
-    inputs_[h] = settings_.perfect_hands && truth_ ? hand_input(truth_->hands[h].world_from_hand, truth_->hands[h].pose) : hand_input(tracked);
+    inputs_[h] =
+        settings_.perfect_hands && truth_ ? hand_input(truth_->hands[h].world_from_hand, truth_->hands[h].pose) : hand_input(tracked);
     counts_.hands_seen[h] = tracked.hand_seen;
   }
   if (recorder_) {
@@ -270,7 +277,8 @@ void Pipeline::physics(World& world) {
   physics_->step(world, inputs_);
   if (replay_ || video_ || script_.right_target().empty()) return;  // only the simulated user looks
   const Entity cube = find_named(world, script_.right_target());
-  if (const Transform* t = world.find<Transform>(cube)) script_.reaim(time_s_, Eigen::Vector3d(t->position.x, t->position.y, t->position.z));
+  if (const Transform* t = world.find<Transform>(cube))
+    script_.reaim(time_s_, Eigen::Vector3d(t->position.x, t->position.y, t->position.z));
 }
 
 }  // namespace rhot

@@ -44,15 +44,15 @@ namespace rhot {
 class World;
 
 struct PipelineSettings {
-  std::filesystem::path asset_dir;   // where the defaults below are found
-  std::filesystem::path rig_file;    // empty: the scene's rig, else assets/rigs/seated-4.yaml
-  std::filesystem::path star_set;    // empty: assets/stars/seed-case.json (the objects' stars)
+  std::filesystem::path asset_dir;  // where the defaults below are found
+  std::filesystem::path rig_file;   // empty: the scene's rig, else assets/rigs/seated-4.yaml
+  std::filesystem::path star_set;   // empty: assets/stars/seed-case.json (the objects' stars)
   double sigma_px = 0.3;
   unsigned seed = 1;
   // 1-euro filtering of each hand's frame and fingertips before the IK (HandTrackerSettings):
   // steadier hands at rest, some lag in fast moves. Off by default (docs/tracking.md).
   bool filter_hands = false;
-  bool perfect_hands = false;  // physics gets the true hands, not the tracked ones (to tell tracking from physics)
+  bool perfect_hands = false;    // physics gets the true hands, not the tracked ones (to tell tracking from physics)
   std::filesystem::path replay;  // play this recording instead of simulating cameras and tracking
   double speed = 1.0;            // replay speed (2: twice as fast)
   std::filesystem::path record;  // write every frame's hands and tracked objects here
@@ -63,10 +63,10 @@ struct PipelineSettings {
 };
 
 struct PipelineCounts {
-  std::size_t detections = 0;  // over all cameras
-  std::size_t points = 0;      // triangulated
+  std::size_t detections = 0;             // over all cameras
+  std::size_t points = 0;                 // triangulated
   double mean_reprojection_rms_px = 0.0;  // over the triangulated points
-  int stars_seen = 0;          // objects' stars measured this frame
+  int stars_seen = 0;                     // objects' stars measured this frame
   std::vector<int> seen_star_ids;
   std::array<bool, 2> hands_seen{};
 };
@@ -77,7 +77,7 @@ class Pipeline {
   // `tracked_by` star missing from the set, a physics error, or video devices that cannot be
   // opened or do not fit the rig (VideoSource::open), or video with perfect_hands or replay.
   [[nodiscard]] static std::expected<std::unique_ptr<Pipeline>, std::string> create(World& world, const SceneDesc& scene,
-                                                                                   PipelineSettings settings);
+                                                                                    PipelineSettings settings);
 
   void source(double t_s);
   void matching();
@@ -128,8 +128,8 @@ class Pipeline {
   std::vector<Eigen::Vector3d> points_;
   std::vector<std::vector<int>> point_cameras_;
   std::unique_ptr<StarTracker> star_tracker_;
-  std::map<int, Rigid3d> object_from_star_;          // by star id: where the star sits on its object
-  std::vector<std::pair<Entity, int>> tracked_;       // entity, star id
+  std::map<int, Rigid3d> object_from_star_;      // by star id: where the star sits on its object
+  std::vector<std::pair<Entity, int>> tracked_;  // entity, star id
   std::array<HandLayout, 2> layouts_;
   std::array<std::unique_ptr<HandTracker>, 2> hand_trackers_;
   std::array<HandInput, 2> inputs_;

@@ -14,7 +14,8 @@ namespace {
 using nlohmann::json;
 
 json pose_json(const Rigid3d& r) {
-  return json::array({r.translation.x(), r.translation.y(), r.translation.z(), r.rotation.x(), r.rotation.y(), r.rotation.z(), r.rotation.w()});
+  return json::array(
+      {r.translation.x(), r.translation.y(), r.translation.z(), r.rotation.x(), r.rotation.y(), r.rotation.z(), r.rotation.w()});
 }
 
 struct Failure {
@@ -46,7 +47,8 @@ void numbers_into(const json& j, std::array<double, N>& out, const std::string& 
 
 }  // namespace
 
-std::expected<RecordingWriter, std::string> RecordingWriter::open(const std::filesystem::path& file, double rate_hz, std::vector<std::string> objects) {
+std::expected<RecordingWriter, std::string> RecordingWriter::open(const std::filesystem::path& file, double rate_hz,
+                                                                  std::vector<std::string> objects) {
   RecordingWriter w;
   w.file_ = file;
   w.out_ = std::make_unique<std::ofstream>(file, std::ios::binary | std::ios::trunc);
@@ -66,8 +68,12 @@ std::expected<void, std::string> RecordingWriter::write(const RecordedFrame& fra
     const HandInput& in = frame.hands[h];
     json joints = json::array();
     for (const Eigen::Vector3d& p : in.joints_world) joints.push_back(json::array({p.x(), p.y(), p.z()}));
-    hands.push_back({{"side", h == 0 ? "left" : "right"}, {"seen", in.seen}, {"wrist_pose", pose_json(in.world_from_hand)},
-                     {"joints", joints}, {"radius", in.radius_m}, {"confidence", in.confidence}});
+    hands.push_back({{"side", h == 0 ? "left" : "right"},
+                     {"seen", in.seen},
+                     {"wrist_pose", pose_json(in.world_from_hand)},
+                     {"joints", joints},
+                     {"radius", in.radius_m},
+                     {"confidence", in.confidence}});
   }
   json objects = json::object();
   for (const auto& [name, pose] : frame.objects) objects[name] = pose_json(pose);
@@ -95,7 +101,8 @@ std::expected<Recording, std::string> load_recording(const std::filesystem::path
         throw Failure{where + ": not JSON (" + std::string(e.what()) + ")"};
       }
       if (number_of_line == 1) {
-        if (!j.is_object() || j.value("format", std::string()) != "rhot-recording") throw Failure{where + ": format: expected \"rhot-recording\""};
+        if (!j.is_object() || j.value("format", std::string()) != "rhot-recording")
+          throw Failure{where + ": format: expected \"rhot-recording\""};
         if (j.value("version", 0) != 1) throw Failure{where + ": version: expected 1"};
         rec.rate_hz = number(j.value("rate_hz", json()), where + ": rate_hz");
         if (!(rec.rate_hz > 0.0)) throw Failure{where + ": rate_hz: expected a positive rate"};
@@ -108,7 +115,8 @@ std::expected<Recording, std::string> load_recording(const std::filesystem::path
       RecordedFrame f;
       f.t_s = number(j.value("t", json()), where + ": t");
       if (!rec.frames.empty() && !(f.t_s > rec.frames.back().t_s)) throw Failure{where + ": t: times must increase"};
-      if (!j.contains("hands") || !j["hands"].is_array() || j["hands"].size() != 2) throw Failure{where + ": hands: expected [left, right]"};
+      if (!j.contains("hands") || !j["hands"].is_array() || j["hands"].size() != 2)
+        throw Failure{where + ": hands: expected [left, right]"};
       for (std::size_t h = 0; h < 2; ++h) {
         const json& hj = j["hands"][h];
         const std::string hw = where + ": hands[" + std::to_string(h) + "]";
@@ -153,8 +161,10 @@ RecordedFrame Recording::at(double t) const {
   out.t_s = want;
   for (std::size_t h = 0; h < 2; ++h) {
     if (!a.hands[h].seen || !b.hands[h].seen) continue;
-    for (std::size_t k = 0; k < kHandJointCount; ++k) out.hands[h].joints_world[k] = a.hands[h].joints_world[k] + u * (b.hands[h].joints_world[k] - a.hands[h].joints_world[k]);
-    out.hands[h].world_from_hand.translation = a.hands[h].world_from_hand.translation + u * (b.hands[h].world_from_hand.translation - a.hands[h].world_from_hand.translation);
+    for (std::size_t k = 0; k < kHandJointCount; ++k)
+      out.hands[h].joints_world[k] = a.hands[h].joints_world[k] + u * (b.hands[h].joints_world[k] - a.hands[h].joints_world[k]);
+    out.hands[h].world_from_hand.translation =
+        a.hands[h].world_from_hand.translation + u * (b.hands[h].world_from_hand.translation - a.hands[h].world_from_hand.translation);
     out.hands[h].world_from_hand.rotation = a.hands[h].world_from_hand.rotation.slerp(u, b.hands[h].world_from_hand.rotation);
   }
   for (auto& [name, pose] : out.objects) {

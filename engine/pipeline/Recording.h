@@ -47,7 +47,7 @@ struct Recording {
 class RecordingWriter {
  public:
   [[nodiscard]] static std::expected<RecordingWriter, std::string> open(const std::filesystem::path& file, double rate_hz,
-                                                                      std::vector<std::string> objects);
+                                                                        std::vector<std::string> objects);
   // Appends one frame (written and flushed at once, so a crash loses at most that frame).
   [[nodiscard]] std::expected<void, std::string> write(const RecordedFrame& frame);
 

@@ -46,8 +46,8 @@ void DebugDraw::axes(const glm::mat4& world_from_frame, float length_m) {
   for (int a = 0; a < 3; ++a) line(o, o + glm::vec3(world_from_frame[a]) * length_m, colors[static_cast<std::size_t>(a)]);
 }
 
-void DebugDraw::camera_frustum(const glm::mat4& world_from_cam, int width_px, int height_px, float fx, float fy, float cx,
-                               float cy, float depth_m, const glm::vec4& color) {
+void DebugDraw::camera_frustum(const glm::mat4& world_from_cam, int width_px, int height_px, float fx, float fy, float cx, float cy,
+                               float depth_m, const glm::vec4& color) {
   const glm::vec3 o(world_from_cam[3]);
   const std::array<glm::vec2, 4> corners{glm::vec2(0, 0), glm::vec2(static_cast<float>(width_px), 0),
                                          glm::vec2(static_cast<float>(width_px), static_cast<float>(height_px)),

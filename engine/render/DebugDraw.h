@@ -29,8 +29,8 @@ class DebugDraw {
   void axes(const glm::mat4& world_from_frame, float length_m);
   // A pinhole camera's viewing pyramid out to depth_m. The camera frame is OpenCV's (x right,
   // y down, z forward); fx, fy, cx, cy in pixels for an image of width x height pixels.
-  void camera_frustum(const glm::mat4& world_from_cam, int width_px, int height_px, float fx, float fy, float cx, float cy,
-                      float depth_m, const glm::vec4& color);
+  void camera_frustum(const glm::mat4& world_from_cam, int width_px, int height_px, float fx, float fy, float cx, float cy, float depth_m,
+                      const glm::vec4& color);
   // Lines on the plane y = height_m every spacing_m out to +-half_extent_m, with the x axis red
   // and the z axis blue.
   void grid(float half_extent_m, float spacing_m, float height_m, const glm::vec4& color);

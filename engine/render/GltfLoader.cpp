@@ -31,8 +31,8 @@ struct Failure {
 template <typename T>
 const T& at(const std::vector<T>& items, int index, const char* what) {
   if (index < 0 || static_cast<std::size_t>(index) >= items.size()) {
-    throw Failure{std::string(what) + " index " + std::to_string(index) + " is out of range (" +
-                  std::to_string(items.size()) + " " + what + "s)"};
+    throw Failure{std::string(what) + " index " + std::to_string(index) + " is out of range (" + std::to_string(items.size()) + " " + what +
+                  "s)"};
   }
   return items[static_cast<std::size_t>(index)];
 }
@@ -150,10 +150,17 @@ void append_mesh(const tinygltf::Model& model, int mesh_index, const glm::dmat4&
         const std::string name = "indices accessor " + std::to_string(prim.indices);
         std::size_t size = 0;
         switch (accessor.componentType) {
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: size = 1; break;
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: size = 2; break;
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: size = 4; break;
-          default: throw Failure{name + " is not unsigned byte, short or int"};
+          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+            size = 1;
+            break;
+          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+            size = 2;
+            break;
+          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+            size = 4;
+            break;
+          default:
+            throw Failure{name + " is not unsigned byte, short or int"};
         }
         if (accessor.type != TINYGLTF_TYPE_SCALAR) throw Failure{name + " is not SCALAR"};
         const Elements idx = elements(model, prim.indices, size, name);
@@ -161,9 +168,15 @@ void append_mesh(const tinygltf::Model& model, int mesh_index, const glm::dmat4&
         for (std::size_t i = 0; i < idx.count; ++i) {
           std::uint32_t v = 0;
           switch (size) {
-            case 1: v = idx.get<std::uint8_t>(i); break;
-            case 2: v = idx.get<std::uint16_t>(i); break;
-            default: v = idx.get<std::uint32_t>(i); break;
+            case 1:
+              v = idx.get<std::uint8_t>(i);
+              break;
+            case 2:
+              v = idx.get<std::uint16_t>(i);
+              break;
+            default:
+              v = idx.get<std::uint32_t>(i);
+              break;
           }
           if (v >= positions.count) {
             throw Failure{"index " + std::to_string(v) + " is out of range (" + std::to_string(positions.count) + " vertices)"};
@@ -273,9 +286,7 @@ std::vector<int> root_nodes(const tinygltf::Model& model) {
 }
 
 // Meshes need no textures: skip decoding images (and failing on a missing or broken one).
-bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
-  return true;
-}
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) { return true; }
 
 std::string trimmed(std::string s) {
   while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
@@ -300,8 +311,7 @@ std::expected<MeshData, std::string> load_gltf_mesh(const std::filesystem::path&
   std::string warn;
   MeshData out;
   try {
-    const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, name)
-                           : loader.LoadASCIIFromFile(&model, &err, &warn, name);
+    const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, name) : loader.LoadASCIIFromFile(&model, &err, &warn, name);
     if (!ok) {
       err = trimmed(err.empty() ? warn : err);
       return std::unexpected(name + ": not a readable glTF 2.0 file: " + (err.empty() ? "unknown error" : err));

@@ -20,13 +20,9 @@ namespace rhot {
 
 namespace {
 
-std::size_t expected_bytes(const Image& im) {
-  return static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height) * 4;
-}
+std::size_t expected_bytes(const Image& im) { return static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height) * 4; }
 
-bool well_formed(const Image& im) {
-  return im.width >= 0 && im.height >= 0 && im.rgba.size() == expected_bytes(im);
-}
+bool well_formed(const Image& im) { return im.width >= 0 && im.height >= 0 && im.rgba.size() == expected_bytes(im); }
 
 // "64x32" or "64x32 with 100 bytes of RGBA (8192 expected)" when the pixel buffer does not fit.
 std::string describe(const Image& im) {
@@ -60,8 +56,7 @@ std::expected<std::vector<std::uint8_t>, std::string> read_file(const std::files
 
 // Writes `bytes` to `file` through a temporary file beside it that is renamed over `file`, so a
 // failure (disk full, a folder in the way) leaves neither a partial file nor a damaged old one.
-std::expected<void, std::string> write_file_atomically(const std::vector<std::uint8_t>& bytes,
-                                                       const std::filesystem::path& file) {
+std::expected<void, std::string> write_file_atomically(const std::vector<std::uint8_t>& bytes, const std::filesystem::path& file) {
   std::filesystem::path partial = file;
   partial += ".partial";
   std::FILE* f = std::fopen(partial.c_str(), "wb");
@@ -99,8 +94,7 @@ std::expected<void, std::string> write_png(const Image& image, const std::filesy
     std::error_code ec;
     std::filesystem::create_directories(file.parent_path(), ec);
     if (ec) {
-      return std::unexpected(name + ": cannot write PNG: cannot create folder " + file.parent_path().string() + ": " +
-                             ec.message());
+      return std::unexpected(name + ": cannot write PNG: cannot create folder " + file.parent_path().string() + ": " + ec.message());
     }
   }
   std::vector<std::uint8_t> encoded;
@@ -165,8 +159,8 @@ std::expected<Image, std::string> read_png(const std::filesystem::path& file) {
 Image side_by_side(const Image& left, const Image& right) {
   RHOT_PRECONDITION(well_formed(left) && well_formed(right),
                     "side_by_side: malformed image (left " + describe(left) + ", right " + describe(right) + ")");
-  RHOT_PRECONDITION(left.height == right.height, "side_by_side: heights differ (left " + describe(left) + ", right " +
-                                                     describe(right) + ")");
+  RHOT_PRECONDITION(left.height == right.height,
+                    "side_by_side: heights differ (left " + describe(left) + ", right " + describe(right) + ")");
   Image out(left.width + right.width, left.height);
   const std::size_t left_row = static_cast<std::size_t>(left.width) * 4;
   const std::size_t right_row = static_cast<std::size_t>(right.width) * 4;
@@ -227,8 +221,8 @@ std::string percent(double fraction) {
 ImageCompareResult compare_images(const Image& actual, const Image& expected, const ImageCompareSettings& settings) {
   ImageCompareResult r;
   if (!well_formed(actual) || !well_formed(expected)) {
-    r.summary = std::string(!well_formed(actual) ? "actual" : "expected") + " image is malformed: " +
-                describe(!well_formed(actual) ? actual : expected);
+    r.summary = std::string(!well_formed(actual) ? "actual" : "expected") +
+                " image is malformed: " + describe(!well_formed(actual) ? actual : expected);
     return r;
   }
   if (actual.width != expected.width || actual.height != expected.height) {
@@ -279,9 +273,9 @@ ImageCompareResult compare_images(const Image& actual, const Image& expected, co
   const long long total = static_cast<long long>(w) * h;
   r.differing_fraction = static_cast<double>(r.differing_pixels) / static_cast<double>(total);
   r.matches = r.differing_fraction <= settings.max_differing_fraction;
-  r.summary = std::to_string(r.differing_pixels) + " of " + std::to_string(total) + " pixels differ (" +
-              percent(r.differing_fraction) + ", allowed " + percent(settings.max_differing_fraction) +
-              "); largest channel difference " + std::to_string(r.max_channel_difference);
+  r.summary = std::to_string(r.differing_pixels) + " of " + std::to_string(total) + " pixels differ (" + percent(r.differing_fraction) +
+              ", allowed " + percent(settings.max_differing_fraction) + "); largest channel difference " +
+              std::to_string(r.max_channel_difference);
   return r;
 }
 

@@ -68,7 +68,6 @@ struct ImageCompareResult {
 // Cost: one pass over the pixels; only a pixel whose plain difference exceeds the tolerance
 // searches its (2r+1)^2 neighbourhood, so near-identical frames cost about a plain comparison.
 // 2160x1200 in a debug build: about 50 ms nearly identical, 0.25 s with every pixel differing.
-ImageCompareResult compare_images(const Image& actual, const Image& expected,
-                                  const ImageCompareSettings& settings = {});
+ImageCompareResult compare_images(const Image& actual, const Image& expected, const ImageCompareSettings& settings = {});
 
 }  // namespace rhot

@@ -15,7 +15,7 @@
 namespace rhot {
 
 struct Vertex {
-  glm::vec3 position{0.0f};  // metres, mesh frame
+  glm::vec3 position{0.0f};            // metres, mesh frame
   glm::vec3 normal{0.0f, 1.0f, 0.0f};  // unit length
 };
 

@@ -103,8 +103,7 @@ MeshData make_sphere(float radius_m, int segments, int rings) {
 }
 
 MeshData make_capsule(float radius_m, float height_m, int segments, int cap_rings) {
-  RHOT_PRECONDITION(positive_finite(radius_m) && std::isfinite(height_m) && height_m >= 2.0f * radius_m &&
-                        segments >= 3 && cap_rings >= 1,
+  RHOT_PRECONDITION(positive_finite(radius_m) && std::isfinite(height_m) && height_m >= 2.0f * radius_m && segments >= 3 && cap_rings >= 1,
                     "make_capsule: needs a finite radius > 0, height >= 2 * radius, segments >= 3 and "
                     "cap_rings >= 1");
   // Exact halving: height_m >= 2 * radius_m makes this >= 0, and exactly 0 for a sphere.
@@ -124,8 +123,7 @@ MeshData make_capsule(float radius_m, float height_m, int segments, int cap_ring
 }
 
 MeshData make_plane(glm::vec2 size_m) {
-  RHOT_PRECONDITION(positive_finite(size_m.x) && positive_finite(size_m.y),
-                    "make_plane: both sizes must be finite and > 0");
+  RHOT_PRECONDITION(positive_finite(size_m.x) && positive_finite(size_m.y), "make_plane: both sizes must be finite and > 0");
   const glm::vec2 h = size_m * 0.5f;
   MeshData m;
   add_quad(m, {-h.x, 0, h.y}, {h.x, 0, h.y}, {h.x, 0, -h.y}, {-h.x, 0, -h.y}, {0, 1, 0});

@@ -20,18 +20,24 @@ namespace rhot {
 
 const char* to_string(StereoMode mode) {
   switch (mode) {
-    case StereoMode::kAuto: return "auto";
-    case StereoMode::kMultiview: return "multiview";
-    case StereoMode::kTwoPass: return "two-pass";
+    case StereoMode::kAuto:
+      return "auto";
+    case StereoMode::kMultiview:
+      return "multiview";
+    case StereoMode::kTwoPass:
+      return "two-pass";
   }
   return "?";
 }
 
 const char* to_string(Shading shading) {
   switch (shading) {
-    case Shading::kAuto: return "auto";
-    case Shading::kPerPixel: return "pixel";
-    case Shading::kPerVertex: return "vertex";
+    case Shading::kAuto:
+      return "auto";
+    case Shading::kPerPixel:
+      return "pixel";
+    case Shading::kPerVertex:
+      return "vertex";
   }
   return "?";
 }
@@ -93,8 +99,7 @@ bool multiview_self_test(const vk::Context& context) {
   MeshData triangle;
   triangle.vertices = {{{-50.0f, -1.0f, -2.0f}, {0, 0, 1}}, {{50.0f, -1.0f, -2.0f}, {0, 0, 1}}, {{0.0f, 1.0f, -2.0f}, {0, 0, 1}}};
   triangle.indices = {0, 1, 2};
-  vk::GpuMesh mesh = context.upload_mesh(triangle.vertices.data(), triangle.vertices.size() * sizeof(Vertex),
-                                         triangle.indices.data(), 3);
+  vk::GpuMesh mesh = context.upload_mesh(triangle.vertices.data(), triangle.vertices.size() * sizeof(Vertex), triangle.indices.data(), 3);
   FrameInput frame;
   HeadsetSettings symmetric;
   symmetric.ipd_m = 0.0;
@@ -168,25 +173,24 @@ std::expected<std::unique_ptr<Renderer>, std::string> Renderer::create(const Ren
     } else if (info.multiview_self_test_passed) {
       multiview = true;
     } else {
-      spdlog::warn("multiview self-test failed on {} (the second view drops geometry that crosses the frustum edge); "
-                   "drawing the eyes in two passes instead",
-                   info.device_name);
+      spdlog::warn(
+          "multiview self-test failed on {} (the second view drops geometry that crosses the frustum edge); "
+          "drawing the eyes in two passes instead",
+          info.device_name);
     }
   } else if (settings.stereo == StereoMode::kMultiview) {
     return std::unexpected(info.device_name + " has no multiview support (VK_KHR_multiview); use two-pass");
   }
   info.mode = multiview ? StereoMode::kMultiview : StereoMode::kTwoPass;
-  info.shading = settings.shading != Shading::kAuto ? settings.shading
-                 : info.cpu_device                  ? Shading::kPerVertex
-                                                    : Shading::kPerPixel;
+  info.shading = settings.shading != Shading::kAuto ? settings.shading : info.cpu_device ? Shading::kPerVertex : Shading::kPerPixel;
   impl->pass = std::make_unique<vk::StereoPass>(*impl->context, settings.eye_width_px, settings.eye_height_px, multiview,
                                                 info.shading == Shading::kPerVertex, settings.clear_color);
   if (window != nullptr) {
     impl->window = window;
     impl->swapchain = std::make_unique<vk::Swapchain>(*impl->context);
   }
-  spdlog::info("renderer: {} x {} per eye, {}, lit per {}", settings.eye_width_px, settings.eye_height_px,
-               to_string(info.mode), to_string(info.shading));
+  spdlog::info("renderer: {} x {} per eye, {}, lit per {}", settings.eye_width_px, settings.eye_height_px, to_string(info.mode),
+               to_string(info.shading));
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 
@@ -205,8 +209,8 @@ MeshHandle Renderer::upload_mesh(const MeshData& mesh) {
   for (const std::uint32_t i : mesh.indices) {
     RHOT_PRECONDITION(i < mesh.vertices.size(), "Renderer::upload_mesh: index out of range");
   }
-  impl_->meshes.push_back(impl_->context->upload_mesh(mesh.vertices.data(), mesh.vertices.size() * sizeof(Vertex),
-                                                      mesh.indices.data(), static_cast<std::uint32_t>(mesh.indices.size())));
+  impl_->meshes.push_back(impl_->context->upload_mesh(mesh.vertices.data(), mesh.vertices.size() * sizeof(Vertex), mesh.indices.data(),
+                                                      static_cast<std::uint32_t>(mesh.indices.size())));
   return MeshHandle{static_cast<std::uint32_t>(impl_->meshes.size() - 1)};
 }
 
@@ -223,8 +227,8 @@ void Renderer::render(const FrameInput& frame) {
     if (m.swapchain->acquire()) {
       // The blit (and the overlay) wait for the acquired image at the transfer stage; the
       // overlay's colour writes come after the blit in the same command buffer.
-      const VkPipelineStageFlags wait = m.overlay ? VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT
-                                                  : VK_PIPELINE_STAGE_TRANSFER_BIT;
+      const VkPipelineStageFlags wait =
+          m.overlay ? VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT : VK_PIPELINE_STAGE_TRANSFER_BIT;
       vk::SubmitSync sync{m.swapchain->acquired_semaphore(), wait, m.swapchain->ready_semaphore()};
       const int w = m.pass->width();
       const int h = m.pass->height();
@@ -301,8 +305,6 @@ std::uint64_t Renderer::overlay_vertices() const { return impl_->overlay ? impl_
 
 std::uint64_t Renderer::swapchain_recreations() const { return impl_->swapchain ? impl_->swapchain->recreations() : 0; }
 
-std::pair<int, int> Renderer::swapchain_extent() const {
-  return impl_->swapchain ? impl_->swapchain->extent() : std::pair<int, int>{0, 0};
-}
+std::pair<int, int> Renderer::swapchain_extent() const { return impl_->swapchain ? impl_->swapchain->extent() : std::pair<int, int>{0, 0}; }
 
 }  // namespace rhot

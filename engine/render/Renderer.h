@@ -80,8 +80,8 @@ struct MeshBatch {
 };
 
 struct LineVertex {
-  glm::vec3 position{0.0f};     // world, metres
-  glm::vec4 color{1.0f};        // linear RGBA
+  glm::vec3 position{0.0f};  // world, metres
+  glm::vec4 color{1.0f};     // linear RGBA
 };
 
 // Everything one frame draws. Matrices and positions must be finite (the renderer checks, and
@@ -89,7 +89,7 @@ struct LineVertex {
 struct FrameInput {
   StereoViews views;
   std::vector<MeshBatch> batches;
-  std::vector<LineVertex> lines;  // pairs: a line list (ground grid, debug draw)
+  std::vector<LineVertex> lines;                                               // pairs: a line list (ground grid, debug draw)
   glm::vec3 light_dir_world = glm::normalize(glm::vec3(-0.4f, -1.0f, -0.3f));  // direction light travels
   glm::vec3 light_color{0.85f, 0.85f, 0.8f};
   float ambient = 0.3f;
@@ -97,7 +97,7 @@ struct FrameInput {
 
 struct RendererInfo {
   std::string device_name;
-  bool cpu_device = false;       // lavapipe or another CPU implementation
+  bool cpu_device = false;  // lavapipe or another CPU implementation
   bool validation_enabled = false;
   bool multiview_supported = false;
   bool multiview_self_test_passed = false;  // meaningful where multiview_supported
@@ -110,8 +110,8 @@ class Renderer {
   // Creates the renderer for offscreen rendering, or (with a window) also for presenting into
   // it. Fails with a message where there is no Vulkan, no suitable device, or the window cannot
   // get a swapchain.
-  [[nodiscard]] static std::expected<std::unique_ptr<Renderer>, std::string> create(
-      const RendererSettings& settings, Window* window = nullptr);
+  [[nodiscard]] static std::expected<std::unique_ptr<Renderer>, std::string> create(const RendererSettings& settings,
+                                                                                    Window* window = nullptr);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;

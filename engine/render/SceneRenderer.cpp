@@ -90,8 +90,7 @@ void SceneRenderer::add(FrameInput& frame, MeshHandle mesh, const glm::mat4& wor
   frame.batches[it->second].instances.push_back({world_from_local, color});
 }
 
-FrameInput SceneRenderer::build(World& world, const StereoViews& views, std::span<const HandDrawInput> hands,
-                                const DebugDraw* debug) {
+FrameInput SceneRenderer::build(World& world, const StereoViews& views, std::span<const HandDrawInput> hands, const DebugDraw* debug) {
   FrameInput frame;
   frame.views = views;
   batch_of_mesh_.clear();

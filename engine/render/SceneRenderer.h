@@ -40,8 +40,7 @@ class SceneRenderer {
   explicit SceneRenderer(Renderer& renderer, SceneRenderSettings settings = {});
 
   // Everything to draw this frame. Precondition: the world is not iterating.
-  FrameInput build(World& world, const StereoViews& views, std::span<const HandDrawInput> hands = {},
-                   const DebugDraw* debug = nullptr);
+  FrameInput build(World& world, const StereoViews& views, std::span<const HandDrawInput> hands = {}, const DebugDraw* debug = nullptr);
 
  private:
   // The mesh for a shape and the scale that turns the mesh into the shape.

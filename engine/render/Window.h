@@ -13,8 +13,7 @@ namespace rhot {
 class Window {
  public:
   // Fails with a message where there is no display (or GLFW cannot start).
-  [[nodiscard]] static std::expected<std::unique_ptr<Window>, std::string> create(const std::string& title, int width_px,
-                                                                                  int height_px);
+  [[nodiscard]] static std::expected<std::unique_ptr<Window>, std::string> create(const std::string& title, int width_px, int height_px);
   ~Window();
   Window(const Window&) = delete;
   Window& operator=(const Window&) = delete;

@@ -26,7 +26,7 @@ struct CapsuleShape {  // axis along local +Y
   float radius_m = 0.25f;
   float height_m = 1.0f;  // end to end, caps included; at least 2 * radius_m
 };
-struct PlaneShape {  // in local XZ, normal +Y
+struct PlaneShape {                // in local XZ, normal +Y
   glm::vec2 size_m{10.0f, 10.0f};  // drawn extent along x and z; as a physics body it is unbounded
 };
 struct GltfMeshShape {

@@ -49,7 +49,7 @@ struct GraspSettings {
   double throw_window_end_s = 0.02;   // ... ending this long before the release
   double max_hold_error_m = 0.1;      // a held object kept this far from the hand (stuck) is dropped
   double max_object_speed_mps = 20.0;
-  double hover_distance_m = 0.05;     // the palm this close to an object's bounding box: hovering
+  double hover_distance_m = 0.05;  // the palm this close to an object's bounding box: hovering
 };
 
 struct SceneSettings {
@@ -71,8 +71,8 @@ enum class InteractionType {
 struct InteractionDesc {
   std::string name;
   InteractionType type = InteractionType::kPlace;
-  std::string object;  // entity names
-  std::string zone;    // kPlace only
+  std::string object;     // entity names
+  std::string zone;       // kPlace only
   double dwell_s = 0.25;  // kPlace: at rest inside this long
 };
 

@@ -181,8 +181,8 @@ Transform read_transform(const Node& n) {
     if (std::abs(norm - 1.0) > 1e-3) {
       r->fail("expected a unit quaternion [x, y, z, w], got one of length " + std::to_string(norm));
     }
-    t.rotation = glm::normalize(glm::quat(static_cast<float>(q[3]), static_cast<float>(q[0]),
-                                          static_cast<float>(q[1]), static_cast<float>(q[2])));
+    t.rotation =
+        glm::normalize(glm::quat(static_cast<float>(q[3]), static_cast<float>(q[0]), static_cast<float>(q[1]), static_cast<float>(q[2])));
   }
   if (auto r = n.optional("rotation_deg")) {
     // Extrinsic X, then Y, then Z: R = Rz * Ry * Rx.
@@ -214,8 +214,7 @@ Mesh read_mesh(const Node& n, const std::filesystem::path& base_dir) {
     const Node size = n["size_m"];
     size.numbers(3);
     const auto e = size.elements();
-    return Mesh{BoxShape{{static_cast<float>(e[0].positive()), static_cast<float>(e[1].positive()),
-                          static_cast<float>(e[2].positive())}}};
+    return Mesh{BoxShape{{static_cast<float>(e[0].positive()), static_cast<float>(e[1].positive()), static_cast<float>(e[2].positive())}}};
   }
   if (shape == "sphere") {
     n.expect_object({"shape", "radius_m"});
@@ -227,8 +226,7 @@ Mesh read_mesh(const Node& n, const std::filesystem::path& base_dir) {
     const Node h = n["height_m"];
     const double height = h.positive();
     if (height < 2.0 * r) {
-      h.fail("expected a height (end to end) of at least twice the radius (" + std::to_string(2.0 * r) +
-             "), got " + describe(h.raw()));
+      h.fail("expected a height (end to end) of at least twice the radius (" + std::to_string(2.0 * r) + "), got " + describe(h.raw()));
     }
     return Mesh{CapsuleShape{static_cast<float>(r), static_cast<float>(height)}};
   }
@@ -247,8 +245,7 @@ Mesh read_mesh(const Node& n, const std::filesystem::path& base_dir) {
     if (ext != ".gltf" && ext != ".glb") file.fail("expected a .gltf or .glb file, got " + describe(file.raw()));
     return Mesh{GltfMeshShape{path}};
   }
-  shape_node.fail("expected one of \"box\", \"sphere\", \"capsule\", \"plane\", \"gltf\", got " +
-                  describe(shape_node.raw()));
+  shape_node.fail("expected one of \"box\", \"sphere\", \"capsule\", \"plane\", \"gltf\", got " + describe(shape_node.raw()));
 }
 
 Material read_material(const Node& n) {
@@ -405,7 +402,8 @@ void check_interactions(const std::vector<InteractionDesc>& interactions, const 
     const std::string path = "/interactions/" + std::to_string(i);
     for (std::size_t k = 0; k < i; ++k) {
       if (interactions[k].name == d.name) {
-        throw LoadFailure{path + "/name", "duplicate interaction name \"" + d.name + "\" (also at /interactions/" + std::to_string(k) + "/name)"};
+        throw LoadFailure{path + "/name",
+                          "duplicate interaction name \"" + d.name + "\" (also at /interactions/" + std::to_string(k) + "/name)"};
       }
     }
     const EntityDesc* object = find(d.object);
@@ -461,14 +459,14 @@ void check_references(const std::vector<EntityDesc>& entities) {
   for (std::size_t i = 0; i < entities.size(); ++i) {
     const auto [it, fresh] = by_name.emplace(entities[i].name, i);
     if (!fresh) {
-      throw LoadFailure{entity_path(i) + "/name", "duplicate name \"" + entities[i].name +
-                                                     "\" (also at " + entity_path(it->second) + "/name)"};
+      throw LoadFailure{entity_path(i) + "/name",
+                        "duplicate name \"" + entities[i].name + "\" (also at " + entity_path(it->second) + "/name)"};
     }
     if (entities[i].tracked_by) {
       const auto [s, new_star] = by_star.emplace(*entities[i].tracked_by, i);
       if (!new_star) {
-        throw LoadFailure{entity_path(i) + "/tracked_by", "marker star " + std::to_string(s->first) +
-                                                              " already tracks " + entity_path(s->second)};
+        throw LoadFailure{entity_path(i) + "/tracked_by",
+                          "marker star " + std::to_string(s->first) + " already tracks " + entity_path(s->second)};
       }
     }
   }
@@ -573,8 +571,7 @@ SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
 
 }  // namespace
 
-std::expected<SceneDesc, SceneError> parse_scene(std::string_view json_text, const std::filesystem::path& base_dir,
-                                                 std::string_view name) {
+std::expected<SceneDesc, SceneError> parse_scene(std::string_view json_text, const std::filesystem::path& base_dir, std::string_view name) {
   const std::string file(name);
   DuplicateKeyCheck duplicates;
   json root;

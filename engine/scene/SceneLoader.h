@@ -33,8 +33,8 @@ struct SceneError {
 
 // The same for scene text in memory; `base_dir` resolves relative references and `name` is used
 // in messages.
-[[nodiscard]] std::expected<SceneDesc, SceneError> parse_scene(
-    std::string_view json_text, const std::filesystem::path& base_dir, std::string_view name = "<text>");
+[[nodiscard]] std::expected<SceneDesc, SceneError> parse_scene(std::string_view json_text, const std::filesystem::path& base_dir,
+                                                               std::string_view name = "<text>");
 
 // Creates one entity per EntityDesc with Name, Transform, WorldTransform and, where given, Parent,
 // Mesh, Material, PhysicsBody, Grabbable and TrackedBy; world transforms are up to date on return.

@@ -57,4 +57,3 @@ BENCHMARK(BM_ThresholdAndComponentsBaseline)->Arg(10)->Arg(40)->Arg(100)->Unit(b
 
 }  // namespace
 }  // namespace rhot
-

@@ -64,7 +64,8 @@ std::array<HandInput, 2> hands_at(const std::array<GraspPose, 2>& grasps, double
   std::array<HandInput, 2> in;
   for (std::size_t h = 0; h < 2; ++h) {
     const double phase = t * 0.6 + static_cast<double>(h) * std::numbers::pi;
-    const Eigen::Vector3d centre(0.3 * std::cos(phase), static_cast<double>(kTableTop) + 0.03 + 0.02 * std::sin(2.0 * phase), -0.5 + 0.2 * std::sin(phase));
+    const Eigen::Vector3d centre(0.3 * std::cos(phase), static_cast<double>(kTableTop) + 0.03 + 0.02 * std::sin(2.0 * phase),
+                                 -0.5 + 0.2 * std::sin(phase));
     const double closure = 0.5 - 0.5 * std::cos(std::numbers::pi * t);
     in[h] = hand_input(grasps[h].place(centre, h == 0 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX()), grasps[h].pose(closure));
   }
@@ -73,7 +74,9 @@ std::array<HandInput, 2> hands_at(const std::array<GraspPose, 2>& grasps, double
 
 void report(benchmark::State& state, std::vector<double>& ms) {
   std::sort(ms.begin(), ms.end());
-  const auto at = [&](double q) { return ms.empty() ? 0.0 : ms[std::min(ms.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ms.size())))]; };
+  const auto at = [&](double q) {
+    return ms.empty() ? 0.0 : ms[std::min(ms.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ms.size())))];
+  };
   state.counters["p50_ms"] = at(0.5);
   state.counters["p99_ms"] = at(0.99);
 }
@@ -136,7 +139,8 @@ void BM_BareBulletKinematicFingers(benchmark::State& state) {
     for (std::size_t h = 0; h < 2; ++h) {
       for (int b = 0; b < kHandBoneCount; ++b) {
         const HandBone& bone = hand_bones()[static_cast<std::size_t>(b)];
-        const Eigen::Vector3d c = 0.5 * (in[h].joints_world[static_cast<std::size_t>(bone.from)] + in[h].joints_world[static_cast<std::size_t>(bone.to)]);
+        const Eigen::Vector3d c =
+            0.5 * (in[h].joints_world[static_cast<std::size_t>(bone.from)] + in[h].joints_world[static_cast<std::size_t>(bone.to)]);
         motions[h * kHandBoneCount + static_cast<std::size_t>(b)]->setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(c)));
       }
     }

@@ -27,7 +27,8 @@ const Data& data() {
     const auto rig = rhot::load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / "seated-4.yaml").value();
     out.set = rhot::load_star_set(std::filesystem::path(RHOT_ASSET_DIR) / "stars" / "seed-case.json").value();
     out.set.stars.resize(25);
-    const auto motions = rhot::random_motions(25, rig.volume->centre_m - rig.volume->size_m / 2, rig.volume->centre_m + rig.volume->size_m / 2, 2);
+    const auto motions =
+        rhot::random_motions(25, rig.volume->centre_m - rig.volume->size_m / 2, rig.volume->centre_m + rig.volume->size_m / 2, 2);
     std::vector<rhot::SimulatedBody> bodies;
     for (std::size_t b = 0; b < 25; ++b) {
       rhot::SimulatedBody body{motions[b], {}};

@@ -24,8 +24,7 @@ DemoRun run_demo(const std::string& args, const std::string& env_prefix = "") {
 }
 
 fs::path temp_dir() {
-  const fs::path d = fs::path(::testing::TempDir()) / "rhot_demo_cli" /
-                     ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  const fs::path d = fs::path(::testing::TempDir()) / "rhot_demo_cli" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
@@ -88,8 +87,7 @@ TEST(DemoCli, BadRendererOptionsAreReported) {
       << size.output;
   const DemoRun device = run_demo("--headless --frames 1 --device warp-drive");
   EXPECT_EQ(device.exit_code, 1);
-  EXPECT_NE(device.output.find("cannot start the renderer: no Vulkan device matches \"warp-drive\""), std::string::npos)
-      << device.output;
+  EXPECT_NE(device.output.find("cannot start the renderer: no Vulkan device matches \"warp-drive\""), std::string::npos) << device.output;
 }
 
 TEST(DemoCli, NoVulkanDriverIsAClearError) {

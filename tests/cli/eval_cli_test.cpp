@@ -65,8 +65,8 @@ TEST(EvalCli, HandsReportsJointErrorsForEveryMotion) {
   const nlohmann::json j = nlohmann::json::parse(r.output);
   for (const char* motion : {"open", "fist", "pinch", "wave", "power-grasp", "precision-grasp"}) {
     ASSERT_TRUE(j["motions"].contains(motion)) << motion;
-    for (const char* key : {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",
-                            "ik_p99_us"}) {
+    for (const char* key : {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction",
+                            "ik_median_us", "ik_p99_us"}) {
       EXPECT_TRUE(j["motions"][motion].contains(key)) << motion << " " << key;
     }
   }
@@ -110,7 +110,8 @@ TEST(EvalCli, GraspPrintsTheScenarioJson) {
   EXPECT_LT(nlohmann::json::parse(t.output)["throw_velocity_error_pct"].get<double>(), 10.0);
   const auto bad = rhot::test::run_program("rhot-eval", "grasp --scenario juggle --json", "2>&1");
   EXPECT_EQ(bad.exit_code, 1);
-  EXPECT_NE(bad.output.find("--scenario juggle: no such scenario (lift, pinch, throw, push, hand-over, hidden-markers, place, all)"), std::string::npos)
+  EXPECT_NE(bad.output.find("--scenario juggle: no such scenario (lift, pinch, throw, push, hand-over, hidden-markers, place, all)"),
+            std::string::npos)
       << bad.output;
 }
 
@@ -128,13 +129,17 @@ TEST(EvalCli, FramePrintsTheWholeFrameAndEveryStage) {
   }
   const auto bad = rhot::test::run_program("rhot-eval", "frame --eye 64by64 --json", "2>&1");
   EXPECT_EQ(bad.exit_code, 1);
-  EXPECT_NE(bad.output.find("--eye: expected WIDTHxHEIGHT, each 16 to 8192 pixels, such as 1080x1200, got \"64by64\""), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("--eye: expected WIDTHxHEIGHT, each 16 to 8192 pixels, such as 1080x1200, got \"64by64\""), std::string::npos)
+      << bad.output;
 }
 
 TEST(EvalCli, UnknownHandMotionIsNamed) {
-  const auto r = rhot::test::run_program("rhot-eval", std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion juggle --json", "2>&1");
+  const auto r = rhot::test::run_program(
+      "rhot-eval", std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion juggle --json", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.output.find("--motion juggle: no such motion (open, fist, pinch, wave, power-grasp, precision-grasp, all)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--motion juggle: no such motion (open, fist, pinch, wave, power-grasp, precision-grasp, all)"),
+            std::string::npos)
+      << r.output;
 }
 
 }  // namespace

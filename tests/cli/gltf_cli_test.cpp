@@ -18,7 +18,8 @@ std::vector<float> floats(const tinygltf::Model& m, int accessor) {
   const tinygltf::BufferView& v = m.bufferViews[static_cast<std::size_t>(a.bufferView)];
   const int components = a.type == TINYGLTF_TYPE_SCALAR ? 1 : a.type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
   std::vector<float> out(a.count * static_cast<std::size_t>(components));
-  std::memcpy(out.data(), m.buffers[static_cast<std::size_t>(v.buffer)].data.data() + v.byteOffset + a.byteOffset, out.size() * sizeof(float));
+  std::memcpy(out.data(), m.buffers[static_cast<std::size_t>(v.buffer)].data.data() + v.byteOffset + a.byteOffset,
+              out.size() * sizeof(float));
   return out;
 }
 

@@ -26,16 +26,18 @@ fs::path temp_dir() {
 TEST(StarsCli, HelpNamesEveryOption) {
   const auto r = run_program("rhot-stars", "--help", "2>&1");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* option : {"--marker-diameter-mm", "--box-mm", "--variation-mm", "--out", "--candidates", "--seed", "--max-stars", "--no-meshes"}) {
+  for (const char* option :
+       {"--marker-diameter-mm", "--box-mm", "--variation-mm", "--out", "--candidates", "--seed", "--max-stars", "--no-meshes"}) {
     EXPECT_NE(r.output.find(option), std::string::npos) << option;
   }
 }
 
 TEST(StarsCli, WritesAValidSetAMeshPerStarAndAPicture) {
   const fs::path dir = temp_dir();
-  const auto r = run_program("rhot-stars", "--marker-diameter-mm 4 --box-mm 20.8 12.6 48.3 --variation-mm 1.5 --candidates 3000 --out " +
-                                               (dir / "nested" / "set.json").string(),
-                             "2>&1");
+  const auto r = run_program(
+      "rhot-stars",
+      "--marker-diameter-mm 4 --box-mm 20.8 12.6 48.3 --variation-mm 1.5 --candidates 3000 --out " + (dir / "nested" / "set.json").string(),
+      "2>&1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto set = rhot::load_star_set(dir / "nested" / "set.json");
   ASSERT_TRUE(set.has_value()) << set.error();

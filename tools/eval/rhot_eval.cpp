@@ -318,7 +318,8 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
         // marker's detections it was built from (two bodies' markers can meet in space).
         int body = point_body[static_cast<std::size_t>(p)];
         for (std::size_t k = 0; k < frame.truth_position_m.size(); ++k) {
-          if (frame.truth_marker_body[k] == t.star && (frame.truth_position_m[k] - points[static_cast<std::size_t>(p)]).norm() < 0.001) body = t.star;
+          if (frame.truth_marker_body[k] == t.star && (frame.truth_position_m[k] - points[static_cast<std::size_t>(p)]).norm() < 0.001)
+            body = t.star;
         }
         other = other || (body >= 0 && body != t.star);
         own = own || body == t.star;
@@ -361,8 +362,8 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
 // One or every scripted hand motion through the simulated rig with a hand layout: the hand's
 // markers (its own bones hiding them) matched, triangulated, the hand star tracked, the fingers
 // solved, and every joint compared with the truth.
-nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion, double sigma, int frames,
-                               unsigned seed, const Eigen::Vector3d& centre, bool filter) {
+nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion, double sigma,
+                               int frames, unsigned seed, const Eigen::Vector3d& centre, bool filter) {
   const rhot::HandPose skeleton = rhot::reference_open_hand(layout.side);
   const auto chains = rhot::hand_chains(skeleton, layout.side);
   const auto relaxed = rhot::HandSolver(layout.side, skeleton).state().angles;
@@ -393,8 +394,8 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
     for (int j = 0; j < rhot::kHandJointCount; ++j) {
       const auto parent = rhot::joint_parent(static_cast<rhot::HandJoint>(j));
       if (!parent) continue;
-      bones.push_back({world_from_hand * pose.position_m[static_cast<std::size_t>(*parent)], world_from_hand * pose.position_m[static_cast<std::size_t>(j)],
-                       0.8 * pose.radius_m[static_cast<std::size_t>(j)]});
+      bones.push_back({world_from_hand * pose.position_m[static_cast<std::size_t>(*parent)],
+                       world_from_hand * pose.position_m[static_cast<std::size_t>(j)], 0.8 * pose.radius_m[static_cast<std::size_t>(j)]});
     }
     sim.set_occluders(bones);
     const rhot::RigFrame frame = sim.next();
@@ -409,7 +410,8 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
     ++hand_frames;
     segment_stars_seen += hand.segment_stars_seen;
     for (int j = 0; j < rhot::kHandJointCount; ++j) {
-      const double e = (hand.joints_world[static_cast<std::size_t>(j)] - world_from_hand * pose.position_m[static_cast<std::size_t>(j)]).norm();
+      const double e =
+          (hand.joints_world[static_cast<std::size_t>(j)] - world_from_hand * pose.position_m[static_cast<std::size_t>(j)]).norm();
       joint_errors.push_back(1000.0 * e);
       ++joint_frames;
       confident += hand.state.confidence[static_cast<std::size_t>(j)] >= 0.5 ? 1 : 0;
@@ -482,8 +484,9 @@ int hands(const std::string& rig_file, const std::string& layout_file, const std
     j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, sigma, frames, seed, box.centre, filter);
   }
   // Over all motions: the mean of the motions' numbers (each motion weighs alike).
-  for (const char* key : {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",
-                          "ik_p99_us", "tracker_median_us", "tracker_p99_us", "hand_seen_fraction", "fingertips_seen_fraction"}) {
+  for (const char* key :
+       {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",
+        "ik_p99_us", "tracker_median_us", "tracker_p99_us", "hand_seen_fraction", "fingertips_seen_fraction"}) {
     double sum = 0.0;
     for (const auto& [name, m] : j["motions"].items()) sum += m[key].get<double>();
     j[key] = sum / static_cast<double>(motions.size());
@@ -655,7 +658,9 @@ int main(int argc, char** argv) {
   wand_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
   wand_cmd->add_option("--frames", frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
   wand_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  wand_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  wand_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   wand_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
   wand_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   wand_cmd->add_flag("--json", json, "print JSON (the only output format)");
@@ -664,11 +669,15 @@ int main(int argc, char** argv) {
   int bodies = 25;
   stars_cmd->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
   stars_cmd->add_option("--set", set_file, "marker star set (JSON, from rhot-stars)")->required();
-  stars_cmd->add_option("--bodies", bodies, "stars moving at once (the set's first ones)")->capture_default_str()->check(CLI::Range(1, 10000));
+  stars_cmd->add_option("--bodies", bodies, "stars moving at once (the set's first ones)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000));
   stars_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
   stars_cmd->add_option("--frames", frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
   stars_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  stars_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  stars_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   stars_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
   stars_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   stars_cmd->add_flag("--json", json, "print JSON (the only output format)");
@@ -682,15 +691,18 @@ int main(int argc, char** argv) {
   hands_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
   hands_cmd->add_option("--frames", hand_frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));
   hands_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  hands_cmd->add_option("--volume-centre-m", volume_centre, "where the hand moves, X Y Z metres (default: the rig's volume centre)")->expected(3);
+  hands_cmd->add_option("--volume-centre-m", volume_centre, "where the hand moves, X Y Z metres (default: the rig's volume centre)")
+      ->expected(3);
   bool filter = false;
   hands_cmd->add_flag("--filter", filter, "1-euro filter the hand frame and the fingertips before the IK");
   hands_cmd->add_flag("--json", json, "print JSON (the only output format)");
-  auto* grasp_cmd = app.add_subcommand("grasp", "scripted grasps through the physics: lift, pinch, throw, push, hand-over, hidden markers, place");
+  auto* grasp_cmd =
+      app.add_subcommand("grasp", "scripted grasps through the physics: lift, pinch, throw, push, hand-over, hidden markers, place");
   std::string scenario = "all";
   grasp_cmd->add_option("--scenario", scenario, "a scenario name or all")->capture_default_str();
   grasp_cmd->add_flag("--json", json, "print JSON (the only output format)");
-  auto* frame_cmd = app.add_subcommand("frame", "the demo's whole frame headless (cameras, tracking, physics, both eyes): p50, p99, budget misses, per stage");
+  auto* frame_cmd = app.add_subcommand(
+      "frame", "the demo's whole frame headless (cameras, tracking, physics, both eyes): p50, p99, budget misses, per stage");
   std::string scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
   std::string eye;
   int frame_count = 900;

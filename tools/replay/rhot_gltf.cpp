@@ -166,9 +166,10 @@ int main(int argc, char** argv) {
     rhot::Rigid3d last;
     for (const auto& f : rec->frames) {
       if (const auto it = f.objects.find(name); it != f.objects.end()) last = it->second;
-      t.insert(t.end(), {static_cast<float>(last.translation.x()), static_cast<float>(last.translation.y()), static_cast<float>(last.translation.z())});
-      r.insert(r.end(), {static_cast<float>(last.rotation.x()), static_cast<float>(last.rotation.y()), static_cast<float>(last.rotation.z()),
-                         static_cast<float>(last.rotation.w())});
+      t.insert(t.end(), {static_cast<float>(last.translation.x()), static_cast<float>(last.translation.y()),
+                         static_cast<float>(last.translation.z())});
+      r.insert(r.end(), {static_cast<float>(last.rotation.x()), static_cast<float>(last.rotation.y()),
+                         static_cast<float>(last.rotation.z()), static_cast<float>(last.rotation.w())});
     }
     animate(index, "translation", t, 3);
     animate(index, "rotation", r, 4);

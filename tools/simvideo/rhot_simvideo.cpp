@@ -25,8 +25,9 @@
 #endif
 
 int main(int argc, char** argv) {
-  CLI::App cli{"rhot-simvideo: renders the demo's simulated camera frames (the script's hands and objects seen by the rig) as PNG\n"
-               "image sequences DIR/cam<i>_%04d.png, one per camera, for rhot-demo --source video:..."};
+  CLI::App cli{
+      "rhot-simvideo: renders the demo's simulated camera frames (the script's hands and objects seen by the rig) as PNG\n"
+      "image sequences DIR/cam<i>_%04d.png, one per camera, for rhot-demo --source video:..."};
   std::string scene_path = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
   std::string out_dir;
   int frames = 1080;
@@ -38,13 +39,19 @@ int main(int argc, char** argv) {
   cli.add_option("--rig", settings.rig_file, "Camera rig (OpenCV YAML; default: the scene's, else assets/rigs/seated-4.yaml)")
       ->check(CLI::ExistingFile);
   cli.add_option("--out", out_dir, "Folder for the images (created if missing)")->required();
-  cli.add_option("--frames", frames, "Frames to render (90 per second of the script)")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cli.add_option("--frames", frames, "Frames to render (90 per second of the script)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
   cli.add_option("--scene", scene_path, "Scene file (JSON)")->capture_default_str();
   cli.add_option("--blob-sigma", draw.blob_sigma_px, "Each marker's spot: Gaussian standard deviation, pixels")
       ->capture_default_str()
       ->check(CLI::Range(0.3, 20.0));
-  cli.add_option("--peak", draw.peak, "A spot's peak above the background, grey levels")->capture_default_str()->check(CLI::Range(1.0, 255.0));
-  cli.add_option("--noise", draw.noise_sigma, "Image noise, standard deviation in grey levels")->capture_default_str()->check(CLI::Range(0.0, 50.0));
+  cli.add_option("--peak", draw.peak, "A spot's peak above the background, grey levels")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 255.0));
+  cli.add_option("--noise", draw.noise_sigma, "Image noise, standard deviation in grey levels")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 50.0));
   cli.add_option("--sigma", settings.sigma_px, "Noise on each marker's pixel position before drawing, pixels")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 50.0));
@@ -80,7 +87,8 @@ int main(int argc, char** argv) {
       char name[64];
       std::snprintf(name, sizeof(name), "cam%zu_%04d.png", c, f);
       const std::string file = (dir / name).string();
-      if (!cv::imwrite(file, rhot::draw_blobs(p.rig().cameras[c].intrinsics, p.frame().cameras[c], draw), {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+      if (!cv::imwrite(file, rhot::draw_blobs(p.rig().cameras[c].intrinsics, p.frame().cameras[c], draw),
+                       {cv::IMWRITE_PNG_COMPRESSION, 1})) {
         std::fprintf(stderr, "rhot-simvideo: cannot write %s\n", file.c_str());
         return EXIT_FAILURE;
       }

@@ -64,7 +64,8 @@ void add_cylinder(std::vector<Triangle>& out, const Eigen::Vector3d& a, const Ei
   for (int i = 0; i < slices; ++i) {
     const double p0 = 2.0 * std::numbers::pi * i / slices, p1 = 2.0 * std::numbers::pi * (i + 1) / slices;
     const Eigen::Vector3d r0 = radius * (std::cos(p0) * u + std::sin(p0) * v), r1 = radius * (std::cos(p1) * u + std::sin(p1) * v);
-    const Eigen::Vector3f a0 = (a + r0).cast<float>(), a1 = (a + r1).cast<float>(), b0 = (b + r0).cast<float>(), b1 = (b + r1).cast<float>();
+    const Eigen::Vector3f a0 = (a + r0).cast<float>(), a1 = (a + r1).cast<float>(), b0 = (b + r0).cast<float>(),
+                          b1 = (b + r1).cast<float>();
     out.push_back({a0, b0, a1});
     out.push_back({a1, b0, b1});
     out.push_back({a.cast<float>(), a0, a1});  // caps
@@ -73,7 +74,9 @@ void add_cylinder(std::vector<Triangle>& out, const Eigen::Vector3d& a, const Ei
 }
 
 void add_box(std::vector<Triangle>& out, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  auto corner = [&](int i) { return Eigen::Vector3f(float(i & 1 ? hi.x() : lo.x()), float(i & 2 ? hi.y() : lo.y()), float(i & 4 ? hi.z() : lo.z())); };
+  auto corner = [&](int i) {
+    return Eigen::Vector3f(float(i & 1 ? hi.x() : lo.x()), float(i & 2 ? hi.y() : lo.y()), float(i & 4 ? hi.z() : lo.z()));
+  };
   const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : quads) {
     out.push_back({corner(q[0]), corner(q[1]), corner(q[2])});
@@ -126,14 +129,15 @@ std::string svg(const rhot::StarSet& set) {
   std::ostringstream s;
   s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << columns * cell_w << "\" height=\"" << rows * cell_h + 30 << "\">\n";
   s << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  s << "<text x=\"8\" y=\"20\" font-family=\"sans-serif\" font-size=\"14\">" << set.stars.size() << " marker stars, " << r.marker_diameter_mm
-    << " mm markers, box " << r.box_mm.x() << " x " << r.box_mm.y() << " x " << r.box_mm.z() << " mm, variation " << r.variation_mm
-    << " mm (front: x right, z up; side: y right, z up)</text>\n";
+  s << "<text x=\"8\" y=\"20\" font-family=\"sans-serif\" font-size=\"14\">" << set.stars.size() << " marker stars, "
+    << r.marker_diameter_mm << " mm markers, box " << r.box_mm.x() << " x " << r.box_mm.y() << " x " << r.box_mm.z() << " mm, variation "
+    << r.variation_mm << " mm (front: x right, z up; side: y right, z up)</text>\n";
   for (std::size_t i = 0; i < set.stars.size(); ++i) {
     const rhot::MarkerStar& star = set.stars[i];
     const double ox = static_cast<double>(i % static_cast<std::size_t>(columns)) * cell_w;
     const double oy = 30 + static_cast<double>(i / static_cast<std::size_t>(columns)) * cell_h;
-    s << "<text x=\"" << ox + pad << "\" y=\"" << oy + 12 << "\" font-family=\"sans-serif\" font-size=\"12\">star " << star.id << "</text>\n";
+    s << "<text x=\"" << ox + pad << "\" y=\"" << oy + 12 << "\" font-family=\"sans-serif\" font-size=\"12\">star " << star.id
+      << "</text>\n";
     for (int view = 0; view < 2; ++view) {
       const double width = view == 0 ? r.box_mm.x() : r.box_mm.y();
       const double vx = ox + pad + (view == 0 ? 0.0 : r.box_mm.x() * scale + pad);
@@ -178,7 +182,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, 10000000));
   app.add_option("--seed", settings.seed, "random seed")->capture_default_str();
-  app.add_option("--max-stars", settings.max_stars, "stop after this many stars (0: as many as fit)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--max-stars", settings.max_stars, "stop after this many stars (0: as many as fit)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_flag("--no-meshes", no_meshes, "write the JSON and the picture only");
   CLI11_PARSE(app, argc, argv);
 

@@ -36,13 +36,9 @@ bool inside_sensor(const CameraIntrinsics& k, const Eigen::Vector2d& pixel) {
 
 }  // namespace
 
-Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy) {
-  return distort(k, xy, nullptr);
-}
+Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy) { return distort(k, xy, nullptr); }
 
-std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world) const {
-  return CameraProjection(*this).project(p_world);
-}
+std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world) const { return CameraProjection(*this).project(p_world); }
 
 std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world, Eigen::Matrix<double, 2, 3>& jacobian) const {
   return CameraProjection(*this).project(p_world, jacobian);
@@ -63,8 +59,7 @@ std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& 
   return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
 }
 
-std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world,
-                                                         Eigen::Matrix<double, 2, 3>& jacobian) const {
+std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world, Eigen::Matrix<double, 2, 3>& jacobian) const {
   const Eigen::Vector3d p = rotation_ * p_world + translation_;
   if (!(p.z() > kMinDepth_m)) return std::nullopt;
   const double inv_z = 1.0 / p.z();
@@ -96,8 +91,8 @@ std::vector<CameraProjection> camera_projections(const CameraRig& rig) {
 
 Eigen::Vector2d Camera::undistort(const Eigen::Vector2d& pixel) const {
   const cv::Matx33d k(intrinsics.fx, 0.0, intrinsics.cx, 0.0, intrinsics.fy, intrinsics.cy, 0.0, 0.0, 1.0);
-  const cv::Vec<double, 5> dist(intrinsics.distortion[0], intrinsics.distortion[1], intrinsics.distortion[2],
-                                intrinsics.distortion[3], intrinsics.distortion[4]);
+  const cv::Vec<double, 5> dist(intrinsics.distortion[0], intrinsics.distortion[1], intrinsics.distortion[2], intrinsics.distortion[3],
+                                intrinsics.distortion[4]);
   const std::vector<cv::Point2d> in{{pixel.x(), pixel.y()}};
   std::vector<cv::Point2d> out;
   // OpenCV's default stops after 5 fixed-point steps, too few for wide lenses; iterate to 1e-14.
@@ -114,9 +109,9 @@ Eigen::Vector3d Camera::ray_world(const Eigen::Vector2d& pixel) const {
 }
 
 Rigid3d cam_from_world_look_at(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - position).normalized();             // forward
+  const Eigen::Vector3d z = (target - position).normalized();                // forward
   const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitY()).normalized();  // right (world up x forward)
-  const Eigen::Vector3d y = z.cross(x);                                   // down in the image
+  const Eigen::Vector3d y = z.cross(x);                                      // down in the image
   Eigen::Matrix3d world_from_cam_rotation;
   world_from_cam_rotation.col(0) = x;
   world_from_cam_rotation.col(1) = y;

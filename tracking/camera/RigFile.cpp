@@ -33,8 +33,8 @@ Eigen::MatrixXd read_matrix(const cv::FileNode& parent, const char* key, int row
     throw Failure{label + ": expected an !!opencv-matrix of " + std::to_string(rows) + "x" + std::to_string(cols) + " numbers"};
   }
   if (m.rows * m.cols != rows * cols || (m.rows != rows && !(rows == 1 || cols == 1))) {
-    throw Failure{label + ": expected " + std::to_string(rows) + "x" + std::to_string(cols) + ", got " +
-                  std::to_string(m.rows) + "x" + std::to_string(m.cols)};
+    throw Failure{label + ": expected " + std::to_string(rows) + "x" + std::to_string(cols) + ", got " + std::to_string(m.rows) + "x" +
+                  std::to_string(m.cols)};
   }
   cv::Mat d;
   m.convertTo(d, CV_64F);
@@ -72,8 +72,8 @@ std::expected<void, std::string> check_rig(const CameraRig& rig) {
     if (c.name.empty()) return std::unexpected(where + ".name: missing or empty");
     if (!names.insert(c.name).second) return std::unexpected(where + ".name: duplicate name \"" + c.name + "\"");
     if (k.width_px <= 0 || k.height_px <= 0 || k.width_px > 65536 || k.height_px > 65536) {
-      return std::unexpected(where + ".image_width/image_height: expected 1 to 65536 pixels, got " + std::to_string(k.width_px) +
-                             "x" + std::to_string(k.height_px));
+      return std::unexpected(where + ".image_width/image_height: expected 1 to 65536 pixels, got " + std::to_string(k.width_px) + "x" +
+                             std::to_string(k.height_px));
     }
     for (const double v : {k.fx, k.fy, k.cx, k.cy}) {
       if (!std::isfinite(v)) return std::unexpected(where + ".camera_matrix: contains a value that is not finite");
@@ -147,7 +147,8 @@ std::expected<CameraRig, std::string> load_rig(const std::filesystem::path& file
     }
     const bool has_centre = !fs["volume_centre"].empty();
     const bool has_size = !fs["volume_size"].empty();
-    if (has_centre != has_size) throw Failure{has_centre ? "volume_size: missing (volume_centre needs it)" : "volume_centre: missing (volume_size needs it)"};
+    if (has_centre != has_size)
+      throw Failure{has_centre ? "volume_size: missing (volume_centre needs it)" : "volume_centre: missing (volume_size needs it)"};
     if (has_centre) {
       const cv::FileNode root = fs.root();
       rig.volume = TrackingVolume{read_matrix(root, "volume_centre", 3, 1, ""), read_matrix(root, "volume_size", 3, 1, "")};
@@ -167,7 +168,8 @@ std::expected<void, std::string> save_rig(const CameraRig& rig, const std::files
     cv::FileStorage fs(file.string(), cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
     if (!fs.isOpened()) return std::unexpected(file.string() + ": cannot write");
     fs << "rig_name" << rig.name;
-    fs << "cameras" << "[";
+    fs << "cameras"
+       << "[";
     for (const Camera& c : rig.cameras) {
       const CameraIntrinsics& k = c.intrinsics;
       const cv::Matx33d camera_matrix(k.fx, 0.0, k.cx, 0.0, k.fy, k.cy, 0.0, 0.0, 1.0);
@@ -176,9 +178,10 @@ std::expected<void, std::string> save_rig(const CameraRig& rig, const std::files
       cv::Matx33d rotation;
       for (int i = 0; i < 9; ++i) rotation.val[i] = r(i / 3, i % 3);
       const Eigen::Vector3d t = c.cam_from_world.translation;
-      fs << "{" << "name" << c.name << "image_width" << k.width_px << "image_height" << k.height_px << "camera_matrix"
-         << cv::Mat(camera_matrix) << "distortion_coefficients" << cv::Mat(dist) << "rotation" << cv::Mat(rotation)
-         << "translation" << cv::Mat(cv::Matx31d(t.x(), t.y(), t.z())) << "}";
+      fs << "{"
+         << "name" << c.name << "image_width" << k.width_px << "image_height" << k.height_px << "camera_matrix" << cv::Mat(camera_matrix)
+         << "distortion_coefficients" << cv::Mat(dist) << "rotation" << cv::Mat(rotation) << "translation"
+         << cv::Mat(cv::Matx31d(t.x(), t.y(), t.z())) << "}";
     }
     fs << "]";
     if (rig.volume) {

@@ -14,15 +14,14 @@
 #include <string_view>
 
 namespace rhot::detail {
-[[noreturn]] void check_failed(const char* kind, const char* condition, std::string_view message,
-                               const char* file, int line) noexcept;
+[[noreturn]] void check_failed(const char* kind, const char* condition, std::string_view message, const char* file, int line) noexcept;
 }  // namespace rhot::detail
 
-#define RHOT_DETAIL_CHECK(kind, cond, msg)                                                   \
-  do {                                                                                       \
-    if (!(cond)) [[unlikely]] {                                                              \
-      ::rhot::detail::check_failed(kind, #cond, (msg), __FILE__, __LINE__);                  \
-    }                                                                                        \
+#define RHOT_DETAIL_CHECK(kind, cond, msg)                                  \
+  do {                                                                      \
+    if (!(cond)) [[unlikely]] {                                             \
+      ::rhot::detail::check_failed(kind, #cond, (msg), __FILE__, __LINE__); \
+    }                                                                       \
   } while (false)
 
 #define RHOT_ASSERT(cond, msg) RHOT_DETAIL_CHECK("assertion", cond, msg)

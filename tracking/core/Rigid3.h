@@ -14,9 +14,7 @@ struct Rigid3d {
 
   static Rigid3d identity() { return {}; }
 
-  Eigen::Vector3d operator*(const Eigen::Vector3d& point) const {
-    return rotation * point + translation;
-  }
+  Eigen::Vector3d operator*(const Eigen::Vector3d& point) const { return rotation * point + translation; }
   Rigid3d operator*(const Rigid3d& b_from_a) const {
     // (this = c_from_b) * b_from_a = c_from_a
     return {(rotation * b_from_a.rotation).normalized(), rotation * b_from_a.translation + translation};

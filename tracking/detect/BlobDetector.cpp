@@ -94,8 +94,8 @@ Region measure(const cv::Mat& gray, const cv::Mat& mask, const cv::Point& offset
 
 // Measures one region; a round one becomes a blob, an elongated one is cut again halfway up to its
 // peak and its parts measured in turn, `depth` more times at most.
-void resolve(const cv::Mat& gray, const cv::Mat& mask, const cv::Point& offset, int level, int depth,
-             const BlobDetectorSettings& s, std::vector<Blob>& out) {
+void resolve(const cv::Mat& gray, const cv::Mat& mask, const cv::Point& offset, int level, int depth, const BlobDetectorSettings& s,
+             std::vector<Blob>& out) {
   const Region r = measure(gray, mask, offset, level);
   if (r.weight <= 0.0) return;
   if (r.elongation <= s.max_elongation) {
@@ -121,11 +121,16 @@ void resolve(const cv::Mat& gray, const cv::Mat& mask, const cv::Point& offset, 
 }  // namespace
 
 std::expected<void, std::string> check(const BlobDetectorSettings& s) {
-  if (s.threshold > 254) return std::unexpected("blob detector: threshold " + std::to_string(s.threshold) + " above 254 (grey levels 0-255; negative: automatic)");
+  if (s.threshold > 254)
+    return std::unexpected("blob detector: threshold " + std::to_string(s.threshold) +
+                           " above 254 (grey levels 0-255; negative: automatic)");
   if (!(s.auto_k >= 0.0) || !std::isfinite(s.auto_k)) return std::unexpected("blob detector: auto_k must be a finite number >= 0");
-  if (s.min_threshold < 0 || s.min_threshold > 254) return std::unexpected("blob detector: min_threshold " + std::to_string(s.min_threshold) + " outside 0-254");
+  if (s.min_threshold < 0 || s.min_threshold > 254)
+    return std::unexpected("blob detector: min_threshold " + std::to_string(s.min_threshold) + " outside 0-254");
   if (s.min_area_px < 1) return std::unexpected("blob detector: min_area_px must be at least 1");
-  if (s.max_area_px < s.min_area_px) return std::unexpected("blob detector: max_area_px " + std::to_string(s.max_area_px) + " below min_area_px " + std::to_string(s.min_area_px));
+  if (s.max_area_px < s.min_area_px)
+    return std::unexpected("blob detector: max_area_px " + std::to_string(s.max_area_px) + " below min_area_px " +
+                           std::to_string(s.min_area_px));
   if (!(s.max_elongation >= 1.0)) return std::unexpected("blob detector: max_elongation must be at least 1 (a disc)");
   if (s.split_depth < 0) return std::unexpected("blob detector: split_depth must be >= 0");
   if (s.max_blobs < 0) return std::unexpected("blob detector: max_blobs must be >= 0");
@@ -174,7 +179,8 @@ std::expected<std::vector<Detection>, std::string> detect_blobs(const cv::Mat& i
     resolve(gray(box), component, box.tl(), threshold, s.split_depth, s, blobs);
   }
   if (static_cast<int>(blobs.size()) > s.max_blobs) {
-    std::nth_element(blobs.begin(), blobs.begin() + s.max_blobs, blobs.end(), [](const Blob& a, const Blob& b) { return a.weight > b.weight; });
+    std::nth_element(blobs.begin(), blobs.begin() + s.max_blobs, blobs.end(),
+                     [](const Blob& a, const Blob& b) { return a.weight > b.weight; });
     blobs.resize(static_cast<std::size_t>(s.max_blobs));
   }
   std::vector<Detection> out;

@@ -38,12 +38,12 @@ struct BlobDetectorSettings {
   // (the default): automatic, background median + auto_k * background noise, at least min_threshold.
   int threshold = -1;
   double auto_k = 5.0;
-  int min_threshold = 40;    // automatic threshold's floor: a black or dim image yields nothing
-  int min_area_px = 3;       // smaller components are noise or hot pixels
-  int max_area_px = 2000;    // larger ones are lamps, reflections, the sun
+  int min_threshold = 40;       // automatic threshold's floor: a black or dim image yields nothing
+  int min_area_px = 3;          // smaller components are noise or hot pixels
+  int max_area_px = 2000;       // larger ones are lamps, reflections, the sun
   double max_elongation = 1.5;  // major / minor axis; a round spot 1, two touching spots 1.7 or more
-  int split_depth = 6;       // times an elongated component is re-thresholded before it is dropped
-  int max_blobs = 256;       // brightest kept
+  int split_depth = 6;          // times an elongated component is re-thresholded before it is dropped
+  int max_blobs = 256;          // brightest kept
 };
 
 // Whether settings make sense; the message names the field and what was expected.
@@ -53,6 +53,6 @@ struct BlobDetectorSettings {
 // particular order, without truth. Fails on bad settings (see check), an empty image or any other
 // pixel type, naming it.
 [[nodiscard]] std::expected<std::vector<Detection>, std::string> detect_blobs(const cv::Mat& image,
-                                                                             const BlobDetectorSettings& settings = {});
+                                                                              const BlobDetectorSettings& settings = {});
 
 }  // namespace rhot

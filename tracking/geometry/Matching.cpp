@@ -38,9 +38,8 @@ struct CameraDetections {
       for (const Eigen::Vector2d& p : pixel) in.emplace_back(p.x(), p.y());
       std::vector<cv::Point2d> out;
       const CameraIntrinsics& k = camera.intrinsics;
-      cv::undistortPoints(in, out, cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1),
-                          cv::Vec<double, 5>(k.distortion.data()), cv::noArray(), cv::noArray(),
-                          cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 1e-12));
+      cv::undistortPoints(in, out, cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1), cv::Vec<double, 5>(k.distortion.data()),
+                          cv::noArray(), cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 1e-12));
       for (std::size_t i = 0; i < out.size(); ++i) normalised[i] = {out[i].x, out[i].y};
     }
     cols = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.width_px / cell_px)) + 1);
@@ -175,8 +174,8 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
             already = clusters[static_cast<std::size_t>(links[static_cast<std::size_t>(l)].first)].detection[j] == static_cast<int>(b);
           }
           if (already) continue;
-          const auto x = ray_midpoint(poses[i].centre_world(), ray_a, poses[j].centre_world(),
-                                      poses[j].ray_direction_world(cams[j].normalised[b]));
+          const auto x =
+              ray_midpoint(poses[i].centre_world(), ray_a, poses[j].centre_world(), poses[j].ray_direction_world(cams[j].normalised[b]));
           if (!x) continue;
           Cluster cl;
           cl.seed_point = *x;

@@ -44,8 +44,7 @@ std::optional<Eigen::Vector3d> triangulate_linear(const CameraRig& rig, std::spa
   return triangulate_linear_normalised(rig, cameras, normalised);
 }
 
-std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations,
-                                             int max_iterations) {
+std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations, int max_iterations) {
   const auto linear = triangulate_linear(rig, observations);
   if (!linear) return std::nullopt;
   return refine_point(rig, observations, *linear, max_iterations);
@@ -100,8 +99,8 @@ std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> 
   return out;
 }
 
-std::optional<Eigen::Matrix3d> crlb_covariance(const CameraRig& rig, const Eigen::Vector3d& p_world,
-                                               std::span<const int> cameras, double sigma_px) {
+std::optional<Eigen::Matrix3d> crlb_covariance(const CameraRig& rig, const Eigen::Vector3d& p_world, std::span<const int> cameras,
+                                               double sigma_px) {
   if (cameras.size() < 2) return std::nullopt;
   Eigen::Matrix3d fisher = Eigen::Matrix3d::Zero();
   Eigen::Matrix<double, 2, 3> j;

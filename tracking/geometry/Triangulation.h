@@ -15,7 +15,7 @@
 namespace rhot {
 
 struct Observation {
-  int camera = 0;              // index into the rig
+  int camera = 0;               // index into the rig
   Eigen::Vector2d pixel{0, 0};  // distorted pixel coordinates as detected
 };
 
@@ -24,7 +24,7 @@ struct TriangulatedPoint {
   double reprojection_rms_px = 0.0;
   double max_residual_px = 0.0;  // the largest observation's residual
   int worst_observation = 0;     // which observation (index into the observations given) that was
-  std::vector<int> cameras;  // which cameras saw it
+  std::vector<int> cameras;      // which cameras saw it
 };
 
 // Linear (DLT) estimate from two or more observations, or nothing when the rays are degenerate
@@ -45,14 +45,13 @@ std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> 
                                               const Eigen::Vector3d& initial_world, int max_iterations = 10);
 
 // Linear estimate refined by Gauss-Newton on the pixel reprojection error.
-std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations,
-                                             int max_iterations = 10);
+std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations, int max_iterations = 10);
 
 // Covariance lower bound (m^2) of any unbiased estimate of a point seen by `cameras` with
 // independent Gaussian pixel noise of sigma_px per axis: the inverse Fisher information
 // sigma^2 (sum J_i^T J_i)^-1 from the projection Jacobians. Nothing if the cameras cannot fix the
 // point (fewer than two, or all on one ray).
-std::optional<Eigen::Matrix3d> crlb_covariance(const CameraRig& rig, const Eigen::Vector3d& p_world,
-                                               std::span<const int> cameras, double sigma_px);
+std::optional<Eigen::Matrix3d> crlb_covariance(const CameraRig& rig, const Eigen::Vector3d& p_world, std::span<const int> cameras,
+                                               double sigma_px);
 
 }  // namespace rhot

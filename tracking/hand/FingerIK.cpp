@@ -52,7 +52,8 @@ double wrap(double a) {
 }  // namespace
 
 FingerAngles clamp_to_limits(const FingerLimits& l, FingerAngles a) {
-  for (std::size_t i = 0; i < 3; ++i) a.flexion_rad[i] = std::clamp(finite_or_zero(a.flexion_rad[i]), l.flexion_min_rad[i], l.flexion_max_rad[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    a.flexion_rad[i] = std::clamp(finite_or_zero(a.flexion_rad[i]), l.flexion_min_rad[i], l.flexion_max_rad[i]);
   const double limit = abduction_limit(l, a.flexion_rad[0]);
   a.abduction_rad = std::clamp(finite_or_zero(a.abduction_rad), -limit, limit);
   return a;
@@ -119,8 +120,8 @@ IkResult fabrik_from(const FingerChain& c, const Eigen::Vector3d& target, const 
     for (int i = 2; i >= 0; --i) {
       const Eigen::Vector2d d = p[static_cast<std::size_t>(i)] - p[static_cast<std::size_t>(i) + 1];
       const double n = d.norm();
-      p[static_cast<std::size_t>(i)] = p[static_cast<std::size_t>(i) + 1] +
-                                       (n > 1e-12 ? Eigen::Vector2d(d / n) : Eigen::Vector2d(-1, 0)) * c.length_m[static_cast<std::size_t>(i)];
+      p[static_cast<std::size_t>(i)] = p[static_cast<std::size_t>(i) + 1] + (n > 1e-12 ? Eigen::Vector2d(d / n) : Eigen::Vector2d(-1, 0)) *
+                                                                                c.length_m[static_cast<std::size_t>(i)];
     }
     double heading = 0.0;
     Eigen::Vector2d at = Eigen::Vector2d::Zero();
@@ -165,8 +166,7 @@ IkResult solve_fabrik(const FingerChain& c, const Eigen::Vector3d& target, const
   return r;
 }
 
-IkResult solve_dls(const FingerChain& c, const Eigen::Vector3d& target, const FingerAngles& start, const IkSettings& s,
-                   double damping) {
+IkResult solve_dls(const FingerChain& c, const Eigen::Vector3d& target, const FingerAngles& start, const IkSettings& s, double damping) {
   IkResult r;
   r.angles = clamp_to_limits(c.limits, start);
   if (!target.allFinite()) return r;

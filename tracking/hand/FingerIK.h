@@ -20,22 +20,22 @@
 namespace rhot {
 
 struct FingerLimits {
-  double abduction_max_rad = 0.2618;          // +-15 degrees; 0 fixes it (the middle finger)
+  double abduction_max_rad = 0.2618;  // +-15 degrees; 0 fixes it (the middle finger)
   std::array<double, 3> flexion_min_rad{0.0, 0.0, 0.0};
   std::array<double, 3> flexion_max_rad{1.5708, 1.9199, 1.5708};  // MCP 90, PIP 110, DIP 90 degrees
-  double coupling = 2.0 / 3.0;                // the last hinge = coupling x the middle one, when not observed
+  double coupling = 2.0 / 3.0;                                    // the last hinge = coupling x the middle one, when not observed
 };
 
 struct FingerChain {
-  Eigen::Vector3d root_m{0, 0, 0};             // hand frame
-  Eigen::Vector3d rest_direction{0, 0, -1};    // unit: the chain straight
-  Eigen::Vector3d up{0, 1, 0};                 // unit, orthogonal to rest_direction: the back of the hand
+  Eigen::Vector3d root_m{0, 0, 0};           // hand frame
+  Eigen::Vector3d rest_direction{0, 0, -1};  // unit: the chain straight
+  Eigen::Vector3d up{0, 1, 0};               // unit, orthogonal to rest_direction: the back of the hand
   std::array<double, 3> length_m{0.04, 0.025, 0.02};
   FingerLimits limits;
 };
 
 struct FingerAngles {
-  double abduction_rad = 0.0;                 // positive toward the chain's lateral axis (rest x up)
+  double abduction_rad = 0.0;  // positive toward the chain's lateral axis (rest x up)
   std::array<double, 3> flexion_rad{0.0, 0.0, 0.0};
 };
 

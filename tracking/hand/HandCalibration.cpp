@@ -60,7 +60,8 @@ std::expected<std::pair<HandPose, HandSide>, std::string> load_hand_calibration(
   if (!in) return std::unexpected(path + ": hand calibration file not found");
   try {
     const nlohmann::json j = nlohmann::json::parse(in);
-    if (!j.is_object() || j.value("format", std::string()) != "rhot-hand-calibration") throw std::runtime_error("format: expected \"rhot-hand-calibration\"");
+    if (!j.is_object() || j.value("format", std::string()) != "rhot-hand-calibration")
+      throw std::runtime_error("format: expected \"rhot-hand-calibration\"");
     if (!j.contains("version") || j["version"] != 1) throw std::runtime_error("version: expected 1");
     const std::string side = j.value("side", std::string());
     if (side != "left" && side != "right") throw std::runtime_error("side: expected \"left\" or \"right\"");

@@ -26,7 +26,8 @@ using FingertipSample = std::array<std::optional<Eigen::Vector3d>, kFingerCount>
 // (fingers without a sample keep their length). Nothing when no finger has a sample.
 std::optional<HandPose> calibrate_flat_hand(const HandPose& reference, HandSide side, std::span<const FingertipSample> samples);
 
-[[nodiscard]] std::expected<void, std::string> save_hand_calibration(const HandPose& skeleton, HandSide side, const std::filesystem::path& file);
+[[nodiscard]] std::expected<void, std::string> save_hand_calibration(const HandPose& skeleton, HandSide side,
+                                                                     const std::filesystem::path& file);
 [[nodiscard]] std::expected<std::pair<HandPose, HandSide>, std::string> load_hand_calibration(const std::filesystem::path& file);
 
 }  // namespace rhot

@@ -41,9 +41,7 @@ StarSet HandLayout::segment_star_set() const {
   return set;
 }
 
-double segment_star_lift_m(const HandPose& pose, HandJoint bone) {
-  return pose.radius_m[static_cast<std::size_t>(bone)] + 0.001;
-}
+double segment_star_lift_m(const HandPose& pose, HandJoint bone) { return pose.radius_m[static_cast<std::size_t>(bone)] + 0.001; }
 
 Finger finger_of_bone(HandJoint bone) {
   if (bone <= HandJoint::kThumbTip) return Finger::kThumb;
@@ -117,7 +115,8 @@ std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::p
   }
   HandLayout layout;
   try {
-    if (!j.is_object() || j.value("format", std::string()) != "rhot-hand-layout") throw std::runtime_error("format: expected \"rhot-hand-layout\"");
+    if (!j.is_object() || j.value("format", std::string()) != "rhot-hand-layout")
+      throw std::runtime_error("format: expected \"rhot-hand-layout\"");
     if (!j.contains("version") || j["version"] != 1) throw std::runtime_error("version: expected 1");
     layout.name = j.value("name", std::string());
     const std::string side = j.value("side", std::string());
@@ -131,37 +130,44 @@ std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::p
     for (std::size_t m = 0; m < 4; ++m) {
       const std::string where = "hand_star_mm[" + std::to_string(m) + "]";
       if (!star[m].is_array() || star[m].size() != 3) throw std::runtime_error(where + ": expected [x, y, z]");
-      layout.hand_star_m[m] = 1e-3 * Eigen::Vector3d(number(star[m][0], where + "[0]"), number(star[m][1], where + "[1]"), number(star[m][2], where + "[2]"));
+      layout.hand_star_m[m] =
+          1e-3 * Eigen::Vector3d(number(star[m][0], where + "[0]"), number(star[m][1], where + "[1]"), number(star[m][2], where + "[2]"));
     }
     if (j.contains("fingertip_markers")) {
       if (!j["fingertip_markers"].is_object()) throw std::runtime_error("fingertip_markers: expected an object of joint names");
-      constexpr std::array<HandJoint, 5> tips{HandJoint::kThumbTip, HandJoint::kIndexTip, HandJoint::kMiddleTip, HandJoint::kRingTip, HandJoint::kLittleTip};
+      constexpr std::array<HandJoint, 5> tips{HandJoint::kThumbTip, HandJoint::kIndexTip, HandJoint::kMiddleTip, HandJoint::kRingTip,
+                                              HandJoint::kLittleTip};
       for (const auto& [name, value] : j["fingertip_markers"].items()) {
         std::size_t finger = 5;
         for (std::size_t f = 0; f < 5; ++f) {
           if (joint_name(tips[f]) == name) finger = f;
         }
-        if (finger == 5) throw std::runtime_error("fingertip_markers." + name + ": not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
+        if (finger == 5)
+          throw std::runtime_error("fingertip_markers." + name +
+                                   ": not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
         layout.fingertip_offset_m[finger] = 1e-3 * number(value, "fingertip_markers." + name);
       }
     }
     if (j.contains("segment_stars")) {
-      if (!j.contains("star_set") || !j["star_set"].is_string()) throw std::runtime_error("star_set: expected the path of the segment stars' set");
+      if (!j.contains("star_set") || !j["star_set"].is_string())
+        throw std::runtime_error("star_set: expected the path of the segment stars' set");
       const auto set = load_star_set(file.parent_path() / j["star_set"].get<std::string>());
       if (!set) throw std::runtime_error("star_set: " + set.error());
       layout.segment_star_rules = set->rules;
       if (!j["segment_stars"].is_array()) throw std::runtime_error("segment_stars: expected an array of {bone, star_id}");
-      constexpr std::array<HandJoint, 15> bones{HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal, HandJoint::kThumbDistal,
-                                                HandJoint::kIndexProximal, HandJoint::kIndexIntermediate, HandJoint::kIndexDistal,
-                                                HandJoint::kMiddleProximal, HandJoint::kMiddleIntermediate, HandJoint::kMiddleDistal,
-                                                HandJoint::kRingProximal, HandJoint::kRingIntermediate, HandJoint::kRingDistal,
-                                                HandJoint::kLittleProximal, HandJoint::kLittleIntermediate, HandJoint::kLittleDistal};
+      constexpr std::array<HandJoint, 15> bones{HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal,      HandJoint::kThumbDistal,
+                                                HandJoint::kIndexProximal,   HandJoint::kIndexIntermediate,  HandJoint::kIndexDistal,
+                                                HandJoint::kMiddleProximal,  HandJoint::kMiddleIntermediate, HandJoint::kMiddleDistal,
+                                                HandJoint::kRingProximal,    HandJoint::kRingIntermediate,   HandJoint::kRingDistal,
+                                                HandJoint::kLittleProximal,  HandJoint::kLittleIntermediate, HandJoint::kLittleDistal};
       for (std::size_t i = 0; i < j["segment_stars"].size(); ++i) {
         const auto& e = j["segment_stars"][i];
         const std::string where = "segment_stars[" + std::to_string(i) + "]";
         const std::string bone = e.is_object() ? e.value("bone", std::string()) : std::string();
         const auto it = std::find_if(bones.begin(), bones.end(), [&](HandJoint b) { return joint_name(b) == bone; });
-        if (it == bones.end()) throw std::runtime_error(where + ".bone: expected a finger bone named by its first joint (index_proximal, thumb_metacarpal, ...)");
+        if (it == bones.end())
+          throw std::runtime_error(where +
+                                   ".bone: expected a finger bone named by its first joint (index_proximal, thumb_metacarpal, ...)");
         if (!e.contains("star_id") || !e["star_id"].is_number_integer()) throw std::runtime_error(where + ".star_id: expected an integer");
         const int id = e["star_id"].get<int>();
         const auto found = std::find_if(set->stars.begin(), set->stars.end(), [&](const MarkerStar& s) { return s.id == id; });

@@ -46,8 +46,8 @@ struct HandLayout {
   std::string name;
   HandSide side = HandSide::kRight;
   double marker_diameter_mm = 6.0;
-  std::array<Eigen::Vector3d, 4> hand_star_m;                   // hand frame, metres
-  std::array<std::optional<double>, 5> fingertip_offset_m{};    // per finger (thumb..little): nothing when unmarked
+  std::array<Eigen::Vector3d, 4> hand_star_m;                 // hand frame, metres
+  std::array<std::optional<double>, 5> fingertip_offset_m{};  // per finger (thumb..little): nothing when unmarked
   std::vector<SegmentStar> segment_stars;
   StarSetRules segment_star_rules;  // of the set the segment stars come from
 
@@ -55,7 +55,6 @@ struct HandLayout {
   StarSet hand_star_set() const;
   // The segment stars as a set (in layout order), for StarLibrary.
   StarSet segment_star_set() const;
-
 };
 
 [[nodiscard]] std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::path& file);

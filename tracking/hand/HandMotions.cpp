@@ -63,11 +63,13 @@ std::optional<HandMotionFrame> hand_motion(std::string_view name, double t, cons
   for (std::size_t f = 0; f < kFingerCount; ++f) {
     FingerAngles a;
     a.abduction_rad = relaxed[f].abduction_rad + s * (target[f].abduction_rad - relaxed[f].abduction_rad);
-    for (std::size_t k = 0; k < 3; ++k) a.flexion_rad[k] = relaxed[f].flexion_rad[k] + s * (target[f].flexion_rad[k] - relaxed[f].flexion_rad[k]);
+    for (std::size_t k = 0; k < 3; ++k)
+      a.flexion_rad[k] = relaxed[f].flexion_rad[k] + s * (target[f].flexion_rad[k] - relaxed[f].flexion_rad[k]);
     frame.angles[f] = clamp_to_limits(chains[f].limits, a);
   }
   // The hand drifts a few centimetres, palm down, fingers forward (-Z), turning about its forearm for a wave.
-  frame.world_from_hand.translation = centre + Eigen::Vector3d(0.05 * std::sin(0.7 * t), 0.03 * std::sin(1.1 * t + 1.0), 0.04 * std::sin(0.5 * t + 2.0));
+  frame.world_from_hand.translation =
+      centre + Eigen::Vector3d(0.05 * std::sin(0.7 * t), 0.03 * std::sin(1.1 * t + 1.0), 0.04 * std::sin(0.5 * t + 2.0));
   frame.world_from_hand.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(wave + 0.15 * std::sin(0.9 * t), Eigen::Vector3d::UnitZ()) *
                                                       Eigen::AngleAxisd(0.2 * std::sin(0.6 * t), Eigen::Vector3d::UnitX()));
   return frame;

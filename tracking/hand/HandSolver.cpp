@@ -17,7 +17,8 @@ HandJoint joint_at(int index) { return static_cast<HandJoint>(index); }
 }  // namespace
 
 std::array<HandJoint, 4> chain_joints(Finger finger) {
-  if (finger == Finger::kThumb) return {HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal, HandJoint::kThumbDistal, HandJoint::kThumbTip};
+  if (finger == Finger::kThumb)
+    return {HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal, HandJoint::kThumbDistal, HandJoint::kThumbTip};
   const int base = static_cast<int>(HandJoint::kIndexProximal) + 5 * (static_cast<int>(finger) - 1);
   return {joint_at(base), joint_at(base + 1), joint_at(base + 2), joint_at(base + 3)};
 }
@@ -30,8 +31,7 @@ std::array<FingerChain, kFingerCount> hand_chains(const HandPose& skeleton, Hand
     FingerChain& c = chains[static_cast<std::size_t>(f)];
     c.root_m = at(joints[0]);
     // The rest direction: the metacarpal's for a finger; for the thumb, its metacarpal bone's.
-    const Eigen::Vector3d from =
-        f == 0 ? at(HandJoint::kThumbMetacarpal) : at(joint_at(static_cast<int>(joints[0]) - 1));
+    const Eigen::Vector3d from = f == 0 ? at(HandJoint::kThumbMetacarpal) : at(joint_at(static_cast<int>(joints[0]) - 1));
     const Eigen::Vector3d to = f == 0 ? at(HandJoint::kThumbProximal) : at(joints[0]);
     c.rest_direction = (to - from).normalized();
     // The flexion plane: where the skeleton's own joints bend (toward the palm), else straight down.
@@ -135,7 +135,8 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
       // Ease toward relaxed: the remaining difference shrinks by exp(-dt / T) each frame.
       const double keep = std::exp(-dt / kRelaxTime_s);
       a.abduction_rad = relaxed_[fi].abduction_rad + keep * (a.abduction_rad - relaxed_[fi].abduction_rad);
-      for (std::size_t k = 0; k < 3; ++k) a.flexion_rad[k] = relaxed_[fi].flexion_rad[k] + keep * (a.flexion_rad[k] - relaxed_[fi].flexion_rad[k]);
+      for (std::size_t k = 0; k < 3; ++k)
+        a.flexion_rad[k] = relaxed_[fi].flexion_rad[k] + keep * (a.flexion_rad[k] - relaxed_[fi].flexion_rad[k]);
       a = clamp_to_limits(chain.limits, a);
     }
     const auto p = finger_forward(chain, a);
@@ -151,7 +152,8 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
   // Gestures.
   const auto at = [&](HandJoint j) { return state_.pose.position_m[static_cast<std::size_t>(j)]; };
   const auto radius = [&](HandJoint j) { return state_.pose.radius_m[static_cast<std::size_t>(j)]; };
-  const double gap = (at(HandJoint::kThumbTip) - at(HandJoint::kIndexTip)).norm() - radius(HandJoint::kThumbTip) - radius(HandJoint::kIndexTip);
+  const double gap =
+      (at(HandJoint::kThumbTip) - at(HandJoint::kIndexTip)).norm() - radius(HandJoint::kThumbTip) - radius(HandJoint::kIndexTip);
   update_pinch(state_.pinch, gap, state_.tip_seen[0] && state_.tip_seen[1], gestures_);
   double curl = 0.0;
   for (int f = 2; f < kFingerCount; ++f) {

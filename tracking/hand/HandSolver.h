@@ -31,10 +31,10 @@ std::array<HandJoint, 4> chain_joints(Finger finger);
 FingerAngles angles_from_bones(const FingerChain& chain, const std::array<Eigen::Vector3d, 3>& bone_directions);
 
 struct GestureSettings {
-  double pinch_on_m = 0.010;   // thumb and index tips, less their radii, closer than this: pinch
-  double pinch_off_m = 0.015;  // ... further than this: released
+  double pinch_on_m = 0.010;    // thumb and index tips, less their radii, closer than this: pinch
+  double pinch_off_m = 0.015;   // ... further than this: released
   double pinch_zero_m = 0.040;  // activation falls from 1 at pinch_on to 0 here
-  double grip_on = 0.65;       // mean curl of middle, ring and little (0 straight, 1 fully bent)
+  double grip_on = 0.65;        // mean curl of middle, ring and little (0 straight, 1 fully bent)
   double grip_off = 0.45;
 };
 

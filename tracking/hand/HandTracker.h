@@ -15,9 +15,9 @@
 namespace rhot {
 
 struct TrackedHand {
-  bool hand_seen = false;          // the hand star was seen this frame
-  Rigid3d world_from_hand;         // last known
-  HandState state;                 // hand frame
+  bool hand_seen = false;   // the hand star was seen this frame
+  Rigid3d world_from_hand;  // last known
+  HandState state;          // hand frame
   std::array<Eigen::Vector3d, kHandJointCount> joints_world{};
   std::array<int, kFingerCount> fingertip_point{-1, -1, -1, -1, -1};  // index into the points, -1 for none
   int segment_stars_seen = 0;

@@ -13,9 +13,9 @@
 namespace rhot {
 
 struct RigidFit {
-  Rigid3d to_from_from;      // maps `from` points onto `to` points
-  double rms_m = 0.0;        // RMS distance between mapped `from` points and `to` points
-  double scale = 1.0;        // the similarity fit's scale: far from 1 means a different shape
+  Rigid3d to_from_from;  // maps `from` points onto `to` points
+  double rms_m = 0.0;    // RMS distance between mapped `from` points and `to` points
+  double scale = 1.0;    // the similarity fit's scale: far from 1 means a different shape
 };
 
 // Nothing when the sets differ in size, have fewer than three points, are (nearly) collinear, or

@@ -110,8 +110,8 @@ std::expected<StarSet, std::string> generate_star_set(const StarGeneratorSetting
     return std::unexpected("variation: must be a positive number of millimetres, got " + mm(r.variation_mm));
   }
   if (!r.box_mm.allFinite() || !(r.box_mm.minCoeff() > 0.0)) {
-    return std::unexpected("box: every side must be a positive number of millimetres, got " + mm(r.box_mm.x()) + " x " +
-                           mm(r.box_mm.y()) + " x " + mm(r.box_mm.z()));
+    return std::unexpected("box: every side must be a positive number of millimetres, got " + mm(r.box_mm.x()) + " x " + mm(r.box_mm.y()) +
+                           " x " + mm(r.box_mm.z()));
   }
   if (settings.candidates < 1) return std::unexpected("candidates: must be at least 1");
   const std::string too_small = "box " + mm(r.box_mm.x()) + " x " + mm(r.box_mm.y()) + " x " + mm(r.box_mm.z()) +
@@ -147,7 +147,8 @@ std::expected<StarSet, std::string> generate_star_set(const StarGeneratorSetting
   std::vector<std::vector<const Candidate*>> orders(4, drawn);
   std::stable_sort(orders[1].begin(), orders[1].end(), [](const Candidate* a, const Candidate* b) { return a->shortest > b->shortest; });
   std::stable_sort(orders[2].begin(), orders[2].end(), [](const Candidate* a, const Candidate* b) { return a->total < b->total; });
-  std::stable_sort(orders[3].begin(), orders[3].end(), [](const Candidate* a, const Candidate* b) { return a->faces[0][2] < b->faces[0][2]; });
+  std::stable_sort(orders[3].begin(), orders[3].end(),
+                   [](const Candidate* a, const Candidate* b) { return a->faces[0][2] < b->faces[0][2]; });
   std::vector<const Candidate*> best;
   for (const auto& order : orders) {
     auto taken = pack(order, r.variation_mm, settings.max_stars);

@@ -31,6 +31,6 @@ using GeneratorProgress = std::function<void(long done, long total)>;
 // A valid set (check_star_set finds nothing), or a message naming the argument that is wrong or
 // saying that not even one star fits.
 [[nodiscard]] std::expected<StarSet, std::string> generate_star_set(const StarGeneratorSettings& settings,
-                                                                   const GeneratorProgress& progress = {});
+                                                                    const GeneratorProgress& progress = {});
 
 }  // namespace rhot

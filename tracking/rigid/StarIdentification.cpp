@@ -46,8 +46,7 @@ StarLibrary::StarLibrary(const StarSet& set, const StarIdentificationSettings& s
 }
 
 const StarLibrary::Face* StarLibrary::find_face(const std::array<double, 3>& e) const {
-  auto it = std::lower_bound(faces_.begin(), faces_.end(), e[0] - tolerance_m_,
-                             [](const Face& f, double v) { return f.edges[0] < v; });
+  auto it = std::lower_bound(faces_.begin(), faces_.end(), e[0] - tolerance_m_, [](const Face& f, double v) { return f.edges[0] < v; });
   for (; it != faces_.end() && it->edges[0] <= e[0] + tolerance_m_; ++it) {
     if (std::abs(it->edges[1] - e[1]) <= tolerance_m_ && std::abs(it->edges[2] - e[2]) <= tolerance_m_) return &*it;
   }
@@ -258,7 +257,8 @@ std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span
       }
       const IdentifiedStar& x = hypotheses[a];
       const IdentifiedStar& y = hypotheses[best];
-      if (std::make_tuple(-x.markers_seen, -support[a], degree[a], x.rms_m) < std::make_tuple(-y.markers_seen, -support[best], degree[best], y.rms_m)) {
+      if (std::make_tuple(-x.markers_seen, -support[a], degree[a], x.rms_m) <
+          std::make_tuple(-y.markers_seen, -support[best], degree[best], y.rms_m)) {
         best = a;
       }
     }

@@ -29,8 +29,8 @@ struct StarIdentificationSettings {
   // Every edge between a fit's markers must match the model within this fraction of the variation:
   // any wrong correspondence of a star's markers puts some edge a whole variation off.
   double edge_check_fraction = 0.75;
-  double max_rms_m = 0.0015;        // refuse fits whose residual is larger
-  double max_scale_error = 0.03;    // refuse fits whose similarity scale is further from 1
+  double max_rms_m = 0.0015;            // refuse fits whose residual is larger
+  double max_scale_error = 0.03;        // refuse fits whose similarity scale is further from 1
   double fourth_marker_gate_m = 0.003;  // how near the predicted fourth marker a point must be
 };
 
@@ -50,8 +50,8 @@ class StarLibrary {
   double longest_edge_m() const { return longest_m_; }
 
   struct Face {
-    int star = 0;                 // index into stars()
-    std::array<int, 3> marker{};  // markers opposite the sorted edges: marker[k] is opposite edges[k]
+    int star = 0;                   // index into stars()
+    std::array<int, 3> marker{};    // markers opposite the sorted edges: marker[k] is opposite edges[k]
     std::array<double, 3> edges{};  // sorted, metres
   };
   // The face whose sorted edges are all within the tolerance of `sorted_edges`, or nullptr.
@@ -62,7 +62,7 @@ class StarLibrary {
  private:
   StarIdentificationSettings settings_;
   std::vector<Star> stars_;
-  std::vector<Face> faces_;  // sorted by their shortest edge
+  std::vector<Face> faces_;           // sorted by their shortest edge
   std::vector<double> edge_lengths_;  // every star edge, sorted
   double tolerance_m_ = 0.0;
   double check_m_ = 0.0;
@@ -70,7 +70,7 @@ class StarLibrary {
 };
 
 struct IdentifiedStar {
-  int star = 0;                // index into the library's stars()
+  int star = 0;  // index into the library's stars()
   Rigid3d world_from_star;
   double rms_m = 0.0;
   std::array<int, 4> point{-1, -1, -1, -1};  // per marker: index into the points, -1 when not seen

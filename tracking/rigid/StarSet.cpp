@@ -59,7 +59,8 @@ std::vector<std::string> check_star_set(const StarSet& set) {
     // Edges: distinct by the variation, markers apart by a diameter.
     std::array<double, 6> edges{};
     for (std::size_t e = 0; e < 6; ++e) {
-      edges[e] = (s.markers_mm[static_cast<std::size_t>(kStarEdges[e][0])] - s.markers_mm[static_cast<std::size_t>(kStarEdges[e][1])]).norm();
+      edges[e] =
+          (s.markers_mm[static_cast<std::size_t>(kStarEdges[e][0])] - s.markers_mm[static_cast<std::size_t>(kStarEdges[e][1])]).norm();
       if (!(edges[e] >= r.marker_diameter_mm)) {
         problems.push_back(where + ": markers " + std::to_string(kStarEdges[e][0]) + " and " + std::to_string(kStarEdges[e][1]) +
                            " overlap (" + format_mm(edges[e]) + " mm apart)");
@@ -96,7 +97,8 @@ std::vector<std::string> check_star_set(const StarSet& set) {
       std::array<int, 3> perm{0, 1, 2};
       do {
         double most = 0.0;
-        for (std::size_t k = 0; k < 3; ++k) most = std::max(most, std::abs(faces[a].edges[k] - faces[b].edges[static_cast<std::size_t>(perm[k])]));
+        for (std::size_t k = 0; k < 3; ++k)
+          most = std::max(most, std::abs(faces[a].edges[k] - faces[b].edges[static_cast<std::size_t>(perm[k])]));
         if (!(most >= v)) {
           problems.push_back(star_label(faces[a].star, set.stars[faces[a].star].id) + " face " + std::to_string(faces[a].face) + " and " +
                              star_label(faces[b].star, set.stars[faces[b].star].id) + " face " + std::to_string(faces[b].face) +
@@ -144,14 +146,16 @@ std::expected<StarSet, std::string> load_star_set(const std::filesystem::path& f
       }
       MarkerStar star;
       star.id = s["id"].get<int>();
-      for (std::size_t m = 0; m < 4; ++m) star.markers_mm[m] = vector3(s["markers_mm"][m], where + ".markers_mm[" + std::to_string(m) + "]");
+      for (std::size_t m = 0; m < 4; ++m)
+        star.markers_mm[m] = vector3(s["markers_mm"][m], where + ".markers_mm[" + std::to_string(m) + "]");
       set.stars.push_back(star);
     }
   } catch (const std::exception& e) {
     return std::unexpected(path + ": " + e.what());
   }
   if (const auto problems = check_star_set(set); !problems.empty()) {
-    return std::unexpected(path + ": " + problems.front() + (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : ""));
+    return std::unexpected(path + ": " + problems.front() +
+                           (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : ""));
   }
   return set;
 }

@@ -99,7 +99,8 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
       if (p >= 0) mine.push_back(p);
     }
     std::optional<IdentifiedStar> fit;
-    if (mine.size() >= 3) fit = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), mine, points), points);
+    if (mine.size() >= 3)
+      fit = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), mine, points), points);
     // One of four points may be wrong (two markers merged into one point): the best three.
     for (std::size_t drop = 0; !fit && mine.size() == 4 && drop < 4; ++drop) {
       std::vector<int> three = mine;

@@ -28,13 +28,13 @@ struct StarTrackerSettings {
   // max_acceleration_m_s2 moves it since the star was last seen.
   double gate_m = 0.004;
   double max_acceleration_m_s2 = 20.0;
-  int max_coast_frames = 45;     // frames a star is predicted without being seen (0.5 s at 90 Hz)
+  int max_coast_frames = 45;      // frames a star is predicted without being seen (0.5 s at 90 Hz)
   double swap_distance_m = 0.03;  // a fresh identification this near another star's prediction is refused
   // How far a star may turn from its predicted orientation: turn_gate_rad plus turn_rate_rad_s per
   // second since it was last seen (hands turn objects at up to a few radians per second).
   double turn_gate_rad = 0.35;
   double turn_rate_rad_s = 6.0;
-  int confirm_frames = 3;        // frames a star found from three markers must be followed before it counts
+  int confirm_frames = 3;  // frames a star found from three markers must be followed before it counts
   // A star found afresh farther from where it was last seen than gate_m plus this speed times the
   // time since is refused: another constellation that happens to match its edges, since nothing a
   // hand carries moves that fast. (Once it has not been seen for a while, anywhere is reachable.)
@@ -48,12 +48,12 @@ struct TrackedStar {
   Eigen::Vector3d velocity_m_s{0, 0, 0};
   Eigen::Vector3d angular_velocity_rad_s{0, 0, 0};  // world frame
   double rms_m = 0.0;
-  int markers_seen = 0;          // this frame (0: not seen)
+  int markers_seen = 0;                      // this frame (0: not seen)
   std::array<int, 4> point{-1, -1, -1, -1};  // this frame's points per marker
-  int frames_since_seen = -1;    // 0: seen this frame; -1: never seen
+  int frames_since_seen = -1;                // 0: seen this frame; -1: never seen
   double last_seen_s = 0.0;
-  bool confirmed = false;        // false while a three-marker acquisition is being checked
-  int frames_followed = 0;       // consecutive frames this star has been fitted
+  bool confirmed = false;   // false while a three-marker acquisition is being checked
+  int frames_followed = 0;  // consecutive frames this star has been fitted
 
   // The pose is this frame's measurement of a confirmed star.
   bool seen_now() const { return confirmed && frames_since_seen == 0; }

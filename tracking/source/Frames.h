@@ -18,18 +18,18 @@ struct Detection {
 };
 
 struct CameraFrame {
-  int camera = 0;            // index into the rig
-  double timestamp_s = 0.0;  // mid-exposure, on the source's clock
+  int camera = 0;                     // index into the rig
+  double timestamp_s = 0.0;           // mid-exposure, on the source's clock
   std::vector<Detection> detections;  // in no particular order
 };
 
 struct RigFrame {
   std::uint64_t index = 0;
   double time_s = 0.0;
-  std::vector<CameraFrame> cameras;                // one per camera in the rig
-  std::vector<Eigen::Vector3d> truth_position_m;   // per marker (simulation only)
-  std::vector<int> truth_marker_body;              // per marker: its rigid body, -1 for a loose marker (simulation only)
-  std::vector<Rigid3d> truth_world_from_body;      // per rigid body (simulation only)
+  std::vector<CameraFrame> cameras;               // one per camera in the rig
+  std::vector<Eigen::Vector3d> truth_position_m;  // per marker (simulation only)
+  std::vector<int> truth_marker_body;             // per marker: its rigid body, -1 for a loose marker (simulation only)
+  std::vector<Rigid3d> truth_world_from_body;     // per rigid body (simulation only)
 };
 
 }  // namespace rhot

@@ -13,8 +13,7 @@ namespace rhot {
 namespace {
 
 // Smallest distance between segments [p0, p1] and [q0, q1].
-double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0,
-                        const Eigen::Vector3d& q1) {
+double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0, const Eigen::Vector3d& q1) {
   const Eigen::Vector3d d1 = p1 - p0;
   const Eigen::Vector3d d2 = q1 - q0;
   const Eigen::Vector3d r = p0 - q0;
@@ -80,10 +79,12 @@ bool SimulatedRig::visible(int camera, const Eigen::Vector3d& p_world) const {
 
 Rigid3d RigidMotion::world_from_body(double t_s) const {
   Eigen::Vector3d turn;
-  for (int a = 0; a < 3; ++a) turn(a) = turn_amplitude_rad(a) * std::sin(2.0 * std::numbers::pi * turn_frequency_hz(a) * t_s + turn_phase_rad(a));
+  for (int a = 0; a < 3; ++a)
+    turn(a) = turn_amplitude_rad(a) * std::sin(2.0 * std::numbers::pi * turn_frequency_hz(a) * t_s + turn_phase_rad(a));
   Rigid3d out;
   out.rotation = base_orientation;
-  if (turn.norm() > 0.0) out.rotation = (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) * base_orientation).normalized();
+  if (turn.norm() > 0.0)
+    out.rotation = (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) * base_orientation).normalized();
   out.translation = position.at(t_s);
   return out;
 }
@@ -115,7 +116,8 @@ void SimulatedRig::merge_blobs(int camera, const std::vector<Eigen::Vector3d>& p
   std::vector<Blob> blobs;
   const double merge2 = settings_.merge_distance_px * settings_.merge_distance_px;
   for (const Detection& d : detections) {
-    auto into = std::find_if(blobs.begin(), blobs.end(), [&](const Blob& b) { return (b.sum / static_cast<double>(b.count) - d.pixel).squaredNorm() < merge2; });
+    auto into = std::find_if(blobs.begin(), blobs.end(),
+                             [&](const Blob& b) { return (b.sum / static_cast<double>(b.count) - d.pixel).squaredNorm() < merge2; });
     if (into == blobs.end()) {
       blobs.push_back({d.pixel, 1, d.truth_marker});
     } else {
@@ -154,10 +156,10 @@ RigFrame SimulatedRig::next() {
     if (script_ && settings_.camera_skew_s != 0.0) scripted_at_camera = script_(cf.timestamp_s);
     for (std::size_t m = 0; m < marker_count; ++m) {
       // Unsynchronised cameras see the marker where it is at their own exposure time.
-      const Eigen::Vector3d p = settings_.camera_skew_s == 0.0 ? frame.truth_position_m[m]
-                                : m < own_count                                    ? marker_at(m, cf.timestamp_s)
+      const Eigen::Vector3d p = settings_.camera_skew_s == 0.0              ? frame.truth_position_m[m]
+                                : m < own_count                             ? marker_at(m, cf.timestamp_s)
                                 : m - own_count < scripted_at_camera.size() ? scripted_at_camera[m - own_count]
-                                                                                   : frame.truth_position_m[m];
+                                                                            : frame.truth_position_m[m];
       // Draw the random numbers whatever happens, so one marker's visibility does not shift the
       // noise of every other: frames stay comparable across settings.
       const double drop = uniform(rng_);
@@ -216,8 +218,7 @@ std::vector<RigidMotion> random_motions(int count, const Eigen::Vector3d& box_mi
   return out;
 }
 
-std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m,
-                                            unsigned seed) {
+std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::vector<Trajectory> out;

@@ -55,10 +55,10 @@ struct Occluder {
 };
 
 struct SimulatedRigSettings {
-  double sigma_px = 0.3;        // Gaussian pixel noise per axis
-  double dropout = 0.0;         // probability that a camera misses a visible marker in a frame
-  double rate_hz = 90.0;        // frames per second
-  double camera_skew_s = 0.0;   // camera i's exposure is offset by i * camera_skew_s (unsynchronised cameras)
+  double sigma_px = 0.3;       // Gaussian pixel noise per axis
+  double dropout = 0.0;        // probability that a camera misses a visible marker in a frame
+  double rate_hz = 90.0;       // frames per second
+  double camera_skew_s = 0.0;  // camera i's exposure is offset by i * camera_skew_s (unsynchronised cameras)
   // Detections of one camera closer than this merge into one blob at their mean pixel, credited to
   // the marker nearest the camera, as a blob detector sees markers whose images overlap. 0: never.
   double merge_distance_px = 0.0;
@@ -116,7 +116,6 @@ std::vector<RigidMotion> random_motions(int count, const Eigen::Vector3d& box_mi
 // its middle drifts through the box. The two markers stay exactly length_m apart.
 std::array<Trajectory, 2> wand_trajectories(double length_m, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m);
 
-std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m,
-                                            unsigned seed);
+std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed);
 
 }  // namespace rhot

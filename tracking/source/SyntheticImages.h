@@ -13,11 +13,11 @@
 namespace rhot {
 
 struct SyntheticImageSettings {
-  double blob_sigma_px = 1.5;   // the spot's Gaussian standard deviation
-  double peak = 200.0;          // the spot's peak above the background, grey levels
-  double background = 10.0;     // grey level where there is no spot
-  double noise_sigma = 0.0;     // Gaussian noise added to every pixel, grey levels
-  std::uint64_t seed = 1;       // for the noise
+  double blob_sigma_px = 1.5;  // the spot's Gaussian standard deviation
+  double peak = 200.0;         // the spot's peak above the background, grey levels
+  double background = 10.0;    // grey level where there is no spot
+  double noise_sigma = 0.0;    // Gaussian noise added to every pixel, grey levels
+  std::uint64_t seed = 1;      // for the noise
 };
 
 // An 8-bit grey image (CV_8UC1) of the camera's calibrated size with a spot at every detection's

@@ -14,7 +14,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 bool is_device_index(const std::string& device) {
-  return !device.empty() && device.size() <= 6 && std::all_of(device.begin(), device.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+  return !device.empty() && device.size() <= 6 &&
+         std::all_of(device.begin(), device.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
 }
 
 std::string size_text(int width, int height) { return std::to_string(width) + "x" + std::to_string(height); }
@@ -45,7 +46,8 @@ std::expected<std::vector<std::string>, std::string> parse_video_devices(const s
     const std::size_t comma = list.find(',', start);
     devices.push_back(list.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (devices.back().empty()) {
-      return std::unexpected("video source: empty device in \"" + list + "\" (expected DEV[,DEV...], one per camera: an index such as 0, or a file)");
+      return std::unexpected("video source: empty device in \"" + list +
+                             "\" (expected DEV[,DEV...], one per camera: an index such as 0, or a file)");
     }
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -58,14 +60,16 @@ VideoSource::VideoSource(VideoSource&&) noexcept = default;
 VideoSource& VideoSource::operator=(VideoSource&&) noexcept = default;
 VideoSource::~VideoSource() = default;
 
-std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, const std::vector<std::string>& devices, VideoSourceSettings settings) {
+std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, const std::vector<std::string>& devices,
+                                                          VideoSourceSettings settings) {
   if (devices.size() != rig.cameras.size()) {
     return std::unexpected("video source: " + std::to_string(devices.size()) + (devices.size() == 1 ? " device" : " devices") +
                            " for a rig of " + std::to_string(rig.cameras.size()) + (rig.cameras.size() == 1 ? " camera" : " cameras") +
                            " (one per camera, in rig order)");
   }
   if (auto ok = check(settings.detector); !ok) return std::unexpected("video source: " + ok.error());
-  if (!(settings.rate_hz > 0.0) || !std::isfinite(settings.rate_hz)) return std::unexpected(std::string("video source: rate_hz must be a positive number"));
+  if (!(settings.rate_hz > 0.0) || !std::isfinite(settings.rate_hz))
+    return std::unexpected(std::string("video source: rate_hz must be a positive number"));
   auto impl = std::make_unique<Impl>();
   impl->rig = rig;
   impl->devices = devices;
@@ -86,7 +90,8 @@ std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, 
       opened = capture.open(device, cv::CAP_FFMPEG) || capture.open(device, cv::CAP_GSTREAMER);
     }
     if (!opened || !capture.isOpened()) {
-      return std::unexpected("video source: " + camera_text(rig, c) + ": cannot open " + (live ? "capture device " + device : "\"" + device + "\""));
+      return std::unexpected("video source: " + camera_text(rig, c) + ": cannot open " +
+                             (live ? "capture device " + device : "\"" + device + "\""));
     }
     cv::Mat first;
     if (!capture.read(first) || first.empty()) {

@@ -20,7 +20,7 @@ class Overlay {
  public:
   // Starts Dear ImGui (one context per process) for `window`, drawing into images of `format`.
   [[nodiscard]] static std::expected<std::unique_ptr<Overlay>, std::string> create(const Context& context, GLFWwindow* window,
-                                                                                  VkFormat format);
+                                                                                   VkFormat format);
   ~Overlay();
   Overlay(const Overlay&) = delete;
   Overlay& operator=(const Overlay&) = delete;

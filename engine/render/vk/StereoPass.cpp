@@ -48,16 +48,15 @@ float srgb_from_linear(float linear) {
 
 }  // namespace
 
-StereoPass::StereoPass(const Context& context, int eye_width_px, int eye_height_px, bool multiview, bool vertex_lit,
-                       glm::vec4 clear_color)
+StereoPass::StereoPass(const Context& context, int eye_width_px, int eye_height_px, bool multiview, bool vertex_lit, glm::vec4 clear_color)
     : ctx_(context),
       width_(eye_width_px),
       height_(eye_height_px),
       multiview_(multiview),
       vertex_lit_(vertex_lit),
       attachment_format_(vertex_lit ? kColourFormatUnorm : kColourFormat),
-      clear_color_(vertex_lit ? glm::vec4(srgb_from_linear(clear_color.r), srgb_from_linear(clear_color.g),
-                                          srgb_from_linear(clear_color.b), clear_color.a)
+      clear_color_(vertex_lit ? glm::vec4(srgb_from_linear(clear_color.r), srgb_from_linear(clear_color.g), srgb_from_linear(clear_color.b),
+                                          clear_color.a)
                               : clear_color) {
   RHOT_PRECONDITION(!multiview || context.multiview_supported(), "StereoPass: the device has no multiview");
   create_targets();
@@ -112,8 +111,7 @@ void StereoPass::create_targets() {
   ici.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
   depth_ = ctx_.create_image(ici);
 
-  const auto make_view = [&](VkImage image, VkFormat format, VkImageAspectFlags aspect, std::uint32_t first_layer,
-                             std::uint32_t layers) {
+  const auto make_view = [&](VkImage image, VkFormat format, VkImageAspectFlags aspect, std::uint32_t first_layer, std::uint32_t layers) {
     VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     vci.image = image;
     vci.viewType = layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
@@ -163,8 +161,8 @@ void StereoPass::create_render_pass() {
   deps[0].srcStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
   deps[0].srcAccessMask = VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
   deps[0].dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT;
-  deps[0].dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
-                          VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT;
+  deps[0].dstAccessMask =
+      VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT;
   deps[1].srcSubpass = 0;
   deps[1].dstSubpass = VK_SUBPASS_EXTERNAL;
   deps[1].srcStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
@@ -286,8 +284,8 @@ VkPipeline StereoPass::create_pipeline(std::span<const std::uint32_t> vert, std:
 
 void StereoPass::create_pipelines() {
   const VkDevice d = ctx_.device();
-  VkDescriptorSetLayoutBinding binding{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1,
-                                       VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
+  VkDescriptorSetLayoutBinding binding{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+                                       nullptr};
   VkDescriptorSetLayoutCreateInfo slci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   slci.bindingCount = 1;
   slci.pBindings = &binding;
@@ -326,9 +324,9 @@ void StereoPass::create_pipelines() {
   // Vertex-lit meshes need only the interpolated colour passed through: line.frag does that.
   mesh_pipeline_ = vertex_lit_ ? create_pipeline(pick(shaders::kMeshVertLit, shaders::kMeshVertLitMultiview), shaders::kLineFrag, false)
                                : create_pipeline(pick(shaders::kMeshVert, shaders::kMeshVertMultiview), shaders::kMeshFrag, false);
-  line_pipeline_ = create_pipeline(vertex_lit_ ? pick(shaders::kLineVertSrgb, shaders::kLineVertSrgbMultiview)
-                                               : pick(shaders::kLineVert, shaders::kLineVertMultiview),
-                                   shaders::kLineFrag, true);
+  line_pipeline_ = create_pipeline(
+      vertex_lit_ ? pick(shaders::kLineVertSrgb, shaders::kLineVertSrgbMultiview) : pick(shaders::kLineVert, shaders::kLineVertMultiview),
+      shaders::kLineFrag, true);
 }
 
 void StereoPass::ensure_capacity(Buffer& buffer, VkDeviceSize bytes, VkBufferUsageFlags usage) {
@@ -348,8 +346,7 @@ std::size_t StereoPass::render(const FrameInput& frame, std::span<const GpuMesh>
   for (int eye = 0; eye < 2; ++eye) u.clip_from_world[eye] = frame.views.clip_from_world(eye);
   u.light_dir_world = glm::vec4(glm::normalize(frame.light_dir_world), 0.0f);
   u.light_color = glm::vec4(frame.light_color, frame.ambient);
-  RHOT_PRECONDITION(finite(u.clip_from_world[0]) && finite(u.clip_from_world[1]) && finite(u.light_dir_world) &&
-                        finite(u.light_color),
+  RHOT_PRECONDITION(finite(u.clip_from_world[0]) && finite(u.clip_from_world[1]) && finite(u.light_dir_world) && finite(u.light_color),
                     "StereoPass::render: the views and light must be finite");
   std::memcpy(frame_uniforms_.mapped, &u, sizeof(u));
 

@@ -28,8 +28,7 @@ struct SubmitSync {
 class StereoPass {
  public:
   // clear_color is linear RGBA.
-  StereoPass(const Context& context, int eye_width_px, int eye_height_px, bool multiview, bool vertex_lit,
-             glm::vec4 clear_color);
+  StereoPass(const Context& context, int eye_width_px, int eye_height_px, bool multiview, bool vertex_lit, glm::vec4 clear_color);
   ~StereoPass();
   StereoPass(const StereoPass&) = delete;
   StereoPass& operator=(const StereoPass&) = delete;

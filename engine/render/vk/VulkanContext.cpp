@@ -11,21 +11,36 @@ namespace rhot::vk {
 
 const char* result_string(VkResult result) {
   switch (result) {
-    case VK_SUCCESS: return "VK_SUCCESS";
-    case VK_NOT_READY: return "VK_NOT_READY";
-    case VK_TIMEOUT: return "VK_TIMEOUT";
-    case VK_SUBOPTIMAL_KHR: return "VK_SUBOPTIMAL_KHR";
-    case VK_ERROR_OUT_OF_HOST_MEMORY: return "VK_ERROR_OUT_OF_HOST_MEMORY";
-    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "VK_ERROR_OUT_OF_DEVICE_MEMORY";
-    case VK_ERROR_INITIALIZATION_FAILED: return "VK_ERROR_INITIALIZATION_FAILED";
-    case VK_ERROR_DEVICE_LOST: return "VK_ERROR_DEVICE_LOST";
-    case VK_ERROR_LAYER_NOT_PRESENT: return "VK_ERROR_LAYER_NOT_PRESENT";
-    case VK_ERROR_EXTENSION_NOT_PRESENT: return "VK_ERROR_EXTENSION_NOT_PRESENT";
-    case VK_ERROR_FEATURE_NOT_PRESENT: return "VK_ERROR_FEATURE_NOT_PRESENT";
-    case VK_ERROR_INCOMPATIBLE_DRIVER: return "VK_ERROR_INCOMPATIBLE_DRIVER (no Vulkan driver installed?)";
-    case VK_ERROR_SURFACE_LOST_KHR: return "VK_ERROR_SURFACE_LOST_KHR";
-    case VK_ERROR_OUT_OF_DATE_KHR: return "VK_ERROR_OUT_OF_DATE_KHR";
-    default: return "VkResult (unlisted)";
+    case VK_SUCCESS:
+      return "VK_SUCCESS";
+    case VK_NOT_READY:
+      return "VK_NOT_READY";
+    case VK_TIMEOUT:
+      return "VK_TIMEOUT";
+    case VK_SUBOPTIMAL_KHR:
+      return "VK_SUBOPTIMAL_KHR";
+    case VK_ERROR_OUT_OF_HOST_MEMORY:
+      return "VK_ERROR_OUT_OF_HOST_MEMORY";
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY:
+      return "VK_ERROR_OUT_OF_DEVICE_MEMORY";
+    case VK_ERROR_INITIALIZATION_FAILED:
+      return "VK_ERROR_INITIALIZATION_FAILED";
+    case VK_ERROR_DEVICE_LOST:
+      return "VK_ERROR_DEVICE_LOST";
+    case VK_ERROR_LAYER_NOT_PRESENT:
+      return "VK_ERROR_LAYER_NOT_PRESENT";
+    case VK_ERROR_EXTENSION_NOT_PRESENT:
+      return "VK_ERROR_EXTENSION_NOT_PRESENT";
+    case VK_ERROR_FEATURE_NOT_PRESENT:
+      return "VK_ERROR_FEATURE_NOT_PRESENT";
+    case VK_ERROR_INCOMPATIBLE_DRIVER:
+      return "VK_ERROR_INCOMPATIBLE_DRIVER (no Vulkan driver installed?)";
+    case VK_ERROR_SURFACE_LOST_KHR:
+      return "VK_ERROR_SURFACE_LOST_KHR";
+    case VK_ERROR_OUT_OF_DATE_KHR:
+      return "VK_ERROR_OUT_OF_DATE_KHR";
+    default:
+      return "VkResult (unlisted)";
   }
 }
 
@@ -38,21 +53,31 @@ std::string lower(std::string s) {
 
 const char* type_name(VkPhysicalDeviceType type) {
   switch (type) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "CPU";
-    default: return "other";
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+      return "discrete GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+      return "integrated GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+      return "virtual GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+      return "CPU";
+    default:
+      return "other";
   }
 }
 
 int preference(VkPhysicalDeviceType type) {
   switch (type) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 4;
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 3;
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 1;
-    default: return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+      return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+      return 3;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+      return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+      return 1;
+    default:
+      return 0;
   }
 }
 
@@ -97,8 +122,9 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
       extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
       c->validation_enabled_ = true;
     } else {
-      spdlog::warn("validation requested but VK_LAYER_KHRONOS_validation is not installed "
-                   "(Debian package vulkan-validationlayers); running without it");
+      spdlog::warn(
+          "validation requested but VK_LAYER_KHRONOS_validation is not installed "
+          "(Debian package vulkan-validationlayers); running without it");
     }
   }
   VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
@@ -122,8 +148,8 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
     return std::unexpected(std::string("cannot create a Vulkan 1.1 instance: ") + result_string(r));
   }
   if (c->validation_enabled_) {
-    auto create_messenger = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
-        vkGetInstanceProcAddr(c->instance_, "vkCreateDebugUtilsMessengerEXT"));
+    auto create_messenger =
+        reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(c->instance_, "vkCreateDebugUtilsMessengerEXT"));
     if (create_messenger != nullptr) create_messenger(c->instance_, &dci, nullptr, &c->messenger_);
   }
   if (options.make_surface) {
@@ -138,8 +164,9 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
   std::vector<VkPhysicalDevice> devices(count);
   vkEnumeratePhysicalDevices(c->instance_, &count, devices.data());
   if (devices.empty()) {
-    return std::unexpected(std::string("no Vulkan device found; install a driver (on machines without a GPU, Mesa's "
-                                       "CPU driver: Debian package mesa-vulkan-drivers)"));
+    return std::unexpected(
+        std::string("no Vulkan device found; install a driver (on machines without a GPU, Mesa's "
+                    "CPU driver: Debian package mesa-vulkan-drivers)"));
   }
   std::string selector = options.device;
   if (selector == "auto") {
@@ -172,7 +199,8 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
   }
   spdlog::debug("Vulkan devices:{}", listing);
   const Candidate* chosen = nullptr;
-  const bool by_index = !selector.empty() && std::all_of(selector.begin(), selector.end(), [](unsigned char ch) { return std::isdigit(ch); });
+  const bool by_index =
+      !selector.empty() && std::all_of(selector.begin(), selector.end(), [](unsigned char ch) { return std::isdigit(ch); });
   for (const Candidate& cand : usable) {
     const bool is_cpu = cand.props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
     bool match = false;
@@ -190,8 +218,10 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
     if (match) chosen = &cand;
   }
   if (chosen == nullptr) {
-    return std::unexpected("no Vulkan device matches \"" + selector + "\" (choose auto, gpu, cpu, an index or part of a "
-                           "name); devices found:" + listing +
+    return std::unexpected("no Vulkan device matches \"" + selector +
+                           "\" (choose auto, gpu, cpu, an index or part of a "
+                           "name); devices found:" +
+                           listing +
                            (usable.empty() ? "\n  none of them offers Vulkan 1.1 graphics" +
                                                  std::string(c->surface_ != VK_NULL_HANDLE ? " and presentation to the window" : "")
                                            : ""));
@@ -248,8 +278,8 @@ Context::~Context() {
   }
   if (surface_ != VK_NULL_HANDLE) vkDestroySurfaceKHR(instance_, surface_, nullptr);
   if (messenger_ != VK_NULL_HANDLE) {
-    auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
-        vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+    auto destroy =
+        reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
     if (destroy != nullptr) destroy(instance_, messenger_, nullptr);
   }
   if (instance_ != VK_NULL_HANDLE) vkDestroyInstance(instance_, nullptr);
@@ -275,8 +305,9 @@ Buffer Context::create_buffer(VkDeviceSize size, VkBufferUsageFlags usage, bool 
   vkGetBufferMemoryRequirements(device_, b.buffer, &req);
   VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   mai.allocationSize = req.size;
-  mai.memoryTypeIndex = memory_type(req.memoryTypeBits, host_visible ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
-                                                                     : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  mai.memoryTypeIndex =
+      memory_type(req.memoryTypeBits, host_visible ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
+                                                   : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
   RHOT_VK_CHECK(vkAllocateMemory(device_, &mai, nullptr, &b.memory));
   RHOT_VK_CHECK(vkBindBufferMemory(device_, b.buffer, b.memory, 0));
   if (host_visible) RHOT_VK_CHECK(vkMapMemory(device_, b.memory, 0, VK_WHOLE_SIZE, 0, &b.mapped));

@@ -17,9 +17,9 @@ namespace rhot::vk {
 const char* result_string(VkResult result);
 
 // For Vulkan calls that can only fail through device loss, out-of-memory or a bug in rhot.
-#define RHOT_VK_CHECK(call)                                                                              \
-  do {                                                                                                   \
-    const VkResult rhot_vk_result = (call);                                                              \
+#define RHOT_VK_CHECK(call)                                                                                                \
+  do {                                                                                                                     \
+    const VkResult rhot_vk_result = (call);                                                                                \
     RHOT_ASSERT(rhot_vk_result == VK_SUCCESS, std::string(#call " failed: ") + ::rhot::vk::result_string(rhot_vk_result)); \
   } while (false)
 
@@ -77,8 +77,7 @@ class Context {
   void destroy(ImageMemory& image) const;
   // Device-local buffer filled through a staging buffer (one submit, waited for).
   Buffer upload(const void* data, VkDeviceSize size, VkBufferUsageFlags usage) const;
-  GpuMesh upload_mesh(const void* vertices, VkDeviceSize vertex_bytes, const std::uint32_t* indices,
-                      std::uint32_t index_count) const;
+  GpuMesh upload_mesh(const void* vertices, VkDeviceSize vertex_bytes, const std::uint32_t* indices, std::uint32_t index_count) const;
   void destroy(GpuMesh& mesh) const;
 
   // Records with `record` into a fresh command buffer, submits and waits.

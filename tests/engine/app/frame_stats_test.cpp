@@ -46,7 +46,7 @@ TEST(FrameStats, SummariesAndBudgetMisses) {
 
 TEST(FrameStats, PercentilesCoverTheWindowAndMaxTheWholeRun) {
   FrameStats s({}, 11.1, 10);
-  s.record(50.0, {});                        // one slow frame, then it leaves the window
+  s.record(50.0, {});  // one slow frame, then it leaves the window
   for (int i = 0; i < 10; ++i) s.record(1.0, {});
   EXPECT_DOUBLE_EQ(s.frame_summary().p99_ms, 1.0);
   EXPECT_DOUBLE_EQ(s.frame_summary().max_ms, 50.0);

@@ -14,8 +14,7 @@ namespace {
 
 SystemDesc recorder(std::string name, std::vector<std::string>* log, std::vector<std::string> after = {},
                     std::vector<std::string> before = {}) {
-  return SystemDesc{name, std::move(after), std::move(before),
-                    [log, name](World&, const FrameContext&) { log->push_back(name); }};
+  return SystemDesc{name, std::move(after), std::move(before), [log, name](World&, const FrameContext&) { log->push_back(name); }};
 }
 
 TEST(Systems, RunInDeclaredOrder) {
@@ -65,9 +64,7 @@ TEST(Systems, UnknownDependencyIsReported) {
 TEST(Systems, EachSystemIsTimed) {
   Systems s;
   s.add({"quick", {}, {}, [](World&, const FrameContext&) {}});
-  s.add({"slow", {"quick"}, {}, [](World&, const FrameContext&) {
-           std::this_thread::sleep_for(std::chrono::milliseconds(20));
-         }});
+  s.add({"slow", {"quick"}, {}, [](World&, const FrameContext&) { std::this_thread::sleep_for(std::chrono::milliseconds(20)); }});
   ASSERT_TRUE(s.build().has_value());
   World w;
   std::vector<double> ms(2, -1.0);

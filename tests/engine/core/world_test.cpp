@@ -200,9 +200,9 @@ TEST(MutationDuringIteration, AddedComponentsAndEntitiesAppearAfterTheIteration)
   int visits = 0;
   w.view<Position>().each([&](Entity e, Position& p) {
     ++visits;
-    const Entity spawned = w.create();           // immediate; has no components yet
-    w.add<Position>(spawned, 100.0f, 0.0f);      // deferred: this pass does not see it
-    w.add<Velocity>(e, p.x, 0.0f);               // deferred
+    const Entity spawned = w.create();       // immediate; has no components yet
+    w.add<Position>(spawned, 100.0f, 0.0f);  // deferred: this pass does not see it
+    w.add<Velocity>(e, p.x, 0.0f);           // deferred
     EXPECT_FALSE(w.has<Velocity>(e));
     EXPECT_GT(w.pending_changes(), 0u);
   });

@@ -60,7 +60,9 @@ TEST(DemoSoak, RHOT_SOAK_TEST_NAME) {
 #endif
   // RHOT_SOAK_FRAMES overrides the count (for longer soaks by hand).
   const char* override_frames = std::getenv("RHOT_SOAK_FRAMES");
-  const std::uint64_t kFrames = override_frames != nullptr ? std::strtoull(override_frames, nullptr, 10) : RHOT_SOAK_SANITIZED ? 10000 : 900;
+  const std::uint64_t kFrames = override_frames != nullptr ? std::strtoull(override_frames, nullptr, 10)
+                                : RHOT_SOAK_SANITIZED      ? 10000
+                                                           : 900;
   // Past the first round of the script (26 s = 2340 frames) where there is room for it.
   const std::uint64_t kWarmUp = kFrames >= 5000 ? 2400 : kFrames / 3;
   const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
@@ -117,7 +119,8 @@ TEST(DemoSoak, RHOT_SOAK_TEST_NAME) {
     if (f <= kWarmUp + window) low_after_warm_up = std::min(low_after_warm_up, heap);
     if (f > kFrames - window) low_at_end = std::min(low_at_end, heap);
     largest = std::max(largest, heap);
-    if (f % 1000 == 0) std::printf("frame %llu: heap in use %zu bytes, %zu grasps so far\n", static_cast<unsigned long long>(f), heap, grasps);
+    if (f % 1000 == 0)
+      std::printf("frame %llu: heap in use %zu bytes, %zu grasps so far\n", static_cast<unsigned long long>(f), heap, grasps);
   }
   std::printf("heap in use: low point after the warm-up %zu, low point at the end %zu, largest %zu bytes (windows of %llu frames)\n",
               low_after_warm_up, low_at_end, largest, static_cast<unsigned long long>(window));

@@ -72,7 +72,8 @@ TEST(PhysicsWorld, ABrokenGltfMeshFailsAndAddsNothing) {
   const std::string file = (std::filesystem::path(::testing::TempDir()) / "rhot_not_gltf.gltf").lexically_normal().string();
   std::ofstream(file) << "not glTF";
   const SceneDesc scene = parse(std::string(R"({"entities": [)") + kFloor + R"(,
-    {"name": "mesh", "mesh": {"shape": "gltf", "file": ")" + file + R"("}, "body": {"type": "dynamic", "mass_kg": 0.5}}]})");
+    {"name": "mesh", "mesh": {"shape": "gltf", "file": ")" +
+                                file + R"("}, "body": {"type": "dynamic", "mass_kg": 0.5}}]})");
   World world;
   instantiate(scene, world);
   PhysicsWorld physics;

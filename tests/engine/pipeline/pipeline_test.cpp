@@ -143,10 +143,12 @@ TEST(Pipeline, ARecordingReplaysToThePosesItRecorded) {
     for (std::size_t h = 0; h < 2; ++h) {
       ASSERT_EQ((*p)->hand_inputs()[h].seen, recorded_hands[static_cast<std::size_t>(f)][h].seen) << f;
       for (std::size_t j = 0; j < kHandJointCount; ++j) {
-        worst_joint = std::max(worst_joint, ((*p)->hand_inputs()[h].joints_world[j] - recorded_hands[static_cast<std::size_t>(f)][h].joints_world[j]).norm());
+        worst_joint = std::max(
+            worst_joint, ((*p)->hand_inputs()[h].joints_world[j] - recorded_hands[static_cast<std::size_t>(f)][h].joints_world[j]).norm());
       }
     }
-    if (f > 0) worst_mug = std::max(worst_mug, glm::distance(world.get<Transform>(mug).position, recorded_mug[static_cast<std::size_t>(f)]));
+    if (f > 0)
+      worst_mug = std::max(worst_mug, glm::distance(world.get<Transform>(mug).position, recorded_mug[static_cast<std::size_t>(f)]));
   }
   EXPECT_LT(worst_joint, 1e-9);
   EXPECT_LT(worst_mug, 1e-6f);
@@ -156,15 +158,18 @@ TEST(Pipeline, BrokenRecordingsAreRefusedNamingTheLine) {
   const std::string file = ::testing::TempDir() + "rhot_bad_recording.jsonl";
   {
     std::ofstream out(file);
-    out << R"({"format": "rhot-recording", "version": 1, "rate_hz": 90, "objects": []})" << "\n";
-    out << R"({"t": 0.0, "hands": [], "objects": {}})" << "\n";
+    out << R"({"format": "rhot-recording", "version": 1, "rate_hz": 90, "objects": []})"
+        << "\n";
+    out << R"({"t": 0.0, "hands": [], "objects": {}})"
+        << "\n";
   }
   const auto r = load_recording(file);
   ASSERT_FALSE(r.has_value());
   EXPECT_EQ(r.error(), file + ":2: hands: expected [left, right]");
   {
     std::ofstream out(file);
-    out << R"({"format": "rhot-recording", "version": 2, "rate_hz": 90})" << "\n";
+    out << R"({"format": "rhot-recording", "version": 2, "rate_hz": 90})"
+        << "\n";
   }
   EXPECT_EQ(load_recording(file).error(), file + ":1: version: expected 1");
   EXPECT_EQ(load_recording(file + ".missing").error(), file + ".missing: cannot read the recording");

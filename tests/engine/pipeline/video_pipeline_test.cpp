@@ -58,8 +58,8 @@ TEST(VideoPipeline, TheDemoRenderedToImagesTracksTheRightHandAsTheSimulatedRigDo
   fs::remove_all(dir);
   // No image noise (rendering it costs most of the time in the debug build); the markers' pixels
   // carry the simulated rig's 0.3 px, as the simulated source's do.
-  const auto rendered = test::run_program("rhot-simvideo", "--out " + dir.string() + " --frames " + std::to_string(kFrames) + " --noise 0 --sigma 0.3",
-                                          "2>&1");
+  const auto rendered = test::run_program(
+      "rhot-simvideo", "--out " + dir.string() + " --frames " + std::to_string(kFrames) + " --noise 0 --sigma 0.3", "2>&1");
   ASSERT_EQ(rendered.exit_code, 0) << rendered.output;
 
   const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");

@@ -32,16 +32,14 @@ void set_grey(Image& im, int x, int y, std::uint8_t grey) {
 // A fresh folder per test under GoogleTest's temporary folder.
 std::filesystem::path temp_dir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "rhot_image_test" /
-                                    (std::string(info->test_suite_name()) + "." + info->name());
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / "rhot_image_test" / (std::string(info->test_suite_name()) + "." + info->name());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
 }
 
-void write_bytes(const std::filesystem::path& file, const std::string& bytes) {
-  std::ofstream(file, std::ios::binary) << bytes;
-}
+void write_bytes(const std::filesystem::path& file, const std::string& bytes) { std::ofstream(file, std::ios::binary) << bytes; }
 
 // --- PNG files ---
 
@@ -78,8 +76,7 @@ TEST(Png, WriteRefusesEmptyAndMalformedImages) {
   Image negative;
   negative.width = -3;
   negative.height = 2;
-  EXPECT_EQ(write_png(negative, file).error(),
-            file.string() + ": cannot write PNG: the image is malformed (-3x2 with 0 bytes of RGBA)");
+  EXPECT_EQ(write_png(negative, file).error(), file.string() + ": cannot write PNG: the image is malformed (-3x2 with 0 bytes of RGBA)");
   EXPECT_FALSE(std::filesystem::exists(file));
 }
 
@@ -152,11 +149,11 @@ TEST(Png, ReadRefusesACorruptPngWithStbsReason) {
 
 TEST(Png, ReadConvertsGreyToRgba) {
   // A 2x1 8-bit greyscale PNG (colour type 0, no alpha) with the values 0 and 200.
-  static constexpr unsigned char kGrey[] = {
-      0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48, 0x44, 0x52, 0x00,
-      0x00, 0x00, 0x02, 0x00, 0x00, 0x00, 0x01, 0x08, 0x00, 0x00, 0x00, 0x00, 0xd1, 0x49, 0x20, 0x56, 0x00,
-      0x00, 0x00, 0x0b, 0x49, 0x44, 0x41, 0x54, 0x78, 0xda, 0x63, 0x60, 0x38, 0x01, 0x00, 0x00, 0xcb, 0x00,
-      0xc9, 0xfa, 0x6c, 0xb4, 0x8b, 0x00, 0x00, 0x00, 0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82};
+  static constexpr unsigned char kGrey[] = {0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48,
+                                            0x44, 0x52, 0x00, 0x00, 0x00, 0x02, 0x00, 0x00, 0x00, 0x01, 0x08, 0x00, 0x00, 0x00,
+                                            0x00, 0xd1, 0x49, 0x20, 0x56, 0x00, 0x00, 0x00, 0x0b, 0x49, 0x44, 0x41, 0x54, 0x78,
+                                            0xda, 0x63, 0x60, 0x38, 0x01, 0x00, 0x00, 0xcb, 0x00, 0xc9, 0xfa, 0x6c, 0xb4, 0x8b,
+                                            0x00, 0x00, 0x00, 0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82};
   const auto file = temp_dir() / "grey.png";
   write_bytes(file, std::string(reinterpret_cast<const char*>(kGrey), sizeof(kGrey)));
   const auto im = read_png(file);
@@ -340,10 +337,8 @@ TEST(Compare, DifferentSizesDoNotMatch) {
 TEST(Compare, MalformedOrEmptyImagesDoNotMatch) {
   Image broken(8, 8);
   broken.rgba.resize(5);
-  EXPECT_EQ(compare_images(broken, filled(8, 8, 0)).summary,
-            "actual image is malformed: 8x8 with 5 bytes of RGBA (256 expected)");
-  EXPECT_EQ(compare_images(filled(8, 8, 0), broken).summary,
-            "expected image is malformed: 8x8 with 5 bytes of RGBA (256 expected)");
+  EXPECT_EQ(compare_images(broken, filled(8, 8, 0)).summary, "actual image is malformed: 8x8 with 5 bytes of RGBA (256 expected)");
+  EXPECT_EQ(compare_images(filled(8, 8, 0), broken).summary, "expected image is malformed: 8x8 with 5 bytes of RGBA (256 expected)");
   const ImageCompareResult empty = compare_images(Image{}, Image{});
   EXPECT_FALSE(empty.matches);
   EXPECT_EQ(empty.summary, "both images are empty (0x0)");

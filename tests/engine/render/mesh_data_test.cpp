@@ -44,8 +44,7 @@ void expect_well_formed(const MeshData& m) {
   for (std::size_t t = 0; t < m.indices.size(); t += 3) {
     const glm::vec3 face = face_normal(m, t);
     ASSERT_GT(glm::length(face), 0.0f) << "triangle " << t / 3 << " is degenerate";
-    const glm::vec3 normals =
-        m.vertices[m.indices[t]].normal + m.vertices[m.indices[t + 1]].normal + m.vertices[m.indices[t + 2]].normal;
+    const glm::vec3 normals = m.vertices[m.indices[t]].normal + m.vertices[m.indices[t + 1]].normal + m.vertices[m.indices[t + 2]].normal;
     EXPECT_GT(glm::dot(face, normals), 0.0f) << "triangle " << t / 3 << " winds against its normals";
   }
 }
@@ -53,8 +52,8 @@ void expect_well_formed(const MeshData& m) {
 // For a convex mesh around the origin: every face points away from the centre.
 void expect_faces_outward(const MeshData& m) {
   for (std::size_t t = 0; t < m.indices.size(); t += 3) {
-    const glm::vec3 centroid = (m.vertices[m.indices[t]].position + m.vertices[m.indices[t + 1]].position +
-                                m.vertices[m.indices[t + 2]].position) / 3.0f;
+    const glm::vec3 centroid =
+        (m.vertices[m.indices[t]].position + m.vertices[m.indices[t + 1]].position + m.vertices[m.indices[t + 2]].position) / 3.0f;
     EXPECT_GT(glm::dot(face_normal(m, t), centroid), 0.0f) << "triangle " << t / 3 << " faces inward";
   }
 }
@@ -237,15 +236,15 @@ struct GltfBuilder {
 
   int view(const std::string& bytes, int stride = 0) {
     while (bin.size() % 4 != 0) bin += '\0';
-    views.push_back(R"({"buffer": 0, "byteOffset": )" + std::to_string(bin.size()) + R"(, "byteLength": )" +
-                    std::to_string(bytes.size()) + (stride != 0 ? R"(, "byteStride": )" + std::to_string(stride) : "") + "}");
+    views.push_back(R"({"buffer": 0, "byteOffset": )" + std::to_string(bin.size()) + R"(, "byteLength": )" + std::to_string(bytes.size()) +
+                    (stride != 0 ? R"(, "byteStride": )" + std::to_string(stride) : "") + "}");
     bin += bytes;
     return static_cast<int>(views.size()) - 1;
   }
   int accessor(int view_index, int component_type, std::size_t count, const char* type, std::size_t offset = 0) {
     accessors.push_back(R"({"bufferView": )" + std::to_string(view_index) + R"(, "byteOffset": )" + std::to_string(offset) +
-                        R"(, "componentType": )" + std::to_string(component_type) + R"(, "count": )" +
-                        std::to_string(count) + R"(, "type": ")" + type + R"("})");
+                        R"(, "componentType": )" + std::to_string(component_type) + R"(, "count": )" + std::to_string(count) +
+                        R"(, "type": ")" + type + R"("})");
     return static_cast<int>(accessors.size()) - 1;
   }
   // embed: the buffer as a base64 data URI; otherwise no URI (a GLB's BIN chunk).
@@ -256,9 +255,8 @@ struct GltfBuilder {
       return "[" + out + "]";
     };
     const std::string uri = embed ? R"(, "uri": "data:application/octet-stream;base64,)" + base64(bin) + "\"" : "";
-    return R"({"asset": {"version": "2.0"}, )" + members + R"(, "buffers": [{"byteLength": )" +
-           std::to_string(bin.size()) + uri + "}], \"bufferViews\": " + list(views) + ", \"accessors\": " +
-           list(accessors) + "}";
+    return R"({"asset": {"version": "2.0"}, )" + members + R"(, "buffers": [{"byteLength": )" + std::to_string(bin.size()) + uri +
+           "}], \"bufferViews\": " + list(views) + ", \"accessors\": " + list(accessors) + "}";
   }
 };
 
@@ -269,15 +267,14 @@ constexpr int kUInt = 5125;
 
 // One triangle (three float positions, then three uint16 indices), a node moving it by +1 in x,
 // and the primitive mode given.
-std::string triangle_gltf(std::uint16_t last_index = 2, int mode = 4, float x = 0.0f, bool embed = true,
-                          std::string* bin = nullptr) {
+std::string triangle_gltf(std::uint16_t last_index = 2, int mode = 4, float x = 0.0f, bool embed = true, std::string* bin = nullptr) {
   GltfBuilder b;
   const int pos = b.accessor(b.view(bytes_of<float>({x, 0, 0, 1, 0, 0, 0, 1, 0})), kFloat, 3, "VEC3");
   const int idx = b.accessor(b.view(bytes_of<std::uint16_t>({0, 1, last_index})), kUShort, 3, "SCALAR");
   if (bin != nullptr) *bin = b.bin;
   return b.json(R"("scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0, "translation": [1, 0, 0]}],
-    "meshes": [{"primitives": [{"attributes": {"POSITION": )" + std::to_string(pos) + R"(}, "indices": )" +
-                    std::to_string(idx) + R"(, "mode": )" + std::to_string(mode) + "}]}]",
+    "meshes": [{"primitives": [{"attributes": {"POSITION": )" +
+                    std::to_string(pos) + R"(}, "indices": )" + std::to_string(idx) + R"(, "mode": )" + std::to_string(mode) + "}]}]",
                 embed);
 }
 
@@ -292,15 +289,14 @@ std::string add_interleaved(GltfBuilder& b, const MeshData& m) {
   const int pos = b.accessor(view, kFloat, m.vertices.size(), "VEC3", 0);
   const int nrm = b.accessor(view, kFloat, m.vertices.size(), "VEC3", 12);
   const int idx = b.accessor(b.view(bytes_of(m.indices)), kUInt, m.indices.size(), "SCALAR");
-  return R"({"attributes": {"POSITION": )" + std::to_string(pos) + R"(, "NORMAL": )" + std::to_string(nrm) +
-         R"(}, "indices": )" + std::to_string(idx) + "}";
+  return R"({"attributes": {"POSITION": )" + std::to_string(pos) + R"(, "NORMAL": )" + std::to_string(nrm) + R"(}, "indices": )" +
+         std::to_string(idx) + "}";
 }
 
 class GltfFiles : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::path(::testing::TempDir()) / "rhot_gltf_test" /
-           ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    dir_ = std::filesystem::path(::testing::TempDir()) / "rhot_gltf_test" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
@@ -340,8 +336,8 @@ TEST_F(GltfFiles, AppliesTheNodeHierarchyToPositionsAndNormals) {
       {"matrix": [1, 0, 0, 0,  0, 1, 0, 0,  0, 0, 1, 0,  0, 3, 0, 1], "mesh": 0}],
     "meshes": [{"primitives": [)" + primitive + "]}]")));
   ASSERT_TRUE(m.has_value()) << m.error();
-  const glm::mat4 world_from_mesh = glm::scale(glm::rotate(glm::mat4(1.0f), 0.5f * std::numbers::pi_v<float>, {0, 1, 0}),
-                                               {2, 1, 1}) * glm::translate(glm::mat4(1.0f), {0, 3, 0});
+  const glm::mat4 world_from_mesh = glm::scale(glm::rotate(glm::mat4(1.0f), 0.5f * std::numbers::pi_v<float>, {0, 1, 0}), {2, 1, 1}) *
+                                    glm::translate(glm::mat4(1.0f), {0, 3, 0});
   ASSERT_EQ(m->vertices.size(), cube.vertices.size());
   ASSERT_EQ(m->indices, cube.indices);
   for (std::size_t i = 0; i < cube.vertices.size(); ++i) {
@@ -379,9 +375,12 @@ TEST_F(GltfFiles, ReadsByteIndicesAndNonIndexedPrimitivesAndSkipsOthers) {
   const int idx = b.accessor(b.view(bytes_of<std::uint8_t>({0, 1, 2})), kUByte, 3, "SCALAR");
   const std::string p = std::to_string(pos);
   const auto m = load_gltf_mesh(write("mixed.gltf", b.json(R"("nodes": [{"mesh": 0, "translation": [0, 0, -2]}],
-    "meshes": [{"primitives": [{"attributes": {"POSITION": )" + p + R"(}, "indices": )" + std::to_string(idx) + R"(},
-                               {"attributes": {"POSITION": )" + p + R"(}, "mode": 0},
-                               {"attributes": {"POSITION": )" + p + "}}]}]")));
+    "meshes": [{"primitives": [{"attributes": {"POSITION": )" +
+                                                           p + R"(}, "indices": )" + std::to_string(idx) + R"(},
+                               {"attributes": {"POSITION": )" +
+                                                           p + R"(}, "mode": 0},
+                               {"attributes": {"POSITION": )" +
+                                                           p + "}}]}]")));
   ASSERT_TRUE(m.has_value()) << m.error();
   ASSERT_EQ(m->indices.size(), 6u);
   expect_well_formed(*m);
@@ -394,8 +393,8 @@ TEST_F(GltfFiles, LoadsGlbWithABinChunk) {
   while (json.size() % 4 != 0) json += ' ';
   while (bin.size() % 4 != 0) bin += '\0';
   auto u32 = [](std::size_t v) { return bytes_of<std::uint32_t>({static_cast<std::uint32_t>(v)}); };
-  const std::string glb = "glTF" + u32(2) + u32(12 + 8 + json.size() + 8 + bin.size()) + u32(json.size()) + "JSON" +
-                          json + u32(bin.size()) + std::string("BIN\0", 4) + bin;
+  const std::string glb = "glTF" + u32(2) + u32(12 + 8 + json.size() + 8 + bin.size()) + u32(json.size()) + "JSON" + json +
+                          u32(bin.size()) + std::string("BIN\0", 4) + bin;
   const auto m = load_gltf_mesh(write("tri.glb", glb));
   ASSERT_TRUE(m.has_value()) << m.error();
   ASSERT_EQ(m->indices.size(), 3u);
@@ -430,7 +429,8 @@ TEST_F(GltfFiles, MalformedStructureIsRefusedNotTrusted) {
   const int as_ints = b.accessor(view, kUInt, 3, "VEC3");
   auto with = [&](const std::string& nodes, int accessor) {
     return b.json(R"("scenes": [{"nodes": [0]}], "nodes": )" + nodes + R"(,
-      "meshes": [{"primitives": [{"attributes": {"POSITION": )" + std::to_string(accessor) + "}}]}]");
+      "meshes": [{"primitives": [{"attributes": {"POSITION": )" +
+                  std::to_string(accessor) + "}}]}]");
   };
   const std::string one_node = R"([{"mesh": 0}])";
   EXPECT_EQ(error_of("count.gltf", with(one_node, too_many)),

@@ -104,8 +104,8 @@ TEST_F(RendererTest, BothEyesSeeTheSameLargeGeometry) {
       EXPECT_EQ(agree, renderer->info().multiview_self_test_passed)
           << "the multiview self-test disagrees with what the driver draws: left " << left << ", right " << right;
     } else {
-      EXPECT_TRUE(agree) << to_string(mode) << " (used " << to_string(renderer->info().mode) << "): left eye " << left
-                         << ", right eye " << right << " of the image is ground";
+      EXPECT_TRUE(agree) << to_string(mode) << " (used " << to_string(renderer->info().mode) << "): left eye " << left << ", right eye "
+                         << right << " of the image is ground";
     }
     EXPECT_NO_VALIDATION_MESSAGES(renderer);
   }
@@ -221,7 +221,9 @@ TEST_F(RendererTest, VertexAndPixelShadingAgreeOnFlatFaces) {
     int drawn = 0;
     for (std::size_t i = 0; i < im.rgba.size(); i += 4) {
       drawn += std::equal(im.rgba.begin() + static_cast<std::ptrdiff_t>(i), im.rgba.begin() + static_cast<std::ptrdiff_t>(i) + 3,
-                          im.rgba.begin()) ? 0 : 1;
+                          im.rgba.begin())
+                   ? 0
+                   : 1;
     }
     EXPECT_GT(drawn, 200 * 220 / 5) << "eye " << eye;
   }
@@ -270,8 +272,7 @@ TEST_F(RendererTest, ParallaxMatchesIpdAndFocalLength) {
   const MeshHandle sphere = renderer->upload_mesh(make_sphere(1.0f, 32, 16));
   for (const float depth : {0.6f, 1.0f, 2.0f}) {
     FrameInput f = flat_frame(views);
-    f.batches.push_back({sphere, {{glm::scale(glm::translate(glm::mat4(1.0f), {0, 0, -depth}), glm::vec3(0.01f)),
-                                   glm::vec4(1, 0, 0, 1)}}});
+    f.batches.push_back({sphere, {{glm::scale(glm::translate(glm::mat4(1.0f), {0, 0, -depth}), glm::vec3(0.01f)), glm::vec4(1, 0, 0, 1)}}});
     renderer->render(f);
     const auto eyes = renderer->read_eyes();
     std::array<double, 2> centre_x{};

@@ -159,8 +159,7 @@ TEST_F(SceneFiles, WrongTypes) {
 
 TEST_F(SceneFiles, MissingRequiredKey) {
   EXPECT_EQ(error_of(scene_with(R"({"transform": {}})")), "/entities/0: missing required key \"name\"");
-  EXPECT_EQ(error_of(scene_with(R"({"name": "a", "mesh": {"shape": "sphere"}})")),
-            "/entities/0/mesh: missing required key \"radius_m\"");
+  EXPECT_EQ(error_of(scene_with(R"({"name": "a", "mesh": {"shape": "sphere"}})")), "/entities/0/mesh: missing required key \"radius_m\"");
 }
 
 TEST_F(SceneFiles, MissingReferencedFiles) {
@@ -175,8 +174,7 @@ TEST_F(SceneFiles, InfiniteAndNaNNumbers) {
   // would become infinity) is refused with its position before anything reaches physics or rendering.
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "transform": {"position": [0, 1e999, 0]}})")),
             "1:59: invalid JSON: the number 1e999 is out of range");
-  EXPECT_EQ(error_of("{\n\"settings\": {\"gravity_mps2\": [0, -1e400, 0]}}"),
-            "2:34: invalid JSON: the number -1e400 is out of range");
+  EXPECT_EQ(error_of("{\n\"settings\": {\"gravity_mps2\": [0, -1e400, 0]}}"), "2:34: invalid JSON: the number -1e400 is out of range");
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "transform": {"position": [NaN, 0, 0]}})")),
             "1:56: invalid JSON: syntax error while parsing value - invalid literal; last read: '\"position\": [N'");
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "transform": {"position": [Infinity, 0, 0]}})")).substr(0, 5), "1:56:");
@@ -208,8 +206,7 @@ TEST_F(SceneFiles, DuplicateKeys) {
 }
 
 TEST_F(SceneFiles, BadParents) {
-  EXPECT_EQ(error_of(scene_with(R"({"name": "a", "parent": "table"})")),
-            "/entities/0/parent: no entity is named \"table\"");
+  EXPECT_EQ(error_of(scene_with(R"({"name": "a", "parent": "table"})")), "/entities/0/parent: no entity is named \"table\"");
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "parent": "b"}, {"name": "b", "parent": "a"})")),
             "/entities/0/parent: parent \"b\" makes a cycle");
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "parent": "a"})")), "/entities/0/parent: parent \"a\" makes a cycle");
@@ -267,7 +264,8 @@ TEST_F(SceneFiles, ShippedInteractionScenesLoad) {
 }
 
 TEST_F(SceneFiles, GraspSettingsAndSubsteps) {
-  const auto scene = parse_scene(R"({"settings": {"physics_substeps": 4, "grasp": {"regrasp_delay_s": 0.5, "opposing_cos": -0.5}}, "entities": []})", dir_);
+  const auto scene = parse_scene(
+      R"({"settings": {"physics_substeps": 4, "grasp": {"regrasp_delay_s": 0.5, "opposing_cos": -0.5}}, "entities": []})", dir_);
   ASSERT_TRUE(scene.has_value());
   EXPECT_EQ(scene->settings.physics_substeps, 4);
   EXPECT_DOUBLE_EQ(scene->settings.grasp.regrasp_delay_s, 0.5);
@@ -275,7 +273,8 @@ TEST_F(SceneFiles, GraspSettingsAndSubsteps) {
   EXPECT_DOUBLE_EQ(scene->settings.grasp.release_distance_m, GraspSettings{}.release_distance_m);
   EXPECT_EQ(error_of(R"({"settings": {"grasp": {"release_distance_m": 0}}})"),
             "/settings/grasp/release_distance_m: expected a distance from 0.001 to 0.2 m, got 0");
-  EXPECT_EQ(error_of(R"({"settings": {"grasp": {"stickiness": 1}}})").substr(0, 52), "/settings/grasp/stickiness: unknown key \"stickiness\"");
+  EXPECT_EQ(error_of(R"({"settings": {"grasp": {"stickiness": 1}}})").substr(0, 52),
+            "/settings/grasp/stickiness: unknown key \"stickiness\"");
   EXPECT_EQ(error_of(R"({"settings": {"physics_substeps": 0}})"), "/settings/physics_substeps: expected an integer from 1 to 16, got 0");
 }
 

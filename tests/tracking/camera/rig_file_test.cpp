@@ -125,7 +125,8 @@ TEST(RigFile, MalformedAndInconsistentRigsAreRefusedWithTheField) {
   EXPECT_EQ(error_after("volume_centre:", "volume_center:"), "volume_centre: missing (volume_size needs it)");
   EXPECT_EQ(error_after("data: \\[ 1.0, 1.0, 1.0 \\]", "data: [ 1.0, -1.0, 1.0 ]"), "volume_size: every side must be positive and finite");
   EXPECT_EQ(error_after("data: \\[ 1.0, 1.0, 1.0 \\]", "data: [ 1.0, 1.0 ]"), "volume_size: expected an !!opencv-matrix of 3x1 numbers");
-  EXPECT_EQ(error_after("data: \\[ 0.0, 1.1, -0.45 \\]", "data: [ 0.0, .inf, -0.45 ]"), "volume_centre: contains a value that is not finite");
+  EXPECT_EQ(error_after("data: \\[ 0.0, 1.1, -0.45 \\]", "data: [ 0.0, .inf, -0.45 ]"),
+            "volume_centre: contains a value that is not finite");
   const auto junk = error_after("%YAML:1.0", "{{{ not yaml");
   EXPECT_NE(junk, "loaded");
 }

@@ -19,8 +19,8 @@ CameraRig rig(const char* name) {
 
 struct Score {
   int findable = 0;  // markers detected by at least two cameras in this frame
-  int found = 0;   // markers recovered by a point whose detections are all that marker's
-  int wrong = 0;   // points mixing markers, or ghosts
+  int found = 0;     // markers recovered by a point whose detections are all that marker's
+  int wrong = 0;     // points mixing markers, or ghosts
   double max_error_m = 0.0;
 };
 
@@ -155,10 +155,10 @@ TEST(Matching, CoincidentalEpipolarGhostsAreRejected) {
   const Rigid3d one_from_zero = r.cameras[1].cam_from_world * r.cameras[0].cam_from_world.inverse();
   const Eigen::Vector3d pa0 = (r.cameras[0].cam_from_world * ta.centre_m).normalized();
   const Eigen::Vector3d pb1 = (r.cameras[1].cam_from_world * tb.centre_m).normalized();
-  const Eigen::Matrix3d t_x = (Eigen::Matrix3d() << 0, -one_from_zero.translation.z(), one_from_zero.translation.y(),
-                               one_from_zero.translation.z(), 0, -one_from_zero.translation.x(), -one_from_zero.translation.y(),
-                               one_from_zero.translation.x(), 0)
-                                  .finished();
+  const Eigen::Matrix3d t_x =
+      (Eigen::Matrix3d() << 0, -one_from_zero.translation.z(), one_from_zero.translation.y(), one_from_zero.translation.z(), 0,
+       -one_from_zero.translation.x(), -one_from_zero.translation.y(), one_from_zero.translation.x(), 0)
+          .finished();
   ASSERT_LT(std::abs(pb1.dot(t_x * one_from_zero.rotation.toRotationMatrix() * pa0)), 1e-9) << "setup: a and b share an epipolar plane";
   const auto points = match_and_triangulate(r, frame);
   const Score sc = score(frame, points);

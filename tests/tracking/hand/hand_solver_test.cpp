@@ -13,7 +13,8 @@ using Tips = std::array<std::optional<Eigen::Vector3d>, kFingerCount>;
 
 Tips tips_of(const HandPose& pose) {
   Tips t;
-  for (int f = 0; f < kFingerCount; ++f) t[static_cast<std::size_t>(f)] = pose.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(f))[3])];
+  for (int f = 0; f < kFingerCount; ++f)
+    t[static_cast<std::size_t>(f)] = pose.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(f))[3])];
   return t;
 }
 
@@ -46,7 +47,8 @@ TEST(HandSolver, BoneDirectionsGiveBackTheAnglesThatMadeThem) {
     for (int trial = 0; trial < 200; ++trial) {
       for (const FingerChain& c : chains) {
         FingerAngles a;
-        for (std::size_t k = 0; k < 3; ++k) a.flexion_rad[k] = c.limits.flexion_min_rad[k] + u(rng) * (c.limits.flexion_max_rad[k] - c.limits.flexion_min_rad[k]);
+        for (std::size_t k = 0; k < 3; ++k)
+          a.flexion_rad[k] = c.limits.flexion_min_rad[k] + u(rng) * (c.limits.flexion_max_rad[k] - c.limits.flexion_min_rad[k]);
         a.abduction_rad = (2.0 * u(rng) - 1.0) * c.limits.abduction_max_rad;
         a = clamp_to_limits(c.limits, a);
         const auto p = finger_forward(c, a);
@@ -103,9 +105,14 @@ TEST(HandSolver, AnUnseenFingerEasesTowardRelaxedAndLosesConfidence) {
 TEST(Gestures, PinchAndGripHaveHysteresis) {
   const GestureSettings g;
   Gesture pinch;
-  for (const auto& [gap, seen, active] : std::vector<std::tuple<double, bool, bool>>{
-           {0.030, true, false}, {0.012, true, false}, {0.005, false, false}, {0.009, true, true}, {0.012, true, true},
-           {0.0149, true, true}, {0.016, true, false}, {0.012, true, false}}) {
+  for (const auto& [gap, seen, active] : std::vector<std::tuple<double, bool, bool>>{{0.030, true, false},
+                                                                                     {0.012, true, false},
+                                                                                     {0.005, false, false},
+                                                                                     {0.009, true, true},
+                                                                                     {0.012, true, true},
+                                                                                     {0.0149, true, true},
+                                                                                     {0.016, true, false},
+                                                                                     {0.012, true, false}}) {
     update_pinch(pinch, gap, seen, g);
     EXPECT_EQ(pinch.active, active) << "gap " << gap;
   }
@@ -116,7 +123,8 @@ TEST(Gestures, PinchAndGripHaveHysteresis) {
   update_pinch(pinch, 0.025, true, g);
   EXPECT_NEAR(pinch.activation, 0.5, 1e-12);
   Gesture grip;
-  for (const auto& [curl, active] : std::vector<std::pair<double, bool>>{{0.3, false}, {0.6, false}, {0.7, true}, {0.5, true}, {0.4, false}}) {
+  for (const auto& [curl, active] :
+       std::vector<std::pair<double, bool>>{{0.3, false}, {0.6, false}, {0.7, true}, {0.5, true}, {0.4, false}}) {
     update_grip(grip, curl, g);
     EXPECT_EQ(grip.active, active) << "curl " << curl;
   }
@@ -158,10 +166,16 @@ TEST(HandSolver, RandomAndBrokenInputNeverGivesNaNOrBreaksALimit) {
     Tips tips;
     for (auto& t : tips) {
       switch (kind(rng)) {
-        case 0: break;  // unseen
-        case 1: t = Eigen::Vector3d(std::nan(""), 0, 0); break;
-        case 2: t = Eigen::Vector3d(1e300, -1e300, 0); break;
-        default: t = Eigen::Vector3d(u(rng), u(rng), u(rng));
+        case 0:
+          break;  // unseen
+        case 1:
+          t = Eigen::Vector3d(std::nan(""), 0, 0);
+          break;
+        case 2:
+          t = Eigen::Vector3d(1e300, -1e300, 0);
+          break;
+        default:
+          t = Eigen::Vector3d(u(rng), u(rng), u(rng));
       }
     }
     const double time = kind(rng) == 0 ? std::nan("") : f / 90.0;
@@ -170,7 +184,8 @@ TEST(HandSolver, RandomAndBrokenInputNeverGivesNaNOrBreaksALimit) {
       ASSERT_TRUE(s.pose.position_m[static_cast<std::size_t>(j)].allFinite()) << f;
       ASSERT_TRUE(std::isfinite(s.confidence[static_cast<std::size_t>(j)]));
     }
-    for (int k = 0; k < kFingerCount; ++k) ASSERT_TRUE(within_limits(solver.chains()[static_cast<std::size_t>(k)].limits, s.angles[static_cast<std::size_t>(k)])) << f;
+    for (int k = 0; k < kFingerCount; ++k)
+      ASSERT_TRUE(within_limits(solver.chains()[static_cast<std::size_t>(k)].limits, s.angles[static_cast<std::size_t>(k)])) << f;
     ASSERT_TRUE(std::isfinite(s.pinch.activation) && std::isfinite(s.grip.activation));
   }
 }

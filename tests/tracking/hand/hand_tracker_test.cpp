@@ -73,7 +73,9 @@ TEST(HandLayout, BadFilesAreRefusedWithWhatIsWrong) {
   EXPECT_EQ(layout_error("{" + head + R"(, "hand_star_mm": [[0, 0, 0], [10, 0, 0], [0, 10, 0], [0, 0, 30]]})"),
             "hand_star_mm: edges 10 and 10 mm differ by less than 1.5 mm");
   const std::string set = R"("star_set": ")" + (fs::path(RHOT_ASSET_DIR) / "stars" / "seed-case.json").string() + "\"";
-  const auto segments = [&](const std::string& list) { return "{" + head + ", " + star + ", " + set + R"(, "segment_stars": )" + list + "}"; };
+  const auto segments = [&](const std::string& list) {
+    return "{" + head + ", " + star + ", " + set + R"(, "segment_stars": )" + list + "}";
+  };
   EXPECT_EQ(layout_error(segments(R"([{"bone": "index_proximal", "star_id": 3}])")), "loaded");
   EXPECT_EQ(layout_error("{" + head + ", " + star + R"(, "segment_stars": []})"), "star_set: expected the path of the segment stars' set");
   EXPECT_EQ(layout_error(segments(R"([{"bone": "index_metacarpal", "star_id": 3}])")),
@@ -160,7 +162,8 @@ TEST(HandCalibration, AFlatHandGivesEachFingersLengthAndTheFileKeepsIt) {
   const auto calibrated_chains = hand_chains(*calibrated, HandSide::kRight);
   for (int f = 0; f < kFingerCount; ++f) {
     for (std::size_t k = 0; k < 3; ++k) {
-      EXPECT_NEAR(calibrated_chains[static_cast<std::size_t>(f)].length_m[k], scale[static_cast<std::size_t>(f)] * chains[static_cast<std::size_t>(f)].length_m[k], 2e-4)
+      EXPECT_NEAR(calibrated_chains[static_cast<std::size_t>(f)].length_m[k],
+                  scale[static_cast<std::size_t>(f)] * chains[static_cast<std::size_t>(f)].length_m[k], 2e-4)
           << "finger " << f << " bone " << k;
     }
   }

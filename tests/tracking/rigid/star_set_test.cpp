@@ -32,8 +32,9 @@ StarSet generate(double diameter, Eigen::Vector3d box, double variation, int can
 StarSet hand_made() {
   StarSet set;
   set.rules = {4.0, {20.8, 12.6, 48.3}, 1.5};
-  set.stars.push_back({0, {Eigen::Vector3d(-7.0, -3.0, 2.0), Eigen::Vector3d(7.5, 2.0, 9.0), Eigen::Vector3d(-2.0, 3.5, 20.0),
-                           Eigen::Vector3d(4.0, -2.5, 40.0)}});
+  set.stars.push_back({0,
+                       {Eigen::Vector3d(-7.0, -3.0, 2.0), Eigen::Vector3d(7.5, 2.0, 9.0), Eigen::Vector3d(-2.0, 3.5, 20.0),
+                        Eigen::Vector3d(4.0, -2.5, 40.0)}});
   return set;
 }
 
@@ -50,7 +51,8 @@ TEST(StarSet, OtherBoxesDiametersAndVariationsAreValidToo) {
     Eigen::Vector3d box;
     double variation;
   };
-  for (const Case& c : {Case{3.0, {15, 15, 30}, 1.0}, Case{6.0, {30, 20, 60}, 2.0}, Case{4.0, {25, 25, 25}, 3.0}, Case{10.0, {80, 40, 120}, 5.0}}) {
+  for (const Case& c :
+       {Case{3.0, {15, 15, 30}, 1.0}, Case{6.0, {30, 20, 60}, 2.0}, Case{4.0, {25, 25, 25}, 3.0}, Case{10.0, {80, 40, 120}, 5.0}}) {
     const StarSet set = generate(c.diameter, c.box, c.variation, 2000, 7);
     EXPECT_GE(set.stars.size(), 1u) << c.diameter << " mm in " << c.box.transpose();
     const auto problems = check_star_set(set);
@@ -139,7 +141,8 @@ std::string load_error(const std::string& text) {
 
 TEST(StarSet, MalformedFilesAreRefusedWithWhatIsWrong) {
   EXPECT_EQ(load_star_set(temp("none.json")).error(), temp("none.json").string() + ": star set file not found");
-  const std::string head = R"("format": "rhot-marker-stars", "version": 1, "marker_diameter_mm": 4, "box_mm": [20.8, 12.6, 48.3], "variation_mm": 1.5)";
+  const std::string head =
+      R"("format": "rhot-marker-stars", "version": 1, "marker_diameter_mm": 4, "box_mm": [20.8, 12.6, 48.3], "variation_mm": 1.5)";
   EXPECT_EQ(load_error("{" + head + R"(, "stars": []})"), "loaded");
   EXPECT_EQ(load_error(R"({"format": "mocap"})"), "format: expected \"rhot-marker-stars\"");
   EXPECT_EQ(load_error(R"({"format": "rhot-marker-stars", "version": 2})"), "version: expected 1");
@@ -149,8 +152,10 @@ TEST(StarSet, MalformedFilesAreRefusedWithWhatIsWrong) {
   EXPECT_EQ(load_error("{" + head + R"(, "stars": [{"id": 0, "markers_mm": [[0, 0, 2], [9, 0, 2], [0, 9, 2], [0, "x", 2]]}]})"),
             "stars[0].markers_mm[3][1]: expected a number");
   EXPECT_EQ(load_error("{" + head + R"(, "stars": [{"id": "a", "markers_mm": []}]})"), "stars[0].id: expected an integer");
-  EXPECT_EQ(load_error(R"({"format": "rhot-marker-stars", "version": 1, "marker_diameter_mm": 0, "box_mm": [1, 1, 1], "variation_mm": 1, "stars": []})"),
-            "marker_diameter_mm: must be positive");
+  EXPECT_EQ(
+      load_error(
+          R"({"format": "rhot-marker-stars", "version": 1, "marker_diameter_mm": 0, "box_mm": [1, 1, 1], "variation_mm": 1, "stars": []})"),
+      "marker_diameter_mm: must be positive");
   // A set that breaks a rule: the first problem, and how many more.
   EXPECT_EQ(load_error("{" + head + R"(, "stars": [{"id": 0, "markers_mm": [[0, 0, 2], [1, 0, 2], [0, 5, 20], [0, -5, 40]]}]})"),
             "stars[0] (id 0): markers 0 and 1 overlap (1 mm apart) (and 5 more)");

@@ -15,9 +15,7 @@ CameraRig rig(const char* name) {
   return r.value_or(CameraRig{});
 }
 
-std::vector<Trajectory> desk_markers(int n, unsigned seed) {
-  return random_trajectories(n, {-0.4, 0.8, -0.85}, {0.4, 1.4, -0.05}, seed);
-}
+std::vector<Trajectory> desk_markers(int n, unsigned seed) { return random_trajectories(n, {-0.4, 0.8, -0.85}, {0.4, 1.4, -0.05}, seed); }
 
 TEST(SimulatedRig, SameSeedSameFrames) {
   SimulatedRigSettings s;

@@ -150,8 +150,9 @@ TEST(VideoSource, ABadImageFromOneCameraCostsThatCameraThatFrameOnly) {
   EXPECT_EQ(stats[0].bad_images, 0u);
   EXPECT_EQ(stats[1].bad_images, 1u);
   EXPECT_EQ(stats[1].frames, 2u);
-  EXPECT_EQ(stats[1].last_problem, "frame 1: \"" + patterns(dir, 4)[1] +
-                                       "\": blob detector: 1280x720 image of type CV_16UC1, expected 8-bit grey (CV_8UC1) or BGR (CV_8UC3)");
+  EXPECT_EQ(stats[1].last_problem,
+            "frame 1: \"" + patterns(dir, 4)[1] +
+                "\": blob detector: 1280x720 image of type CV_16UC1, expected 8-bit grey (CV_8UC1) or BGR (CV_8UC3)");
   EXPECT_EQ(stats[2].bad_images, 1u);
   EXPECT_EQ(stats[2].last_problem, "frame 1: \"" + patterns(dir, 4)[2] + "\" gave a 320x240 image, the rig calibrates it at 1280x720");
 }
@@ -172,14 +173,16 @@ TEST(VideoSource, OneCameraEndingEarlyCountsAsFailedReadsUntilAllEnd) {
 
 TEST(VideoSource, WrongDeviceCountUnopenableDeviceAndWrongImageSizeAreErrors) {
   const CameraRig rig = seated_rig();
-  EXPECT_EQ(VideoSource::open(rig, {"a.png", "b.png"}).error(), "video source: 2 devices for a rig of 4 cameras (one per camera, in rig order)");
+  EXPECT_EQ(VideoSource::open(rig, {"a.png", "b.png"}).error(),
+            "video source: 2 devices for a rig of 4 cameras (one per camera, in rig order)");
   EXPECT_EQ(VideoSource::open(rig, {"a.png"}).error(), "video source: 1 device for a rig of 4 cameras (one per camera, in rig order)");
 
   const fs::path dir = fresh_dir("rhot_video_source_errors");
   write_sequence(rig, dir, 1);
   std::vector<std::string> devices = patterns(dir, rig.cameras.size());
   devices[2] = (dir / "missing_%04d.png").string();
-  EXPECT_EQ(VideoSource::open(rig, devices).error(), "video source: camera 2 (" + rig.cameras[2].name + "): cannot open \"" + devices[2] + "\"");
+  EXPECT_EQ(VideoSource::open(rig, devices).error(),
+            "video source: camera 2 (" + rig.cameras[2].name + "): cannot open \"" + devices[2] + "\"");
 
   // A file that exists but is no image: opened by no backend, or opened with no frame to give.
   devices = patterns(dir, rig.cameras.size());
@@ -194,8 +197,8 @@ TEST(VideoSource, WrongDeviceCountUnopenableDeviceAndWrongImageSizeAreErrors) {
   ASSERT_TRUE(cv::imwrite((small / "cam_0000.png").string(), cv::Mat(240, 320, CV_8UC1, cv::Scalar(0))));
   devices = patterns(dir, rig.cameras.size());
   devices[3] = (small / "cam_%04d.png").string();
-  EXPECT_EQ(VideoSource::open(rig, devices).error(),
-            "video source: camera 3 (" + rig.cameras[3].name + "): \"" + devices[3] + "\" gives 320x240 images, the rig calibrates it at 1280x720");
+  EXPECT_EQ(VideoSource::open(rig, devices).error(), "video source: camera 3 (" + rig.cameras[3].name + "): \"" + devices[3] +
+                                                         "\" gives 320x240 images, the rig calibrates it at 1280x720");
 }
 
 TEST(VideoSource, DeviceListsSplitAtCommas) {
