@@ -32,11 +32,18 @@ else()
   endif()
 endif()
 
-# rhot_add_library(NAME SOURCES... [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
-# One library per layer; the include root is the repository root, so code includes
-# "engine/core/World.h" and "tracking/core/Pose.h": a file's folder is its layer.
+# rhot_add_library(NAME [INTERFACE] [SOURCES...] [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
+# One library per folder; the include root is the repository root, so code includes
+# "engine/core/World.h" and "tracking/core/Rigid3.h": a file's folder is its layer. INTERFACE: a
+# folder of headers only.
 function(rhot_add_library name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
+  cmake_parse_arguments(ARG "INTERFACE" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
+  if(ARG_INTERFACE)
+    add_library(${name} INTERFACE)
+    target_include_directories(${name} INTERFACE ${PROJECT_SOURCE_DIR})
+    target_link_libraries(${name} INTERFACE rhot::options ${ARG_PUBLIC_LIBS})
+    return()
+  endif()
   add_library(${name} STATIC ${ARG_SOURCES})
   target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(${name} PUBLIC rhot::options ${ARG_PUBLIC_LIBS} PRIVATE ${ARG_PRIVATE_LIBS})

@@ -8,7 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include "engine/core/World.h"
-#include "tracking/core/Check.h"
+#include "base/Check.h"
 
 namespace rhot {
 

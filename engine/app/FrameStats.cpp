@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "tracking/core/Check.h"
+#include "base/Check.h"
 
 namespace rhot {
 

@@ -4,7 +4,7 @@
 #include <unordered_map>
 
 #include "engine/core/World.h"
-#include "tracking/core/Check.h"
+#include "base/Check.h"
 
 namespace rhot {
 

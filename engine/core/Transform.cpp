@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "engine/core/World.h"
-#include "tracking/core/Check.h"
+#include "base/Check.h"
 
 namespace rhot {
 

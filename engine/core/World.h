@@ -26,7 +26,7 @@
 
 #include "engine/core/ComponentPool.h"
 #include "engine/core/Entity.h"
-#include "tracking/core/Check.h"
+#include "base/Check.h"
 
 namespace rhot {
 

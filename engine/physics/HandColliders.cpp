@@ -4,33 +4,10 @@
 #include <cmath>
 
 #include "engine/physics/BulletMath.h"
-#include "tracking/hand/HandTracker.h"
 
 namespace rhot {
 
 namespace {
-
-constexpr std::array<HandBone, kHandBoneCount> kBones{{
-    {HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal, 0},
-    {HandJoint::kThumbProximal, HandJoint::kThumbDistal, 0},
-    {HandJoint::kThumbDistal, HandJoint::kThumbTip, 0},
-    {HandJoint::kIndexMetacarpal, HandJoint::kIndexProximal, kPalmGroup},
-    {HandJoint::kIndexProximal, HandJoint::kIndexIntermediate, 1},
-    {HandJoint::kIndexIntermediate, HandJoint::kIndexDistal, 1},
-    {HandJoint::kIndexDistal, HandJoint::kIndexTip, 1},
-    {HandJoint::kMiddleMetacarpal, HandJoint::kMiddleProximal, kPalmGroup},
-    {HandJoint::kMiddleProximal, HandJoint::kMiddleIntermediate, 2},
-    {HandJoint::kMiddleIntermediate, HandJoint::kMiddleDistal, 2},
-    {HandJoint::kMiddleDistal, HandJoint::kMiddleTip, 2},
-    {HandJoint::kRingMetacarpal, HandJoint::kRingProximal, kPalmGroup},
-    {HandJoint::kRingProximal, HandJoint::kRingIntermediate, 3},
-    {HandJoint::kRingIntermediate, HandJoint::kRingDistal, 3},
-    {HandJoint::kRingDistal, HandJoint::kRingTip, 3},
-    {HandJoint::kLittleMetacarpal, HandJoint::kLittleProximal, kPalmGroup},
-    {HandJoint::kLittleProximal, HandJoint::kLittleIntermediate, 4},
-    {HandJoint::kLittleIntermediate, HandJoint::kLittleDistal, 4},
-    {HandJoint::kLittleDistal, HandJoint::kLittleTip, 4},
-}};
 
 std::size_t at(HandJoint j) { return static_cast<std::size_t>(j); }
 
@@ -55,28 +32,6 @@ btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 }  // namespace
-
-const std::array<HandBone, kHandBoneCount>& hand_bones() { return kBones; }
-
-HandInput hand_input(const TrackedHand& tracked) {
-  HandInput in;
-  in.seen = tracked.hand_seen;
-  in.world_from_hand = tracked.world_from_hand;
-  in.joints_world = tracked.joints_world;
-  in.radius_m = tracked.state.pose.radius_m;
-  in.confidence = tracked.state.confidence;
-  return in;
-}
-
-HandInput hand_input(const Rigid3d& world_from_hand, const HandPose& pose) {
-  HandInput in;
-  in.seen = true;
-  in.world_from_hand = world_from_hand;
-  for (std::size_t j = 0; j < kHandJointCount; ++j) in.joints_world[j] = world_from_hand * pose.position_m[j];
-  in.radius_m = pose.radius_m;
-  in.confidence.fill(1.0);
-  return in;
-}
 
 HandColliders::HandColliders(PhysicsWorld& physics, HandSide side, HandColliderSettings settings)
     : physics_(physics), side_(side), settings_(settings) {}
@@ -125,9 +80,9 @@ void HandColliders::drive(const HandInput& input) {
   }
   input_ = input;
   if (!built_) {
-    for (std::size_t i = 0; i < kBones.size(); ++i) {
+    for (std::size_t i = 0; i < hand_bones().size(); ++i) {
       Bone& b = bones_[i];
-      const auto& def = kBones[i];
+      const auto& def = hand_bones()[i];
       b.length_m = (input.joints_world[at(def.to)] - input.joints_world[at(def.from)]).norm();
       const double r = std::max(settings_.min_radius_m, std::min(input.radius_m[at(def.from)], input.radius_m[at(def.to)]));
       b.shape = std::make_unique<btCapsuleShape>(static_cast<btScalar>(r), static_cast<btScalar>(b.length_m));
@@ -148,9 +103,9 @@ void HandColliders::drive(const HandInput& input) {
     built_ = true;
   }
   const btScalar dt = static_cast<btScalar>(physics_.step_s());
-  for (std::size_t i = 0; i < kBones.size(); ++i) {
+  for (std::size_t i = 0; i < hand_bones().size(); ++i) {
     Bone& b = bones_[i];
-    const auto& def = kBones[i];
+    const auto& def = hand_bones()[i];
     const Eigen::Vector3d a = input.joints_world[at(def.from)];
     const Eigen::Vector3d e = input.joints_world[at(def.to)];
     const btVector3 previous_target = b.target.getOrigin();
@@ -182,12 +137,12 @@ void HandColliders::drive(const HandInput& input) {
 std::array<Eigen::Vector3d, kHandJointCount> HandColliders::physical_joints() const {
   std::array<Eigen::Vector3d, kHandJointCount> out = input_.joints_world;
   if (!built_) return out;
-  for (std::size_t i = 0; i < kBones.size(); ++i) {
+  for (std::size_t i = 0; i < hand_bones().size(); ++i) {
     const Bone& b = bones_[i];
     const btTransform& t = b.body->getWorldTransform();
     const btVector3 half = t.getBasis() * btVector3(0, static_cast<btScalar>(0.5 * b.length_m), 0);
-    out[at(kBones[i].from)] = to_eigen(t.getOrigin() - half);
-    out[at(kBones[i].to)] = to_eigen(t.getOrigin() + half);
+    out[at(hand_bones()[i].from)] = to_eigen(t.getOrigin() - half);
+    out[at(hand_bones()[i].to)] = to_eigen(t.getOrigin() + half);
   }
   return out;
 }

@@ -17,36 +17,10 @@
 
 #include <btBulletDynamicsCommon.h>
 
+#include "engine/hand/HandComponents.h"
 #include "engine/physics/PhysicsWorld.h"
-#include "tracking/core/Rigid3.h"
-#include "tracking/hand/HandJoints.h"
 
 namespace rhot {
-
-struct TrackedHand;
-
-// One hand's tracking result, in the world frame.
-struct HandInput {
-  bool seen = false;
-  Rigid3d world_from_hand;  // the hand frame (tracking/hand/HandJoints.h)
-  std::array<Eigen::Vector3d, kHandJointCount> joints_world{};
-  std::array<double, kHandJointCount> radius_m{};
-  std::array<double, kHandJointCount> confidence{};  // 1: measured this frame; less: inferred
-};
-
-HandInput hand_input(const TrackedHand& tracked);
-// A hand in a pose, every joint fully confident (scripted hands).
-HandInput hand_input(const Rigid3d& world_from_hand, const HandPose& pose);
-
-inline constexpr int kHandBoneCount = 19;
-inline constexpr int kPalmGroup = 5;  // bone groups: 0 thumb .. 4 little, 5 the palm (metacarpals)
-
-struct HandBone {
-  HandJoint from;
-  HandJoint to;
-  int group;  // finger 0-4 or kPalmGroup
-};
-const std::array<HandBone, kHandBoneCount>& hand_bones();
 
 struct HandColliderSettings {
   double bone_mass_kg = 0.05;
@@ -80,35 +54,34 @@ class HandColliders {
   std::array<Eigen::Vector3d, kHandJointCount> physical_joints() const;
   // The bones' capsules where the physics has them, for debug drawing (empty before the hand is
   // first tracked).
-  struct Capsule {
-    Eigen::Vector3d a_world{0, 0, 0};
-    Eigen::Vector3d b_world{0, 0, 0};
-    double radius_m = 0.0;
-    bool soft = false;  // held back, not colliding (see HandColliderSettings)
-  };
-  std::vector<Capsule> capsules() const;
-  // How far the physical hand is from the tracked one (largest bone distance), metres.
-  double largest_offset_m() const;
+  using Capsule = HandCapsule;
+  Eigen::Vector3d b_world{0, 0, 0};
+  double radius_m = 0.0;
+  bool soft = false;  // held back, not colliding (see HandColliderSettings)
+};
+std::vector<Capsule> capsules() const;
+// How far the physical hand is from the tracked one (largest bone distance), metres.
+double largest_offset_m() const;
 
- private:
-  struct Bone {
-    std::unique_ptr<btCapsuleShape> shape;
-    std::unique_ptr<btDefaultMotionState> motion;
-    std::unique_ptr<btRigidBody> body;
-    btTransform target = btTransform::getIdentity();
-    double length_m = 0.0;
-    bool soft = false;
-  };
-  void place(Bone& b, const btTransform& pose);
-  void set_soft(Bone& b, bool soft);
+private:
+struct Bone {
+  std::unique_ptr<btCapsuleShape> shape;
+  std::unique_ptr<btDefaultMotionState> motion;
+  std::unique_ptr<btRigidBody> body;
+  btTransform target = btTransform::getIdentity();
+  double length_m = 0.0;
+  bool soft = false;
+};
+void place(Bone& b, const btTransform& pose);
+void set_soft(Bone& b, bool soft);
 
-  PhysicsWorld& physics_;
-  HandSide side_;
-  HandColliderSettings settings_;
-  std::array<Bone, kHandBoneCount> bones_;
-  HandInput input_;
-  bool active_ = false;
-  bool built_ = false;
+PhysicsWorld& physics_;
+HandSide side_;
+HandColliderSettings settings_;
+std::array<Bone, kHandBoneCount> bones_;
+HandInput input_;
+bool active_ = false;
+bool built_ = false;
 };
 
 }  // namespace rhot

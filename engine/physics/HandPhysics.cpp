@@ -1,6 +1,7 @@
 #include "engine/physics/HandPhysics.h"
 
 #include "engine/core/World.h"
+#include "engine/hand/HandComponents.h"
 
 namespace rhot {
 
@@ -31,6 +32,25 @@ void HandPhysics::step(World& world, const std::array<HandInput, 2>& hands) {
   grasp_->post_step(world);
   events_ = grasp_->events();
   interactions_.update(world, *physics_, *grasp_, events_);
+}
+
+void HandPhysics::step(World& world) {
+  std::array<HandInput, 2> inputs;
+  world.view<Hand>().each([&](Entity, Hand& hand) { inputs[hand.side == HandSide::kLeft ? 0 : 1] = hand.tracked; });
+  step(world, inputs);
+  std::vector<Entity> without_body;
+  world.view<Hand>().each([&](Entity e, Hand& hand) {
+    if (world.find<HandBody>(e) == nullptr) without_body.push_back(e);
+    (void)hand;
+  });
+  for (const Entity e : without_body) world.add<HandBody>(e);
+  world.view<Hand, HandBody>().each([&](Entity, Hand& hand, HandBody& body) {
+    const HandColliders& colliders = *hands_[hand.side == HandSide::kLeft ? 0 : 1];
+    body.active = colliders.active();
+    body.joints_world = colliders.physical_joints();
+    body.capsules = colliders.capsules();
+    body.holding = grasp_->holding(hand.side);
+  });
 }
 
 }  // namespace rhot

@@ -30,6 +30,10 @@ class HandPhysics {
 
   // One frame: hands[0] the left hand, hands[1] the right (seen = false for a hand not tracked).
   void step(World& world, const std::array<HandInput, 2>& hands);
+  // One frame of the runtime: the hands are the entities with a Hand component (a side with none
+  // is not tracked); afterwards each of them gets a HandBody with where its colliders are and what
+  // it holds (engine/hand/HandComponents.h).
+  void step(World& world);
 
   // Events of the last step (grasp system's, then interactions' successes).
   const std::vector<InteractionEvent>& events() const { return events_; }

@@ -10,7 +10,7 @@
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "engine/physics/BulletMath.h"
-#include "engine/render/MeshData.h"
+#include "engine/mesh/MeshData.h"
 
 namespace rhot {
 

@@ -22,7 +22,7 @@
 #include <glm/glm.hpp>
 
 #include "engine/render/Image.h"
-#include "engine/render/MeshData.h"
+#include "engine/mesh/MeshData.h"
 #include "engine/render/StereoCamera.h"
 
 namespace rhot {

@@ -59,8 +59,4 @@ class SceneRenderer {
   std::map<std::uint32_t, std::size_t> batch_of_mesh_;  // per frame: mesh index -> batch
 };
 
-// The reference open hands (tracking/hand) placed in front of a seated user, palms down above the
-// default scene's table, for drawing before real hand tracking exists.
-std::array<HandDrawInput, 2> reference_hands();
-
 }  // namespace rhot

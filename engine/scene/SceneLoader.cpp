@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/core/World.h"
-#include "tracking/core/Check.h"
+#include "base/Check.h"
 
 namespace rhot {
 

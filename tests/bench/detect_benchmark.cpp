@@ -11,7 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "tracking/detect/BlobDetector.h"
-#include "tracking/source/SyntheticImages.h"
+#include "tracking/sim/SyntheticImages.h"
 
 namespace rhot {
 namespace {

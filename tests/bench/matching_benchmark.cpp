@@ -10,7 +10,7 @@
 
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
-#include "tracking/source/SimulatedRig.h"
+#include "tracking/sim/SimulatedRig.h"
 
 namespace {
 

@@ -18,7 +18,7 @@
 #include "engine/core/World.h"
 #include "engine/physics/BulletMath.h"
 #include "engine/physics/HandPhysics.h"
-#include "engine/physics/ScriptedHands.h"
+#include "engine/sim/ScriptedHands.h"
 #include "engine/scene/SceneLoader.h"
 
 namespace rhot {

@@ -16,6 +16,7 @@
 #include <spdlog/spdlog.h>
 
 #include "engine/app/FrameStats.h"
+#include "tests/support/ReferenceHands.h"
 #include "engine/core/World.h"
 #include "engine/render/Renderer.h"
 #include "engine/render/SceneRenderer.h"

@@ -11,7 +11,7 @@
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
 #include "tracking/rigid/StarTracker.h"
-#include "tracking/source/SimulatedRig.h"
+#include "tracking/sim/SimulatedRig.h"
 
 namespace {
 

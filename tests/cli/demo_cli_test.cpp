@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "RunCommand.h"
+#include "tests/support/RunCommand.h"
 
 namespace {
 

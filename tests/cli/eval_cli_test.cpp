@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "RunCommand.h"
+#include "tests/support/RunCommand.h"
 
 namespace {
 

@@ -7,8 +7,8 @@
 #include <gtest/gtest.h>
 #include <tiny_gltf.h>
 
-#include "RunCommand.h"
-#include "engine/pipeline/Recording.h"
+#include "tests/support/RunCommand.h"
+#include "engine/tracked/Recording.h"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "RunCommand.h"
+#include "tests/support/RunCommand.h"
 #include "tracking/rigid/StarSet.h"
 
 namespace {

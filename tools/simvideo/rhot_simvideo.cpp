@@ -15,10 +15,9 @@
 #pragma GCC diagnostic pop
 #include <opencv2/imgcodecs.hpp>
 
-#include "engine/core/World.h"
-#include "engine/pipeline/Pipeline.h"
+#include "engine/sim/Demo.h"
 #include "engine/scene/SceneLoader.h"
-#include "tracking/source/SyntheticImages.h"
+#include "tracking/sim/SyntheticImages.h"
 
 #ifndef RHOT_ASSET_DIR
 #error "RHOT_ASSET_DIR must name the assets folder"
@@ -31,7 +30,7 @@ int main(int argc, char** argv) {
   std::string scene_path = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
   std::string out_dir;
   int frames = 1080;
-  rhot::PipelineSettings settings;
+  rhot::DemoSettings settings;
   settings.asset_dir = RHOT_ASSET_DIR;
   settings.sigma_px = 0.0;
   rhot::SyntheticImageSettings draw;
@@ -69,25 +68,23 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "rhot-simvideo: cannot create %s: %s\n", out_dir.c_str(), ec.message().c_str());
     return EXIT_FAILURE;
   }
-  rhot::World world;
-  rhot::instantiate(*scene, world);
-  auto pipeline = rhot::Pipeline::create(world, *scene, settings);
-  if (!pipeline) {
-    std::fprintf(stderr, "rhot-simvideo: %s\n", pipeline.error().c_str());
+  auto demo = rhot::Demo::create(*scene, nullptr, settings);
+  if (!demo) {
+    std::fprintf(stderr, "rhot-simvideo: %s\n", demo.error().c_str());
     return EXIT_FAILURE;
   }
-  rhot::Pipeline& p = **pipeline;
-  const std::size_t cameras = p.rig().cameras.size();
+  rhot::LiveTracking& p = *(*demo)->live();  // the simulated rig behind live tracking
+  const std::size_t cameras = p.source().rig().cameras.size();
   const double rate_hz = scene->settings.headset.refresh_hz;
   const std::filesystem::path dir(out_dir);
   for (int f = 0; f < frames; ++f) {
-    p.source(f / rate_hz);  // the simulated rig photographs the script's markers (no tracking needed)
+    p.read_source(f / rate_hz);  // the simulated rig photographs the script's markers (no tracking needed)
     for (std::size_t c = 0; c < cameras; ++c) {
       draw.seed = settings.seed * 1000003ULL + static_cast<std::uint64_t>(f) * cameras + c;
       char name[64];
       std::snprintf(name, sizeof(name), "cam%zu_%04d.png", c, f);
       const std::string file = (dir / name).string();
-      if (!cv::imwrite(file, rhot::draw_blobs(p.rig().cameras[c].intrinsics, p.frame().cameras[c], draw),
+      if (!cv::imwrite(file, rhot::draw_blobs(p.source().rig().cameras[c].intrinsics, p.frame().cameras[c], draw),
                        {cv::IMWRITE_PNG_COMPRESSION, 1})) {
         std::fprintf(stderr, "rhot-simvideo: cannot write %s\n", file.c_str());
         return EXIT_FAILURE;

@@ -29,7 +29,7 @@
 
 #include <opencv2/core/mat.hpp>
 
-#include "tracking/source/Frames.h"
+#include "tracking/core/Frames.h"
 
 namespace rhot {
 

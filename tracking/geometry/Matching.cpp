@@ -7,7 +7,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
 
-#include "tracking/core/Check.h"
+#include "base/Check.h"
 
 namespace rhot {
 

@@ -26,7 +26,7 @@
 
 #include "tracking/camera/Camera.h"
 #include "tracking/geometry/Triangulation.h"
-#include "tracking/source/Frames.h"
+#include "tracking/core/Frames.h"
 
 namespace rhot {
 

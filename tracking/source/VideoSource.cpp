@@ -34,6 +34,7 @@ struct VideoSource::Impl {
   std::vector<bool> live;
   std::vector<cv::Mat> pending;  // the first frames, read by open() to check their size
   std::vector<VideoCameraStats> stats;
+  std::vector<VideoCameraStats> told;  // the counts last told by take_warnings()
   Clock::time_point opened = Clock::now();
   std::uint64_t index = 0;
   bool ended = false;
@@ -172,6 +173,40 @@ std::optional<RigFrame> VideoSource::next() {
 }
 
 bool VideoSource::ended() const { return impl_->ended; }
+const CameraRig& VideoSource::rig() const { return impl_->rig; }
+
+std::vector<std::string> VideoSource::take_warnings() {
+  // True when a power of ten lies in (before, now].
+  const auto milestone = [](std::uint64_t before, std::uint64_t now) {
+    for (std::uint64_t m = 1; m <= now; m *= 10) {
+      if (m > before) return true;
+    }
+    return false;
+  };
+  Impl& s = *impl_;
+  s.told.resize(s.stats.size());
+  std::vector<std::string> out;
+  for (std::size_t c = 0; c < s.stats.size(); ++c) {
+    const VideoCameraStats& now = s.stats[c];
+    VideoCameraStats& told = s.told[c];
+    if (milestone(told.bad_images, now.bad_images) || milestone(told.failed_reads, now.failed_reads)) {
+      out.push_back("video: camera " + std::to_string(c) + " (" + s.rig.cameras[c].name + "): " + std::to_string(now.bad_images) +
+                    " bad image(s), " + std::to_string(now.failed_reads) + " failed read(s) so far; last: " + now.last_problem);
+      told = now;
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> VideoSource::summary() const {
+  std::vector<std::string> out;
+  for (std::size_t c = 0; c < impl_->stats.size(); ++c) {
+    const VideoCameraStats& s = impl_->stats[c];
+    out.push_back("video camera " + std::to_string(c) + " (" + impl_->devices[c] + "): " + std::to_string(s.frames) + " frames, " +
+                  std::to_string(s.bad_images) + " bad images, " + std::to_string(s.failed_reads) + " failed reads");
+  }
+  return out;
+}
 const std::vector<VideoCameraStats>& VideoSource::stats() const { return impl_->stats; }
 const std::vector<std::string>& VideoSource::devices() const { return impl_->devices; }
 

@@ -24,7 +24,8 @@
 
 #include "tracking/camera/Camera.h"
 #include "tracking/detect/BlobDetector.h"
-#include "tracking/source/Frames.h"
+#include "tracking/core/Frames.h"
+#include "tracking/source/FrameSource.h"
 
 namespace rhot {
 
@@ -44,17 +45,24 @@ struct VideoCameraStats {
 // entry, quoting the text.
 [[nodiscard]] std::expected<std::vector<std::string>, std::string> parse_video_devices(const std::string& list);
 
-class VideoSource {
+class VideoSource final : public FrameSource {
  public:
   [[nodiscard]] static std::expected<VideoSource, std::string> open(const CameraRig& rig, const std::vector<std::string>& devices,
                                                                     VideoSourceSettings settings = {});
   VideoSource(VideoSource&&) noexcept;
   VideoSource& operator=(VideoSource&&) noexcept;
-  ~VideoSource();
+  ~VideoSource() override;
 
   // The next frame: one CameraFrame per camera (camera i at index i), detections without truth
   // and no truth positions. Nothing once the stream has ended.
   std::optional<RigFrame> next();
+  // FrameSource: the next frame whatever t_s is (files and devices keep their own time).
+  std::optional<RigFrame> next(double) override { return next(); }
+  const CameraRig& rig() const override;
+  // A camera's failed reads and bad images, told at the 1st, 10th, 100th ... of each kind.
+  std::vector<std::string> take_warnings() override;
+  // "camera 0 (DEV): N frames, B bad images, F failed reads" per camera.
+  std::vector<std::string> summary() const override;
 
   bool ended() const;
   const std::vector<VideoCameraStats>& stats() const;

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "tracking/core/Check.h"
+#include "base/Check.h"
 
 namespace rhot::vk {
 

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/physics/GraspScenarios.h"
+#include "engine/sim/GraspScenarios.h"
 #include "engine/scene/SceneLoader.h"
 
 namespace rhot {

@@ -1,4 +1,5 @@
 #include "engine/render/Image.h"
+#include "tests/support/ImageCompare.h"
 
 #include <array>
 #include <filesystem>

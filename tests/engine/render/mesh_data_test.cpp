@@ -1,4 +1,4 @@
-#include "engine/render/MeshData.h"
+#include "engine/mesh/MeshData.h"
 
 #include <cmath>
 #include <cstring>

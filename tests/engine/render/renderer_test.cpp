@@ -16,7 +16,8 @@
 #include "engine/core/World.h"
 #include "engine/render/SceneRenderer.h"
 #include "engine/scene/SceneLoader.h"
-#include "golden.h"
+#include "tests/support/Golden.h"
+#include "tests/support/ReferenceHands.h"
 
 namespace rhot {
 namespace {

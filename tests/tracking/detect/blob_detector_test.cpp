@@ -1,4 +1,4 @@
-// The blob detector on images drawn from known sub-pixel positions (tracking/source/SyntheticImages.h).
+// The blob detector on images drawn from known sub-pixel positions (tracking/sim/SyntheticImages.h).
 
 #include "tracking/detect/BlobDetector.h"
 
@@ -9,7 +9,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "tracking/source/SyntheticImages.h"
+#include "tracking/sim/SyntheticImages.h"
 
 namespace rhot {
 namespace {

@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "tracking/camera/RigFile.h"
-#include "tracking/source/SimulatedRig.h"
+#include "tracking/sim/SimulatedRig.h"
 
 namespace rhot {
 namespace {

@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "tracking/hand/HandCalibration.h"
-#include "tracking/hand/HandMotions.h"
+#include "tracking/sim/HandMotions.h"
 
 namespace rhot {
 namespace {

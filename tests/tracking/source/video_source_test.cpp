@@ -15,8 +15,8 @@
 
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
-#include "tracking/source/SimulatedRig.h"
-#include "tracking/source/SyntheticImages.h"
+#include "tracking/sim/SimulatedRig.h"
+#include "tracking/sim/SyntheticImages.h"
 
 namespace rhot {
 namespace {

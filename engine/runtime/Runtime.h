@@ -1,0 +1,136 @@
+#pragma once
+// The runtime: a scene, a source of tracking results, physics and the stereo renderer, as
+// declared, timed systems of the frame loop. It only runs: what feeds it (live cameras of any
+// kind, the simulated rig, a recording) is decided by whoever builds it (tools/demo, rhot-eval,
+// tests), through the ResultSource it is given. One frame:
+//
+//   clock       the runtime's clock advances one step (not while paused, unless stepping)
+//   <tracking>  the result source's stages (live: source, matching, stars, hands; or replay)
+//   tracked     tracking results into components: tracked objects' Transforms, hands' Hand, the
+//               markers (engine/tracked/TrackedObjects.h)
+//   record      with RuntimeSettings::record: the frame's results appended to a recording
+//   transforms  world transforms of the hierarchy
+//   physics     hand colliders, grasping, Bullet, interactions (reads Hand, writes HandBody)
+//   render      both eyes, drawn from the components (with a renderer)
+//
+// An application adds stages of its own between these (add_stage): the demo's script looks where
+// the cube lies after physics, for example. Stages other than transforms and render run only on
+// frames the clock advances.
+
+#include <cstdint>
+#include <expected>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/core/Systems.h"
+#include "engine/core/World.h"
+#include "engine/physics/HandPhysics.h"
+#include "engine/render/DebugDraw.h"
+#include "engine/render/Renderer.h"
+#include "engine/render/SceneRenderer.h"
+#include "engine/scene/SceneDesc.h"
+#include "engine/tracked/ReplaySource.h"
+#include "engine/tracked/ResultSource.h"
+#include "engine/tracked/TrackedObjects.h"
+
+namespace rhot {
+
+// What the debug views draw over the scene (toggled from the overlay, or set by flags).
+struct DebugViews {
+  bool markers = false;    // triangulated marker points as small spheres
+  bool rays = false;       // from each camera that saw a point to the point
+  bool frusta = false;     // each camera's viewing pyramid
+  bool colliders = false;  // the hands' collider capsules (orange where held back) and the tracked skeleton
+};
+
+struct RuntimeSettings {
+  std::filesystem::path star_set;  // the marker stars objects are tracked by (required when any is)
+  std::filesystem::path record;    // write every frame's hands and tracked objects here (empty: no recording)
+  DebugViews debug;
+};
+
+class Runtime {
+ public:
+  // Builds the result source once the scene is in the world and its tracked objects are known.
+  using TrackingFactory = std::function<std::expected<std::unique_ptr<ResultSource>, std::string>(World&, const TrackedObjects&)>;
+
+  // Instantiates `scene`, finds its star-tracked objects, asks `make_tracking` for the results'
+  // source, builds the physics and the hand entities. `renderer` may be null (no render stage).
+  // Fails, naming what is wrong, on a star set that cannot be read or lacks a tracked object's
+  // star, the factory's errors, a physics error, or a recording that cannot be written.
+  [[nodiscard]] static std::expected<std::unique_ptr<Runtime>, std::string> create(const SceneDesc& scene, Renderer* renderer,
+                                                                                   const RuntimeSettings& settings,
+                                                                                   const TrackingFactory& make_tracking);
+
+  // A stage of the application's, run right after the stage named `after` on frames the clock
+  // advances. Before add_systems. Stages added after the same one run in the order added.
+  void add_stage(const std::string& after, TrackingStage stage);
+  // Adds the runtime's systems; `after` names a system they run after ("" for none).
+  void add_systems(Systems& systems, const std::string& after);
+  // Runs every stage once at t_s, as a frame the clock advances to t_s would, without a frame loop
+  // (for tools and tests that drive the runtime themselves). The clock is not touched.
+  void run_frame(double t_s);
+
+  World& world() { return world_; }
+  const SceneDesc& scene() const { return scene_; }
+  ResultSource& tracking() { return *tracking_; }
+  const TrackedObjects& objects() const { return objects_; }
+  HandPhysics& physics() { return *physics_; }
+  // A hand entity's components (there are always two hand entities).
+  const Hand& hand(HandSide side);
+  const HandBody* hand_body(HandSide side);
+
+  // Pausing stops the clock: tracking and physics do nothing and the last state is drawn again.
+  // step() runs the next frame while paused.
+  void set_paused(bool paused) { paused_ = paused; }
+  bool paused() const { return paused_; }
+  void step() { step_requested_ = true; }
+  double time_s() const { return time_s_; }
+  std::uint64_t frames() const { return frames_; }
+
+  DebugViews& debug_views() { return settings_.debug; }
+  // Called in the render stage once the renderer's overlay frame has begun (Dear ImGui calls are
+  // allowed); not called without an overlay.
+  void set_overlay(std::function<void()> build_ui) { overlay_ = std::move(build_ui); }
+
+  // The debug shapes the views in debug_views() draw for the current state (from components).
+  void fill_debug(DebugDraw& debug);
+
+ private:
+  struct Stage {
+    TrackingStage stage;
+    bool always = false;  // also on frames the clock does not advance
+    bool added = false;   // by the application (add_stage)
+  };
+  Runtime() = default;
+  void advance(const FrameContext& f);
+  void render();
+  Entity hand_entity(HandSide side);
+
+  SceneDesc scene_;
+  World world_;
+  RuntimeSettings settings_;
+  TrackedObjects objects_;
+  std::unique_ptr<ResultSource> tracking_;
+  std::unique_ptr<HandPhysics> physics_;
+  std::optional<SessionRecorder> recorder_;
+  std::vector<Stage> stages_;
+  Renderer* renderer_ = nullptr;
+  std::unique_ptr<SceneRenderer> scene_renderer_;
+  StereoViews views_;
+  DebugDraw debug_;
+  std::function<void()> overlay_;
+  bool paused_ = false;
+  bool step_requested_ = false;
+  bool advancing_ = true;  // this frame runs tracking and physics
+  bool started_ = false;
+  double time_s_ = 0.0;  // of the frame that ran last
+  double next_time_s_ = 0.0;
+  std::uint64_t frames_ = 0;
+};
+
+}  // namespace rhot

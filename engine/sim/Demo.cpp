@@ -1,0 +1,148 @@
+#include "engine/sim/Demo.h"
+
+#include <cmath>
+
+#include "engine/core/Transform.h"
+#include "engine/core/World.h"
+#include "engine/scene/SceneLoader.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/sim/SimulatedRig.h"
+#include "tracking/source/VideoSource.h"
+
+namespace rhot {
+
+namespace {
+
+void add_bones(std::vector<Occluder>& out, const HandTruth& hand) {
+  for (int j = 0; j < kHandJointCount; ++j) {
+    const auto parent = joint_parent(static_cast<HandJoint>(j));
+    if (!parent) continue;
+    out.push_back({hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(*parent)],
+                   hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(j)],
+                   0.8 * hand.pose.radius_m[static_cast<std::size_t>(j)]});
+  }
+}
+
+}  // namespace
+
+std::expected<void, std::string> DemoSettings::check() const {
+  if (!std::isfinite(sigma_px) || sigma_px < 0.0 || sigma_px > 50.0) {
+    return std::unexpected("sigma: the simulated pixel noise must be a number from 0 to 50 pixels, got " + std::to_string(sigma_px));
+  }
+  if (!std::isfinite(speed) || !(speed > 0.0)) return std::unexpected(std::string("speed: the replay speed must be a positive number"));
+  if (!video_devices.empty() && perfect_hands) {
+    return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
+  }
+  if (!video_devices.empty() && !replay.empty()) return std::unexpected(std::string("choose video devices or a replay, not both"));
+  return {};
+}
+
+DemoWorld::DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects)
+    : script_(script), layouts_(layouts) {
+  // The stars in the tracker's library order, as the markers have always been numbered.
+  const StarLibrary library(objects.stars);
+  for (const StarLibrary::Star& star : library.stars()) {
+    const TrackedObject* object = objects.by_star(star.id);
+    if (object) stars_.push_back({star.id, object->object_from_star, star.markers_m});
+  }
+}
+
+WorldSnapshot DemoWorld::at(double t_s) {
+  truth_ = script_.at(t_s);
+  WorldSnapshot out;
+  add_bones(out.occluders, truth_->hands[0]);
+  add_bones(out.occluders, truth_->hands[1]);
+  for (std::size_t h = 0; h < 2; ++h) {
+    const HandTruth& hand = truth_->hands[h];
+    for (const Eigen::Vector3d& m : layout_markers(layouts_[h], hand.world_from_hand, hand.pose)) out.markers_m.push_back(m);
+  }
+  for (const Star& star : stars_) {
+    const auto at = truth_->world_from_object.find(star.id);
+    if (at == truth_->world_from_object.end()) continue;
+    const Rigid3d world_from_star = at->second * star.object_from_star;
+    for (const Eigen::Vector3d& m : star.markers_m) out.markers_m.push_back(world_from_star * m);
+  }
+  return out;
+}
+
+std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& scene, Renderer* renderer, DemoSettings settings) {
+  if (auto checked = settings.check(); !checked) return std::unexpected(checked.error());
+  std::unique_ptr<Demo> d(new Demo());
+  d->script_ = std::make_unique<DemoScript>(scene);
+  Demo* self = d.get();
+  const bool replay = !settings.replay.empty();
+  const bool video = !settings.video_devices.empty();
+  const auto make_tracking = [&](World&, const TrackedObjects& objects) -> std::expected<std::unique_ptr<ResultSource>, std::string> {
+    if (replay) {
+      auto source = ReplaySource::open(settings.replay, settings.speed, objects);
+      if (!source) return std::unexpected(source.error());
+      return std::unique_ptr<ResultSource>(std::move(*source));
+    }
+    const std::filesystem::path rig_file = !settings.rig_file.empty()
+                                               ? settings.rig_file
+                                               : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
+    auto rig = load_rig(rig_file);
+    if (!rig) return std::unexpected(rig.error());
+    std::array<HandLayout, 2> layouts;
+    for (std::size_t h = 0; h < 2; ++h) {
+      auto layout = load_hand_layout(settings.asset_dir / "hands" / (h == 0 ? "low-cost-left.json" : "low-cost-right.json"));
+      if (!layout) return std::unexpected(layout.error());
+      layouts[h] = std::move(*layout);
+    }
+    const double rate_hz = scene.settings.headset.refresh_hz;
+    std::unique_ptr<FrameSource> source;
+    if (video) {
+      VideoSourceSettings vs;
+      vs.detector = settings.detector;
+      vs.rate_hz = rate_hz;
+      auto opened = VideoSource::open(*rig, settings.video_devices, vs);
+      if (!opened) return std::unexpected(rig_file.string() + ": " + opened.error());
+      source = std::make_unique<VideoSource>(std::move(*opened));
+    } else {
+      SimulatedRigSettings sim;
+      sim.sigma_px = settings.sigma_px;
+      sim.seed = settings.seed;
+      sim.rate_hz = rate_hz;
+      auto rig_source = std::make_unique<SimulatedRig>(*rig, std::vector<Trajectory>{}, sim);
+      self->world_ = std::make_shared<DemoWorld>(*self->script_, layouts, objects);
+      rig_source->set_world(self->world_);
+      source = std::move(rig_source);
+    }
+    auto live = std::make_unique<LiveTracking>(std::move(source), objects, layouts, LiveTrackingSettings{settings.filter_hands});
+    self->live_ = live.get();
+    return std::unique_ptr<ResultSource>(std::move(live));
+  };
+  RuntimeSettings rs;
+  rs.star_set = !settings.star_set.empty() ? settings.star_set : settings.asset_dir / "stars" / "seed-case.json";
+  rs.record = settings.record;
+  rs.debug = settings.debug;
+  auto runtime = Runtime::create(scene, renderer, rs, make_tracking);
+  if (!runtime) return std::unexpected(runtime.error());
+  d->runtime_ = std::move(*runtime);
+
+  if (d->world_) {
+    Runtime& r = *d->runtime_;
+    if (settings.perfect_hands) {
+      r.add_stage("hands", {"perfect-hands", [self](double) {
+                              const auto& truth = self->world_->truth();
+                              if (!truth) return;
+                              TrackingResults& results = self->runtime_->tracking().results();
+                              for (std::size_t h = 0; h < 2; ++h) {
+                                results.hands[h] = hand_input(truth->hands[h].world_from_hand, truth->hands[h].pose);
+                              }
+                            }});
+    }
+    if (!d->script_->right_target().empty()) {
+      r.add_stage("physics", {"look", [self](double t_s) {
+                                World& world = self->runtime_->world();
+                                const Entity cube = find_named(world, self->script_->right_target());
+                                if (const Transform* t = world.find<Transform>(cube)) {
+                                  self->script_->reaim(t_s, Eigen::Vector3d(t->position.x, t->position.y, t->position.z));
+                                }
+                              }});
+    }
+  }
+  return d;
+}
+
+}  // namespace rhot

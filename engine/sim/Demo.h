@@ -1,0 +1,103 @@
+#pragma once
+// The demo: the runtime (engine/runtime/Runtime.h) fed by the source the settings name, and the
+// demo's own stages. Shared by rhot-demo, `rhot-eval frame`, rhot-simvideo and the tests.
+//
+// Sources:
+//   simulated (default)  the simulated camera rig (tracking/sim) photographs the demo script's
+//                        hands and star-tracked objects (DemoWorld below), with pixel noise and
+//                        the hands' bones hiding markers; live tracking recovers them
+//   video devices        one OpenCV capture per rig camera (tracking/source/VideoSource.h); no
+//                        truth, and the demo ends with the stream
+//   replay               a recording's tracking results (engine/tracked/ReplaySource.h)
+//
+// Stages the demo adds to the runtime (simulated source only):
+//   perfect-hands  after the tracking stages: the hands are the script's true hands (to tell
+//                  tracking from physics)
+//   look           after physics: the script's right hand aims its next pickup where the cube
+//                  lies (DemoScript::reaim), as a user looks before reaching
+
+#include <array>
+#include <expected>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/runtime/Runtime.h"
+#include "engine/sim/DemoScript.h"
+#include "engine/tracked/LiveTracking.h"
+#include "tracking/detect/BlobDetector.h"
+#include "tracking/hand/HandLayout.h"
+#include "tracking/rigid/StarIdentification.h"
+#include "tracking/sim/SimulatedWorld.h"
+
+namespace rhot {
+
+struct DemoSettings {
+  std::filesystem::path asset_dir;  // where the defaults below are found
+  std::filesystem::path rig_file;   // empty: the scene's rig, else assets/rigs/seated-4.yaml
+  std::filesystem::path star_set;   // empty: assets/stars/seed-case.json (the objects' stars)
+  double sigma_px = 0.3;            // the simulated cameras' pixel noise
+  unsigned seed = 1;
+  bool filter_hands = false;   // LiveTrackingSettings::filter_hands
+  bool perfect_hands = false;  // physics gets the true hands, not the tracked ones
+  std::filesystem::path replay;  // play this recording instead of tracking
+  double speed = 1.0;            // replay speed (2: twice as fast)
+  std::filesystem::path record;  // write every frame's hands and tracked objects here
+  // Real cameras instead of the simulated rig: one OpenCV device per rig camera, in rig order (an
+  // index such as "0", a video file, or an image sequence such as "cams/cam0_%04d.png").
+  std::vector<std::string> video_devices;
+  BlobDetectorSettings detector;  // for video_devices
+  DebugViews debug;
+
+  // Every value a user can set checked: "<name>: <what is wrong>" for the first bad one.
+  [[nodiscard]] std::expected<void, std::string> check() const;
+};
+
+// The demo script's world as the simulated rig sees it: both hands' markers (their layouts on the
+// script's hands) and the tracked objects' star markers, with the hands' bones as occluders.
+class DemoWorld final : public SimulatedWorld {
+ public:
+  DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects);
+  WorldSnapshot at(double t_s) override;
+  // The truth at the time last asked for.
+  const std::optional<SceneTruth>& truth() const { return truth_; }
+
+ private:
+  const DemoScript& script_;
+  std::array<HandLayout, 2> layouts_;
+  struct Star {
+    int id;
+    Rigid3d object_from_star;
+    std::vector<Eigen::Vector3d> markers_m;  // star frame
+  };
+  std::vector<Star> stars_;
+  std::optional<SceneTruth> truth_;
+};
+
+class Demo {
+ public:
+  // Fails naming what is wrong: bad settings, a rig, star set or hand layout that cannot be read,
+  // video devices that cannot be opened or do not fit the rig, a recording that cannot be read or
+  // written, a physics error; video with perfect hands or with a replay.
+  [[nodiscard]] static std::expected<std::unique_ptr<Demo>, std::string> create(const SceneDesc& scene, Renderer* renderer,
+                                                                                DemoSettings settings);
+
+  Runtime& runtime() { return *runtime_; }
+  World& world() { return runtime_->world(); }
+  // Live tracking, unless replaying.
+  LiveTracking* live() { return live_; }
+  // The simulated world, when the source is the simulated rig.
+  const DemoWorld* simulated() const { return world_.get(); }
+  const DemoScript& script() const { return *script_; }
+
+ private:
+  Demo() = default;
+  std::unique_ptr<DemoScript> script_;  // before the runtime: its world reads the script
+  std::shared_ptr<DemoWorld> world_;
+  LiveTracking* live_ = nullptr;
+  std::unique_ptr<Runtime> runtime_;
+};
+
+}  // namespace rhot

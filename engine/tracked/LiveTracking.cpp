@@ -1,0 +1,95 @@
+#include "engine/tracked/LiveTracking.h"
+
+#include <spdlog/spdlog.h>
+
+#include "tracking/geometry/Matching.h"
+
+namespace rhot {
+
+HandInput hand_input(const TrackedHand& tracked) {
+  HandInput in;
+  in.seen = tracked.hand_seen;
+  in.world_from_hand = tracked.world_from_hand;
+  in.joints_world = tracked.joints_world;
+  in.radius_m = tracked.state.pose.radius_m;
+  in.confidence = tracked.state.confidence;
+  return in;
+}
+
+LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObjects& objects, const std::array<HandLayout, 2>& layouts,
+                           LiveTrackingSettings settings)
+    : source_(std::move(source)), layouts_(layouts) {
+  for (const TrackedObject& o : objects.objects) object_from_star_.emplace_back(o.star_id, o.object_from_star);
+  star_tracker_ = std::make_unique<StarTracker>(StarLibrary(objects.stars));
+  HandTrackerSettings tracker_settings;
+  tracker_settings.filter = settings.filter_hands;
+  for (std::size_t h = 0; h < 2; ++h) {
+    hand_trackers_[h] = std::make_unique<HandTracker>(layouts_[h], reference_open_hand(layouts_[h].side), tracker_settings);
+  }
+}
+
+std::vector<TrackingStage> LiveTracking::stages() {
+  return {{"source", [this](double t) { read_source(t); }},
+          {"matching", [this](double) { match(); }},
+          {"stars", [this](double t) { track_stars(t); }},
+          {"hands", [this](double t) { track_hands(t); }}};
+}
+
+void LiveTracking::read_source(double t_s) {
+  results_.t_s = t_s;
+  results_.counts = {};
+  if (auto frame = ended_ ? std::nullopt : source_->next(t_s)) {
+    frame_ = std::move(*frame);
+  } else {
+    if (!ended_) spdlog::info("source: the stream has ended after {} frames", frame_.cameras.empty() ? 0 : frame_.index + 1);
+    ended_ = true;
+    frame_.cameras.assign(source_->rig().cameras.size(), CameraFrame{});
+    for (std::size_t c = 0; c < frame_.cameras.size(); ++c) frame_.cameras[c].camera = static_cast<int>(c);
+  }
+  for (const std::string& warning : source_->take_warnings()) spdlog::warn("{}", warning);
+  for (const auto& camera : frame_.cameras) {
+    results_.counts.detections += camera.detections.size();
+    results_.counts.detections_per_camera.push_back(camera.detections.size());
+  }
+}
+
+void LiveTracking::match() {
+  results_.points.clear();
+  results_.point_cameras.clear();
+  double sum_rms = 0.0;
+  for (const MatchedPoint& m : match_and_triangulate(source_->rig(), frame_)) {
+    results_.points.push_back(m.point.position_world);
+    results_.point_cameras.push_back(m.point.cameras);
+    sum_rms += m.point.reprojection_rms_px;
+  }
+  results_.counts.points = results_.points.size();
+  results_.counts.mean_reprojection_rms_px = results_.points.empty() ? 0.0 : sum_rms / static_cast<double>(results_.points.size());
+}
+
+void LiveTracking::track_stars(double t_s) {
+  results_.world_from_object.clear();
+  const auto& stars = star_tracker_->update(t_s, results_.points);
+  for (const auto& [id, object_from_star] : object_from_star_) {
+    for (const TrackedStar& s : stars) {
+      if (s.id != id || !s.seen_now()) continue;
+      ++results_.counts.stars_seen;
+      results_.counts.seen_star_ids.push_back(id);
+      const Rigid3d world_from_object = s.world_from_star * object_from_star.inverse();
+      if (!world_from_object.translation.allFinite() || !world_from_object.rotation.coeffs().allFinite()) continue;
+      results_.world_from_object[id] = world_from_object;
+    }
+  }
+}
+
+void LiveTracking::track_hands(double t_s) {
+  for (std::size_t h = 0; h < 2; ++h) {
+    const TrackedHand& tracked = hand_trackers_[h]->update(t_s, results_.points);
+    results_.hands[h] = hand_input(tracked);
+    results_.counts.hands_seen[h] = tracked.hand_seen;
+    results_.pinch[h] = {tracked.state.pinch.activation, tracked.state.pinch.active};
+    results_.grip[h] = {tracked.state.grip.activation, tracked.state.grip.active};
+  }
+  results_.gestures_measured = true;
+}
+
+}  // namespace rhot

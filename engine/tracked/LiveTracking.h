@@ -1,0 +1,73 @@
+#pragma once
+// Live tracking: camera frames from a frame source (tracking/source/FrameSource.h, any kind)
+// through the tracker, as four timed stages:
+//
+//   source    the next multi-camera frame (the source's warnings are logged)
+//   matching  detections matched across cameras and triangulated
+//   stars     the tracked objects' marker stars identified and followed; each object's pose
+//   hands     each hand's star and fingertip markers -> a 26-joint hand (HandTracker)
+//
+// Once the source has ended, frames have no detections (nothing is seen, hands ease to rest) and
+// ended() is true.
+
+#include <array>
+#include <expected>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/tracked/ResultSource.h"
+#include "engine/tracked/TrackedObjects.h"
+#include "tracking/hand/HandLayout.h"
+#include "tracking/hand/HandTracker.h"
+#include "tracking/rigid/StarTracker.h"
+#include "tracking/source/FrameSource.h"
+
+namespace rhot {
+
+struct LiveTrackingSettings {
+  // 1-euro filtering of each hand's frame and fingertips before the IK (HandTrackerSettings):
+  // steadier hands at rest, some lag in fast moves. Off by default (docs/tracking.md).
+  bool filter_hands = false;
+};
+
+// A tracked hand as the engine takes it.
+HandInput hand_input(const TrackedHand& tracked);
+
+class LiveTracking final : public ResultSource {
+ public:
+  // layouts: the left hand's, then the right's.
+  LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObjects& objects, const std::array<HandLayout, 2>& layouts,
+               LiveTrackingSettings settings = {});
+
+  std::vector<TrackingStage> stages() override;
+  TrackingResults& results() override { return results_; }
+  const CameraRig* rig() const override { return &source_->rig(); }
+  bool ended() const override { return ended_; }
+  std::vector<std::string> summary() const override { return source_->summary(); }
+
+  // The stages, one by one (stages() runs these).
+  void read_source(double t_s);
+  void match();
+  void track_stars(double t_s);
+  void track_hands(double t_s);
+
+  // This frame's camera detections.
+  const RigFrame& frame() const { return frame_; }
+  FrameSource& source() { return *source_; }
+  const TrackedHand& tracked_hand(HandSide side) const { return hand_trackers_[side == HandSide::kLeft ? 0 : 1]->last(); }
+  const std::array<HandLayout, 2>& layouts() const { return layouts_; }
+  const StarLibrary& star_library() const { return star_tracker_->library(); }
+
+ private:
+  std::unique_ptr<FrameSource> source_;
+  std::vector<std::pair<int, Rigid3d>> object_from_star_;  // per tracked object: star id, where the star sits on it
+  std::array<HandLayout, 2> layouts_;
+  std::unique_ptr<StarTracker> star_tracker_;
+  std::array<std::unique_ptr<HandTracker>, 2> hand_trackers_;
+  RigFrame frame_;
+  TrackingResults results_;
+  bool ended_ = false;
+};
+
+}  // namespace rhot

@@ -1,0 +1,59 @@
+#pragma once
+// Recordings of tracked sessions (seed 000 section 9): every frame's hands (26 joints each, with
+// radii and confidences) and star-tracked objects' poses, with timestamps, so a session can be
+// played back at any speed, inspected, or converted to glTF (tools/replay).
+//
+// Format: JSON Lines (docs/recording-format.md). The first line is a header:
+//   {"format": "rhot-recording", "version": 1, "rate_hz": 90, "joints": [26 OpenXR joint names],
+//    "objects": ["tracked-mug", ...]}
+// then one line per frame:
+//   {"t": 0.0111, "hands": [{"side": "left", "seen": true, "wrist_pose": [x, y, z, qx, qy, qz, qw],
+//     "joints": [[x, y, z] x 26], "radius": [26], "confidence": [26]}, {...right...}],
+//    "objects": {"tracked-mug": [x, y, z, qx, qy, qz, qw], ...}}
+// Metres, seconds, quaternions (x, y, z, w) as glTF writes them.
+
+#include <array>
+#include <expected>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/hand/HandInput.h"
+#include "tracking/core/Rigid3.h"
+
+namespace rhot {
+
+struct RecordedFrame {
+  double t_s = 0.0;
+  std::array<HandInput, 2> hands;  // 0 left, 1 right
+  std::map<std::string, Rigid3d> objects;
+};
+
+struct Recording {
+  double rate_hz = 90.0;
+  std::vector<std::string> objects;
+  std::vector<RecordedFrame> frames;  // increasing t_s
+
+  double duration_s() const { return frames.empty() ? 0.0 : frames.back().t_s - frames.front().t_s; }
+  // The state at time t (from the first frame's time): joints and positions interpolated
+  // linearly, rotations by slerp; confidence and "seen" from the nearer frame. Clamped at both ends.
+  RecordedFrame at(double t_s) const;
+};
+
+[[nodiscard]] std::expected<Recording, std::string> load_recording(const std::filesystem::path& file);
+
+class RecordingWriter {
+ public:
+  [[nodiscard]] static std::expected<RecordingWriter, std::string> open(const std::filesystem::path& file, double rate_hz,
+                                                                        std::vector<std::string> objects);
+  // Appends one frame (written and flushed at once, so a crash loses at most that frame).
+  [[nodiscard]] std::expected<void, std::string> write(const RecordedFrame& frame);
+
+ private:
+  std::filesystem::path file_;
+  std::unique_ptr<std::ofstream> out_;
+};
+
+}  // namespace rhot

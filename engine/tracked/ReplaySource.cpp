@@ -1,0 +1,86 @@
+#include "engine/tracked/ReplaySource.h"
+
+#include <cmath>
+
+#include <spdlog/spdlog.h>
+
+#include "base/Check.h"
+
+namespace rhot {
+
+std::expected<std::unique_ptr<ReplaySource>, std::string> ReplaySource::open(const std::filesystem::path& file, double speed,
+                                                                             const TrackedObjects& objects) {
+  auto recording = load_recording(file);
+  if (!recording) return std::unexpected(recording.error());
+  if (!(speed > 0.0) || !std::isfinite(speed)) return std::unexpected(std::string("replay speed must be a positive number"));
+  return std::unique_ptr<ReplaySource>(new ReplaySource(std::move(*recording), speed, objects));
+}
+
+ReplaySource::ReplaySource(Recording recording, double speed, const TrackedObjects& objects)
+    : recording_(std::move(recording)), speed_(speed) {
+  for (const TrackedObject& o : objects.objects) {
+    if (!o.name.empty()) objects_.emplace_back(o.star_id, o.name);
+  }
+}
+
+std::vector<TrackingStage> ReplaySource::stages() { return {{"replay", [this](double t) { replay(t); }}}; }
+
+void ReplaySource::set_speed(double speed) {
+  RHOT_PRECONDITION(std::isfinite(speed) && speed > 0.0, "ReplaySource::set_speed: speed must be finite and positive");
+  speed_ = speed;
+}
+
+void ReplaySource::replay(double t_s) {
+  // The recording's clock runs at the replay speed, which may change between frames.
+  clock_s_ = started_ ? clock_s_ + (t_s - last_t_s_) * speed_ : t_s * speed_;
+  started_ = true;
+  last_t_s_ = t_s;
+  const RecordedFrame frame = recording_.at(clock_s_);
+  results_ = TrackingResults{};
+  results_.t_s = t_s;
+  results_.hands = frame.hands;
+  results_.counts.hands_seen = {frame.hands[0].seen, frame.hands[1].seen};
+  for (const auto& [id, name] : objects_) {
+    const auto pose = frame.objects.find(name);
+    if (pose == frame.objects.end()) continue;
+    results_.world_from_object[id] = pose->second;
+    ++results_.counts.stars_seen;
+    results_.counts.seen_star_ids.push_back(id);
+  }
+}
+
+std::expected<SessionRecorder, std::string> SessionRecorder::open(const std::filesystem::path& file, double rate_hz,
+                                                                  const TrackedObjects& objects) {
+  std::map<int, std::string> names;
+  for (const TrackedObject& o : objects.objects) {
+    if (!o.name.empty()) names[o.star_id] = o.name;
+  }
+  std::vector<std::string> columns;
+  for (const auto& [id, name] : names) columns.push_back(name);
+  auto writer = RecordingWriter::open(file, rate_hz, columns);
+  if (!writer) return std::unexpected(writer.error());
+  return SessionRecorder(std::move(*writer), objects);
+}
+
+SessionRecorder::SessionRecorder(RecordingWriter writer, const TrackedObjects& objects) : writer_(std::move(writer)) {
+  for (const TrackedObject& o : objects.objects) {
+    if (!o.name.empty()) name_of_star_[o.star_id] = o.name;
+  }
+}
+
+void SessionRecorder::record(const TrackingResults& results) {
+  if (!writer_) return;
+  for (const auto& [id, pose] : results.world_from_object) {
+    if (const auto name = name_of_star_.find(id); name != name_of_star_.end()) last_pose_[name->second] = pose;
+  }
+  RecordedFrame f;
+  f.t_s = results.t_s;
+  f.hands = results.hands;
+  f.objects = last_pose_;
+  if (auto written = writer_->write(f); !written) {
+    spdlog::error("recording stopped: {}", written.error());
+    writer_.reset();
+  }
+}
+
+}  // namespace rhot

@@ -1,0 +1,209 @@
+// The whole frame from simulated cameras to physics, headless and deterministic.
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "engine/core/Transform.h"
+#include "engine/core/World.h"
+#include "engine/sim/Demo.h"
+#include "engine/tracked/Recording.h"
+#include "engine/scene/SceneLoader.h"
+
+namespace rhot {
+namespace {
+
+Entity named(World& world, const std::string& name) { return find_named(world, name); }
+
+struct DemoRun {
+  double block_lift_m = 0.0;
+  int right_grasps_of_block = 0;
+  int right_releases_of_block = 0;
+  double mug_worst_error_m = 0.0;
+  double mug_lift_m = 0.0;
+  int mug_seen_frames = 0;
+  double hands_seen_fraction = 0.0;
+  Eigen::Vector3d block_end = Eigen::Vector3d::Zero();
+};
+
+DemoRun run_default_scene(int frames, bool perfect_hands = false) {
+  const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
+  EXPECT_TRUE(scene.has_value());
+  DemoSettings settings;
+  settings.asset_dir = RHOT_ASSET_DIR;
+  settings.perfect_hands = perfect_hands;
+  auto created = Demo::create(*scene, nullptr, settings);
+  EXPECT_TRUE(created.has_value()) << (created ? "" : created.error());
+  Demo& demo = **created;
+  Runtime& p = demo.runtime();
+  World& world = p.world();
+  const Entity block = named(world, "cube-red");
+  const Entity mug = named(world, "tracked-mug");
+  const float block_y0 = world.get<Transform>(block).position.y;
+  const float mug_y0 = world.get<Transform>(mug).position.y;
+  DemoRun r;
+  long seen = 0;
+  for (int f = 0; f < frames; ++f) {
+    const double t = f / 90.0;
+    p.run_frame(t);
+    for (const InteractionEvent& e : p.physics().events()) {
+      if (e.object != block || e.hand != HandSide::kRight) continue;
+      r.right_grasps_of_block += e.type == InteractionEventType::kGrasp ? 1 : 0;
+      r.right_releases_of_block += e.type == InteractionEventType::kRelease ? 1 : 0;
+    }
+    r.block_lift_m = std::max(r.block_lift_m, static_cast<double>(world.get<Transform>(block).position.y - block_y0));
+    const glm::vec3 m = world.get<Transform>(mug).position;
+    const Eigen::Vector3d truth = demo.simulated()->truth()->world_from_object.at(0).translation;
+    const auto& seen_ids = p.tracking().results().counts.seen_star_ids;
+    if (std::find(seen_ids.begin(), seen_ids.end(), 0) != seen_ids.end()) {
+      ++r.mug_seen_frames;
+      r.mug_worst_error_m = std::max(r.mug_worst_error_m, (Eigen::Vector3d(m.x, m.y, m.z) - truth).norm());
+    }
+    r.mug_lift_m = std::max(r.mug_lift_m, static_cast<double>(m.y - mug_y0));
+    const TrackingCounts& counts = p.tracking().results().counts;
+    seen += (counts.hands_seen[0] ? 1 : 0) + (counts.hands_seen[1] ? 1 : 0);
+  }
+  const glm::vec3 b = world.get<Transform>(block).position;
+  r.block_end = Eigen::Vector3d(b.x, b.y, b.z);
+  r.hands_seen_fraction = static_cast<double>(seen) / (2.0 * frames);
+  return r;
+}
+
+TEST(Demo, FromSimulatedCamerasTheRightHandLiftsTheBlockAndTheLeftCarriesTheTrackedMug) {
+  const DemoRun r = run_default_scene(1080);
+  EXPECT_GT(r.hands_seen_fraction, 0.95);
+  EXPECT_EQ(r.right_grasps_of_block, 1);
+  EXPECT_EQ(r.right_releases_of_block, 1);
+  EXPECT_GE(r.block_lift_m, 0.10) << "lifted through tracking and physics";
+  EXPECT_NEAR(r.block_end.x(), -0.35 + 0.15, 0.03) << "set down where the script put it";
+  EXPECT_NEAR(r.block_end.z(), -0.35 - 0.1, 0.03);
+  EXPECT_GE(r.mug_lift_m, 0.10) << "the star-tracked mug follows the hand that carries it";
+  EXPECT_GT(r.mug_seen_frames, 1080 * 9 / 10) << "its star is seen in most frames, also while carried";
+  EXPECT_LT(r.mug_worst_error_m, 0.005) << "where seen, its tracked pose is within 5 mm of the truth";
+}
+
+TEST(Demo, WithPerfectHandsTooTheBlockIsLifted) {
+  // The cube's part of the script only (lifted by 3.2 s).
+  const DemoRun r = run_default_scene(330, true);
+  EXPECT_EQ(r.right_grasps_of_block, 1);
+  EXPECT_GE(r.block_lift_m, 0.10);
+}
+
+TEST(Demo, ARecordingReplaysToThePosesItRecorded) {
+  const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
+  ASSERT_TRUE(scene.has_value());
+  const std::string file = ::testing::TempDir() + "rhot_pipeline_recording.jsonl";
+  constexpr int kFrames = 300;
+  std::vector<std::array<HandInput, 2>> recorded_hands;
+  std::vector<glm::vec3> recorded_mug;
+  {
+    DemoSettings settings;
+    settings.asset_dir = RHOT_ASSET_DIR;
+    settings.record = file;
+    auto demo = Demo::create(*scene, nullptr, settings);
+    ASSERT_TRUE(demo.has_value()) << demo.error();
+    Runtime& p = (*demo)->runtime();
+    World& world = p.world();
+    const Entity mug = named(world, "tracked-mug");
+    for (int f = 0; f < kFrames; ++f) {
+      p.run_frame(f / 90.0);
+      recorded_hands.push_back({p.hand(HandSide::kLeft).tracked, p.hand(HandSide::kRight).tracked});
+      recorded_mug.push_back(world.get<Transform>(mug).position);
+    }
+  }
+  const auto recording = load_recording(file);
+  ASSERT_TRUE(recording.has_value()) << recording.error();
+  EXPECT_EQ(recording->frames.size(), static_cast<std::size_t>(kFrames));
+  EXPECT_EQ(recording->objects, (std::vector<std::string>{"tracked-mug", "tracked-screwdriver", "tracked-part"}));
+
+  DemoSettings settings;
+  settings.asset_dir = RHOT_ASSET_DIR;
+  settings.replay = file;
+  auto demo = Demo::create(*scene, nullptr, settings);
+  ASSERT_TRUE(demo.has_value()) << demo.error();
+  Runtime& p = (*demo)->runtime();
+  ASSERT_NE(p.tracking().playback(), nullptr);
+  World& world = p.world();
+  const Entity mug = named(world, "tracked-mug");
+  double worst_joint = 0.0;
+  float worst_mug = 0.0f;
+  for (int f = 0; f < kFrames; ++f) {
+    p.run_frame(f / 90.0);
+    for (std::size_t h = 0; h < 2; ++h) {
+      const HandInput& replayed = p.hand(h == 0 ? HandSide::kLeft : HandSide::kRight).tracked;
+      ASSERT_EQ(replayed.seen, recorded_hands[static_cast<std::size_t>(f)][h].seen) << f;
+      for (std::size_t j = 0; j < kHandJointCount; ++j) {
+        worst_joint =
+            std::max(worst_joint, (replayed.joints_world[j] - recorded_hands[static_cast<std::size_t>(f)][h].joints_world[j]).norm());
+      }
+    }
+    if (f > 0)
+      worst_mug = std::max(worst_mug, glm::distance(world.get<Transform>(mug).position, recorded_mug[static_cast<std::size_t>(f)]));
+  }
+  EXPECT_LT(worst_joint, 1e-9);
+  EXPECT_LT(worst_mug, 1e-6f);
+}
+
+TEST(Demo, BrokenRecordingsAreRefusedNamingTheLine) {
+  const std::string file = ::testing::TempDir() + "rhot_bad_recording.jsonl";
+  {
+    std::ofstream out(file);
+    out << R"({"format": "rhot-recording", "version": 1, "rate_hz": 90, "objects": []})"
+        << "\n";
+    out << R"({"t": 0.0, "hands": [], "objects": {}})"
+        << "\n";
+  }
+  const auto r = load_recording(file);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error(), file + ":2: hands: expected [left, right]");
+  {
+    std::ofstream out(file);
+    out << R"({"format": "rhot-recording", "version": 2, "rate_hz": 90})"
+        << "\n";
+  }
+  EXPECT_EQ(load_recording(file).error(), file + ":1: version: expected 1");
+  EXPECT_EQ(load_recording(file + ".missing").error(), file + ".missing: cannot read the recording");
+}
+
+// Frame-to-frame motion of the tracked right index tip while the script holds the hand still
+// above the cube (0.1-0.8 s): pixel noise only.
+double resting_tip_jitter_m(bool filter) {
+  const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
+  EXPECT_TRUE(scene.has_value());
+  DemoSettings settings;
+  settings.asset_dir = RHOT_ASSET_DIR;
+  settings.filter_hands = filter;
+  auto created = Demo::create(*scene, nullptr, settings);
+  EXPECT_TRUE(created.has_value()) << (created ? "" : created.error());
+  Runtime& p = (*created)->runtime();
+  LiveTracking& live = *(*created)->live();
+  double sum = 0.0;
+  int n = 0;
+  Eigen::Vector3d last = Eigen::Vector3d::Zero();
+  for (int f = 0; f < 72; ++f) {
+    p.run_frame(f / 90.0);
+    const TrackedHand& right = live.tracked_hand(HandSide::kRight);
+    const Eigen::Vector3d tip = right.joints_world[static_cast<std::size_t>(HandJoint::kIndexTip)];
+    if (f > 9 && right.hand_seen) {
+      sum += (tip - last).norm();
+      ++n;
+    }
+    last = tip;
+  }
+  EXPECT_GT(n, 50);
+  return n > 0 ? sum / n : 0.0;
+}
+
+TEST(Demo, TheOneEuroFilterSteadiesAHandAtRest) {
+  const double raw = resting_tip_jitter_m(false);
+  const double filtered = resting_tip_jitter_m(true);
+  // Measured: 1.58 mm a frame raw, 0.61 mm filtered.
+  std::printf("index tip at rest, mean motion per frame: %.4f mm raw, %.4f mm filtered\n", 1e3 * raw, 1e3 * filtered);
+  EXPECT_GT(raw, 0.0);
+  EXPECT_LT(filtered, 0.6 * raw) << "raw " << raw << " m, filtered " << filtered << " m";
+}
+
+}  // namespace
+}  // namespace rhot

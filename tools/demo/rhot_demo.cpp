@@ -1,0 +1,335 @@
+// rhot-demo: the VR demo. Loads a scene, runs one frame after another at a fixed 90 Hz step:
+// simulated (or real: --source video:...) cameras -> tracking (markers, marker stars, hands) -> physics (hand colliders,
+// grasping) -> both eyes rendered to a window or PNG files; reports frame statistics per stage.
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+// GCC 12 at -O2 sees a "potential null pointer dereference" inside CLI11's option parsing
+// (libstdc++'s string move); the pragma covers only CLI11's lines.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+#include <CLI/CLI.hpp>
+#pragma GCC diagnostic pop
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "engine/app/FrameLoop.h"
+#include "engine/core/Transform.h"
+#include "engine/core/World.h"
+#include "engine/runtime/Overlay.h"
+#include "engine/render/Renderer.h"
+#include "engine/render/SceneRenderer.h"
+#include "engine/render/Window.h"
+#include "engine/scene/SceneLoader.h"
+#include "engine/sim/Demo.h"
+#include "tracking/source/VideoSource.h"
+
+#ifndef RHOT_ASSET_DIR
+#error "RHOT_ASSET_DIR must name the assets folder"
+#endif
+
+namespace {
+
+// Debug builds run with the Vulkan validation layer unless told otherwise.
+#ifdef NDEBUG
+constexpr bool kDebugBuild = false;
+#else
+constexpr bool kDebugBuild = true;
+#endif
+
+std::atomic<bool> g_interrupted{false};
+
+void on_signal(int) { g_interrupted.store(true); }
+
+// "1080x1200" -> {1080, 1200}
+bool parse_size(const std::string& text, int& w, int& h) {
+  char x = 0;
+  char rest = 0;
+  return std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &rest) == 3 && (x == 'x' || x == 'X') && w > 0 && h > 0;
+}
+
+// Everything the command line says.
+struct Options {
+  std::string scene_path = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
+  bool headless = false;
+  std::uint64_t frames = 0;
+  std::string stats_path;
+  rhot::FrameLoopSettings loop;
+  std::string log_level = "info";
+  std::string capture_dir;
+  std::string capture_layout = "eyes";
+  std::string eye_size;
+  rhot::RendererSettings render;
+  std::string stereo = "auto";
+  std::string shading = "auto";
+  std::string source = "sim";
+  rhot::DemoSettings demo;
+  std::vector<std::string> debug_views;
+  std::string window_capture;
+  bool no_overlay = false;
+};
+
+void add_options(CLI::App& cli, Options& o) {
+  cli.add_option("--scene", o.scene_path, "Scene file (JSON, see docs/scene-format.md)")->capture_default_str();
+  cli.add_flag("--headless", o.headless, "Run without a window (also chosen when there is no display)");
+  cli.add_option("--frames", o.frames, "Stop after N frames (0: until closed; headless default 900, 10 s at 90 Hz)");
+  cli.add_option("--stats", o.stats_path, "Write frame statistics (p50, p99, max per stage and frame) as JSON");
+  cli.add_option("--rate-hz", o.loop.rate_hz, "Fixed simulation rate")->capture_default_str()->check(CLI::Range(1.0, 10000.0));
+  cli.add_option("--budget-ms", o.loop.budget_ms, "Frame budget; slower frames count as misses")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cli.add_option("--log-level", o.log_level, "trace, debug, info, warn, error or off")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
+  o.render.validation = kDebugBuild;
+  cli.add_option("--capture", o.capture_dir, "Write every frame as PNG into this folder (created if missing)");
+  cli.add_option("--capture-layout", o.capture_layout, "eyes: one PNG per eye; side-by-side: both eyes in one PNG")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"eyes", "side-by-side"}));
+  cli.add_option("--eye", o.eye_size, "Pixels per eye, WxH (default: the scene's headset, 1080x1200)");
+  cli.add_option("--device", o.render.device, "Vulkan device: auto, gpu, cpu, an index or part of its name (or set RHOT_VK_DEVICE)")
+      ->capture_default_str();
+  cli.add_option("--stereo", o.stereo, "auto (multiview where the driver passes a self-test), multiview or two-pass")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "multiview", "two-pass"}));
+  cli.add_option("--shading", o.shading, "light per pixel, per vertex, or auto (per vertex on a CPU driver, where it halves the frame)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
+  cli.add_flag("--validation,!--no-validation", o.render.validation,
+               "Vulkan validation layer (default: on in debug builds; or set RHOT_VK_VALIDATION=1)");
+  o.demo.asset_dir = RHOT_ASSET_DIR;
+  cli.add_option("--source", o.source,
+                 "sim (the built-in simulated camera rig), replay:FILE (a recording made with --record), or video:DEV[,DEV...] "
+                 "(real cameras, one per camera of --rig in rig order: a capture device index such as 0, a video file, or an image "
+                 "sequence such as cams/cam0_%04d.png; docs/demo.md)")
+      ->capture_default_str();
+  cli.add_option("--blob-threshold", o.demo.detector.threshold,
+                 "With --source video: grey level above which pixels are marker (-1: automatic, background + 5 sigma, at least 40)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 254));
+  cli.add_option("--speed", o.demo.speed, "Replay speed (with --source replay:FILE)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 100.0));
+  cli.add_option("--record", o.demo.record,
+                 "Record every frame's hands and tracked objects to FILE (JSON Lines, docs/recording-format.md)");
+  cli.add_option("--rig", o.demo.rig_file, "Camera rig (OpenCV YAML; default: the scene's, else assets/rigs/seated-4.yaml)")
+      ->check(CLI::ExistingFile);
+  cli.add_option("--sigma", o.demo.sigma_px, "Simulated pixel noise, standard deviation")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 50.0));
+  cli.add_option("--seed", o.demo.seed, "Simulation seed")->capture_default_str();
+  cli.add_flag("--filter", o.demo.filter_hands, "1-euro filter the tracked hands (steadier at rest, some lag)");
+  cli.add_option("--debug-views", o.debug_views, "Debug views on from the start: markers, rays, frusta, colliders (comma-separated)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"markers", "rays", "frusta", "colliders"}));
+  cli.add_flag("--points", o.demo.debug.markers, "Draw the triangulated marker points (as --debug-views markers)");
+  cli.add_option("--window-capture", o.window_capture,
+                 "With a window and --frames: write what it shows on the last frame (both eyes and the overlay) as PNG");
+  cli.add_flag("--no-overlay", o.no_overlay, "No Dear ImGui overlay in the window");
+}
+
+// What the options mean beyond their own checks: the source, the debug views, the eye size.
+// False after logging what is wrong.
+bool resolve_options(Options& o) {
+  for (const std::string& v : o.debug_views) {
+    if (v == "markers") o.demo.debug.markers = true;
+    if (v == "rays") o.demo.debug.rays = true;
+    if (v == "frusta") o.demo.debug.frusta = true;
+    if (v == "colliders") o.demo.debug.colliders = true;
+  }
+  spdlog::set_level(spdlog::level::from_str(o.log_level));
+  if (o.source.rfind("replay:", 0) == 0 && o.source.size() > 7) {
+    o.demo.replay = o.source.substr(7);
+  } else if (o.source.rfind("video:", 0) == 0) {
+    auto devices = rhot::parse_video_devices(o.source.substr(6));
+    if (!devices) {
+      spdlog::error("--source: {}", devices.error());
+      return false;
+    }
+    o.demo.video_devices = std::move(*devices);
+  } else if (o.source != "sim") {
+    spdlog::error("--source: expected sim, replay:FILE or video:DEV[,DEV...], got \"{}\"", o.source);
+    return false;
+  }
+  if (auto checked = o.demo.check(); !checked) {
+    spdlog::error("{}", checked.error());
+    return false;
+  }
+  if (!o.eye_size.empty() && !parse_size(o.eye_size, o.render.eye_width_px, o.render.eye_height_px)) {
+    spdlog::error("--eye: expected WIDTHxHEIGHT in pixels, such as 1080x1200, got \"{}\"", o.eye_size);
+    return false;
+  }
+  if (!o.headless && !rhot::Window::display_available()) {
+    spdlog::info("no display found (DISPLAY and WAYLAND_DISPLAY are unset); running headless");
+    o.headless = true;
+  }
+  if (o.headless && o.frames == 0) o.frames = 900;
+  o.render.stereo = o.stereo == "multiview"  ? rhot::StereoMode::kMultiview
+                    : o.stereo == "two-pass" ? rhot::StereoMode::kTwoPass
+                                             : rhot::StereoMode::kAuto;
+  o.render.shading = *rhot::shading_from_string(o.shading);  // checked by the option
+  if (!o.capture_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.capture_dir, ec);
+    if (ec) {
+      spdlog::error("--capture: cannot create folder {}: {}", o.capture_dir, ec.message());
+      return false;
+    }
+  }
+  return true;
+}
+
+// Both eyes side by side, scaled to fit a desktop; headless (null) when no window opens.
+std::unique_ptr<rhot::Window> open_window(Options& o) {
+  if (o.headless) return nullptr;
+  const double scale = std::min(1.0, 1600.0 / (2.0 * o.render.eye_width_px));
+  auto created =
+      rhot::Window::create("rhot", static_cast<int>(2.0 * o.render.eye_width_px * scale), static_cast<int>(o.render.eye_height_px * scale));
+  if (created) return std::move(*created);
+  spdlog::warn("cannot open a window ({}); running headless", created.error());
+  o.headless = true;
+  if (o.frames == 0) o.frames = 900;
+  return nullptr;
+}
+
+// The PNG files --capture writes for one frame.
+std::expected<void, std::string> capture_frame(const Options& o, rhot::Renderer& renderer, std::uint64_t frame_index) {
+  char stem[32];
+  std::snprintf(stem, sizeof(stem), "frame_%06llu", static_cast<unsigned long long>(frame_index));
+  const auto eyes = renderer.read_eyes();
+  const std::filesystem::path dir(o.capture_dir);
+  if (o.capture_layout == "side-by-side") return rhot::write_png(rhot::side_by_side(eyes[0], eyes[1]), dir / (std::string(stem) + ".png"));
+  if (auto written = rhot::write_png(eyes[0], dir / (std::string(stem) + "_left.png")); !written) return written;
+  return rhot::write_png(eyes[1], dir / (std::string(stem) + "_right.png"));
+}
+
+// --window-capture and --stats, after the run. False after logging what failed.
+bool write_outputs(const Options& o, const rhot::Window* window, rhot::Renderer& renderer, const rhot::FrameLoop& frame_loop) {
+  if (!o.window_capture.empty()) {
+    if (!window) {
+      spdlog::error("--window-capture: there is no window (headless)");
+      return false;
+    }
+    const rhot::Image& shown = renderer.window_image();
+    if (shown.width == 0) {
+      spdlog::error("--window-capture: no frame was captured (it needs --frames N, and a window that is not minimised)");
+      return false;
+    }
+    if (const auto written = rhot::write_png(shown, o.window_capture); !written) {
+      spdlog::error("--window-capture: {}", written.error());
+      return false;
+    }
+    spdlog::info("window written to {}", o.window_capture);
+  }
+  if (!o.stats_path.empty()) {
+    nlohmann::json j = frame_loop.stats().to_json();
+    j["scene"] = o.scene_path;
+    j["rate_hz"] = o.loop.rate_hz;
+    std::ofstream out(o.stats_path);
+    out << j.dump(2) << '\n';
+    out.close();
+    if (!out) {
+      spdlog::error("cannot write statistics to {}", o.stats_path);
+      return false;
+    }
+    spdlog::info("statistics written to {}", o.stats_path);
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{
+      "rhot-demo: tracked hands and objects in VR, drawn for both eyes of a headset.\n"
+      "With no arguments it runs the default scene; with no display it runs headless."};
+  Options o;
+  add_options(cli, o);
+  CLI11_PARSE(cli, argc, argv);
+  if (!resolve_options(o)) return EXIT_FAILURE;
+
+  const auto scene = rhot::load_scene_file(o.scene_path);
+  if (!scene) {
+    spdlog::error("cannot load scene: {}", scene.error().to_string());
+    return EXIT_FAILURE;
+  }
+  if (o.eye_size.empty()) {
+    o.render.eye_width_px = scene->settings.headset.eye_width_px;
+    o.render.eye_height_px = scene->settings.headset.eye_height_px;
+  }
+  std::unique_ptr<rhot::Window> window = open_window(o);
+  auto renderer = rhot::Renderer::create(o.render, window.get());
+  if (!renderer) {
+    spdlog::error("cannot start the renderer: {}", renderer.error());
+    return EXIT_FAILURE;
+  }
+  auto demo = rhot::Demo::create(*scene, renderer->get(), o.demo);
+  if (!demo) {
+    spdlog::error("cannot start the demo: {}", demo.error());
+    return EXIT_FAILURE;
+  }
+  rhot::Runtime& runtime = (*demo)->runtime();
+  const rhot::CameraRig* rig = runtime.tracking().rig();
+  spdlog::info("scene {}: tracking {} cameras, {} star-tracked objects", o.scene_path, rig ? rig->cameras.size() : 0,
+               runtime.objects().objects.size());
+
+  bool capture_failed = false;
+  rhot::Systems systems;
+  systems.add({"window-events", {}, {}, [&](rhot::World&, const rhot::FrameContext& f) {
+                 if (!window) return;
+                 window->poll_events();
+                 if (!o.window_capture.empty() && o.frames > 0 && f.frame_index + 1 == o.frames) (void)(*renderer)->capture_window();
+               }});
+  runtime.add_systems(systems, "window-events");
+  systems.add({"capture", {"render"}, {}, [&](rhot::World&, const rhot::FrameContext& f) {
+                 if (o.capture_dir.empty() || capture_failed) return;
+                 if (auto written = capture_frame(o, **renderer, f.frame_index); !written) {
+                   spdlog::error("capture stopped: {}", written.error());
+                   capture_failed = true;
+                 }
+               }});
+  if (const auto built = systems.build(); !built) {
+    spdlog::error("cannot order systems: {}", built.error());
+    return EXIT_FAILURE;
+  }
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  o.loop.real_time = !o.headless;
+  rhot::FrameLoop frame_loop(runtime.world(), systems, o.loop);
+  std::unique_ptr<rhot::Overlay> overlay;
+  if (window && !o.no_overlay) {
+    if (const auto enabled = (*renderer)->enable_overlay(); enabled) {
+      overlay = std::make_unique<rhot::Overlay>(
+          runtime, frame_loop.stats(),
+          rhot::OverlayInfo{o.scene_path, o.source,
+                            (*renderer)->info().device_name + ", lit per " + rhot::to_string((*renderer)->info().shading),
+                            o.render.eye_width_px, o.render.eye_height_px});
+      runtime.set_overlay([&overlay] { overlay->build(); });
+    } else {
+      spdlog::warn("no overlay: {}", enabled.error());
+    }
+  }
+  const std::uint64_t ran =
+      frame_loop.run(o.frames, [&] { return !g_interrupted.load() && !(window && window->should_close()) && !runtime.tracking().ended(); });
+  for (const std::string& line : runtime.tracking().summary()) spdlog::info("{}", line);
+
+  const rhot::FrameStats& stats = frame_loop.stats();
+  const rhot::TimingSummary whole = stats.frame_summary();
+  spdlog::info(
+      "{} frames ({:.1f} s simulated): frame p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms; {} over the "
+      "{:.1f} ms budget",
+      ran, frame_loop.time_s(), whole.p50_ms, whole.p99_ms, whole.max_ms, stats.frames_over_budget(), stats.budget_ms());
+  if (!write_outputs(o, window.get(), **renderer, frame_loop)) return EXIT_FAILURE;
+  const std::uint64_t validation = (*renderer)->validation_messages();
+  if (validation > 0) spdlog::warn("{} Vulkan validation message(s)", validation);
+  return capture_failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}

@@ -1,0 +1,44 @@
+#pragma once
+// rhot-eval's subcommands, one file each (triangulation.cpp, wand.cpp, stars.cpp, hands.cpp,
+// grasp.cpp, frame.cpp), and what they share. Each prints one JSON object on stdout and returns
+// the process's exit code.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "engine/render/Renderer.h"
+#include "tracking/camera/Camera.h"
+
+namespace rhot::eval {
+
+// The point nearest (least squares) to every camera's optical axis.
+Eigen::Vector3d axes_meeting_point(const CameraRig& rig);
+
+// A matched point further than this from every true marker is a ghost.
+inline constexpr double kGhostDistance_m = 0.005;
+
+// The box simulated markers move in: the flags when given, else the rig file's tracking volume,
+// else a 1 m cube where the optical axes meet.
+struct Box {
+  Eigen::Vector3d centre;
+  Eigen::Vector3d size;
+};
+Box evaluation_box(const CameraRig& rig, const std::vector<double>& size, const std::vector<double>& centre);
+
+// The q-quantile (0..1) of v, by rank; 0 for none.
+double percentile(std::vector<double> v, double q);
+
+int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
+                  const std::vector<double>& volume, const std::vector<double>& volume_centre);
+int wand(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout,
+         const std::vector<double>& volume, const std::vector<double>& volume_centre);
+int stars(const std::string& rig_file, const std::string& set_file, int bodies, double sigma, int frames, unsigned seed, double dropout,
+          const std::vector<double>& volume, const std::vector<double>& volume_centre);
+int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, double sigma, int frames, unsigned seed,
+          const std::vector<double>& volume_centre, bool filter);
+int grasp(const std::string& scenario);
+int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading);
+
+}  // namespace rhot::eval

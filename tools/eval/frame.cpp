@@ -1,0 +1,108 @@
+// rhot-eval: measurements a user sizing a rig wants, as one JSON object on stdout.
+//
+//   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M]
+//                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--sigma PX] [--frames N] --json
+//   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
+//   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
+//                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//
+// Markers wander through a box: the flags', else the rig file's tracking volume, else a 1 m cube
+// where the cameras' optical axes meet (least squares); the simulated rig sees them with Gaussian noise and dropouts; matching and
+// triangulation recover them; the result is compared with ground truth and with the Cramer-Rao
+// bound of each point for the cameras that saw it.
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "engine/sim/GraspScenarios.h"
+#include "engine/scene/SceneLoader.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/geometry/Matching.h"
+#include "tracking/sim/HandMotions.h"
+#include "tracking/hand/HandTracker.h"
+#include "tracking/rigid/StarTracker.h"
+#include "tracking/sim/SimulatedRig.h"
+
+#include "engine/app/FrameLoop.h"
+#include "engine/sim/Demo.h"
+#include "tools/eval/Eval.h"
+
+namespace rhot::eval {
+
+// The demo's whole frame, headless: simulated cameras, tracking, physics and both eyes rendered
+// offscreen, every stage timed (engine/sim/Demo.h).
+int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, rhot::Shading shading) {
+  // stdout carries the JSON only: the log goes to stderr.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));
+  const auto scene = rhot::load_scene_file(scene_file);
+  if (!scene) {
+    std::cerr << "rhot-eval: " << scene.error().to_string() << "\n";
+    return 1;
+  }
+  rhot::RendererSettings render;
+  render.eye_width_px = scene->settings.headset.eye_width_px;
+  render.eye_height_px = scene->settings.headset.eye_height_px;
+  render.device = device;
+  render.shading = shading;
+  if (!eye.empty()) {
+    char x = 0, rest = 0;
+    if (std::sscanf(eye.c_str(), "%d%c%d%c", &render.eye_width_px, &x, &render.eye_height_px, &rest) != 3 || (x != 'x' && x != 'X') ||
+        render.eye_width_px < 16 || render.eye_height_px < 16 || render.eye_width_px > 8192 || render.eye_height_px > 8192) {
+      std::cerr << "rhot-eval: --eye: expected WIDTHxHEIGHT, each 16 to 8192 pixels, such as 1080x1200, got \"" << eye << "\"\n";
+      return 1;
+    }
+  }
+  auto renderer = rhot::Renderer::create(render);
+  if (!renderer) {
+    std::cerr << "rhot-eval: cannot start the renderer: " << renderer.error() << "\n";
+    return 1;
+  }
+  rhot::DemoSettings settings;
+  settings.asset_dir = RHOT_ASSET_DIR;
+  auto demo = rhot::Demo::create(*scene, renderer->get(), settings);
+  if (!demo) {
+    std::cerr << "rhot-eval: " << demo.error() << "\n";
+    return 1;
+  }
+  rhot::Systems systems;
+  (*demo)->runtime().add_systems(systems, "");
+  if (const auto built = systems.build(); !built) {
+    std::cerr << "rhot-eval: " << built.error() << "\n";
+    return 1;
+  }
+  rhot::FrameLoopSettings loop;
+  loop.rate_hz = scene->settings.headset.refresh_hz;
+  loop.budget_ms = 1000.0 / loop.rate_hz;
+  rhot::FrameLoop frame_loop((*demo)->world(), systems, loop);
+  for (int f = 0; f < frames; ++f) {
+    frame_loop.step();
+    if ((f + 1) % 90 == 0) std::cerr << "rhot-eval: frame " << (f + 1) << " of " << frames << "\n";
+  }
+  nlohmann::json j = frame_loop.stats().to_json();
+  j["scene"] = scene_file;
+  j["eye_px"] = {(*renderer)->eye_width_px(), (*renderer)->eye_height_px()};
+  j["device"] = (*renderer)->info().device_name;
+  j["cpu_device"] = (*renderer)->info().cpu_device;
+  j["stereo"] = (*renderer)->info().mode == rhot::StereoMode::kMultiview ? "multiview" : "two-pass";
+  j["shading"] = rhot::to_string((*renderer)->info().shading);
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
+}  // namespace rhot::eval

@@ -1,0 +1,182 @@
+// rhot-eval: measurements a user sizing a rig wants, as one JSON object on stdout.
+//
+//   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M]
+//                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--sigma PX] [--frames N] --json
+//   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
+//   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
+//                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//
+// Markers wander through a box: the flags', else the rig file's tracking volume, else a 1 m cube
+// where the cameras' optical axes meet (least squares); the simulated rig sees them with Gaussian noise and dropouts; matching and
+// triangulation recover them; the result is compared with ground truth and with the Cramer-Rao
+// bound of each point for the cameras that saw it.
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "engine/sim/GraspScenarios.h"
+#include "engine/scene/SceneLoader.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/geometry/Matching.h"
+#include "tracking/sim/HandMotions.h"
+#include "tracking/hand/HandTracker.h"
+#include "tracking/rigid/StarTracker.h"
+#include "tracking/sim/SimulatedRig.h"
+
+#include "tools/eval/Eval.h"
+
+namespace rhot::eval {
+
+// One or every scripted hand motion through the simulated rig with a hand layout: the hand's
+// markers (its own bones hiding them) matched, triangulated, the hand star tracked, the fingers
+// solved, and every joint compared with the truth.
+nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion, double sigma,
+                               int frames, unsigned seed, const Eigen::Vector3d& centre, bool filter) {
+  const rhot::HandPose skeleton = rhot::reference_open_hand(layout.side);
+  const auto chains = rhot::hand_chains(skeleton, layout.side);
+  const auto relaxed = rhot::HandSolver(layout.side, skeleton).state().angles;
+  auto truth_at = [&](double t) {
+    const auto frame = *rhot::hand_motion(motion, t, chains, relaxed, centre);
+    return std::make_pair(frame.world_from_hand, rhot::hand_pose_from_angles(skeleton, chains, frame.angles));
+  };
+  auto markers_at = [&](double t) {
+    const auto [world_from_hand, pose] = truth_at(t);
+    return rhot::layout_markers(layout, world_from_hand, pose);
+  };
+  rhot::SimulatedRigSettings settings;
+  settings.sigma_px = sigma;
+  settings.seed = seed;
+  rhot::SimulatedRig sim(rig, {}, settings);
+  sim.set_scripted_markers(markers_at);
+  rhot::HandTrackerSettings tracker_settings;
+  tracker_settings.filter = filter;
+  rhot::HandTracker tracker(layout, skeleton, tracker_settings);
+
+  std::vector<double> tip_errors, joint_errors, ik_us, tracker_us;
+  long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0, segment_stars_seen = 0;
+  for (int f = 0; f < frames; ++f) {
+    const double t = static_cast<double>(f) / settings.rate_hz;
+    // The hand's own bones hide its markers: capsules a little thinner than the joints' radii.
+    const auto [world_from_hand, pose] = truth_at(t);
+    std::vector<rhot::Occluder> bones;
+    for (int j = 0; j < rhot::kHandJointCount; ++j) {
+      const auto parent = rhot::joint_parent(static_cast<rhot::HandJoint>(j));
+      if (!parent) continue;
+      bones.push_back({world_from_hand * pose.position_m[static_cast<std::size_t>(*parent)],
+                       world_from_hand * pose.position_m[static_cast<std::size_t>(j)], 0.8 * pose.radius_m[static_cast<std::size_t>(j)]});
+    }
+    sim.set_occluders(bones);
+    const rhot::RigFrame frame = sim.next();
+    std::vector<Eigen::Vector3d> points;
+    for (const rhot::MatchedPoint& m : rhot::match_and_triangulate(rig, frame)) points.push_back(m.point.position_world);
+    const auto tracker_start = std::chrono::steady_clock::now();
+    const rhot::TrackedHand& hand = tracker.update(frame.time_s, points);
+    tracker_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - tracker_start).count());
+    ik_us.push_back(tracker.last_ik_us());
+    ++tip_frames;
+    if (!hand.hand_seen) continue;
+    ++hand_frames;
+    segment_stars_seen += hand.segment_stars_seen;
+    for (int j = 0; j < rhot::kHandJointCount; ++j) {
+      const double e =
+          (hand.joints_world[static_cast<std::size_t>(j)] - world_from_hand * pose.position_m[static_cast<std::size_t>(j)]).norm();
+      joint_errors.push_back(1000.0 * e);
+      ++joint_frames;
+      confident += hand.state.confidence[static_cast<std::size_t>(j)] >= 0.5 ? 1 : 0;
+    }
+    for (int fi = 0; fi < rhot::kFingerCount; ++fi) {
+      // A fingertip measured this frame: its marker found, or its distal bone's star seen.
+      if (!hand.state.tip_seen[static_cast<std::size_t>(fi)]) continue;
+      ++tips_seen;
+      const auto tip = static_cast<std::size_t>(rhot::chain_joints(static_cast<rhot::Finger>(fi))[3]);
+      tip_errors.push_back(1000.0 * (hand.joints_world[tip] - world_from_hand * pose.position_m[tip]).norm());
+    }
+  }
+  auto mean = [](const std::vector<double>& v) {
+    double s = 0.0;
+    for (const double x : v) s += x;
+    return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+  };
+  nlohmann::json j;
+  j["frames"] = frames;
+  j["hand_seen_fraction"] = static_cast<double>(hand_frames) / static_cast<double>(std::max(1L, tip_frames));
+  j["fingertips_seen_fraction"] = static_cast<double>(tips_seen) / static_cast<double>(std::max(1L, 5 * hand_frames));
+  if (!layout.segment_stars.empty()) {
+    j["segment_stars_seen_fraction"] = static_cast<double>(segment_stars_seen) /
+                                       static_cast<double>(std::max(1L, hand_frames * static_cast<long>(layout.segment_stars.size())));
+  }
+  j["fingertip_mean_mm"] = mean(tip_errors);
+  j["fingertip_p95_mm"] = percentile(tip_errors, 0.95);
+  j["joint_mean_mm"] = mean(joint_errors);
+  j["joint_p95_mm"] = percentile(joint_errors, 0.95);
+  j["joints_with_confidence_fraction"] = static_cast<double>(confident) / static_cast<double>(std::max(1L, joint_frames));
+  j["ik_median_us"] = percentile(ik_us, 0.5);
+  j["ik_p99_us"] = percentile(ik_us, 0.99);
+  j["tracker_median_us"] = percentile(tracker_us, 0.5);
+  j["tracker_p99_us"] = percentile(tracker_us, 0.99);
+  return j;
+}
+
+int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, double sigma, int frames, unsigned seed,
+          const std::vector<double>& volume_centre, bool filter) {
+  const auto rig = rhot::load_rig(rig_file);
+  if (!rig) {
+    std::cerr << "rhot-eval: " << rig.error() << "\n";
+    return 1;
+  }
+  const auto layout = rhot::load_hand_layout(layout_file);
+  if (!layout) {
+    std::cerr << "rhot-eval: " << layout.error() << "\n";
+    return 1;
+  }
+  std::vector<std::string_view> motions;
+  for (const std::string_view name : rhot::hand_motion_names()) {
+    if (motion == "all" || motion == name) motions.push_back(name);
+  }
+  if (motions.empty()) {
+    std::string known;
+    for (const std::string_view name : rhot::hand_motion_names()) known += std::string(known.empty() ? "" : ", ") + std::string(name);
+    std::cerr << "rhot-eval: --motion " << motion << ": no such motion (" << known << ", all)\n";
+    return 1;
+  }
+  const Box box = evaluation_box(*rig, {}, volume_centre);
+  nlohmann::json j;
+  j["rig"] = rig_file;
+  j["layout"] = layout_file;
+  j["sigma_px"] = sigma;
+  j["seed"] = seed;
+  j["centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
+  j["filter"] = filter;
+  for (const std::string_view name : motions) {
+    std::cerr << "rhot-eval: hand motion " << name << "\n";
+    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, sigma, frames, seed, box.centre, filter);
+  }
+  // Over all motions: the mean of the motions' numbers (each motion weighs alike).
+  for (const char* key :
+       {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",
+        "ik_p99_us", "tracker_median_us", "tracker_p99_us", "hand_seen_fraction", "fingertips_seen_fraction"}) {
+    double sum = 0.0;
+    for (const auto& [name, m] : j["motions"].items()) sum += m[key].get<double>();
+    j[key] = sum / static_cast<double>(motions.size());
+  }
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
+}  // namespace rhot::eval

@@ -1,0 +1,180 @@
+// rhot-eval: measurements a user sizing a rig wants, as one JSON object on stdout.
+//
+//   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M]
+//                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--sigma PX] [--frames N] --json
+//   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
+//   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
+//                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//
+// Markers wander through a box: the flags', else the rig file's tracking volume, else a 1 m cube
+// where the cameras' optical axes meet (least squares); the simulated rig sees them with Gaussian noise and dropouts; matching and
+// triangulation recover them; the result is compared with ground truth and with the Cramer-Rao
+// bound of each point for the cameras that saw it.
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "engine/sim/GraspScenarios.h"
+#include "engine/scene/SceneLoader.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/geometry/Matching.h"
+#include "tracking/sim/HandMotions.h"
+#include "tracking/hand/HandTracker.h"
+#include "tracking/rigid/StarTracker.h"
+#include "tracking/sim/SimulatedRig.h"
+
+#include "tools/eval/Eval.h"
+
+namespace rhot::eval {
+
+// Marker stars moving through the volume (25 of a set by default), matched, triangulated and
+// tracked; identities against the truth, poses against the true poses.
+int stars(const std::string& rig_file, const std::string& set_file, int bodies, double sigma, int frames, unsigned seed, double dropout,
+          const std::vector<double>& volume, const std::vector<double>& volume_centre) {
+  const auto rig = rhot::load_rig(rig_file);
+  if (!rig) {
+    std::cerr << "rhot-eval: " << rig.error() << "\n";
+    return 1;
+  }
+  const auto set = rhot::load_star_set(set_file);
+  if (!set) {
+    std::cerr << "rhot-eval: " << set.error() << "\n";
+    return 1;
+  }
+  if (bodies > static_cast<int>(set->stars.size())) {
+    std::cerr << "rhot-eval: --bodies " << bodies << ": " << set_file << " has only " << set->stars.size() << " stars\n";
+    return 1;
+  }
+  const Box box = evaluation_box(*rig, volume, volume_centre);
+  const auto motions = rhot::random_motions(bodies, box.centre - box.size / 2, box.centre + box.size / 2, seed + 1);
+  std::vector<rhot::SimulatedBody> simulated;
+  for (int b = 0; b < bodies; ++b) {
+    rhot::SimulatedBody body;
+    body.motion = motions[static_cast<std::size_t>(b)];
+    for (const Eigen::Vector3d& m : set->stars[static_cast<std::size_t>(b)].markers_mm) body.markers_body_m.push_back(m * 1e-3);
+    simulated.push_back(body);
+  }
+  rhot::SimulatedRigSettings settings;
+  settings.sigma_px = sigma;
+  settings.dropout = dropout;
+  settings.seed = seed;
+  rhot::SimulatedRig sim(*rig, {}, settings);
+  sim.set_bodies(simulated);
+  // The tracker knows the stars in the scene, as a scene file tells it.
+  rhot::StarSet in_use = *set;
+  in_use.stars.resize(static_cast<std::size_t>(bodies));
+  rhot::StarTracker tracker{rhot::StarLibrary(in_use)};
+
+  long identifiable = 0;  // body-frames with three or more of the body's markers triangulated
+  long correct = 0;       // ... among them, the body's star reported at the body's markers
+  long wrong = 0;         // a star reported at another body's markers
+  long posed = 0;
+  double sum_position2 = 0.0;
+  double sum_rotation2 = 0.0;
+  std::vector<double> ms;
+  for (int f = 0; f < frames; ++f) {
+    const rhot::RigFrame frame = sim.next();
+    const auto matched = rhot::match_and_triangulate(*rig, frame);
+    std::vector<Eigen::Vector3d> points;
+    std::vector<int> point_body;  // the body all of a point's detections belong to; -1: none, or several
+    std::vector<int> clean(static_cast<std::size_t>(bodies), 0);
+    for (const rhot::MatchedPoint& m : matched) {
+      points.push_back(m.point.position_world);
+      // Markers of one star lie millimetres apart, so a point may mix two markers of one body: it is
+      // still that body's.
+      int body = -2;
+      for (std::size_t k = 0; k < m.observations.size() && body != -1; ++k) {
+        const int marker = frame.cameras[static_cast<std::size_t>(m.observations[k].camera)]
+                               .detections[static_cast<std::size_t>(m.detection[k])]
+                               .truth_marker;
+        const int b = marker < 0 ? -1 : frame.truth_marker_body[static_cast<std::size_t>(marker)];
+        body = (body == -2 || body == b) ? b : -1;
+      }
+      if (body < 0) {
+        // Detections of markers of different bodies (two stars passing close): the body of the true
+        // marker the point lies at, if it lies within a millimetre of one.
+        body = -1;
+        double nearest = 0.001;
+        for (std::size_t t = 0; t < frame.truth_position_m.size(); ++t) {
+          const double d = (frame.truth_position_m[t] - m.point.position_world).norm();
+          if (d < nearest) {
+            nearest = d;
+            body = frame.truth_marker_body[t];
+          }
+        }
+      }
+      point_body.push_back(body);
+      if (point_body.back() >= 0) ++clean[static_cast<std::size_t>(point_body.back())];
+    }
+    const auto start = std::chrono::steady_clock::now();
+    const auto& tracked = tracker.update(frame.time_s, points);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    for (int b = 0; b < bodies; ++b) identifiable += clean[static_cast<std::size_t>(b)] >= 3 ? 1 : 0;
+    for (const rhot::TrackedStar& t : tracked) {
+      if (!t.seen_now()) continue;
+      bool other = false;
+      bool own = false;
+      for (const int p : t.point) {
+        if (p < 0) continue;
+        // A point within a millimetre of one of the star's own markers is the star's, whichever
+        // marker's detections it was built from (two bodies' markers can meet in space).
+        int body = point_body[static_cast<std::size_t>(p)];
+        for (std::size_t k = 0; k < frame.truth_position_m.size(); ++k) {
+          if (frame.truth_marker_body[k] == t.star && (frame.truth_position_m[k] - points[static_cast<std::size_t>(p)]).norm() < 0.001)
+            body = t.star;
+        }
+        other = other || (body >= 0 && body != t.star);
+        own = own || body == t.star;
+      }
+      if (other || !own) {
+        ++wrong;
+        continue;
+      }
+      if (clean[static_cast<std::size_t>(t.star)] >= 3) ++correct;
+      const rhot::Rigid3d& truth = frame.truth_world_from_body[static_cast<std::size_t>(t.star)];
+      sum_position2 += (t.world_from_star.translation - truth.translation).squaredNorm();
+      const double angle = Eigen::AngleAxisd(t.world_from_star.rotation * truth.rotation.conjugate()).angle();
+      sum_rotation2 += angle * angle;
+      ++posed;
+    }
+    if (frames >= 20 && (f + 1) % (frames / 10) == 0) std::cerr << "rhot-eval: frame " << f + 1 << " of " << frames << "\n";
+  }
+  nlohmann::json j;
+  j["rig"] = rig_file;
+  j["set"] = set_file;
+  j["bodies"] = bodies;
+  j["sigma_px"] = sigma;
+  j["dropout"] = dropout;
+  j["frames"] = frames;
+  j["seed"] = seed;
+  j["volume_centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
+  j["volume_size_m"] = {box.size.x(), box.size.y(), box.size.z()};
+  j["identifiable_body_frames"] = identifiable;
+  j["correct_id_fraction"] = identifiable > 0 ? static_cast<double>(correct) / static_cast<double>(identifiable) : 0.0;
+  j["wrong_id_count"] = wrong;
+  j["posed_body_frames"] = posed;
+  j["position_rms_mm"] = posed > 0 ? 1000.0 * std::sqrt(sum_position2 / static_cast<double>(posed)) : 0.0;
+  j["rotation_rms_deg"] = posed > 0 ? std::sqrt(sum_rotation2 / static_cast<double>(posed)) * 180.0 / std::numbers::pi : 0.0;
+  j["median_ms"] = percentile(ms, 0.5);
+  j["p99_ms"] = percentile(ms, 0.99);
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
+}  // namespace rhot::eval

@@ -1,0 +1,260 @@
+#include "tracking/sim/SimulatedRig.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Geometry>
+
+#include "base/Check.h"
+
+namespace rhot {
+
+namespace {
+
+// Smallest distance between segments [p0, p1] and [q0, q1].
+double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0, const Eigen::Vector3d& q1) {
+  const Eigen::Vector3d d1 = p1 - p0;
+  const Eigen::Vector3d d2 = q1 - q0;
+  const Eigen::Vector3d r = p0 - q0;
+  const double a = d1.squaredNorm();
+  const double e = d2.squaredNorm();
+  const double f = d2.dot(r);
+  double s = 0.0;
+  double t = 0.0;
+  if (a <= 1e-18 && e <= 1e-18) return r.norm();
+  if (a <= 1e-18) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= 1e-18) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2);
+      const double denom = a * e - b * b;
+      s = denom > 1e-18 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  return ((p0 + d1 * s) - (q0 + d2 * t)).norm();
+}
+
+}  // namespace
+
+Eigen::Vector3d Trajectory::at(double t_s) const {
+  Eigen::Vector3d p = centre_m;
+  for (int i = 0; i < 3; ++i) {
+    p(i) += amplitude_m(i) * std::sin(2.0 * std::numbers::pi * frequency_hz(i) * t_s + phase_rad(i)) +
+            drift_amplitude_m(i) * std::sin(2.0 * std::numbers::pi * drift_frequency_hz(i) * t_s + drift_phase_rad(i));
+  }
+  return p;
+}
+
+SimulatedRig::SimulatedRig(CameraRig rig, std::vector<Trajectory> markers, SimulatedRigSettings settings)
+    : rig_(std::move(rig)), markers_(std::move(markers)), settings_(settings), rng_(settings.seed) {
+  RHOT_PRECONDITION(settings.sigma_px >= 0.0 && settings.dropout >= 0.0 && settings.dropout <= 1.0 && settings.rate_hz > 0.0,
+                    "SimulatedRig: sigma >= 0, dropout in [0, 1], rate > 0");
+}
+
+bool SimulatedRig::visible(int camera, const Eigen::Vector3d& p_world) const {
+  const Camera& c = rig_.cameras[static_cast<std::size_t>(camera)];
+  const auto pixel = c.project(p_world);
+  if (!pixel || !c.in_image(*pixel)) return false;
+  // The line of sight stops 1 mm short of the marker, so the surface a marker sits on does not
+  // hide it from cameras on its own side.
+  const Eigen::Vector3d from = c.centre_world();
+  const Eigen::Vector3d to = p_world + (from - p_world).normalized() * 1e-3;
+  for (const Occluder& o : occluders_) {
+    if (segment_distance(from, to, o.a_m, o.b_m) < o.radius_m) return false;
+  }
+  return true;
+}
+
+Rigid3d RigidMotion::world_from_body(double t_s) const {
+  Eigen::Vector3d turn;
+  for (int a = 0; a < 3; ++a)
+    turn(a) = turn_amplitude_rad(a) * std::sin(2.0 * std::numbers::pi * turn_frequency_hz(a) * t_s + turn_phase_rad(a));
+  Rigid3d out;
+  out.rotation = base_orientation;
+  if (turn.norm() > 0.0)
+    out.rotation = (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) * base_orientation).normalized();
+  out.translation = position.at(t_s);
+  return out;
+}
+
+void SimulatedRig::set_bodies(std::vector<SimulatedBody> bodies) {
+  bodies_ = std::move(bodies);
+  body_markers_.clear();
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    for (std::size_t m = 0; m < bodies_[b].markers_body_m.size(); ++m) body_markers_.emplace_back(static_cast<int>(b), static_cast<int>(m));
+  }
+}
+
+Eigen::Vector3d SimulatedRig::marker_at(std::size_t marker, double t_s) const {
+  if (marker < markers_.size()) return markers_[marker].at(t_s);
+  const auto [b, m] = body_markers_[marker - markers_.size()];
+  const SimulatedBody& body = bodies_[static_cast<std::size_t>(b)];
+  return body.motion.world_from_body(t_s) * body.markers_body_m[static_cast<std::size_t>(m)];
+}
+
+void SimulatedRig::merge_blobs(int camera, const std::vector<Eigen::Vector3d>& positions, std::vector<Detection>& detections) const {
+  const Rigid3d& cam_from_world = rig_.cameras[static_cast<std::size_t>(camera)].cam_from_world;
+  auto depth = [&](const Detection& d) { return (cam_from_world * positions[static_cast<std::size_t>(d.truth_marker)]).z(); };
+  std::sort(detections.begin(), detections.end(), [&](const Detection& a, const Detection& b) { return depth(a) < depth(b); });
+  struct Blob {
+    Eigen::Vector2d sum;
+    int count;
+    int marker;
+  };
+  std::vector<Blob> blobs;
+  const double merge2 = settings_.merge_distance_px * settings_.merge_distance_px;
+  for (const Detection& d : detections) {
+    auto into = std::find_if(blobs.begin(), blobs.end(),
+                             [&](const Blob& b) { return (b.sum / static_cast<double>(b.count) - d.pixel).squaredNorm() < merge2; });
+    if (into == blobs.end()) {
+      blobs.push_back({d.pixel, 1, d.truth_marker});
+    } else {
+      into->sum += d.pixel;
+      ++into->count;
+    }
+  }
+  detections.clear();
+  for (const Blob& b : blobs) detections.push_back({b.sum / static_cast<double>(b.count), b.marker});
+}
+
+RigFrame SimulatedRig::next() { return frame_at(static_cast<double>(frame_) / settings_.rate_hz); }
+
+RigFrame SimulatedRig::frame_at(double t_s) {
+  RigFrame frame;
+  frame.index = frame_++;
+  frame.time_s = t_s;
+  std::normal_distribution<double> noise(0.0, settings_.sigma_px);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const std::size_t own_count = markers_.size() + body_markers_.size();
+  for (std::size_t m = 0; m < own_count; ++m) {
+    frame.truth_position_m.push_back(marker_at(m, frame.time_s));
+    frame.truth_marker_body.push_back(m < markers_.size() ? -1 : body_markers_[m - markers_.size()].first);
+  }
+  // Scripted markers and the world's follow the rig's own, with no body.
+  const auto scripted_at = [this](double t) {
+    std::vector<Eigen::Vector3d> out;
+    if (script_) out = script_(t);
+    if (world_) {
+      const std::vector<Eigen::Vector3d> w = world_->at(t).markers_m;
+      out.insert(out.end(), w.begin(), w.end());
+    }
+    return out;
+  };
+  if (script_) {
+    for (const Eigen::Vector3d& p : script_(frame.time_s)) {
+      frame.truth_position_m.push_back(p);
+      frame.truth_marker_body.push_back(-1);
+    }
+  }
+  if (world_) {
+    WorldSnapshot now = world_->at(frame.time_s);
+    occluders_ = std::move(now.occluders);
+    for (const Eigen::Vector3d& p : now.markers_m) {
+      frame.truth_position_m.push_back(p);
+      frame.truth_marker_body.push_back(-1);
+    }
+  }
+  const std::size_t marker_count = frame.truth_position_m.size();
+  for (const SimulatedBody& b : bodies_) frame.truth_world_from_body.push_back(b.motion.world_from_body(frame.time_s));
+  for (std::size_t c = 0; c < rig_.cameras.size(); ++c) {
+    CameraFrame cf;
+    cf.camera = static_cast<int>(c);
+    cf.timestamp_s = frame.time_s + static_cast<double>(c) * settings_.camera_skew_s;
+    std::vector<Eigen::Vector3d> scripted_at_camera;
+    if ((script_ || world_) && settings_.camera_skew_s != 0.0) scripted_at_camera = scripted_at(cf.timestamp_s);
+    for (std::size_t m = 0; m < marker_count; ++m) {
+      // Unsynchronised cameras see the marker where it is at their own exposure time.
+      const Eigen::Vector3d p = settings_.camera_skew_s == 0.0              ? frame.truth_position_m[m]
+                                : m < own_count                             ? marker_at(m, cf.timestamp_s)
+                                : m - own_count < scripted_at_camera.size() ? scripted_at_camera[m - own_count]
+                                                                            : frame.truth_position_m[m];
+      // Draw the random numbers whatever happens, so one marker's visibility does not shift the
+      // noise of every other: frames stay comparable across settings.
+      const double drop = uniform(rng_);
+      const Eigen::Vector2d n(noise(rng_), noise(rng_));
+      if (!visible(static_cast<int>(c), p) || drop < settings_.dropout) continue;
+      cf.detections.push_back({*rig_.cameras[c].project(p) + n, static_cast<int>(m)});
+    }
+    if (settings_.merge_distance_px > 0.0) merge_blobs(static_cast<int>(c), frame.truth_position_m, cf.detections);
+    std::shuffle(cf.detections.begin(), cf.detections.end(), rng_);
+    frame.cameras.push_back(std::move(cf));
+  }
+  return frame;
+}
+
+std::array<Trajectory, 2> wand_trajectories(double length_m, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m) {
+  // Half the wand along the horizontal circle (x, z) = r (sin, cos) of one frequency: the two ends
+  // are opposite points of that circle, so their distance is exactly 2 r. The middle drifts on
+  // independent frequencies through the box, keeping the ends inside it.
+  const double r = 0.5 * length_m;
+  const Eigen::Vector3d centre = 0.5 * (box_min_m + box_max_m);
+  const Eigen::Vector3d room = (0.5 * (box_max_m - box_min_m)).array() - r;
+  std::array<Trajectory, 2> ends;
+  for (int e = 0; e < 2; ++e) {
+    Trajectory& t = ends[static_cast<std::size_t>(e)];
+    const double phase = e == 0 ? 0.0 : std::numbers::pi;
+    t.centre_m = centre;
+    t.amplitude_m = {r, 0.0, r};
+    t.frequency_hz = {0.23, 0.0, 0.23};
+    t.phase_rad = {phase, 0.0, phase + 0.5 * std::numbers::pi};
+    t.drift_amplitude_m = room.cwiseMax(0.0);
+    t.drift_frequency_hz = {0.071, 0.113, 0.089};
+    t.drift_phase_rad = {0.0, 1.0, 2.0};
+  }
+  return ends;
+}
+
+std::vector<RigidMotion> random_motions(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed) {
+  std::vector<RigidMotion> out;
+  const std::vector<Trajectory> paths = random_trajectories(count, box_min_m, box_max_m, seed);
+  std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ULL);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const Trajectory& path : paths) {
+    RigidMotion m;
+    m.position = path;
+    // Uniform over rotations: a normalised 4D Gaussian (Eigen's UnitRandom would draw from std::rand).
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    const double w = gauss(rng), x = gauss(rng), y = gauss(rng), z = gauss(rng);
+    m.base_orientation = Eigen::Quaterniond(w, x, y, z).normalized();
+    for (int a = 0; a < 3; ++a) {
+      m.turn_amplitude_rad(a) = 0.5 * std::numbers::pi * unit(rng);
+      m.turn_frequency_hz(a) = 0.1 + 0.3 * unit(rng);
+      m.turn_phase_rad(a) = 2.0 * std::numbers::pi * unit(rng);
+    }
+    out.push_back(m);
+  }
+  return out;
+}
+
+std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Trajectory> out;
+  const Eigen::Vector3d size = box_max_m - box_min_m;
+  for (int i = 0; i < count; ++i) {
+    Trajectory t;
+    for (int a = 0; a < 3; ++a) {
+      t.amplitude_m(a) = 0.25 * size(a) * unit(rng);
+      // Keep the whole path inside the box.
+      t.centre_m(a) = box_min_m(a) + t.amplitude_m(a) + (size(a) - 2.0 * t.amplitude_m(a)) * unit(rng);
+      t.frequency_hz(a) = 0.1 + 0.4 * unit(rng);
+      t.phase_rad(a) = 2.0 * std::numbers::pi * unit(rng);
+    }
+    out.push_back(t);
+  }
+  return out;
+}
+
+}  // namespace rhot
