@@ -55,33 +55,29 @@ class HandColliders {
   // The bones' capsules where the physics has them, for debug drawing (empty before the hand is
   // first tracked).
   using Capsule = HandCapsule;
-  Eigen::Vector3d b_world{0, 0, 0};
-  double radius_m = 0.0;
-  bool soft = false;  // held back, not colliding (see HandColliderSettings)
-};
-std::vector<Capsule> capsules() const;
-// How far the physical hand is from the tracked one (largest bone distance), metres.
-double largest_offset_m() const;
+  std::vector<Capsule> capsules() const;
+  // How far the physical hand is from the tracked one (largest bone distance), metres.
+  double largest_offset_m() const;
 
-private:
-struct Bone {
-  std::unique_ptr<btCapsuleShape> shape;
-  std::unique_ptr<btDefaultMotionState> motion;
-  std::unique_ptr<btRigidBody> body;
-  btTransform target = btTransform::getIdentity();
-  double length_m = 0.0;
-  bool soft = false;
-};
-void place(Bone& b, const btTransform& pose);
-void set_soft(Bone& b, bool soft);
+ private:
+  struct Bone {
+    std::unique_ptr<btCapsuleShape> shape;
+    std::unique_ptr<btDefaultMotionState> motion;
+    std::unique_ptr<btRigidBody> body;
+    btTransform target = btTransform::getIdentity();
+    double length_m = 0.0;
+    bool soft = false;
+  };
+  void place(Bone& b, const btTransform& pose);
+  void set_soft(Bone& b, bool soft);
 
-PhysicsWorld& physics_;
-HandSide side_;
-HandColliderSettings settings_;
-std::array<Bone, kHandBoneCount> bones_;
-HandInput input_;
-bool active_ = false;
-bool built_ = false;
+  PhysicsWorld& physics_;
+  HandSide side_;
+  HandColliderSettings settings_;
+  std::array<Bone, kHandBoneCount> bones_;
+  HandInput input_;
+  bool active_ = false;
+  bool built_ = false;
 };
 
 }  // namespace rhot

@@ -70,7 +70,7 @@ class DemoWorld final : public SimulatedWorld {
   struct Star {
     int id;
     Rigid3d object_from_star;
-    std::vector<Eigen::Vector3d> markers_m;  // star frame
+    std::array<Eigen::Vector3d, 4> markers_m;  // star frame
   };
   std::vector<Star> stars_;
   std::optional<SceneTruth> truth_;
