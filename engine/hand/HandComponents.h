@@ -25,8 +25,8 @@ struct HandGesture {
 
 struct Hand {
   HandSide side = HandSide::kRight;
-  bool shown = true;  // drawn (a scene may leave a hand out: SceneSettings::left_hand / right_hand)
-  HandInput tracked;  // this frame's tracked hand; tracked.seen is false while it is lost
+  bool shown = true;               // drawn (a scene may leave a hand out: SceneSettings::left_hand / right_hand)
+  HandInput tracked;               // this frame's tracked hand; tracked.seen is false while it is lost
   bool gestures_measured = false;  // pinch and grip come from a hand tracker (a recording has none)
   HandGesture pinch;
   HandGesture grip;
@@ -41,7 +41,7 @@ struct HandCapsule {
 };
 
 struct HandBody {
-  bool active = false;  // the colliders are in the world (the hand was tracked)
+  bool active = false;                                          // the colliders are in the world (the hand was tracked)
   std::array<Eigen::Vector3d, kHandJointCount> joints_world{};  // the physical hand: joints from the bone bodies
   std::vector<HandCapsule> capsules;                            // empty before the hand is first tracked
   std::optional<Entity> holding;

@@ -12,7 +12,9 @@
 
 namespace rhot {
 
-inline glm::vec3 to_glm(const Eigen::Vector3d& v) { return {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())}; }
+inline glm::vec3 to_glm(const Eigen::Vector3d& v) {
+  return {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+}
 
 // Not normalised: a caller that needs a unit quaternion in float normalises it.
 inline glm::quat to_glm(const Eigen::Quaterniond& q) {

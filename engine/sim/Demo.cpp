@@ -78,9 +78,8 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
       if (!source) return std::unexpected(source.error());
       return std::unique_ptr<ResultSource>(std::move(*source));
     }
-    const std::filesystem::path rig_file = !settings.rig_file.empty()
-                                               ? settings.rig_file
-                                               : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
+    const std::filesystem::path rig_file =
+        !settings.rig_file.empty() ? settings.rig_file : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
     auto rig = load_rig(rig_file);
     if (!rig) return std::unexpected(rig.error());
     std::array<HandLayout, 2> layouts;

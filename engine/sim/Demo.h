@@ -40,8 +40,8 @@ struct DemoSettings {
   std::filesystem::path star_set;   // empty: assets/stars/seed-case.json (the objects' stars)
   double sigma_px = 0.3;            // the simulated cameras' pixel noise
   unsigned seed = 1;
-  bool filter_hands = false;   // LiveTrackingSettings::filter_hands
-  bool perfect_hands = false;  // physics gets the true hands, not the tracked ones
+  bool filter_hands = false;     // LiveTrackingSettings::filter_hands
+  bool perfect_hands = false;    // physics gets the true hands, not the tracked ones
   std::filesystem::path replay;  // play this recording instead of tracking
   double speed = 1.0;            // replay speed (2: twice as fast)
   std::filesystem::path record;  // write every frame's hands and tracked objects here

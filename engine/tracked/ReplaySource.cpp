@@ -23,7 +23,9 @@ ReplaySource::ReplaySource(Recording recording, double speed, const TrackedObjec
   }
 }
 
-std::vector<TrackingStage> ReplaySource::stages() { return {{"replay", [this](double t) { replay(t); }}}; }
+std::vector<TrackingStage> ReplaySource::stages() {
+  return {{"replay", [this](double t) { replay(t); }}};
+}
 
 void ReplaySource::set_speed(double speed) {
   RHOT_PRECONDITION(std::isfinite(speed) && speed > 0.0, "ReplaySource::set_speed: speed must be finite and positive");

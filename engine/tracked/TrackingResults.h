@@ -17,7 +17,7 @@
 namespace rhot {
 
 struct TrackingCounts {
-  std::size_t detections = 0;                     // over all cameras
+  std::size_t detections = 0;                      // over all cameras
   std::vector<std::size_t> detections_per_camera;  // in rig order (empty without cameras)
   std::size_t points = 0;                          // triangulated
   double mean_reprojection_rms_px = 0.0;           // over the triangulated points
@@ -35,7 +35,7 @@ struct TrackingResults {
   bool gestures_measured = false;
   // The objects seen this frame, by marker-star id: where each object is (finite poses only).
   std::map<int, Rigid3d> world_from_object;
-  std::vector<Eigen::Vector3d> points;        // triangulated markers, world
+  std::vector<Eigen::Vector3d> points;          // triangulated markers, world
   std::vector<std::vector<int>> point_cameras;  // per point: the cameras that saw it
   TrackingCounts counts;
 };

@@ -1,0 +1,2 @@
+// Not compiled: fed to the layout check as engine/physics/Bad.cpp.
+#include "engine/sim/DemoScript.h"
