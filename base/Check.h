@@ -1,5 +1,6 @@
 #pragma once
-// Checks for the first two of rhot's three error tiers (see ../shared/STYLE.md):
+// Checks for the first two of rhot's three error tiers (the third, bad data from outside, is a
+// result the caller must look at):
 //
 //   RHOT_ASSERT(cond, msg)        a bug in rhot itself.
 //   RHOT_PRECONDITION(cond, msg)  a caller broke the contract of a public API.
