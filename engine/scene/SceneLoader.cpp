@@ -13,149 +13,22 @@
 
 #include "engine/core/World.h"
 #include "base/Check.h"
+#include "base/Json.h"
 
 namespace rhot {
-
-std::string SceneError::to_string() const {
-  std::string s = file;
-  if (!json_path.empty()) s += (json_path.front() == '/' ? ": " : ":") + json_path;
-  return s + ": " + message;
-}
 
 namespace {
 
 using nlohmann::json;
 
-// Thrown inside the loader only; load_scene_file/parse_scene turn it into the returned error.
-struct LoadFailure {
-  std::string json_path;
-  std::string message;
-};
+using Node = JsonNode;
 
-std::string describe(const json& j) {
-  switch (j.type()) {
-    case json::value_t::number_float: {
-      const double v = j.get<double>();
-      if (std::isnan(v)) return "NaN";
-      if (std::isinf(v)) return v > 0 ? "infinity" : "-infinity";
-      return j.dump();
-    }
-    case json::value_t::number_integer:
-    case json::value_t::number_unsigned:
-    case json::value_t::boolean:
-    case json::value_t::null:
-      return j.dump();
-    case json::value_t::string: {
-      std::string s = j.dump();
-      return s.size() > 40 ? s.substr(0, 37) + "...\"" : s;
-    }
-    default:
-      return std::string("an ") + j.type_name();
-  }
+std::string describe(const json& j) { return describe_json(j); }
+
+glm::vec3 vec3(const Node& n) {
+  const auto v = n.numbers(3);
+  return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
 }
-
-// A JSON value and where it is, with typed accessors that fail naming the path.
-class Node {
- public:
-  Node(const json& value, std::string path) : j_(value), path_(std::move(path)) {}
-
-  const std::string& path() const { return path_; }
-  const json& raw() const { return j_; }
-
-  [[noreturn]] void fail(const std::string& message) const { throw LoadFailure{path_, message}; }
-
-  // Checks that this is an object whose keys are all among `allowed`.
-  void expect_object(std::initializer_list<std::string_view> allowed) const {
-    if (!j_.is_object()) fail("expected an object, got " + describe(j_));
-    for (const auto& [key, value] : j_.items()) {
-      bool known = false;
-      for (const std::string_view a : allowed) known = known || a == key;
-      if (!known) {
-        std::string list;
-        for (const std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-        Node(value, path_ + "/" + key).fail("unknown key \"" + key + "\"; expected one of: " + list);
-      }
-    }
-  }
-
-  bool has(const char* key) const { return j_.contains(key); }
-  Node operator[](const char* key) const {
-    if (!j_.contains(key)) fail(std::string("missing required key \"") + key + "\"");
-    return Node(j_.at(key), path_ + "/" + key);
-  }
-  std::optional<Node> optional(const char* key) const {
-    if (!j_.contains(key)) return std::nullopt;
-    return Node(j_.at(key), path_ + "/" + key);
-  }
-  std::vector<Node> elements() const {
-    if (!j_.is_array()) fail("expected an array, got " + describe(j_));
-    std::vector<Node> out;
-    for (std::size_t i = 0; i < j_.size(); ++i) out.emplace_back(j_[i], path_ + "/" + std::to_string(i));
-    return out;
-  }
-
-  double number() const {
-    if (!j_.is_number()) fail("expected a number, got " + describe(j_));
-    const double v = j_.get<double>();
-    if (!std::isfinite(v)) fail("expected a finite number, got " + describe(j_));
-    if (std::abs(v) > static_cast<double>(std::numeric_limits<float>::max())) {
-      fail("expected a number within float range (magnitude up to 3.4e38), got " + describe(j_));
-    }
-    return v;
-  }
-  double number_in(double lo, double hi, const char* what) const {
-    const double v = number();
-    if (v < lo || v > hi) fail(std::string("expected ") + what + ", got " + describe(j_));
-    return v;
-  }
-  double positive() const {
-    const double v = number();
-    // Stored as float downstream: refuse what a float turns into 0 or infinity.
-    if (!(v > 0.0) || !(static_cast<float>(v) > 0.0f) || v > static_cast<double>(std::numeric_limits<float>::max())) {
-      fail("expected a number greater than 0 (and within float range), got " + describe(j_));
-    }
-    return v;
-  }
-  int integer_in(int lo, int hi) const {
-    if (!j_.is_number_integer() && !j_.is_number_unsigned()) fail("expected an integer, got " + describe(j_));
-    const auto v = j_.get<long long>();
-    if (v < lo || v > hi) {
-      fail("expected an integer from " + std::to_string(lo) + " to " + std::to_string(hi) + ", got " + describe(j_));
-    }
-    return static_cast<int>(v);
-  }
-  bool boolean() const {
-    if (!j_.is_boolean()) fail("expected true or false, got " + describe(j_));
-    return j_.get<bool>();
-  }
-  std::string string() const {
-    if (!j_.is_string()) fail("expected a string, got " + describe(j_));
-    return j_.get<std::string>();
-  }
-  std::string non_empty_string() const {
-    std::string s = string();
-    if (s.empty()) fail("expected a non-empty string");
-    return s;
-  }
-  // An array of exactly n finite numbers.
-  std::vector<double> numbers(std::size_t n) const {
-    if (!j_.is_array() || j_.size() != n) {
-      fail("expected an array of " + std::to_string(n) + " numbers, got " + describe(j_) +
-           (j_.is_array() ? " of " + std::to_string(j_.size()) : ""));
-    }
-    std::vector<double> out;
-    for (const Node& e : elements()) out.push_back(e.number());
-    return out;
-  }
-  glm::vec3 vec3() const {
-    const auto v = numbers(3);
-    return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
-  }
-
- private:
-  const json& j_;
-  std::string path_;
-};
 
 // Resolves a file reference relative to the scene's folder and checks that it exists.
 std::filesystem::path existing_file(const Node& node, const std::filesystem::path& base_dir) {
@@ -171,7 +44,7 @@ std::filesystem::path existing_file(const Node& node, const std::filesystem::pat
 Transform read_transform(const Node& n) {
   n.expect_object({"position", "rotation", "rotation_deg", "scale"});
   Transform t;
-  if (auto p = n.optional("position")) t.position = p->vec3();
+  if (auto p = n.optional("position")) t.position = vec3(*p);
   if (n.has("rotation") && n.has("rotation_deg")) {
     n["rotation_deg"].fail("give either \"rotation\" (a quaternion) or \"rotation_deg\" (Euler angles), not both");
   }
@@ -186,7 +59,7 @@ Transform read_transform(const Node& n) {
   }
   if (auto r = n.optional("rotation_deg")) {
     // Extrinsic X, then Y, then Z: R = Rz * Ry * Rx.
-    const glm::vec3 deg = r->vec3();
+    const glm::vec3 deg = vec3(*r);
     const glm::quat qx = glm::angleAxis(glm::radians(deg.x), glm::vec3(1, 0, 0));
     const glm::quat qy = glm::angleAxis(glm::radians(deg.y), glm::vec3(0, 1, 0));
     const glm::quat qz = glm::angleAxis(glm::radians(deg.z), glm::vec3(0, 0, 1));
@@ -360,7 +233,7 @@ SceneSettings read_settings(const Node& n, const std::filesystem::path& base_dir
       slot = true;
     }
   }
-  if (auto g = n.optional("gravity_mps2")) s.gravity_mps2 = g->vec3();
+  if (auto g = n.optional("gravity_mps2")) s.gravity_mps2 = vec3(*g);
   if (auto p = n.optional("physics_substeps")) s.physics_substeps = p->integer_in(1, 16);
   if (auto g = n.optional("grasp")) s.grasp = read_grasp(*g);
   return s;
@@ -402,20 +275,20 @@ void check_interactions(const std::vector<InteractionDesc>& interactions, const 
     const std::string path = "/interactions/" + std::to_string(i);
     for (std::size_t k = 0; k < i; ++k) {
       if (interactions[k].name == d.name) {
-        throw LoadFailure{path + "/name",
+        throw JsonFailure{path + "/name",
                           "duplicate interaction name \"" + d.name + "\" (also at /interactions/" + std::to_string(k) + "/name)"};
       }
     }
     const EntityDesc* object = find(d.object);
-    if (!object) throw LoadFailure{path + "/object", "no entity is named \"" + d.object + "\""};
-    if (!object->grabbable) throw LoadFailure{path + "/object", "\"" + d.object + "\" is not grabbable"};
+    if (!object) throw JsonFailure{path + "/object", "no entity is named \"" + d.object + "\""};
+    if (!object->grabbable) throw JsonFailure{path + "/object", "\"" + d.object + "\" is not grabbable"};
     if (d.type == InteractionType::kPlace) {
       const EntityDesc* zone = find(d.zone);
-      if (!zone) throw LoadFailure{path + "/zone", "no entity is named \"" + d.zone + "\""};
+      if (!zone) throw JsonFailure{path + "/zone", "no entity is named \"" + d.zone + "\""};
       if (!zone->mesh || !std::holds_alternative<BoxShape>(zone->mesh->shape)) {
-        throw LoadFailure{path + "/zone", "zone \"" + d.zone + "\" needs a box mesh (the zone is its box)"};
+        throw JsonFailure{path + "/zone", "zone \"" + d.zone + "\" needs a box mesh (the zone is its box)"};
       }
-      if (zone->body) throw LoadFailure{path + "/zone", "zone \"" + d.zone + "\" has a physics body; a zone must let objects in"};
+      if (zone->body) throw JsonFailure{path + "/zone", "zone \"" + d.zone + "\" has a physics body; a zone must let objects in"};
     }
   }
 }
@@ -459,13 +332,13 @@ void check_references(const std::vector<EntityDesc>& entities) {
   for (std::size_t i = 0; i < entities.size(); ++i) {
     const auto [it, fresh] = by_name.emplace(entities[i].name, i);
     if (!fresh) {
-      throw LoadFailure{entity_path(i) + "/name",
+      throw JsonFailure{entity_path(i) + "/name",
                         "duplicate name \"" + entities[i].name + "\" (also at " + entity_path(it->second) + "/name)"};
     }
     if (entities[i].tracked_by) {
       const auto [s, new_star] = by_star.emplace(*entities[i].tracked_by, i);
       if (!new_star) {
-        throw LoadFailure{entity_path(i) + "/tracked_by",
+        throw JsonFailure{entity_path(i) + "/tracked_by",
                           "marker star " + std::to_string(s->first) + " already tracks " + entity_path(s->second)};
       }
     }
@@ -473,80 +346,17 @@ void check_references(const std::vector<EntityDesc>& entities) {
   for (std::size_t i = 0; i < entities.size(); ++i) {
     if (entities[i].parent.empty()) continue;
     if (!by_name.contains(entities[i].parent)) {
-      throw LoadFailure{entity_path(i) + "/parent", "no entity is named \"" + entities[i].parent + "\""};
+      throw JsonFailure{entity_path(i) + "/parent", "no entity is named \"" + entities[i].parent + "\""};
     }
     // Walk up; more steps than there are entities means a cycle.
     std::size_t a = i;
     for (std::size_t steps = 0; !entities[a].parent.empty(); ++steps) {
       a = by_name.at(entities[a].parent);
       if (a == i || steps > entities.size()) {
-        throw LoadFailure{entity_path(i) + "/parent", "parent \"" + entities[i].parent + "\" makes a cycle"};
+        throw JsonFailure{entity_path(i) + "/parent", "parent \"" + entities[i].parent + "\" makes a cycle"};
       }
     }
   }
-}
-
-// Rejects duplicate keys, which nlohmann::json would otherwise resolve silently (last one wins),
-// reporting the JSON pointer of the repeated key.
-class DuplicateKeyCheck {
- public:
-  bool operator()(int /*depth*/, json::parse_event_t event, json& parsed) {
-    switch (event) {
-      case json::parse_event_t::object_start:
-        frames_.push_back(Frame{false, 0, {}, {}});
-        break;
-      case json::parse_event_t::array_start:
-        frames_.push_back(Frame{true, 0, {}, {}});
-        break;
-      case json::parse_event_t::key: {
-        Frame& f = frames_.back();
-        f.key = parsed.get<std::string>();
-        if (!f.keys.insert(f.key).second && !duplicate_) duplicate_ = LoadFailure{path(), "duplicate key \"" + f.key + "\""};
-        break;
-      }
-      case json::parse_event_t::object_end:
-      case json::parse_event_t::array_end:
-        frames_.pop_back();
-        element_done();
-        break;
-      case json::parse_event_t::value:
-        element_done();
-        break;
-    }
-    return true;
-  }
-  const std::optional<LoadFailure>& duplicate() const { return duplicate_; }
-
- private:
-  struct Frame {
-    bool is_array;
-    std::size_t index;
-    std::string key;
-    std::set<std::string> keys;
-  };
-  void element_done() {
-    if (!frames_.empty() && frames_.back().is_array) ++frames_.back().index;
-  }
-  std::string path() const {
-    std::string p;
-    for (const Frame& f : frames_) p += "/" + (f.is_array ? std::to_string(f.index) : f.key);
-    return p;
-  }
-  std::vector<Frame> frames_;
-  std::optional<LoadFailure> duplicate_;
-};
-
-std::string line_and_column(std::string_view text, std::size_t byte) {
-  std::size_t line = 1, column = 1;
-  for (std::size_t i = 0; i + 1 < byte && i < text.size(); ++i) {
-    if (text[i] == '\n') {
-      ++line;
-      column = 1;
-    } else {
-      ++column;
-    }
-  }
-  return std::to_string(line) + ":" + std::to_string(column);
 }
 
 SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
@@ -572,53 +382,13 @@ SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
 }  // namespace
 
 std::expected<SceneDesc, SceneError> parse_scene(std::string_view json_text, const std::filesystem::path& base_dir, std::string_view name) {
-  const std::string file(name);
-  DuplicateKeyCheck duplicates;
-  json root;
-  try {
-    root = json::parse(json_text.begin(), json_text.end(), std::ref(duplicates));
-  } catch (const json::parse_error& e) {
-    // nlohmann's message starts "[json.exception.parse_error.101] parse error at line 1, column 2: ";
-    // keep only the part after the position, which we give in the file:line:col form ourselves.
-    std::string what = e.what();
-    if (const auto colon = what.find(": "); colon != std::string::npos) what = what.substr(colon + 2);
-    return std::unexpected(SceneError{file, line_and_column(json_text, e.byte), "invalid JSON: " + what});
-  } catch (const json::out_of_range& e) {
-    // A number too large for a double, such as 1e999: nlohmann gives the token but no position,
-    // so find the token in the text. Such a number would be infinity, which must never reach
-    // physics or rendering.
-    const std::string what = e.what();
-    const auto open = what.find('\'');
-    const auto close = what.rfind('\'');
-    std::string where;
-    if (open != std::string::npos && close > open) {
-      const std::string token = what.substr(open + 1, close - open - 1);
-      if (const auto at = json_text.find(token); at != std::string_view::npos) where = line_and_column(json_text, at + 1);
-      return std::unexpected(SceneError{file, where, "invalid JSON: the number " + token + " is out of range"});
-    }
-    return std::unexpected(SceneError{file, where, "invalid JSON: " + what});
-  }
-  if (duplicates.duplicate()) {
-    return std::unexpected(SceneError{file, duplicates.duplicate()->json_path, duplicates.duplicate()->message});
-  }
-  try {
-    SceneDesc scene = read_scene(root, base_dir);
-    return scene;
-  } catch (const LoadFailure& f) {
-    return std::unexpected(SceneError{file, f.json_path.empty() ? "/" : f.json_path, f.message});
-  }
+  return parse_json<SceneDesc>(json_text, name, [&](const JsonNode& root) { return read_scene(root.raw(), base_dir); });
 }
 
 std::expected<SceneDesc, SceneError> load_scene_file(const std::filesystem::path& file) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(file, ec)) {
-    return std::unexpected(SceneError{file.string(), "", "scene file not found"});
-  }
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in && !in.eof()) return std::unexpected(SceneError{file.string(), "", "cannot read the file"});
-  auto scene = parse_scene(text.str(), file.parent_path(), file.string());
+  auto text = read_text_file(file, "scene");
+  if (!text) return std::unexpected(text.error());
+  auto scene = parse_scene(*text, file.parent_path(), file.string());
   if (scene) scene->file = file;
   return scene;
 }

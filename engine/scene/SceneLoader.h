@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "base/JsonError.h"
 #include "engine/core/Entity.h"
 #include "engine/scene/SceneDesc.h"
 
@@ -18,14 +19,9 @@ namespace rhot {
 
 class World;
 
-struct SceneError {
-  std::string file;       // the scene file (or "<text>")
-  std::string json_path;  // JSON pointer; empty for errors about the whole file; "line:col" for syntax
-  std::string message;    // what was wrong and what was expected
-
-  // "file: /json/path: message"
-  std::string to_string() const;
-};
+// "file: /json/path: message"; json_path is empty for errors about the whole file, "line:col" for
+// syntax errors.
+using SceneError = JsonError;
 
 // Reads and validates a scene file. Relative file references in it (glTF meshes, the camera rig)
 // are resolved against the scene file's folder and must exist.

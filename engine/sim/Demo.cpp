@@ -30,6 +30,7 @@ std::expected<void, std::string> DemoSettings::check() const {
     return std::unexpected("sigma: the simulated pixel noise must be a number from 0 to 50 pixels, got " + std::to_string(sigma_px));
   }
   if (!std::isfinite(speed) || !(speed > 0.0)) return std::unexpected(std::string("speed: the replay speed must be a positive number"));
+  if (auto detector_ok = rhot::check(detector); !detector_ok) return std::unexpected("detector: " + detector_ok.error());
   if (!video_devices.empty() && perfect_hands) {
     return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
   }

@@ -7,6 +7,8 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "base/Json.h"
+
 namespace rhot {
 
 namespace {
@@ -18,31 +20,69 @@ json pose_json(const Rigid3d& r) {
       {r.translation.x(), r.translation.y(), r.translation.z(), r.rotation.x(), r.rotation.y(), r.rotation.z(), r.rotation.w()});
 }
 
-struct Failure {
-  std::string message;
-};
-
-double number(const json& j, const std::string& where) {
-  if (!j.is_number()) throw Failure{where + ": expected a number"};
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) throw Failure{where + ": expected a finite number"};
-  return v;
-}
-
-Rigid3d pose_from(const json& j, const std::string& where) {
-  if (!j.is_array() || j.size() != 7) throw Failure{where + ": expected [x, y, z, qx, qy, qz, qw]"};
+// A pose [x, y, z, qx, qy, qz, qw] (glTF's quaternion order).
+Rigid3d pose_from(const JsonNode& n) {
+  const auto v = n.numbers(7);
+  Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
+  if (q.norm() < 0.5 || q.norm() > 1.5) n.fail("the rotation is not a unit quaternion");
   Rigid3d r;
-  r.translation = Eigen::Vector3d(number(j[0], where), number(j[1], where), number(j[2], where));
-  Eigen::Quaterniond q(number(j[6], where), number(j[3], where), number(j[4], where), number(j[5], where));
-  if (q.norm() < 0.5 || q.norm() > 1.5) throw Failure{where + ": the rotation is not a unit quaternion"};
+  r.translation = Eigen::Vector3d(v[0], v[1], v[2]);
   r.rotation = q.normalized();
   return r;
 }
 
 template <std::size_t N>
-void numbers_into(const json& j, std::array<double, N>& out, const std::string& where) {
-  if (!j.is_array() || j.size() != N) throw Failure{where + ": expected " + std::to_string(N) + " numbers"};
-  for (std::size_t i = 0; i < N; ++i) out[i] = number(j[i], where);
+void numbers_into(const JsonNode& n, std::array<double, N>& out) {
+  const auto v = n.numbers(N);
+  for (std::size_t i = 0; i < N; ++i) out[i] = v[i];
+}
+
+struct Header {
+  double rate_hz = 90.0;
+  std::vector<std::string> objects;
+};
+
+Header read_header(const JsonNode& j) {
+  j.expect_object({"format", "version", "rate_hz", "joints", "objects"});
+  const JsonNode format = j["format"];
+  if (format.string() != "rhot-recording") format.fail("expected \"rhot-recording\", got " + describe_json(format.raw()));
+  j["version"].integer_in(1, 1);
+  Header h;
+  h.rate_hz = j["rate_hz"].positive();
+  if (auto objects = j.optional("objects")) {
+    for (const JsonNode& o : objects->elements()) h.objects.push_back(o.string());
+  }
+  return h;
+}
+
+RecordedFrame read_frame(const JsonNode& j) {
+  j.expect_object({"t", "hands", "objects"});
+  RecordedFrame f;
+  f.t_s = j["t"].number();
+  const JsonNode hands = j["hands"];
+  if (!hands.raw().is_array() || hands.raw().size() != 2) hands.fail("expected [left, right]");
+  const auto sides = hands.elements();
+  for (std::size_t h = 0; h < 2; ++h) {
+    const JsonNode& hj = sides[h];
+    hj.expect_object({"side", "seen", "wrist_pose", "joints", "radius", "confidence"});
+    HandInput& in_hand = f.hands[h];
+    if (auto seen = hj.optional("seen")) in_hand.seen = seen->boolean();
+    in_hand.world_from_hand = pose_from(hj["wrist_pose"]);
+    const JsonNode joints = hj["joints"];
+    if (!joints.raw().is_array() || joints.raw().size() != kHandJointCount) joints.fail("expected 26 [x, y, z]");
+    const auto points = joints.elements();
+    for (std::size_t k = 0; k < kHandJointCount; ++k) {
+      const auto p = points[k].numbers(3);
+      in_hand.joints_world[k] = Eigen::Vector3d(p[0], p[1], p[2]);
+    }
+    numbers_into(hj["radius"], in_hand.radius_m);
+    numbers_into(hj["confidence"], in_hand.confidence);
+  }
+  if (auto objects = j.optional("objects")) {
+    if (!objects->raw().is_object()) objects->fail("expected {name: pose}, got " + describe_json(objects->raw()));
+    for (const auto& [name, pose] : objects->raw().items()) f.objects[name] = pose_from((*objects)[name.c_str()]);
+  }
+  return f;
 }
 
 }  // namespace
@@ -89,59 +129,22 @@ std::expected<Recording, std::string> load_recording(const std::filesystem::path
   Recording rec;
   std::string line;
   long number_of_line = 0;
-  try {
-    while (std::getline(in, line)) {
-      ++number_of_line;
-      const std::string where = file.string() + ":" + std::to_string(number_of_line);
-      if (line.empty()) continue;
-      json j;
-      try {
-        j = json::parse(line);
-      } catch (const json::exception& e) {
-        throw Failure{where + ": not JSON (" + std::string(e.what()) + ")"};
-      }
-      if (number_of_line == 1) {
-        if (!j.is_object() || j.value("format", std::string()) != "rhot-recording")
-          throw Failure{where + ": format: expected \"rhot-recording\""};
-        if (j.value("version", 0) != 1) throw Failure{where + ": version: expected 1"};
-        rec.rate_hz = number(j.value("rate_hz", json()), where + ": rate_hz");
-        if (!(rec.rate_hz > 0.0)) throw Failure{where + ": rate_hz: expected a positive rate"};
-        if (j.contains("objects") && j["objects"].is_array()) {
-          for (const json& o : j["objects"]) rec.objects.push_back(o.is_string() ? o.get<std::string>() : std::string());
-        }
-        continue;
-      }
-      if (!j.is_object()) throw Failure{where + ": expected a frame object"};
-      RecordedFrame f;
-      f.t_s = number(j.value("t", json()), where + ": t");
-      if (!rec.frames.empty() && !(f.t_s > rec.frames.back().t_s)) throw Failure{where + ": t: times must increase"};
-      if (!j.contains("hands") || !j["hands"].is_array() || j["hands"].size() != 2)
-        throw Failure{where + ": hands: expected [left, right]"};
-      for (std::size_t h = 0; h < 2; ++h) {
-        const json& hj = j["hands"][h];
-        const std::string hw = where + ": hands[" + std::to_string(h) + "]";
-        if (!hj.is_object()) throw Failure{hw + ": expected an object"};
-        HandInput& in_hand = f.hands[h];
-        in_hand.seen = hj.value("seen", false);
-        in_hand.world_from_hand = pose_from(hj.value("wrist_pose", json()), hw + ".wrist_pose");
-        const json& joints = hj.value("joints", json());
-        if (!joints.is_array() || joints.size() != kHandJointCount) throw Failure{hw + ".joints: expected 26 [x, y, z]"};
-        for (std::size_t k = 0; k < kHandJointCount; ++k) {
-          std::array<double, 3> p{};
-          numbers_into(joints[k], p, hw + ".joints[" + std::to_string(k) + "]");
-          in_hand.joints_world[k] = Eigen::Vector3d(p[0], p[1], p[2]);
-        }
-        numbers_into(hj.value("radius", json()), in_hand.radius_m, hw + ".radius");
-        numbers_into(hj.value("confidence", json()), in_hand.confidence, hw + ".confidence");
-      }
-      if (j.contains("objects")) {
-        if (!j["objects"].is_object()) throw Failure{where + ": objects: expected {name: pose}"};
-        for (const auto& [name, pose] : j["objects"].items()) f.objects[name] = pose_from(pose, where + ": objects." + name);
-      }
-      rec.frames.push_back(std::move(f));
+  while (std::getline(in, line)) {
+    ++number_of_line;
+    if (line.empty()) continue;
+    // Each line is a JSON document of its own, named "FILE:LINE" in errors.
+    const std::string where = file.string() + ":" + std::to_string(number_of_line);
+    if (number_of_line == 1) {
+      auto header = parse_json<Header>(line, where, read_header);
+      if (!header) return std::unexpected(header.error().to_string());
+      rec.rate_hz = header->rate_hz;
+      rec.objects = std::move(header->objects);
+      continue;
     }
-  } catch (const Failure& f) {
-    return std::unexpected(f.message);
+    auto frame = parse_json<RecordedFrame>(line, where, read_frame);
+    if (!frame) return std::unexpected(frame.error().to_string());
+    if (!rec.frames.empty() && !(frame->t_s > rec.frames.back().t_s)) return std::unexpected(where + ": /t: times must increase");
+    rec.frames.push_back(std::move(*frame));
   }
   if (number_of_line == 0) return std::unexpected(file.string() + ": empty; expected a rhot-recording header");
   if (rec.frames.empty()) return std::unexpected(file.string() + ": no frames");

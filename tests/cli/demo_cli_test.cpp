@@ -122,6 +122,12 @@ TEST(DemoCli, MissingSceneAndBadFlagsAreReported) {
   EXPECT_NE(bad_flag.exit_code, 0);
   EXPECT_NE(bad_flag.output.find("--frames"), std::string::npos) << bad_flag.output;
 
+  // A number the flag's range lets through but no simulation can use: a clear error, no abort.
+  const DemoRun nan_sigma = run_demo("--headless --sigma nan");
+  EXPECT_EQ(nan_sigma.exit_code, 1) << nan_sigma.output;
+  EXPECT_NE(nan_sigma.output.find("sigma: the simulated pixel noise must be a number from 0 to 50 pixels, got nan"), std::string::npos)
+      << nan_sigma.output;
+
   const DemoRun unknown = run_demo("--fly");
   EXPECT_NE(unknown.exit_code, 0);
   EXPECT_NE(unknown.output.find("--fly"), std::string::npos) << unknown.output;

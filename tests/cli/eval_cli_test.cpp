@@ -59,6 +59,18 @@ TEST(EvalCli, BadRigIsReported) {
   EXPECT_EQ(r.exit_code, 1);
 }
 
+TEST(EvalCli, ANoiseNoSimulationCanUseIsAClearError) {
+  // NaN gets through the flag's range check; the simulated rig's settings check refuses it.
+  const std::string stars = std::string("stars --set ") + RHOT_ASSET_DIR + "/stars/seed-case.json";
+  for (const std::string& mode : {std::string("triangulation"), std::string("wand"), stars, std::string("hands")}) {
+    const auto r = rhot::test::run_program("rhot-eval",
+                                           mode + " --rig " + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --sigma nan --frames 2 --json", "2>&1");
+    EXPECT_EQ(r.exit_code, 1) << mode << "\n" << r.output;
+    EXPECT_NE(r.output.find("rhot-eval: sigma_px: expected a pixel noise of 0 or more, got nan"), std::string::npos) << mode << "\n"
+                                                                                                                     << r.output;
+  }
+}
+
 TEST(EvalCli, HandsReportsJointErrorsForEveryMotion) {
   const EvalRun r = run_eval(std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion all --frames 30 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -135,6 +135,12 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
 
 int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, double sigma, int frames, unsigned seed,
           const std::vector<double>& volume_centre, bool filter) {
+  rhot::SimulatedRigSettings checked;
+  checked.sigma_px = sigma;
+  if (const auto ok = checked.check(); !ok) {
+    std::cerr << "rhot-eval: " << ok.error() << "\n";
+    return 1;
+  }
   const auto rig = rhot::load_rig(rig_file);
   if (!rig) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";

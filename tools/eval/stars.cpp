@@ -74,6 +74,10 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   settings.sigma_px = sigma;
   settings.dropout = dropout;
   settings.seed = seed;
+  if (const auto ok = settings.check(); !ok) {
+    std::cerr << "rhot-eval: " << ok.error() << "\n";
+    return 1;
+  }
   rhot::SimulatedRig sim(*rig, {}, settings);
   sim.set_bodies(simulated);
   // The tracker knows the stars in the scene, as a scene file tells it.

@@ -61,6 +61,10 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   settings.sigma_px = sigma;
   settings.dropout = dropout;
   settings.seed = seed;
+  if (const auto ok = settings.check(); !ok) {
+    std::cerr << "rhot-eval: " << ok.error() << "\n";
+    return 1;
+  }
   rhot::SimulatedRig sim(*rig, rhot::random_trajectories(markers, centre - half, centre + half, seed + 1), settings);
 
   double sum_error2 = 0.0;

@@ -60,6 +60,10 @@ int wand(const std::string& rig_file, double length_mm, double sigma, int frames
   settings.sigma_px = sigma;
   settings.dropout = dropout;
   settings.seed = seed;
+  if (const auto ok = settings.check(); !ok) {
+    std::cerr << "rhot-eval: " << ok.error() << "\n";
+    return 1;
+  }
   rhot::SimulatedRig sim(*rig, {ends[0], ends[1]}, settings);
   double sum_abs = 0.0;
   double sum_sq = 0.0;

@@ -56,6 +56,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 50.0));
   cli.add_option("--seed", settings.seed, "Seed for both noises")->capture_default_str();
   CLI11_PARSE(cli, argc, argv);
+  for (const auto& checked : {draw.check(), settings.check()}) {
+    if (!checked) {
+      std::fprintf(stderr, "rhot-simvideo: %s\n", checked.error().c_str());
+      return EXIT_FAILURE;
+    }
+  }
 
   const auto scene = rhot::load_scene_file(scene_path);
   if (!scene) {

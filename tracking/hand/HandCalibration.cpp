@@ -5,6 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/Json.h"
+
 namespace rhot {
 
 std::optional<HandPose> calibrate_flat_hand(const HandPose& reference, HandSide side, std::span<const FingertipSample> samples) {
@@ -54,38 +56,34 @@ std::expected<void, std::string> save_hand_calibration(const HandPose& skeleton,
   return {};
 }
 
-std::expected<std::pair<HandPose, HandSide>, std::string> load_hand_calibration(const std::filesystem::path& file) {
-  const std::string path = file.string();
-  std::ifstream in(file);
-  if (!in) return std::unexpected(path + ": hand calibration file not found");
-  try {
-    const nlohmann::json j = nlohmann::json::parse(in);
-    if (!j.is_object() || j.value("format", std::string()) != "rhot-hand-calibration")
-      throw std::runtime_error("format: expected \"rhot-hand-calibration\"");
-    if (!j.contains("version") || j["version"] != 1) throw std::runtime_error("version: expected 1");
-    const std::string side = j.value("side", std::string());
-    if (side != "left" && side != "right") throw std::runtime_error("side: expected \"left\" or \"right\"");
-    HandPose pose;
-    for (int k = 0; k < kHandJointCount; ++k) {
-      const std::string name(joint_name(static_cast<HandJoint>(k)));
-      const auto& p = j.contains("joints_mm") && j["joints_mm"].contains(name) ? j["joints_mm"][name] : nlohmann::json();
-      if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number()) {
-        throw std::runtime_error("joints_mm." + name + ": expected [x, y, z]");
-      }
-      pose.position_m[static_cast<std::size_t>(k)] = 1e-3 * Eigen::Vector3d(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
-      const auto& r = j.contains("radii_mm") && j["radii_mm"].contains(name) ? j["radii_mm"][name] : nlohmann::json();
-      if (!r.is_number() || !(r.get<double>() > 0.0)) throw std::runtime_error("radii_mm." + name + ": expected a positive number");
-      pose.radius_m[static_cast<std::size_t>(k)] = 1e-3 * r.get<double>();
-      if (!pose.position_m[static_cast<std::size_t>(k)].allFinite() || !std::isfinite(pose.radius_m[static_cast<std::size_t>(k)])) {
-        throw std::runtime_error("joints_mm." + name + ": not finite");
-      }
-    }
-    return std::make_pair(pose, side == "left" ? HandSide::kLeft : HandSide::kRight);
-  } catch (const nlohmann::json::parse_error& e) {
-    return std::unexpected(path + ": not JSON: " + e.what());
-  } catch (const std::exception& e) {
-    return std::unexpected(path + ": " + e.what());
+namespace {
+
+std::pair<HandPose, HandSide> read_calibration(const JsonNode& j) {
+  j.expect_object({"format", "version", "side", "joints_mm", "radii_mm"});
+  const JsonNode format = j["format"];
+  if (format.string() != "rhot-hand-calibration") format.fail("expected \"rhot-hand-calibration\", got " + describe_json(format.raw()));
+  j["version"].integer_in(1, 1);
+  const JsonNode side = j["side"];
+  const std::string side_name = side.string();
+  if (side_name != "left" && side_name != "right") side.fail("expected \"left\" or \"right\", got " + describe_json(side.raw()));
+  const JsonNode joints = j["joints_mm"];
+  const JsonNode radii = j["radii_mm"];
+  HandPose pose;
+  for (int k = 0; k < kHandJointCount; ++k) {
+    const std::string name(joint_name(static_cast<HandJoint>(k)));
+    const auto p = joints[name.c_str()].numbers(3);
+    pose.position_m[static_cast<std::size_t>(k)] = 1e-3 * Eigen::Vector3d(p[0], p[1], p[2]);
+    pose.radius_m[static_cast<std::size_t>(k)] = 1e-3 * radii[name.c_str()].positive();
   }
+  return {pose, side_name == "left" ? HandSide::kLeft : HandSide::kRight};
+}
+
+}  // namespace
+
+std::expected<std::pair<HandPose, HandSide>, std::string> load_hand_calibration(const std::filesystem::path& file) {
+  auto calibration = read_json_file<std::pair<HandPose, HandSide>>(file, "hand calibration", read_calibration);
+  if (!calibration) return std::unexpected(calibration.error().to_string());
+  return *calibration;
 }
 
 }  // namespace rhot

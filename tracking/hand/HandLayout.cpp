@@ -7,20 +7,10 @@
 #include <fstream>
 
 #include <Eigen/Geometry>
-#include <nlohmann/json.hpp>
+
+#include "base/Json.h"
 
 namespace rhot {
-
-namespace {
-
-double number(const nlohmann::json& j, const std::string& where) {
-  if (!j.is_number()) throw std::runtime_error(where + ": expected a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) throw std::runtime_error(where + ": not a finite number");
-  return v;
-}
-
-}  // namespace
 
 StarSet HandLayout::hand_star_set() const {
   StarSet set;
@@ -103,92 +93,92 @@ Rigid3d hand_from_segment_star(const HandPose& pose, HandJoint bone, const Finge
   return out;
 }
 
-std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::path& file) {
-  const std::string path = file.string();
-  std::ifstream in(file);
-  if (!in) return std::unexpected(path + ": hand layout file not found");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    return std::unexpected(path + ": not JSON: " + e.what());
-  }
+namespace {
+
+// A point [x, y, z] in millimetres -> metres.
+Eigen::Vector3d point_mm(const JsonNode& n) {
+  const auto v = n.numbers(3);
+  return 1e-3 * Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+HandLayout read_layout(const JsonNode& j, const std::filesystem::path& folder) {
+  j.expect_object({"format", "version", "name", "side", "marker_diameter_mm", "hand_star_mm", "fingertip_markers", "star_set",
+                   "segment_stars", "description"});
+  const JsonNode format = j["format"];
+  if (format.string() != "rhot-hand-layout") format.fail("expected \"rhot-hand-layout\", got " + describe_json(format.raw()));
+  j["version"].integer_in(1, 1);
   HandLayout layout;
-  try {
-    if (!j.is_object() || j.value("format", std::string()) != "rhot-hand-layout")
-      throw std::runtime_error("format: expected \"rhot-hand-layout\"");
-    if (!j.contains("version") || j["version"] != 1) throw std::runtime_error("version: expected 1");
-    layout.name = j.value("name", std::string());
-    const std::string side = j.value("side", std::string());
-    if (side != "left" && side != "right") throw std::runtime_error("side: expected \"left\" or \"right\"");
-    layout.side = side == "left" ? HandSide::kLeft : HandSide::kRight;
-    if (!j.contains("marker_diameter_mm")) throw std::runtime_error("marker_diameter_mm: missing");
-    layout.marker_diameter_mm = number(j["marker_diameter_mm"], "marker_diameter_mm");
-    if (!(layout.marker_diameter_mm > 0.0)) throw std::runtime_error("marker_diameter_mm: must be positive");
-    const auto& star = j.contains("hand_star_mm") ? j["hand_star_mm"] : nlohmann::json();
-    if (!star.is_array() || star.size() != 4) throw std::runtime_error("hand_star_mm: expected four [x, y, z] marker centres");
-    for (std::size_t m = 0; m < 4; ++m) {
-      const std::string where = "hand_star_mm[" + std::to_string(m) + "]";
-      if (!star[m].is_array() || star[m].size() != 3) throw std::runtime_error(where + ": expected [x, y, z]");
-      layout.hand_star_m[m] =
-          1e-3 * Eigen::Vector3d(number(star[m][0], where + "[0]"), number(star[m][1], where + "[1]"), number(star[m][2], where + "[2]"));
-    }
-    if (j.contains("fingertip_markers")) {
-      if (!j["fingertip_markers"].is_object()) throw std::runtime_error("fingertip_markers: expected an object of joint names");
-      constexpr std::array<HandJoint, 5> tips{HandJoint::kThumbTip, HandJoint::kIndexTip, HandJoint::kMiddleTip, HandJoint::kRingTip,
-                                              HandJoint::kLittleTip};
-      for (const auto& [name, value] : j["fingertip_markers"].items()) {
-        std::size_t finger = 5;
-        for (std::size_t f = 0; f < 5; ++f) {
-          if (joint_name(tips[f]) == name) finger = f;
-        }
-        if (finger == 5)
-          throw std::runtime_error("fingertip_markers." + name +
-                                   ": not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
-        layout.fingertip_offset_m[finger] = 1e-3 * number(value, "fingertip_markers." + name);
+  if (auto name = j.optional("name")) layout.name = name->string();
+  const JsonNode side = j["side"];
+  const std::string side_name = side.string();
+  if (side_name != "left" && side_name != "right") side.fail("expected \"left\" or \"right\", got " + describe_json(side.raw()));
+  layout.side = side_name == "left" ? HandSide::kLeft : HandSide::kRight;
+  layout.marker_diameter_mm = j["marker_diameter_mm"].positive();
+  const JsonNode star = j["hand_star_mm"];
+  if (!star.raw().is_array() || star.raw().size() != 4)
+    star.fail("expected four [x, y, z] marker centres, got " + describe_json(star.raw()));
+  const auto corners = star.elements();
+  for (std::size_t m = 0; m < 4; ++m) layout.hand_star_m[m] = point_mm(corners[m]);
+  if (auto tips_node = j.optional("fingertip_markers")) {
+    if (!tips_node->raw().is_object())
+      tips_node->fail("expected an object of fingertip joint names, got " + describe_json(tips_node->raw()));
+    constexpr std::array<HandJoint, 5> tips{HandJoint::kThumbTip, HandJoint::kIndexTip, HandJoint::kMiddleTip, HandJoint::kRingTip,
+                                            HandJoint::kLittleTip};
+    for (const auto& [name, value] : tips_node->raw().items()) {
+      const JsonNode tip = (*tips_node)[name.c_str()];
+      std::size_t finger = 5;
+      for (std::size_t f = 0; f < 5; ++f) {
+        if (joint_name(tips[f]) == name) finger = f;
       }
+      if (finger == 5) tip.fail("not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
+      layout.fingertip_offset_m[finger] = 1e-3 * tip.number();
     }
-    if (j.contains("segment_stars")) {
-      if (!j.contains("star_set") || !j["star_set"].is_string())
-        throw std::runtime_error("star_set: expected the path of the segment stars' set");
-      const auto set = load_star_set(file.parent_path() / j["star_set"].get<std::string>());
-      if (!set) throw std::runtime_error("star_set: " + set.error());
-      layout.segment_star_rules = set->rules;
-      if (!j["segment_stars"].is_array()) throw std::runtime_error("segment_stars: expected an array of {bone, star_id}");
-      constexpr std::array<HandJoint, 15> bones{HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal,      HandJoint::kThumbDistal,
-                                                HandJoint::kIndexProximal,   HandJoint::kIndexIntermediate,  HandJoint::kIndexDistal,
-                                                HandJoint::kMiddleProximal,  HandJoint::kMiddleIntermediate, HandJoint::kMiddleDistal,
-                                                HandJoint::kRingProximal,    HandJoint::kRingIntermediate,   HandJoint::kRingDistal,
-                                                HandJoint::kLittleProximal,  HandJoint::kLittleIntermediate, HandJoint::kLittleDistal};
-      for (std::size_t i = 0; i < j["segment_stars"].size(); ++i) {
-        const auto& e = j["segment_stars"][i];
-        const std::string where = "segment_stars[" + std::to_string(i) + "]";
-        const std::string bone = e.is_object() ? e.value("bone", std::string()) : std::string();
-        const auto it = std::find_if(bones.begin(), bones.end(), [&](HandJoint b) { return joint_name(b) == bone; });
-        if (it == bones.end())
-          throw std::runtime_error(where +
-                                   ".bone: expected a finger bone named by its first joint (index_proximal, thumb_metacarpal, ...)");
-        if (!e.contains("star_id") || !e["star_id"].is_number_integer()) throw std::runtime_error(where + ".star_id: expected an integer");
-        const int id = e["star_id"].get<int>();
-        const auto found = std::find_if(set->stars.begin(), set->stars.end(), [&](const MarkerStar& s) { return s.id == id; });
-        if (found == set->stars.end()) throw std::runtime_error(where + ".star_id: no star " + std::to_string(id) + " in the set");
-        for (const SegmentStar& other : layout.segment_stars) {
-          if (other.bone == *it) throw std::runtime_error(where + ".bone: " + bone + " has a star already");
-          if (other.star.id == id) throw std::runtime_error(where + ".star_id: star " + std::to_string(id) + " is on another bone already");
-        }
-        layout.segment_stars.push_back({*it, *found});
+  }
+  if (auto list = j.optional("segment_stars")) {
+    if (!j.has("star_set")) j.fail("missing \"star_set\", the path of the segment stars' set");
+    const JsonNode set_node = j["star_set"];
+    const std::filesystem::path set_file = set_node.non_empty_string();
+    const auto set = load_star_set(set_file.is_absolute() ? set_file : folder / set_file);
+    if (!set) set_node.fail(set.error());
+    layout.segment_star_rules = set->rules;
+    constexpr std::array<HandJoint, 15> bones{HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal,      HandJoint::kThumbDistal,
+                                              HandJoint::kIndexProximal,   HandJoint::kIndexIntermediate,  HandJoint::kIndexDistal,
+                                              HandJoint::kMiddleProximal,  HandJoint::kMiddleIntermediate, HandJoint::kMiddleDistal,
+                                              HandJoint::kRingProximal,    HandJoint::kRingIntermediate,   HandJoint::kRingDistal,
+                                              HandJoint::kLittleProximal,  HandJoint::kLittleIntermediate, HandJoint::kLittleDistal};
+    for (const JsonNode& e : list->elements()) {
+      e.expect_object({"bone", "star_id"});
+      const JsonNode bone_node = e["bone"];
+      const std::string bone = bone_node.string();
+      const auto it = std::find_if(bones.begin(), bones.end(), [&](HandJoint b) { return joint_name(b) == bone; });
+      if (it == bones.end()) bone_node.fail("expected a finger bone named by its first joint (index_proximal, thumb_metacarpal, ...)");
+      const JsonNode id_node = e["star_id"];
+      const int id = id_node.integer_in(0, 1000000);
+      const auto found = std::find_if(set->stars.begin(), set->stars.end(), [&](const MarkerStar& s) { return s.id == id; });
+      if (found == set->stars.end()) id_node.fail("no star " + std::to_string(id) + " in the set");
+      for (const SegmentStar& other : layout.segment_stars) {
+        if (other.bone == *it) bone_node.fail(bone + " has a star already");
+        if (other.star.id == id) id_node.fail("star " + std::to_string(id) + " is on another bone already");
       }
+      layout.segment_stars.push_back({*it, *found});
     }
-    // The star must be a star: edges distinct, markers apart, faces apart (it sits in the hand's
-    // frame, not in a box of its own, so the box rule does not apply).
-    for (const std::string& problem : check_star_set(layout.hand_star_set())) {
-      if (problem.find("is not inside the box") != std::string::npos) continue;
-      throw std::runtime_error("hand_star_mm: " + problem.substr(problem.find(": ") + 2));
-    }
-  } catch (const std::exception& e) {
-    return std::unexpected(path + ": " + e.what());
+  }
+  // The star must be a star: edges distinct, markers apart, faces apart (it sits in the hand's
+  // frame, not in a box of its own, so the box rule does not apply).
+  for (const std::string& problem : check_star_set(layout.hand_star_set())) {
+    if (problem.find("is not inside the box") != std::string::npos) continue;
+    star.fail(problem.substr(problem.find(": ") + 2));
   }
   return layout;
+}
+
+}  // namespace
+
+std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::path& file) {
+  auto layout =
+      read_json_file<HandLayout>(file, "hand layout", [&](const JsonNode& root) { return read_layout(root, file.parent_path()); });
+  if (!layout) return std::unexpected(layout.error().to_string());
+  return *layout;
 }
 
 }  // namespace rhot

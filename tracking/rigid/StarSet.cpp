@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/Json.h"
+
 namespace rhot {
 
 namespace {
@@ -30,18 +32,6 @@ std::array<double, 3> face_edges(const MarkerStar& s, const std::array<int, 3>& 
     e[static_cast<std::size_t>(k)] = (a - b).norm();
   }
   return e;
-}
-
-double number(const nlohmann::json& j, const std::string& where) {
-  if (!j.is_number()) throw std::runtime_error(where + ": expected a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) throw std::runtime_error(where + ": not a finite number");
-  return v;
-}
-
-Eigen::Vector3d vector3(const nlohmann::json& j, const std::string& where) {
-  if (!j.is_array() || j.size() != 3) throw std::runtime_error(where + ": expected [x, y, z]");
-  return {number(j[0], where + "[0]"), number(j[1], where + "[1]"), number(j[2], where + "[2]")};
 }
 
 }  // namespace
@@ -111,53 +101,50 @@ std::vector<std::string> check_star_set(const StarSet& set) {
   return problems;
 }
 
-std::expected<StarSet, std::string> load_star_set(const std::filesystem::path& file) {
-  const std::string path = file.string();
-  std::ifstream in(file);
-  if (!in) return std::unexpected(path + ": star set file not found");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    return std::unexpected(path + ": not JSON: " + e.what());
-  }
+namespace {
+
+Eigen::Vector3d vector3(const JsonNode& n) {
+  const auto v = n.numbers(3);
+  return {v[0], v[1], v[2]};
+}
+
+StarSet read_star_set(const JsonNode& j) {
+  j.expect_object({"format", "version", "marker_diameter_mm", "box_mm", "variation_mm", "stars"});
+  const JsonNode format = j["format"];
+  if (format.string() != "rhot-marker-stars") format.fail("expected \"rhot-marker-stars\", got " + describe_json(format.raw()));
+  j["version"].integer_in(1, 1);
   StarSet set;
-  try {
-    if (!j.is_object()) throw std::runtime_error("expected a JSON object");
-    if (j.value("format", std::string()) != "rhot-marker-stars") throw std::runtime_error("format: expected \"rhot-marker-stars\"");
-    if (!j.contains("version") || j["version"] != 1) throw std::runtime_error("version: expected 1");
-    for (const char* key : {"marker_diameter_mm", "box_mm", "variation_mm", "stars"}) {
-      if (!j.contains(key)) throw std::runtime_error(std::string(key) + ": missing");
+  set.rules.marker_diameter_mm = j["marker_diameter_mm"].positive();
+  const JsonNode box = j["box_mm"];
+  set.rules.box_mm = vector3(box);
+  for (const JsonNode& side : box.elements()) side.positive();
+  set.rules.variation_mm = j["variation_mm"].positive();
+  for (const JsonNode& s : j["stars"].elements()) {
+    s.expect_object({"id", "markers_mm"});
+    MarkerStar star;
+    star.id = s["id"].integer_in(0, 1000000);
+    const JsonNode markers = s["markers_mm"];
+    if (!markers.raw().is_array() || markers.raw().size() != 4) {
+      markers.fail("expected four [x, y, z] marker centres, got " + describe_json(markers.raw()));
     }
-    set.rules.marker_diameter_mm = number(j["marker_diameter_mm"], "marker_diameter_mm");
-    set.rules.box_mm = vector3(j["box_mm"], "box_mm");
-    set.rules.variation_mm = number(j["variation_mm"], "variation_mm");
-    if (!(set.rules.marker_diameter_mm > 0.0)) throw std::runtime_error("marker_diameter_mm: must be positive");
-    if (!(set.rules.box_mm.minCoeff() > 0.0)) throw std::runtime_error("box_mm: every side must be positive");
-    if (!(set.rules.variation_mm > 0.0)) throw std::runtime_error("variation_mm: must be positive");
-    if (!j["stars"].is_array()) throw std::runtime_error("stars: expected an array");
-    for (std::size_t i = 0; i < j["stars"].size(); ++i) {
-      const nlohmann::json& s = j["stars"][i];
-      const std::string where = "stars[" + std::to_string(i) + "]";
-      if (!s.is_object()) throw std::runtime_error(where + ": expected an object with id and markers_mm");
-      if (!s.contains("id") || !s["id"].is_number_integer()) throw std::runtime_error(where + ".id: expected an integer");
-      if (!s.contains("markers_mm") || !s["markers_mm"].is_array() || s["markers_mm"].size() != 4) {
-        throw std::runtime_error(where + ".markers_mm: expected four [x, y, z] marker centres");
-      }
-      MarkerStar star;
-      star.id = s["id"].get<int>();
-      for (std::size_t m = 0; m < 4; ++m)
-        star.markers_mm[m] = vector3(s["markers_mm"][m], where + ".markers_mm[" + std::to_string(m) + "]");
-      set.stars.push_back(star);
-    }
-  } catch (const std::exception& e) {
-    return std::unexpected(path + ": " + e.what());
-  }
-  if (const auto problems = check_star_set(set); !problems.empty()) {
-    return std::unexpected(path + ": " + problems.front() +
-                           (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : ""));
+    const auto corners = markers.elements();
+    for (std::size_t m = 0; m < 4; ++m) star.markers_mm[m] = vector3(corners[m]);
+    set.stars.push_back(star);
   }
   return set;
+}
+
+}  // namespace
+
+std::expected<StarSet, std::string> load_star_set(const std::filesystem::path& file) {
+  auto set = read_json_file<StarSet>(file, "star set", read_star_set);
+  if (!set) return std::unexpected(set.error().to_string());
+  // The rules of a set (docs/marker-stars.md): the first problem, and how many more.
+  if (const auto problems = check_star_set(*set); !problems.empty()) {
+    return std::unexpected(file.string() + ": " + problems.front() +
+                           (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : ""));
+  }
+  return *set;
 }
 
 std::expected<void, std::string> save_star_set(const StarSet& set, const std::filesystem::path& file) {

@@ -48,6 +48,18 @@ double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, co
 
 }  // namespace
 
+std::expected<void, std::string> SimulatedRigSettings::check() const {
+  const auto bad = [](const char* field, const char* expected, double value) {
+    return std::unexpected(std::string(field) + ": expected " + expected + ", got " + std::to_string(value));
+  };
+  if (!std::isfinite(sigma_px) || sigma_px < 0.0) return bad("sigma_px", "a pixel noise of 0 or more", sigma_px);
+  if (!std::isfinite(dropout) || dropout < 0.0 || dropout > 1.0) return bad("dropout", "a probability from 0 to 1", dropout);
+  if (!std::isfinite(rate_hz) || !(rate_hz > 0.0)) return bad("rate_hz", "a positive frame rate", rate_hz);
+  if (!std::isfinite(camera_skew_s) || std::abs(camera_skew_s) > 1.0) return bad("camera_skew_s", "at most 1 s either way", camera_skew_s);
+  if (!std::isfinite(merge_distance_px) || merge_distance_px < 0.0) return bad("merge_distance_px", "0 or more pixels", merge_distance_px);
+  return {};
+}
+
 Eigen::Vector3d Trajectory::at(double t_s) const {
   Eigen::Vector3d p = centre_m;
   for (int i = 0; i < 3; ++i) {
@@ -59,8 +71,7 @@ Eigen::Vector3d Trajectory::at(double t_s) const {
 
 SimulatedRig::SimulatedRig(CameraRig rig, std::vector<Trajectory> markers, SimulatedRigSettings settings)
     : rig_(std::move(rig)), markers_(std::move(markers)), settings_(settings), rng_(settings.seed) {
-  RHOT_PRECONDITION(settings.sigma_px >= 0.0 && settings.dropout >= 0.0 && settings.dropout <= 1.0 && settings.rate_hz > 0.0,
-                    "SimulatedRig: sigma >= 0, dropout in [0, 1], rate > 0");
+  RHOT_PRECONDITION(settings.check().has_value(), "SimulatedRig: " + settings.check().error());
 }
 
 bool SimulatedRig::visible(int camera, const Eigen::Vector3d& p_world) const {

@@ -5,6 +5,8 @@
 // and seed give the same frames. Ground truth stays in every frame for evaluation.
 
 #include <array>
+#include <expected>
+#include <string>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -60,11 +62,14 @@ struct SimulatedRigSettings {
   // the marker nearest the camera, as a blob detector sees markers whose images overlap. 0: never.
   double merge_distance_px = 0.0;
   unsigned seed = 1;
+
+  // Every value usable: "<field>: <what was expected>, got <value>" for the first that is not.
+  [[nodiscard]] std::expected<void, std::string> check() const;
 };
 
 class SimulatedRig final : public FrameSource {
  public:
-  // Precondition: settings are sane (sigma >= 0, dropout in [0, 1], rate > 0).
+  // Precondition: settings.check() passes.
   SimulatedRig(CameraRig rig, std::vector<Trajectory> markers, SimulatedRigSettings settings = {});
 
   // Rigid bodies from the next frame on. Their markers follow the loose markers in each frame's

@@ -7,6 +7,19 @@
 
 namespace rhot {
 
+std::expected<void, std::string> SyntheticImageSettings::check() const {
+  const auto bad = [](const char* field, const char* expected, double value) {
+    return std::unexpected(std::string(field) + ": expected " + expected + ", got " + std::to_string(value));
+  };
+  if (!std::isfinite(blob_sigma_px) || blob_sigma_px < 0.3 || blob_sigma_px > 20.0)
+    return bad("blob_sigma_px", "0.3 to 20 pixels", blob_sigma_px);
+  if (!std::isfinite(peak) || peak < 0.0 || peak > 255.0) return bad("peak", "0 to 255 grey levels", peak);
+  if (!std::isfinite(background) || background < 0.0 || background > 255.0) return bad("background", "0 to 255 grey levels", background);
+  if (!std::isfinite(noise_sigma) || noise_sigma < 0.0 || noise_sigma > 100.0)
+    return bad("noise_sigma", "0 to 100 grey levels", noise_sigma);
+  return {};
+}
+
 cv::Mat draw_blobs(const CameraIntrinsics& camera, const CameraFrame& frame, const SyntheticImageSettings& s) {
   cv::Mat light(camera.height_px, camera.width_px, CV_64FC1, cv::Scalar(s.background));
   const double radius = std::ceil(4.0 * s.blob_sigma_px);

@@ -4,6 +4,8 @@
 // and for rhot-simvideo (the demo's simulated cameras written as image sequences).
 
 #include <cstdint>
+#include <expected>
+#include <string>
 
 #include <opencv2/core/mat.hpp>
 
@@ -18,6 +20,9 @@ struct SyntheticImageSettings {
   double background = 10.0;    // grey level where there is no spot
   double noise_sigma = 0.0;    // Gaussian noise added to every pixel, grey levels
   std::uint64_t seed = 1;      // for the noise
+
+  // Every value usable: "<field>: <what was expected>, got <value>" for the first that is not.
+  [[nodiscard]] std::expected<void, std::string> check() const;
 };
 
 // An 8-bit grey image (CV_8UC1) of the camera's calibrated size with a spot at every detection's

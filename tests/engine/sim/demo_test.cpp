@@ -157,13 +157,13 @@ TEST(Demo, BrokenRecordingsAreRefusedNamingTheLine) {
   }
   const auto r = load_recording(file);
   ASSERT_FALSE(r.has_value());
-  EXPECT_EQ(r.error(), file + ":2: hands: expected [left, right]");
+  EXPECT_EQ(r.error(), file + ":2: /hands: expected [left, right]");
   {
     std::ofstream out(file);
     out << R"({"format": "rhot-recording", "version": 2, "rate_hz": 90})"
         << "\n";
   }
-  EXPECT_EQ(load_recording(file).error(), file + ":1: version: expected 1");
+  EXPECT_EQ(load_recording(file).error(), file + ":1: /version: expected an integer from 1 to 1, got 2");
   EXPECT_EQ(load_recording(file + ".missing").error(), file + ".missing: cannot read the recording");
 }
 

@@ -58,33 +58,48 @@ std::string layout_error(const std::string& text) {
   const fs::path file = fs::path(::testing::TempDir()) / "rhot_bad_layout.json";
   std::ofstream(file) << text;
   const auto r = load_hand_layout(file);
-  return r ? std::string("loaded") : r.error().substr(file.string().size() + 2);
+  if (r) return "loaded";
+  // "FILE: /pointer: message", or "FILE:line:col: message" for syntax errors.
+  std::string e = r.error().substr(file.string().size());
+  return e.substr(e.rfind(": ", 0) == 0 ? 2 : 1);
 }
 
 TEST(HandLayout, BadFilesAreRefusedWithWhatIsWrong) {
   const std::string head = R"("format": "rhot-hand-layout", "version": 1, "side": "right", "marker_diameter_mm": 6)";
   const std::string star = R"("hand_star_mm": [[20.1, 17.7, -69.5], [-17.7, 21.9, -17.7], [0.0, 12.4, -56.0], [-4.3, 17.0, -22.4]])";
   EXPECT_EQ(layout_error("{" + head + ", " + star + "}"), "loaded");
-  EXPECT_EQ(layout_error(R"({"format": "hand"})"), "format: expected \"rhot-hand-layout\"");
-  EXPECT_EQ(layout_error(R"({"format": "rhot-hand-layout", "version": 1, "side": "middle"})"), "side: expected \"left\" or \"right\"");
-  EXPECT_EQ(layout_error("{" + head + "}"), "hand_star_mm: expected four [x, y, z] marker centres");
+  EXPECT_EQ(layout_error(R"({"format": "hand"})"), "/format: expected \"rhot-hand-layout\", got \"hand\"");
+  EXPECT_EQ(layout_error(R"({"format": "rhot-hand-layout", "version": 1, "side": "middle"})"),
+            "/side: expected \"left\" or \"right\", got \"middle\"");
+  EXPECT_EQ(layout_error("{" + head + "}"), "/: missing required key \"hand_star_mm\"");
+  EXPECT_EQ(layout_error("{" + head + R"(, "hand_star_mm": [[1, 2, 3]]})"),
+            "/hand_star_mm: expected four [x, y, z] marker centres, got an array");
+  EXPECT_EQ(layout_error(R"({"format": "rhot-hand-layout", "version": 1, "side": "right", "marker_diameter_mm": -6})"),
+            "/marker_diameter_mm: expected a number greater than 0 (and within float range), got -6");
+  EXPECT_EQ(layout_error("{" + head + ", " + star + R"(, "colour": "red"})"),
+            "/colour: unknown key \"colour\"; expected one of: format, version, name, side, marker_diameter_mm, hand_star_mm, "
+            "fingertip_markers, star_set, segment_stars, description");
+  EXPECT_EQ(layout_error("{" + head + ", " + star + ", " + star + "}"), "/hand_star_mm: duplicate key \"hand_star_mm\"");
+  EXPECT_EQ(layout_error("{" + head),  // The text ends after 85 characters: the parser stops at column 86.
+            "1:86: invalid JSON: syntax error while parsing object - unexpected end of input; expected '}'");
   EXPECT_EQ(layout_error("{" + head + ", " + star + R"(, "fingertip_markers": {"index_knuckle": 8})" + "}"),
-            "fingertip_markers.index_knuckle: not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
+            "/fingertip_markers/index_knuckle: not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
   EXPECT_EQ(layout_error("{" + head + R"(, "hand_star_mm": [[0, 0, 0], [10, 0, 0], [0, 10, 0], [0, 0, 30]]})"),
-            "hand_star_mm: edges 10 and 10 mm differ by less than 1.5 mm");
+            "/hand_star_mm: edges 10 and 10 mm differ by less than 1.5 mm");
   const std::string set = R"("star_set": ")" + (fs::path(RHOT_ASSET_DIR) / "stars" / "seed-case.json").string() + "\"";
   const auto segments = [&](const std::string& list) {
     return "{" + head + ", " + star + ", " + set + R"(, "segment_stars": )" + list + "}";
   };
   EXPECT_EQ(layout_error(segments(R"([{"bone": "index_proximal", "star_id": 3}])")), "loaded");
-  EXPECT_EQ(layout_error("{" + head + ", " + star + R"(, "segment_stars": []})"), "star_set: expected the path of the segment stars' set");
+  EXPECT_EQ(layout_error("{" + head + ", " + star + R"(, "segment_stars": []})"),
+            "/: missing \"star_set\", the path of the segment stars' set");
   EXPECT_EQ(layout_error(segments(R"([{"bone": "index_metacarpal", "star_id": 3}])")),
-            "segment_stars[0].bone: expected a finger bone named by its first joint (index_proximal, thumb_metacarpal, ...)");
-  EXPECT_EQ(layout_error(segments(R"([{"bone": "index_proximal", "star_id": 300}])")), "segment_stars[0].star_id: no star 300 in the set");
+            "/segment_stars/0/bone: expected a finger bone named by its first joint (index_proximal, thumb_metacarpal, ...)");
+  EXPECT_EQ(layout_error(segments(R"([{"bone": "index_proximal", "star_id": 300}])")), "/segment_stars/0/star_id: no star 300 in the set");
   EXPECT_EQ(layout_error(segments(R"([{"bone": "index_proximal", "star_id": 3}, {"bone": "index_proximal", "star_id": 4}])")),
-            "segment_stars[1].bone: index_proximal has a star already");
+            "/segment_stars/1/bone: index_proximal has a star already");
   EXPECT_EQ(layout_error(segments(R"([{"bone": "index_proximal", "star_id": 3}, {"bone": "index_distal", "star_id": 3}])")),
-            "segment_stars[1].star_id: star 3 is on another bone already");
+            "/segment_stars/1/star_id: star 3 is on another bone already");
 }
 
 TEST(HandTracker, FollowsAScriptedHandFromItsMarkers) {
@@ -175,8 +190,11 @@ TEST(HandCalibration, AFlatHandGivesEachFingersLengthAndTheFileKeepsIt) {
   for (int j = 0; j < kHandJointCount; ++j) {
     EXPECT_LT((back->first.position_m[static_cast<std::size_t>(j)] - calibrated->position_m[static_cast<std::size_t>(j)]).norm(), 1e-9);
   }
-  std::ofstream(file) << R"({"format": "rhot-hand-calibration", "version": 1, "side": "right", "joints_mm": {}})";
-  EXPECT_EQ(load_hand_calibration(file).error(), file.string() + ": joints_mm.palm: expected [x, y, z]");
+  std::ofstream(file) << R"({"format": "rhot-hand-calibration", "version": 1, "side": "right", "joints_mm": {}, "radii_mm": {}})";
+  EXPECT_EQ(load_hand_calibration(file).error(), file.string() + ": /joints_mm: missing required key \"palm\"");
+  std::ofstream(file)
+      << R"({"format": "rhot-hand-calibration", "version": 1, "side": "right", "joints_mm": {"palm": [0, 1]}, "radii_mm": {}})";
+  EXPECT_EQ(load_hand_calibration(file).error(), file.string() + ": /joints_mm/palm: expected an array of 3 numbers, got an array of 2");
   EXPECT_FALSE(calibrate_flat_hand(reference, HandSide::kRight, {}).has_value());
 }
 

@@ -82,6 +82,51 @@ TEST(SimulatedRig, OccludersHideMarkersFromCamerasBehindThem) {
   EXPECT_TRUE(sim.visible(0, fixed.centre_m));
 }
 
+// A world that puts one marker at a place that moves with time, behind a ball at t >= 1 s.
+class BallWorld final : public SimulatedWorld {
+ public:
+  explicit BallWorld(Eigen::Vector3d toward_camera0) : toward0_(std::move(toward_camera0)) {}
+  WorldSnapshot at(double t_s) override {
+    asked.push_back(t_s);
+    const Eigen::Vector3d marker(0.1 * t_s, 1.1, -0.45);
+    WorldSnapshot w;
+    w.markers_m = {marker};
+    if (t_s >= 1.0) w.occluders = {Occluder{marker + 0.1 * toward0_, marker + 0.1 * toward0_, 0.03}};
+    return w;
+  }
+  std::vector<double> asked;
+
+ private:
+  Eigen::Vector3d toward0_;
+};
+
+TEST(SimulatedRig, AWorldHandedToItIsPhotographedAtTheTimeAsked) {
+  const CameraRig r = rig("seated-4.yaml");
+  SimulatedRigSettings s;
+  s.sigma_px = 0.0;
+  SimulatedRig sim(r, {}, s);
+  FrameSource& source = sim;
+  const Eigen::Vector3d toward0 = (r.cameras[0].centre_world() - Eigen::Vector3d(0.05, 1.1, -0.45)).normalized();
+  auto world = std::make_shared<BallWorld>(toward0);
+  sim.set_world(world);
+  const auto early = source.next(0.5);
+  ASSERT_TRUE(early.has_value());
+  EXPECT_EQ(world->asked, std::vector<double>{0.5});
+  ASSERT_EQ(early->truth_position_m.size(), 1u);
+  EXPECT_EQ(early->truth_position_m[0], Eigen::Vector3d(0.05, 1.1, -0.45));
+  EXPECT_EQ(early->time_s, 0.5);
+  for (const CameraFrame& cf : early->cameras) {
+    ASSERT_EQ(cf.detections.size(), 1u) << "camera " << cf.camera;
+    const Eigen::Vector2d truth = *r.cameras[static_cast<std::size_t>(cf.camera)].project(early->truth_position_m[0]);
+    EXPECT_LT((cf.detections[0].pixel - truth).norm(), 1e-9);
+  }
+  // At 1 s the world's own occluder (the ball) hides the marker from camera 0: the rig took it.
+  const auto late = source.next(1.0);
+  ASSERT_TRUE(late.has_value());
+  EXPECT_TRUE(late->cameras[0].detections.empty());
+  EXPECT_EQ(late->cameras[1].detections.size(), 1u);
+}
+
 TEST(SimulatedRig, CamerasSeeOnlyWhatIsInTheirImageAndStampTheirOwnTime) {
   Trajectory behind;
   behind.centre_m = {0.0, 1.0, 5.0};  // behind the seated user, out of every front camera's view

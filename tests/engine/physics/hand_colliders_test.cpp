@@ -1,0 +1,100 @@
+// Hand colliders: bones that follow the tracked hand by velocity, stop at surfaces, never tunnel.
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include "engine/core/Transform.h"
+#include "engine/core/World.h"
+#include "engine/physics/BulletMath.h"
+#include "engine/physics/HandPhysics.h"
+#include "engine/sim/ScriptedHands.h"
+#include "engine/scene/SceneLoader.h"
+#include "tests/engine/physics/PhysicsTestScenes.h"
+
+namespace rhot {
+namespace {
+
+using test::kFloor;
+using test::parse;
+using test::physics_for;
+
+Entity named(World& world, const std::string& name) { return find_named(world, name); }
+
+const char* kPlateScene = R"({"entities": [
+    {"name": "floor", "mesh": {"shape": "plane", "size_m": [4, 4]}, "body": {"type": "static"}},
+    {"name": "stand", "transform": {"position": [0, 0.4, 0]}, "mesh": {"shape": "box", "size_m": [0.3, 0.8, 0.3]}, "body": {"type": "static"}},
+    {"name": "plate", "transform": {"position": [0, 0.9, 0]}, "mesh": {"shape": "box", "size_m": [0.25, 0.2, 0.004]},
+     "body": {"type": "dynamic", "mass_kg": 0.05}}]})";
+
+TEST(HandColliders, AFastHandDoesNotPassThroughAThinPlate) {
+  // The pointing hand sweeps at 4 m/s (4.4 cm per frame, ten times the plate's thickness) through
+  // where a 4 mm plate stands: the bones must hit it, not skip over it.
+  World world;
+  auto p = physics_for(world, parse(kPlateScene));
+  const HandPose pose = pointing_hand(HandSide::kRight);
+  for (int i = 0; i < 30; ++i) {
+    Rigid3d hand;
+    hand.translation = Eigen::Vector3d(0.0, 0.92, 0.3 - 4.0 * static_cast<double>(i) / 90.0);
+    p->step(world, {HandInput{}, hand_input(hand, pose)});
+  }
+  const Entity plate = named(world, "plate");
+  const btRigidBody* body = p->physics().body(plate);
+  EXPECT_LT(body->getWorldTransform().getOrigin().z(), -0.02f) << "knocked away by the hand";
+}
+
+TEST(HandColliders, BonesStopAtSurfacesInsteadOfSinkingIn) {
+  // The tracked hand pressed 1.5 cm into a static block: the physical bones stay on its surface.
+  World world;
+  auto p = physics_for(world, parse(kPlateScene));
+  const HandPose pose = pointing_hand(HandSide::kRight);
+  Rigid3d hand;
+  hand.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  for (int i = 0; i < 60; ++i) {
+    const double lowest = [&] {
+      double y = 1e9;
+      for (const auto& j : pose.position_m) y = std::min(y, (hand.rotation * j).y());
+      return y;
+    }();
+    hand.translation = Eigen::Vector3d(0.0, 0.8 + 0.03 - std::min(1.0, i / 30.0) * 0.045 - lowest, 0.10);
+    p->step(world, {HandInput{}, hand_input(hand, pose)});
+  }
+  const HandColliders& h = p->hand(HandSide::kRight);
+  double lowest_physical = 1e9;
+  for (int i = 0; i < kHandBoneCount; ++i) {
+    // The capsule's lowest point: its lower end's sphere.
+    const auto* capsule = static_cast<const btCapsuleShape*>(h.bone(i)->getCollisionShape());
+    const btTransform& t = h.bone(i)->getWorldTransform();
+    const btScalar a = (t * btVector3(0, capsule->getHalfHeight(), 0)).y();
+    const btScalar b = (t * btVector3(0, -capsule->getHalfHeight(), 0)).y();
+    lowest_physical = std::min(lowest_physical, static_cast<double>(std::min(a, b) - capsule->getRadius()));
+    EXPECT_FALSE(h.soft(i)) << "1.5 cm is under the soft distance";
+  }
+  EXPECT_GT(lowest_physical, 0.8 - 0.003) << "no bone sinks into the stand";
+  EXPECT_GT(h.largest_offset_m(), 0.01) << "the physical hand is offset from the tracked one";
+}
+
+TEST(HandColliders, NonFiniteHandsAreIgnored) {
+  World world;
+  auto p = physics_for(world, parse(kPlateScene));
+  Rigid3d hand;
+  hand.translation = Eigen::Vector3d(0.0, 1.2, 0.0);
+  HandInput good = hand_input(hand, pointing_hand(HandSide::kRight));
+  p->step(world, {HandInput{}, good});
+  HandInput bad = good;
+  bad.joints_world[7].x() = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i < 10; ++i) p->step(world, {bad, bad});
+  EXPECT_FALSE(p->hand(HandSide::kRight).active());
+  for (int i = 0; i < kHandBoneCount; ++i) EXPECT_TRUE(finite(p->hand(HandSide::kRight).bone(i)->getWorldTransform().getOrigin()));
+  p->step(world, {HandInput{}, good});
+  EXPECT_TRUE(p->hand(HandSide::kRight).active());
+}
+
+}  // namespace
+}  // namespace rhot
