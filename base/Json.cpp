@@ -138,7 +138,8 @@ std::expected<nlohmann::json, JsonError> parse_json_text(std::string_view json_t
 
 std::expected<std::string, JsonError> read_text_file(const std::filesystem::path& file, std::string_view what) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(file, ec)) return std::unexpected(JsonError{file.string(), "", std::string(what) + " file not found"});
+  if (!std::filesystem::is_regular_file(file, ec))
+    return std::unexpected(JsonError{file.string(), "", std::string(what) + " file not found"});
   std::ifstream in(file, std::ios::binary);
   std::ostringstream text;
   text << in.rdbuf();

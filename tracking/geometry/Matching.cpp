@@ -134,140 +134,154 @@ int truth_marker(const RigFrame& frame, const MatchedPoint& point) {
   return marker;
 }
 
-std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings) {
-  const std::size_t n = rig.cameras.size();
-  RHOT_PRECONDITION(frame.cameras.size() == n, "match_and_triangulate: one CameraFrame per camera of the rig");
-  std::vector<CameraDetections> cams(n);
-  for (std::size_t c = 0; c < n; ++c) {
-    RHOT_PRECONDITION(frame.cameras[c].camera == static_cast<int>(c), "match_and_triangulate: cameras in rig order");
-    cams[c].build(rig.cameras[c], frame.cameras[c]);
+namespace {
+
+// One frame's matching, in three phases: seed clusters from epipolar pairs, refine them, accept
+// the best without sharing detections.
+class Matcher {
+ public:
+  Matcher(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings)
+      : rig_(rig), settings_(settings), n_(rig.cameras.size()), cams_(n_), poses_(camera_projections(rig)) {
+    for (std::size_t c = 0; c < n_; ++c) {
+      RHOT_PRECONDITION(frame.cameras[c].camera == static_cast<int>(c), "match_and_triangulate: cameras in rig order");
+      cams_[c].build(rig.cameras[c], frame.cameras[c]);
+    }
   }
 
-  // The clusters containing each detection (to skip redundant seeds), as singly linked lists:
-  // links[l] = {cluster, next link}, heads in CameraDetections::first_link.
-  std::vector<std::pair<int, int>> links;
-  std::vector<Cluster> clusters;
-  // A detection that seeded or joined a cluster three or more cameras confirm seeds nothing more:
-  // its marker is found, and pairing it with another detection could only make a ghost. This is
-  // what keeps seeding near linear in the markers.
+  std::vector<MatchedPoint> run() {
+    for (std::size_t i = 0; i < n_; ++i) {
+      for (std::size_t j = i + 1; j < n_; ++j) seed_pair(i, j);
+    }
+    for (Cluster& cl : clusters_) refine(cl);
+    return accept();
+  }
 
-  const std::vector<CameraProjection> poses = camera_projections(rig);
-  std::vector<Observation> grown;
-  for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t j = i + 1; j < n; ++j) {
-      if (cams[i].pixel.empty() || cams[j].pixel.empty()) continue;
-      // cam_j_from_cam_i = R t; essential matrix E = [t]x R maps x_i to the epipolar line in j.
-      const Rigid3d j_from_i = rig.cameras[j].cam_from_world * rig.cameras[i].cam_from_world.inverse();
-      const Eigen::Matrix3d e = skew(j_from_i.translation) * j_from_i.rotation.toRotationMatrix();
-      const double fj = 0.5 * (rig.cameras[j].intrinsics.fx + rig.cameras[j].intrinsics.fy);
-      for (std::size_t a = 0; a < cams[i].pixel.size(); ++a) {
-        if (cams[i].explained[a] != 0) continue;
-        const Eigen::Vector3d line = e * cams[i].normalised[a].homogeneous();
-        const double tolerance = settings.epipolar_tolerance_px * line.head<2>().norm() / fj;
-        const Eigen::Vector3d ray_a = poses[i].ray_direction_world(cams[i].normalised[a]);
-        for (std::size_t b = 0; b < cams[j].pixel.size(); ++b) {
-          if (cams[j].explained[b] != 0) continue;
-          if (std::abs(line.dot(cams[j].normalised[b].homogeneous())) > tolerance) continue;
-          // Skip a seed already explained by one cluster.
-          bool already = false;
-          for (int l = cams[i].first_link[a]; l >= 0 && !already; l = links[static_cast<std::size_t>(l)].second) {
-            already = clusters[static_cast<std::size_t>(links[static_cast<std::size_t>(l)].first)].detection[j] == static_cast<int>(b);
-          }
-          if (already) continue;
-          const auto x =
-              ray_midpoint(poses[i].centre_world(), ray_a, poses[j].centre_world(), poses[j].ray_direction_world(cams[j].normalised[b]));
-          if (!x) continue;
-          Cluster cl;
-          cl.seed_point = *x;
-          cl.detection.assign(n, -1);
-          cl.detection[i] = static_cast<int>(a);
-          cl.detection[j] = static_cast<int>(b);
-          int unseen = 0;  // cameras that should see the point and have no detection near it
-          for (std::size_t k = 0; k < n; ++k) {
-            if (k == i || k == j) continue;
-            const auto p = poses[k].project(*x);
-            if (!p || !poses[k].in_image(*p)) continue;
-            cl.detection[k] = cams[k].nearest(*p, settings.reprojection_tolerance_px);
-            if (cl.detection[k] < 0) ++unseen;
-          }
-          grown.clear();
-          for (std::size_t k = 0; k < n; ++k) {
-            if (cl.detection[k] >= 0) grown.push_back({static_cast<int>(k), cams[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
-          }
-          // A pair no third camera confirms, where more than two cameras should have seen it, is
-          // a ghost: the acceptance rule below would refuse it anyway (more missing than support).
-          if (grown.size() == 2 && unseen > 2) continue;
-          // Three or more views that agree after refinement (every residual small) explain their
-          // detections; a coincidental third detection near a ghost rarely survives refinement.
-          bool confirmed = false;
-          if (grown.size() >= 3) {
-            if (const auto refined = refine_point(poses, grown, cl.seed_point, 5)) {
-              confirmed = refined->max_residual_px <= settings.max_residual_px;
-              cl.seed_point = refined->position_world;
-              // Where two markers project close together in one camera, the refined point picks
-              // the right detection more often than the two-view seed did.
-              for (std::size_t k = 0; k < n; ++k) {
-                if (k == i || k == j || cl.detection[k] < 0) continue;
-                if (const auto p = poses[k].project(cl.seed_point)) {
-                  const int d = cams[k].nearest(*p, settings.reprojection_tolerance_px);
-                  if (d >= 0) cl.detection[k] = d;
-                }
-              }
-            }
-          }
-          const int index = static_cast<int>(clusters.size());
-          for (std::size_t k = 0; k < n; ++k) {
-            if (cl.detection[k] < 0) continue;
-            const auto d = static_cast<std::size_t>(cl.detection[k]);
-            links.emplace_back(index, cams[k].first_link[d]);
-            cams[k].first_link[d] = static_cast<int>(links.size()) - 1;
-            if (confirmed) cams[k].explained[d] = 1;
-          }
-          clusters.push_back(std::move(cl));
-          if (confirmed) break;  // a is explained: no more seeds from it
-        }
+ private:
+  // Seeds from every epipolar-consistent detection pair of cameras i < j, each grown into every
+  // other camera.
+  void seed_pair(std::size_t i, std::size_t j) {
+    if (cams_[i].pixel.empty() || cams_[j].pixel.empty()) return;
+    // cam_j_from_cam_i = R t; essential matrix E = [t]x R maps x_i to the epipolar line in j.
+    const Rigid3d j_from_i = rig_.cameras[j].cam_from_world * rig_.cameras[i].cam_from_world.inverse();
+    const Eigen::Matrix3d e = skew(j_from_i.translation) * j_from_i.rotation.toRotationMatrix();
+    const double fj = 0.5 * (rig_.cameras[j].intrinsics.fx + rig_.cameras[j].intrinsics.fy);
+    for (std::size_t a = 0; a < cams_[i].pixel.size(); ++a) {
+      if (cams_[i].explained[a] != 0) continue;
+      const Eigen::Vector3d line = e * cams_[i].normalised[a].homogeneous();
+      const double tolerance = settings_.epipolar_tolerance_px * line.head<2>().norm() / fj;
+      const Eigen::Vector3d ray_a = poses_[i].ray_direction_world(cams_[i].normalised[a]);
+      for (std::size_t b = 0; b < cams_[j].pixel.size(); ++b) {
+        if (cams_[j].explained[b] != 0) continue;
+        if (std::abs(line.dot(cams_[j].normalised[b].homogeneous())) > tolerance) continue;
+        if (explained_by_a_cluster(i, a, j, b)) continue;
+        const auto x =
+            ray_midpoint(poses_[i].centre_world(), ray_a, poses_[j].centre_world(), poses_[j].ray_direction_world(cams_[j].normalised[b]));
+        if (!x) continue;
+        if (grow_seed(i, a, j, b, *x)) break;  // a is explained: no more seeds from it
       }
     }
   }
 
-  // Refine every cluster, count its support and the cameras that should have seen it.
-  for (Cluster& cl : clusters) {
-    for (std::size_t k = 0; k < n; ++k) {
-      if (cl.detection[k] >= 0) cl.observations.push_back({static_cast<int>(k), cams[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
+  // Whether a cluster already holds detection a of camera i together with detection b of camera j.
+  bool explained_by_a_cluster(std::size_t i, std::size_t a, std::size_t j, std::size_t b) const {
+    for (int l = cams_[i].first_link[a]; l >= 0; l = links_[static_cast<std::size_t>(l)].second) {
+      if (clusters_[static_cast<std::size_t>(links_[static_cast<std::size_t>(l)].first)].detection[j] == static_cast<int>(b)) return true;
+    }
+    return false;
+  }
+
+  // The seed (a in camera i, b in camera j, meeting near x) grown into every other camera; kept as
+  // a cluster unless it is a ghost. True when three or more views confirm it: its detections are
+  // then explained and seed nothing more.
+  bool grow_seed(std::size_t i, std::size_t a, std::size_t j, std::size_t b, const Eigen::Vector3d& x) {
+    Cluster cl;
+    cl.seed_point = x;
+    cl.detection.assign(n_, -1);
+    cl.detection[i] = static_cast<int>(a);
+    cl.detection[j] = static_cast<int>(b);
+    int unseen = 0;  // cameras that should see the point and have no detection near it
+    for (std::size_t k = 0; k < n_; ++k) {
+      if (k == i || k == j) continue;
+      const auto p = poses_[k].project(x);
+      if (!p || !poses_[k].in_image(*p)) continue;
+      cl.detection[k] = cams_[k].nearest(*p, settings_.reprojection_tolerance_px);
+      if (cl.detection[k] < 0) ++unseen;
+    }
+    grown_.clear();
+    for (std::size_t k = 0; k < n_; ++k) {
+      if (cl.detection[k] >= 0) grown_.push_back({static_cast<int>(k), cams_[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
+    }
+    // A pair no third camera confirms, where more than two cameras should have seen it, is a
+    // ghost: the acceptance rule would refuse it anyway (more missing than support).
+    if (grown_.size() == 2 && unseen > 2) return false;
+    // Three or more views that agree after refinement (every residual small) explain their
+    // detections; a coincidental third detection near a ghost rarely survives refinement.
+    bool confirmed = false;
+    if (grown_.size() >= 3) {
+      if (const auto refined = refine_point(poses_, grown_, cl.seed_point, 5)) {
+        confirmed = refined->max_residual_px <= settings_.max_residual_px;
+        cl.seed_point = refined->position_world;
+        // Where two markers project close together in one camera, the refined point picks the
+        // right detection more often than the two-view seed did.
+        for (std::size_t k = 0; k < n_; ++k) {
+          if (k == i || k == j || cl.detection[k] < 0) continue;
+          if (const auto p = poses_[k].project(cl.seed_point)) {
+            const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px);
+            if (d >= 0) cl.detection[k] = d;
+          }
+        }
+      }
+    }
+    const int index = static_cast<int>(clusters_.size());
+    for (std::size_t k = 0; k < n_; ++k) {
+      if (cl.detection[k] < 0) continue;
+      const auto d = static_cast<std::size_t>(cl.detection[k]);
+      links_.emplace_back(index, cams_[k].first_link[d]);
+      cams_[k].first_link[d] = static_cast<int>(links_.size()) - 1;
+      if (confirmed) cams_[k].explained[d] = 1;
+    }
+    clusters_.push_back(std::move(cl));
+    return confirmed;
+  }
+
+  // Refines a cluster, counts its support and the cameras that should have seen it.
+  void refine(Cluster& cl) {
+    for (std::size_t k = 0; k < n_; ++k) {
+      if (cl.detection[k] >= 0) cl.observations.push_back({static_cast<int>(k), cams_[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
     }
     cl.support = static_cast<int>(cl.observations.size());
-    const auto t = refine_point(poses, cl.observations, cl.seed_point, 5);
+    const auto t = refine_point(poses_, cl.observations, cl.seed_point, 5);
     if (!t) {
       cl.support = 0;
-      continue;
+      return;
     }
     cl.point = *t;
     // A two-view seed predicts the other cameras only roughly; with the refined point, look again
     // for detections the first pass missed.
     bool grew = false;
-    for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t k = 0; k < n_; ++k) {
       if (cl.detection[k] >= 0) continue;
-      const auto p = poses[k].project(cl.point.position_world);
-      if (!p || !poses[k].in_image(*p)) continue;
-      const int d = cams[k].nearest(*p, settings.reprojection_tolerance_px);
+      const auto p = poses_[k].project(cl.point.position_world);
+      if (!p || !poses_[k].in_image(*p)) continue;
+      const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px);
       if (d < 0) continue;
       cl.detection[k] = d;
-      cl.observations.push_back({static_cast<int>(k), cams[k].pixel[static_cast<std::size_t>(d)]});
+      cl.observations.push_back({static_cast<int>(k), cams_[k].pixel[static_cast<std::size_t>(d)]});
       grew = true;
     }
     if (grew) {
       std::sort(cl.observations.begin(), cl.observations.end(),
                 [](const Observation& a, const Observation& b) { return a.camera < b.camera; });
-      const auto again = refine_point(poses, cl.observations, cl.point.position_world, 5);
+      const auto again = refine_point(poses_, cl.observations, cl.point.position_world, 5);
       if (!again) {
         cl.support = 0;
-        continue;
+        return;
       }
       cl.point = *again;
     }
     // Drop, one at a time, observations that disagree with the others: a neighbouring marker's
     // detection picked up while growing.
-    while (cl.point.max_residual_px > settings.max_residual_px) {
+    while (cl.point.max_residual_px > settings_.max_residual_px) {
       const auto worst_at = static_cast<std::size_t>(cl.point.worst_observation);
       if (cl.observations.size() <= 2) {
         cl.observations.clear();
@@ -275,7 +289,7 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
       }
       cl.detection[static_cast<std::size_t>(cl.observations[worst_at].camera)] = -1;
       cl.observations.erase(cl.observations.begin() + static_cast<std::ptrdiff_t>(worst_at));
-      const auto again = refine_point(poses, cl.observations, cl.point.position_world, 5);
+      const auto again = refine_point(poses_, cl.observations, cl.point.position_world, 5);
       if (!again) {
         cl.observations.clear();
         break;
@@ -283,57 +297,82 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
       cl.point = *again;
     }
     cl.support = static_cast<int>(cl.observations.size());
-    if (cl.support < 2) continue;
-    for (std::size_t k = 0; k < n; ++k) {
+    if (cl.support < 2) return;
+    for (std::size_t k = 0; k < n_; ++k) {
       if (cl.detection[k] >= 0) continue;
-      const auto p = poses[k].project(cl.point.position_world);
-      if (p && poses[k].in_image(*p)) ++cl.missing;
+      const auto p = poses_[k].project(cl.point.position_world);
+      if (p && poses_[k].in_image(*p)) ++cl.missing;
     }
   }
-  std::vector<std::size_t> order(clusters.size());
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    if (clusters[a].support != clusters[b].support) return clusters[a].support > clusters[b].support;
-    return clusters[a].point.reprojection_rms_px < clusters[b].point.reprojection_rms_px;
-  });
 
-  std::vector<std::vector<bool>> used(n);
-  for (std::size_t c = 0; c < n; ++c) used[c].assign(cams[c].pixel.size(), false);
-  std::vector<MatchedPoint> out;
-  for (const std::size_t k : order) {
-    Cluster& cl = clusters[k];
-    if (cl.support < 2 || cl.point.reprojection_rms_px > settings.max_rms_px || cl.missing > cl.support) continue;
-    int taken = -1;  // the camera whose detection a better point already took
-    int conflicts = 0;
-    for (std::size_t c = 0; c < n; ++c) {
-      if (cl.detection[c] >= 0 && used[c][static_cast<std::size_t>(cl.detection[c])]) {
-        ++conflicts;
-        taken = static_cast<int>(c);
+  // The clusters, best first (most support, then smallest RMS), each accepted unless it is weak
+  // or shares detections with a better one.
+  std::vector<MatchedPoint> accept() {
+    std::vector<std::size_t> order(clusters_.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      if (clusters_[a].support != clusters_[b].support) return clusters_[a].support > clusters_[b].support;
+      return clusters_[a].point.reprojection_rms_px < clusters_[b].point.reprojection_rms_px;
+    });
+    std::vector<std::vector<bool>> used(n_);
+    for (std::size_t c = 0; c < n_; ++c) used[c].assign(cams_[c].pixel.size(), false);
+    std::vector<MatchedPoint> out;
+    for (const std::size_t k : order) {
+      Cluster& cl = clusters_[k];
+      if (cl.support < 2 || cl.point.reprojection_rms_px > settings_.max_rms_px || cl.missing > cl.support) continue;
+      int taken = -1;  // the camera whose detection a better point already took
+      int conflicts = 0;
+      for (std::size_t c = 0; c < n_; ++c) {
+        if (cl.detection[c] >= 0 && used[c][static_cast<std::size_t>(cl.detection[c])]) {
+          ++conflicts;
+          taken = static_cast<int>(c);
+        }
       }
+      if (conflicts > 1) continue;
+      if (conflicts == 1) {
+        // Two markers whose projections nearly coincide in one camera share a detection there;
+        // the point seen by three or more other cameras is still found, without that camera.
+        // (Two clusters of one marker share two detections or more, so no duplicate comes of this.)
+        if (cl.support < 4) continue;
+        std::erase_if(cl.observations, [&](const Observation& o) { return o.camera == taken; });
+        const auto again = refine_point(poses_, cl.observations, cl.point.position_world, 5);
+        if (!again || again->max_residual_px > settings_.max_residual_px || again->reprojection_rms_px > settings_.max_rms_px) continue;
+        cl.point = *again;
+        cl.detection[static_cast<std::size_t>(taken)] = -1;
+      }
+      MatchedPoint m;
+      m.point = cl.point;
+      m.observations = cl.observations;
+      for (std::size_t c = 0; c < n_; ++c) {
+        if (cl.detection[c] < 0) continue;
+        used[c][static_cast<std::size_t>(cl.detection[c])] = true;
+        m.detection.push_back(cl.detection[c]);
+      }
+      out.push_back(std::move(m));
     }
-    if (conflicts > 1) continue;
-    if (conflicts == 1) {
-      // Two markers whose projections nearly coincide in one camera share a detection there; the
-      // point seen by three or more other cameras is still found, without that camera. (Two
-      // clusters of one marker share two detections or more, so no duplicate comes of this.)
-      if (cl.support < 4) continue;
-      std::erase_if(cl.observations, [&](const Observation& o) { return o.camera == taken; });
-      const auto again = refine_point(poses, cl.observations, cl.point.position_world, 5);
-      if (!again || again->max_residual_px > settings.max_residual_px || again->reprojection_rms_px > settings.max_rms_px) continue;
-      cl.point = *again;
-      cl.detection[static_cast<std::size_t>(taken)] = -1;
-    }
-    MatchedPoint m;
-    m.point = cl.point;
-    m.observations = cl.observations;
-    for (std::size_t c = 0; c < n; ++c) {
-      if (cl.detection[c] < 0) continue;
-      used[c][static_cast<std::size_t>(cl.detection[c])] = true;
-      m.detection.push_back(cl.detection[c]);
-    }
-    out.push_back(std::move(m));
+    return out;
   }
-  return out;
+
+  const CameraRig& rig_;
+  const MatchSettings& settings_;
+  std::size_t n_;
+  std::vector<CameraDetections> cams_;
+  std::vector<CameraProjection> poses_;
+  // The clusters containing each detection (to skip redundant seeds), as singly linked lists:
+  // links_[l] = {cluster, next link}, heads in CameraDetections::first_link. A detection that
+  // seeded or joined a cluster three or more cameras confirm seeds nothing more: its marker is
+  // found, and pairing it with another detection could only make a ghost. This is what keeps
+  // seeding near linear in the markers.
+  std::vector<std::pair<int, int>> links_;
+  std::vector<Cluster> clusters_;
+  std::vector<Observation> grown_;  // scratch for grow_seed
+};
+
+}  // namespace
+
+std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings) {
+  RHOT_PRECONDITION(frame.cameras.size() == rig.cameras.size(), "match_and_triangulate: one CameraFrame per camera of the rig");
+  return Matcher(rig, frame, settings).run();
 }
 
 }  // namespace rhot

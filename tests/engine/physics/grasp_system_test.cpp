@@ -54,8 +54,8 @@ struct Bench {
     return static_cast<int>(std::count_if(events.begin(), events.end(), [&](const InteractionEvent& e) { return e.type == type; }));
   }
   std::size_t first(InteractionEventType type) const {
-    return static_cast<std::size_t>(
-        std::find_if(events.begin(), events.end(), [&](const InteractionEvent& e) { return e.type == type; }) - events.begin());
+    return static_cast<std::size_t>(std::find_if(events.begin(), events.end(), [&](const InteractionEvent& e) { return e.type == type; }) -
+                                    events.begin());
   }
 };
 
@@ -110,10 +110,11 @@ TEST(GraspSystem, OpeningReleasesAndTheHandCannotGraspAgainAtOnce) {
   EXPECT_EQ(b.count(InteractionEventType::kGrasp), 1) << "not within the regrasp delay";
   for (int i = 0; i < 45; ++i) b.step(1.0);
   ASSERT_EQ(b.count(InteractionEventType::kGrasp), 2);
-  const InteractionEvent& again = b.events[b.events.size() - 1 -
-                                           static_cast<std::size_t>(std::find_if(b.events.rbegin(), b.events.rend(), [](const InteractionEvent& e) {
-                                                                      return e.type == InteractionEventType::kGrasp;
-                                                                    }) - b.events.rbegin())];
+  const InteractionEvent& again =
+      b.events[b.events.size() - 1 -
+               static_cast<std::size_t>(std::find_if(b.events.rbegin(), b.events.rend(),
+                                                     [](const InteractionEvent& e) { return e.type == InteractionEventType::kGrasp; }) -
+                                        b.events.rbegin())];
   EXPECT_GE(again.time_s - released_at, b.physics->grasp().settings().regrasp_delay_s - 1e-9);
 }
 

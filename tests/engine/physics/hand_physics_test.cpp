@@ -25,7 +25,6 @@ using test::kFloor;
 using test::parse;
 using test::physics_for;
 
-
 TEST(HandPhysics, AThousandRandomHandMotionsThroughTheDefaultSceneStayInTheWorld) {
   const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
   ASSERT_TRUE(scene.has_value());
