@@ -213,8 +213,16 @@ void GraspSystem::release(Entity object, bool handed_over) {
 
 void GraspSystem::post_step(World& world) {
   events_.clear();
-  // Contacts between hand bones and scene bodies.
-  std::array<std::unordered_map<Entity, std::vector<Contact>>, 2> contacts;
+  const HandContacts contacts = read_contacts();
+  update_hover_and_contact(contacts);
+  release_opened();
+  begin_new_grasps(world, contacts);
+  resume_collisions();
+}
+
+// Contacts between hand bones and scene bodies, per hand and object.
+GraspSystem::HandContacts GraspSystem::read_contacts() const {
+  HandContacts contacts;
   btDispatcher* dispatcher = physics_.bullet().getDispatcher();
   for (int m = 0; m < dispatcher->getNumManifolds(); ++m) {
     const btPersistentManifold* manifold = dispatcher->getManifoldByIndexInternal(m);
@@ -246,7 +254,11 @@ void GraspSystem::post_step(World& world) {
     }
   }
 
-  // Hover and contact events, for every non-static body.
+  return contacts;
+}
+
+// Hover and contact events, for every non-static body.
+void GraspSystem::update_hover_and_contact(const HandContacts& contacts) {
   for (const Entity object : physics_.entities()) {
     btRigidBody* body = physics_.body(object);
     if (body->isStaticObject() && !body->isKinematicObject()) continue;
@@ -269,8 +281,10 @@ void GraspSystem::post_step(World& world) {
       s.hovering = hovering;
     }
   }
+}
 
-  // Releases: fingers opened, or the object stuck far from the hand.
+// Releases: fingers opened, or the object stuck far from the hand.
+void GraspSystem::release_opened() {
   std::vector<Entity> to_release;
   for (auto& [object, held] : held_) {
     const HandColliders* h = hands_[static_cast<std::size_t>(held.hand)];
@@ -312,8 +326,11 @@ void GraspSystem::post_step(World& world) {
     if ((any_anchor && anchor_open) || (any_finger && fingers_open)) to_release.push_back(object);
   }
   for (const Entity object : to_release) release(object, false);
+}
 
-  // New grasps.
+// New grasps: a hand not holding anything whose anchor (thumb or palm) and a curled finger touch
+// one grabbable object with opposing normals.
+void GraspSystem::begin_new_grasps(World& world, const HandContacts& contacts) {
   for (int hand = 0; hand < 2; ++hand) {
     HandColliders* h = hands_[static_cast<std::size_t>(hand)];
     if (!h || !h->active()) continue;
@@ -354,8 +371,10 @@ void GraspSystem::post_step(World& world) {
       break;  // one object per hand
     }
   }
+}
 
-  // Collisions resume once no bone of the releasing hand overlaps the object.
+// Collisions resume once no bone of the releasing hand overlaps the object.
+void GraspSystem::resume_collisions() {
   std::erase_if(reenable_, [&](const std::pair<Entity, int>& r) {
     btRigidBody* body = physics_.body(r.first);
     HandColliders* h = hands_[static_cast<std::size_t>(r.second)];

@@ -93,6 +93,15 @@ class GraspSystem {
     bool touching = false;
   };
 
+  using HandContacts = std::array<std::unordered_map<Entity, std::vector<Contact>>, 2>;  // per hand, per object
+
+  // post_step's phases, in order.
+  HandContacts read_contacts() const;
+  void update_hover_and_contact(const HandContacts& contacts);
+  void release_opened();
+  void begin_new_grasps(World& world, const HandContacts& contacts);
+  void resume_collisions();
+
   void begin_grasp(World& world, int hand, Entity object, const std::vector<Contact>& contacts, const std::vector<int>& groups);
   void release(Entity object, bool handed_over);
   btTransform target_of(const Held& held) const;

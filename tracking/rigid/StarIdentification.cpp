@@ -119,14 +119,19 @@ std::optional<IdentifiedStar> fit_star(const StarLibrary& library, int star, con
   return out;
 }
 
-std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span<const Eigen::Vector3d> points) {
+namespace {
+
+// Per point: the points at a star edge's length from it, with the distance (found by a sweep
+// along x).
+using Neighbours = std::vector<std::vector<std::pair<int, double>>>;
+
+Neighbours edge_candidates(const StarLibrary& library, std::span<const Eigen::Vector3d> points) {
   const std::size_t n = points.size();
   const double reach = library.longest_edge_m() + library.edge_tolerance_m();
-  // Edge candidates: pairs at a star edge's length, found by a sweep along x.
   std::vector<std::size_t> by_x(n);
   for (std::size_t i = 0; i < n; ++i) by_x[i] = i;
   std::sort(by_x.begin(), by_x.end(), [&](std::size_t a, std::size_t b) { return points[a].x() < points[b].x(); });
-  std::vector<std::vector<std::pair<int, double>>> neighbours(n);  // (point, distance), any order
+  Neighbours neighbours(n);  // (point, distance), any order
   for (std::size_t a = 0; a < n; ++a) {
     const Eigen::Vector3d& p = points[by_x[a]];
     if (!p.allFinite()) continue;
@@ -137,17 +142,48 @@ std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span
       neighbours[by_x[b]].emplace_back(static_cast<int>(by_x[a]), d);
     }
   }
+  return neighbours;
+}
+
+struct Hypotheses {
+  std::vector<IdentifiedStar> stars;
+  std::vector<int> support;  // per hypothesis: faces that found it
+};
+
+// A three-marker fit with its fourth marker added where the three put it, if a point is there and
+// the four still fit; else the three.
+IdentifiedStar with_fourth_marker(const StarLibrary& library, const IdentifiedStar& three, std::span<const Eigen::Vector3d> points) {
+  const std::array<int, 4>& point = three.point;
+  const auto missing = static_cast<std::size_t>(std::find(point.begin(), point.end(), -1) - point.begin());
+  const Eigen::Vector3d predicted = three.world_from_star * library.stars()[static_cast<std::size_t>(three.star)].markers_m[missing];
+  int best = -1;
+  double best_d = library.settings().fourth_marker_gate_m;
+  for (std::size_t q = 0; q < points.size(); ++q) {
+    const double d = (points[q] - predicted).norm();
+    if (d <= best_d && static_cast<int>(q) != point[0] && static_cast<int>(q) != point[1] && static_cast<int>(q) != point[2] &&
+        static_cast<int>(q) != point[3]) {
+      best_d = d;
+      best = static_cast<int>(q);
+    }
+  }
+  if (best >= 0) {
+    std::array<int, 4> four = point;
+    four[missing] = best;
+    if (auto full = fit_star(library, three.star, four, points)) return *full;
+  }
+  return three;
+}
+
+// Hypotheses from every candidate triangle (i < j < k) that is a face of the set.
+Hypotheses face_hypotheses(const StarLibrary& library, std::span<const Eigen::Vector3d> points, const Neighbours& neighbours) {
   auto distance_between = [&](int i, int j) -> double {
     for (const auto& [k, d] : neighbours[static_cast<std::size_t>(i)]) {
       if (k == j) return d;
     }
     return -1.0;
   };
-
-  // Hypotheses from every candidate triangle (i < j < k) that is a face of the set.
-  std::vector<IdentifiedStar> hypotheses;
-  std::vector<int> found_by;  // per hypothesis: faces that found it
-  for (std::size_t i = 0; i < n; ++i) {
+  Hypotheses out;
+  for (std::size_t i = 0; i < points.size(); ++i) {
     const auto& ni = neighbours[i];
     for (std::size_t x = 0; x < ni.size(); ++x) {
       const int j = ni[x].first;
@@ -166,72 +202,56 @@ std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span
         for (std::size_t e = 0; e < 3; ++e) point[static_cast<std::size_t>(face->marker[e])] = opposite[e].second;
         // Another face of a star already found with these markers: more support, no new fit.
         bool known = false;
-        for (std::size_t h = 0; h < hypotheses.size() && !known; ++h) {
-          if (hypotheses[h].star != face->star || hypotheses[h].markers_seen != 4) continue;
+        for (std::size_t h = 0; h < out.stars.size() && !known; ++h) {
+          if (out.stars[h].star != face->star || out.stars[h].markers_seen != 4) continue;
           known = true;
-          for (std::size_t m = 0; m < 4; ++m) known = known && (point[m] < 0 || point[m] == hypotheses[h].point[m]);
-          if (known) ++found_by[h];
+          for (std::size_t m = 0; m < 4; ++m) known = known && (point[m] < 0 || point[m] == out.stars[h].point[m]);
+          if (known) ++out.support[h];
         }
         if (known) continue;
         auto three = fit_star(library, face->star, point, points);
         if (!three) continue;
-        // The fourth marker where the three put it.
-        const auto missing = static_cast<std::size_t>(std::find(point.begin(), point.end(), -1) - point.begin());
-        const Eigen::Vector3d predicted = three->world_from_star * library.stars()[static_cast<std::size_t>(face->star)].markers_m[missing];
-        int best = -1;
-        double best_d = library.settings().fourth_marker_gate_m;
-        for (std::size_t q = 0; q < n; ++q) {
-          const double d = (points[q] - predicted).norm();
-          if (d <= best_d && static_cast<int>(q) != point[0] && static_cast<int>(q) != point[1] && static_cast<int>(q) != point[2] &&
-              static_cast<int>(q) != point[3]) {
-            best_d = d;
-            best = static_cast<int>(q);
-          }
-        }
-        if (best >= 0) {
-          std::array<int, 4> four = point;
-          four[missing] = best;
-          if (auto full = fit_star(library, face->star, four, points)) {
-            hypotheses.push_back(*full);
-            found_by.push_back(1);
-            continue;
-          }
-        }
-        hypotheses.push_back(*three);
-        found_by.push_back(1);
+        out.stars.push_back(with_fourth_marker(library, *three, points));
+        out.support.push_back(1);
       }
     }
   }
+  return out;
+}
 
-  // A star in view is found from each of its faces whose edges are within the tolerance: the
-  // number of faces that found a hypothesis is its support. A chance match rarely has more than one.
-  std::vector<std::size_t> order(hypotheses.size());
+// A star in view is found from each of its faces whose edges are within the tolerance: the number
+// of faces that found a hypothesis is its support. A chance match rarely has more than one.
+// Hypotheses of one star on the same points become one, their support added.
+Hypotheses merge_duplicates(const Hypotheses& found) {
+  std::vector<std::size_t> order(found.stars.size());
   for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return std::tie(hypotheses[a].star, hypotheses[a].point) < std::tie(hypotheses[b].star, hypotheses[b].point);
+    return std::tie(found.stars[a].star, found.stars[a].point) < std::tie(found.stars[b].star, found.stars[b].point);
   });
-  std::vector<IdentifiedStar> unique;
-  std::vector<int> support;
+  Hypotheses unique;
   for (const std::size_t k : order) {
-    const IdentifiedStar& x = hypotheses[k];
-    if (!unique.empty() && unique.back().star == x.star && unique.back().point == x.point) {
-      support.back() += found_by[k];
+    const IdentifiedStar& x = found.stars[k];
+    if (!unique.stars.empty() && unique.stars.back().star == x.star && unique.stars.back().point == x.point) {
+      unique.support.back() += found.support[k];
       continue;
     }
-    unique.push_back(x);
-    support.push_back(found_by[k]);
+    unique.stars.push_back(x);
+    unique.support.push_back(found.support[k]);
   }
-  hypotheses = std::move(unique);
+  return unique;
+}
 
-  // Choosing among conflicting hypotheses (sharing a point, or one star at two places): a chance
-  // triangle takes points from two or three real stars, so it conflicts with more hypotheses than
-  // a real star does. Repeatedly take the hypothesis with the most markers, then the most support,
-  // then the fewest conflicts left, then the smallest residual; drop what it conflicts with.
-  const std::size_t h = hypotheses.size();
+// Choosing among conflicting hypotheses (sharing a point, or one star at two places): a chance
+// triangle takes points from two or three real stars, so it conflicts with more hypotheses than
+// a real star does. Repeatedly take the hypothesis with the most markers, then the most support,
+// then the fewest conflicts left, then the smallest residual; drop what it conflicts with.
+std::vector<IdentifiedStar> resolve_conflicts(const Hypotheses& hypotheses) {
+  const std::vector<IdentifiedStar>& stars = hypotheses.stars;
+  const std::size_t h = stars.size();
   auto conflict = [&](std::size_t a, std::size_t b) {
-    if (hypotheses[a].star == hypotheses[b].star) return true;
-    for (const int p : hypotheses[a].point) {
-      if (p >= 0 && std::find(hypotheses[b].point.begin(), hypotheses[b].point.end(), p) != hypotheses[b].point.end()) return true;
+    if (stars[a].star == stars[b].star) return true;
+    for (const int p : stars[a].point) {
+      if (p >= 0 && std::find(stars[b].point.begin(), stars[b].point.end(), p) != stars[b].point.end()) return true;
     }
     return false;
   };
@@ -255,15 +275,15 @@ std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span
         best = a;
         continue;
       }
-      const IdentifiedStar& x = hypotheses[a];
-      const IdentifiedStar& y = hypotheses[best];
-      if (std::make_tuple(-x.markers_seen, -support[a], degree[a], x.rms_m) <
-          std::make_tuple(-y.markers_seen, -support[best], degree[best], y.rms_m)) {
+      const IdentifiedStar& x = stars[a];
+      const IdentifiedStar& y = stars[best];
+      if (std::make_tuple(-x.markers_seen, -hypotheses.support[a], degree[a], x.rms_m) <
+          std::make_tuple(-y.markers_seen, -hypotheses.support[best], degree[best], y.rms_m)) {
         best = a;
       }
     }
     if (best == h) break;
-    out.push_back(hypotheses[best]);
+    out.push_back(stars[best]);
     alive[best] = false;
     for (const std::size_t c : conflicts[best]) {
       if (!alive[c]) continue;
@@ -272,6 +292,13 @@ std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span
     }
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span<const Eigen::Vector3d> points) {
+  const Neighbours neighbours = edge_candidates(library, points);
+  return resolve_conflicts(merge_duplicates(face_hypotheses(library, points, neighbours)));
 }
 
 }  // namespace rhot
