@@ -80,42 +80,23 @@ SceneDesc make_scene(bool sphere, double size_m, bool second_pedestal, float ped
   return scene;
 }
 
-}  // namespace
-
-std::span<const std::string_view> grasp_scenario_names() { return kNames; }
-
-std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name, const SceneDesc* given) {
-  if (std::find(kNames.begin(), kNames.end(), name) == kNames.end())
-    return std::unexpected("no grasp scenario \"" + std::string(name) + "\"");
-  const bool sphere = name == "pinch";
-  const double size = sphere ? 0.03 : 0.05;
-  SceneDesc scene;
-  if (given) {
-    scene = *given;
-  } else {
-    scene = make_scene(sphere, size, name == "place", name == "push" ? 0.3f : 0.12f);
-    if (name == "place") scene.interactions.push_back({"cube-in-zone", InteractionType::kPlace, "object", "zone", 0.25});
-    if (name == "hand-over") scene.interactions.push_back({"pass-the-cube", InteractionType::kHandOver, "object", "", 0.0});
-  }
-  World world;
-  const std::vector<Entity> entities = instantiate(scene, world);
-  Entity object;
-  for (std::size_t i = 0; i < scene.entities.size(); ++i) {
-    if (scene.entities[i].name == "object") object = entities[i];
-  }
-  if (object.is_null()) return std::unexpected("the scene has no entity named \"object\"");
-  auto created = HandPhysics::create(world, scene);
-  if (!created) return std::unexpected(created.error());
-  HandPhysics& physics = **created;
-
-  const GraspPose right = make_grasp(HandSide::kRight, size, 0.006, 2);
-  const GraspPose left = make_grasp(HandSide::kLeft, size, 0.006, 2);
-  const Eigen::Vector3d start(0.0, kPedestalTop + 0.5 * size, 0.0);
-  const Eigen::Vector3d up(0.0, 1.0, 0.0);
-  const Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX();
+// What a scenario does with the hands: each hand's keys (grip centre and closure over time) and
+// how long it runs; the throw's swing velocity.
+struct ScenarioScript {
   std::vector<Key> right_keys, left_keys;
   double duration = 0.0;
   Eigen::Vector3d swing_velocity = Eigen::Vector3d::Zero();
+};
+
+ScenarioScript script_for(std::string_view name, double size) {
+  const Eigen::Vector3d start(0.0, kPedestalTop + 0.5 * size, 0.0);
+  const Eigen::Vector3d up(0.0, 1.0, 0.0);
+  const Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX();
+  ScenarioScript sc;
+  std::vector<Key>& right_keys = sc.right_keys;
+  std::vector<Key>& left_keys = sc.left_keys;
+  double& duration = sc.duration;
+  Eigen::Vector3d& swing_velocity = sc.swing_velocity;
   if (name == "lift" || name == "pinch" || name == "hidden-markers") {
     right_keys = {{0.0, start + 0.15 * up, 0.0},
                   {0.3, start + 0.15 * up, 0.0},
@@ -170,106 +151,184 @@ std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_v
     duration = 4.5;
   }
 
-  // The hand solver, for the hidden-markers scenario: fingertips in, a hand out.
-  HandSolver solver(HandSide::kRight, right.skeleton);
-  const Rigid3d push_hand_start = [&] {
+  return sc;
+}
+
+// The hands of a scenario at time t, from its script (and, for hidden-markers, through the hand
+// solver with the fingertips hidden for 0.5 s while holding).
+class ScenarioHands {
+ public:
+  ScenarioHands(std::string_view name, double size)
+      : name_(name),
+        script_(script_for(name, size)),
+        right_(make_grasp(HandSide::kRight, size, 0.006, 2)),
+        left_(make_grasp(HandSide::kLeft, size, 0.006, 2)),
+        solver_(HandSide::kRight, right_.skeleton) {
     // Pointing forward-down at 40 degrees, the index tip 4 cm behind the cube's near face (+Z side)
     // at 1 cm above its centre; it moves along -Z.
     const HandPose pointing = pointing_hand(HandSide::kRight);
     const Eigen::Vector3d tip = pointing.position_m[static_cast<std::size_t>(HandJoint::kIndexTip)];
-    Rigid3d r;
-    r.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(-0.7, Eigen::Vector3d::UnitX()));
-    r.translation = Eigen::Vector3d(0.0, start.y() + 0.01, 0.5 * size + 0.04) - r.rotation * tip;
-    return r;
-  }();
+    push_hand_start_.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(-0.7, Eigen::Vector3d::UnitX()));
+    push_hand_start_.translation =
+        Eigen::Vector3d(0.0, kPedestalTop + 0.5 * size + 0.01, 0.5 * size + 0.04) - push_hand_start_.rotation * tip;
+  }
 
-  GraspScenarioResult result;
-  result.name = std::string(name);
-  const double dt = physics.physics().step_s();
-  const btRigidBody* body = physics.physics().body(object);
-  const Eigen::Vector3d object_start = to_eigen(body->getWorldTransform().getOrigin());
-  bool have_offset = false;  // object in the holding hand's frame, at the grasp
-  Eigen::Vector3d held_offset = Eigen::Vector3d::Zero();
-  std::optional<double> released_at;
-  bool measure_throw = false;
-  double lowest_after_release = 1e9;
-  double height_at_release = 0.0;
-  std::array<HandInput, 2> inputs;
-  const long frames = static_cast<long>(std::lround(duration / dt));
-  for (long f = 0; f < frames; ++f) {
-    const double t = static_cast<double>(f) * dt;
-    inputs = {};
-    if (!right_keys.empty()) {
-      const auto [centre, closure] = at_time(right_keys, t);
-      const Rigid3d world_from_hand = right.place(centre, x_axis);
-      if (name == "hidden-markers") {
-        const HandPose truth = right.pose(closure);
+  const ScenarioScript& script() const { return script_; }
+
+  std::array<HandInput, 2> at(double t) {
+    std::array<HandInput, 2> inputs;
+    const Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX();
+    if (!script_.right_keys.empty()) {
+      const auto [centre, closure] = at_time(script_.right_keys, t);
+      const Rigid3d world_from_hand = right_.place(centre, x_axis);
+      if (name_ == "hidden-markers") {
+        const HandPose truth = right_.pose(closure);
         std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips;
         const bool hidden = t >= 2.8 && t < 3.3;
         for (int k = 0; k < kFingerCount; ++k) {
           if (!hidden)
             tips[static_cast<std::size_t>(k)] = truth.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3])];
         }
-        const HandState& s = solver.update(t, tips);
+        const HandState& s = solver_.update(t, tips);
         inputs[1] = hand_input(world_from_hand, s.pose);
         inputs[1].confidence = s.confidence;
       } else {
-        inputs[1] = hand_input(world_from_hand, right.pose(closure));
+        inputs[1] = hand_input(world_from_hand, right_.pose(closure));
       }
     }
-    if (name == "push") {
-      Rigid3d r = push_hand_start;
+    if (name_ == "push") {
+      Rigid3d r = push_hand_start_;
       const double travel = std::clamp((t - 0.3) / 1.2, 0.0, 1.0) * 0.10;  // 4 cm to the face, then 6 cm of push
       r.translation.z() -= travel;
       inputs[1] = hand_input(r, pointing_hand(HandSide::kRight));
     }
-    if (!left_keys.empty()) {
-      const auto [centre, closure] = at_time(left_keys, t);
-      inputs[0] = hand_input(left.place(centre, Eigen::Vector3d::UnitZ()), left.pose(closure));
+    if (!script_.left_keys.empty()) {
+      const auto [centre, closure] = at_time(script_.left_keys, t);
+      inputs[0] = hand_input(left_.place(centre, Eigen::Vector3d::UnitZ()), left_.pose(closure));
     }
-    const auto begin = std::chrono::steady_clock::now();
-    physics.step(world, inputs);
-    result.step_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count());
-    ++result.frames;
+    return inputs;
+  }
 
-    const Eigen::Vector3d p = to_eigen(body->getWorldTransform().getOrigin());
-    if (measure_throw && released_at && t > *released_at) {
+ private:
+  std::string_view name_;
+  ScenarioScript script_;
+  GraspPose right_, left_;
+  HandSolver solver_;  // for hidden-markers: fingertips in, a hand out
+  Rigid3d push_hand_start_;
+};
+
+// What a scenario measures, step by step.
+class ScenarioMeasure {
+ public:
+  ScenarioMeasure(std::string_view name, const btRigidBody* body, Entity object, Eigen::Vector3d swing_velocity)
+      : body_(body), object_(object), swing_velocity_(std::move(swing_velocity)), throwing_(name == "throw") {
+    result_.name = std::string(name);
+    object_start_ = to_eigen(body->getWorldTransform().getOrigin());
+  }
+
+  // After the physics step at time t with these hands.
+  void observe(double t, double dt, const HandPhysics& physics, const std::array<HandInput, 2>& inputs) {
+    ++result_.frames;
+    const Eigen::Vector3d p = to_eigen(body_->getWorldTransform().getOrigin());
+    if (measure_throw_ && released_at_ && t > *released_at_) {
       // The step after the release: the object flies on its own.
-      result.hand_speed_mps = swing_velocity.norm();
-      result.throw_velocity_error = (to_eigen(body->getLinearVelocity()) - swing_velocity).norm() / swing_velocity.norm();
-      measure_throw = false;
+      result_.hand_speed_mps = swing_velocity_.norm();
+      result_.throw_velocity_error = (to_eigen(body_->getLinearVelocity()) - swing_velocity_).norm() / swing_velocity_.norm();
+      measure_throw_ = false;
     }
     for (const InteractionEvent& e : physics.events()) {
-      result.events.push_back(e);
-      if (e.object != object) continue;
+      result_.events.push_back(e);
+      if (e.object != object_) continue;
       if (e.type == InteractionEventType::kGrasp) {
-        result.grasped = true;
-        have_offset = false;
+        result_.grasped = true;
+        have_offset_ = false;
       }
-      if (e.type == InteractionEventType::kRelease && e.handed_over) result.handed_over = true;
+      if (e.type == InteractionEventType::kRelease && e.handed_over) result_.handed_over = true;
       if (e.type == InteractionEventType::kRelease && !e.handed_over) {
-        result.released = true;
-        released_at = t;
-        height_at_release = p.y();
-        lowest_after_release = p.y();
-        measure_throw = name == "throw";
+        result_.released = true;
+        released_at_ = t;
+        height_at_release_ = p.y();
+        lowest_after_release_ = p.y();
+        measure_throw_ = throwing_;
       }
-      if (e.type == InteractionEventType::kSuccess) result.successes.push_back(e.interaction);
+      if (e.type == InteractionEventType::kSuccess) result_.successes.push_back(e.interaction);
     }
-    result.lift_m = std::max(result.lift_m, p.y() - object_start.y());
-    if (const auto side = physics.grasp().held_by(object)) {
+    result_.lift_m = std::max(result_.lift_m, p.y() - object_start_.y());
+    if (const auto side = physics.grasp().held_by(object_)) {
       const HandInput& in = inputs[*side == HandSide::kLeft ? 0 : 1];
       const Eigen::Vector3d in_hand = in.world_from_hand.inverse() * p;
-      if (!have_offset) held_offset = in_hand;
-      have_offset = true;
-      result.max_slip_m = std::max(result.max_slip_m, (in_hand - held_offset).norm());
-      result.held_s += dt;
+      if (!have_offset_) held_offset_ = in_hand;
+      have_offset_ = true;
+      result_.max_slip_m = std::max(result_.max_slip_m, (in_hand - held_offset_).norm());
+      result_.held_s += dt;
     }
-    if (released_at) lowest_after_release = std::min(lowest_after_release, p.y());
+    if (released_at_) lowest_after_release_ = std::min(lowest_after_release_, p.y());
   }
-  result.fell_after_release = released_at && height_at_release - lowest_after_release >= 0.05;
-  result.pushed_m = (to_eigen(body->getWorldTransform().getOrigin()) - object_start).norm();
-  return result;
+
+  GraspScenarioResult& result() { return result_; }
+
+  GraspScenarioResult finish() {
+    result_.fell_after_release = released_at_ && height_at_release_ - lowest_after_release_ >= 0.05;
+    result_.pushed_m = (to_eigen(body_->getWorldTransform().getOrigin()) - object_start_).norm();
+    return result_;
+  }
+
+ private:
+  const btRigidBody* body_;
+  Entity object_;
+  Eigen::Vector3d swing_velocity_;
+  bool throwing_;
+  GraspScenarioResult result_;
+  Eigen::Vector3d object_start_ = Eigen::Vector3d::Zero();
+  bool have_offset_ = false;  // object in the holding hand's frame, at the grasp
+  Eigen::Vector3d held_offset_ = Eigen::Vector3d::Zero();
+  std::optional<double> released_at_;
+  bool measure_throw_ = false;
+  double lowest_after_release_ = 1e9;
+  double height_at_release_ = 0.0;
+};
+
+}  // namespace
+
+std::span<const std::string_view> grasp_scenario_names() { return kNames; }
+
+std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name, const SceneDesc* given) {
+  if (std::find(kNames.begin(), kNames.end(), name) == kNames.end())
+    return std::unexpected("no grasp scenario \"" + std::string(name) + "\"");
+  const bool sphere = name == "pinch";
+  const double size = sphere ? 0.03 : 0.05;
+  SceneDesc scene;
+  if (given) {
+    scene = *given;
+  } else {
+    scene = make_scene(sphere, size, name == "place", name == "push" ? 0.3f : 0.12f);
+    if (name == "place") scene.interactions.push_back({"cube-in-zone", InteractionType::kPlace, "object", "zone", 0.25});
+    if (name == "hand-over") scene.interactions.push_back({"pass-the-cube", InteractionType::kHandOver, "object", "", 0.0});
+  }
+  World world;
+  const std::vector<Entity> entities = instantiate(scene, world);
+  Entity object;
+  for (std::size_t i = 0; i < scene.entities.size(); ++i) {
+    if (scene.entities[i].name == "object") object = entities[i];
+  }
+  if (object.is_null()) return std::unexpected("the scene has no entity named \"object\"");
+  auto created = HandPhysics::create(world, scene);
+  if (!created) return std::unexpected(created.error());
+  HandPhysics& physics = **created;
+
+  ScenarioHands hands(name, size);
+  ScenarioMeasure measure(name, physics.physics().body(object), object, hands.script().swing_velocity);
+  const double dt = physics.physics().step_s();
+  const long frames = static_cast<long>(std::lround(hands.script().duration / dt));
+  for (long f = 0; f < frames; ++f) {
+    const double t = static_cast<double>(f) * dt;
+    const std::array<HandInput, 2> inputs = hands.at(t);
+    const auto begin = std::chrono::steady_clock::now();
+    physics.step(world, inputs);
+    measure.result().step_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count());
+    measure.observe(t, dt, physics, inputs);
+  }
+  return measure.finish();
 }
 
 }  // namespace rhot

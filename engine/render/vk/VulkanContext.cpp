@@ -109,8 +109,16 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Context::on_debug_message(VkDebugUtilsMessageSeve
 
 std::expected<std::unique_ptr<Context>, std::string> Context::create(const Options& options) {
   std::unique_ptr<Context> c(new Context());
+  if (auto made = c->create_instance(options); !made) return std::unexpected(made.error());
+  if (auto chosen = c->choose_device(options); !chosen) return std::unexpected(chosen.error());
+  if (auto made = c->create_device(); !made) return std::unexpected(made.error());
+  spdlog::info("Vulkan device: {} ({}){}", c->device_name_, type_name(c->device_type_), c->validation_enabled_ ? ", validation on" : "");
+  return c;
+}
 
-  // ---- instance
+// The instance (with the validation layer and its messenger when asked for), and the window's
+// surface when there is a window.
+std::expected<void, std::string> Context::create_instance(const Options& options) {
   std::vector<const char*> extensions;
   for (const std::string& e : options.instance_extensions) extensions.push_back(e.c_str());
   std::vector<const char*> layers;
@@ -120,7 +128,7 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
     if (layer_available("VK_LAYER_KHRONOS_validation")) {
       layers.push_back("VK_LAYER_KHRONOS_validation");
       extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
-      c->validation_enabled_ = true;
+      validation_enabled_ = true;
     } else {
       spdlog::warn(
           "validation requested but VK_LAYER_KHRONOS_validation is not installed "
@@ -142,27 +150,32 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
   dci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
                     VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
   dci.pfnUserCallback = &Context::on_debug_message;
-  dci.pUserData = c.get();
-  if (c->validation_enabled_) ici.pNext = &dci;  // also catches messages from instance creation itself
-  if (const VkResult r = vkCreateInstance(&ici, nullptr, &c->instance_); r != VK_SUCCESS) {
+  dci.pUserData = this;
+  if (validation_enabled_) ici.pNext = &dci;  // also catches messages from instance creation itself
+  if (const VkResult r = vkCreateInstance(&ici, nullptr, &instance_); r != VK_SUCCESS) {
     return std::unexpected(std::string("cannot create a Vulkan 1.1 instance: ") + result_string(r));
   }
-  if (c->validation_enabled_) {
+  if (validation_enabled_) {
     auto create_messenger =
-        reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(c->instance_, "vkCreateDebugUtilsMessengerEXT"));
-    if (create_messenger != nullptr) create_messenger(c->instance_, &dci, nullptr, &c->messenger_);
+        reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
+    if (create_messenger != nullptr) create_messenger(instance_, &dci, nullptr, &messenger_);
   }
   if (options.make_surface) {
-    auto surface = options.make_surface(c->instance_);
+    auto surface = options.make_surface(instance_);
     if (!surface) return std::unexpected(surface.error());
-    c->surface_ = *surface;
+    surface_ = *surface;
   }
 
-  // ---- physical device
+  return {};
+}
+
+// The device the options select (auto: a discrete GPU before an integrated one before the CPU
+// driver) among those with Vulkan 1.1 graphics (and presentation to the surface, if any).
+std::expected<void, std::string> Context::choose_device(const Options& options) {
   std::uint32_t count = 0;
-  vkEnumeratePhysicalDevices(c->instance_, &count, nullptr);
+  vkEnumeratePhysicalDevices(instance_, &count, nullptr);
   std::vector<VkPhysicalDevice> devices(count);
-  vkEnumeratePhysicalDevices(c->instance_, &count, devices.data());
+  vkEnumeratePhysicalDevices(instance_, &count, devices.data());
   if (devices.empty()) {
     return std::unexpected(
         std::string("no Vulkan device found; install a driver (on machines without a GPU, Mesa's "
@@ -190,7 +203,7 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
     vkGetPhysicalDeviceQueueFamilyProperties(devices[i], &nfam, families.data());
     for (std::uint32_t f = 0; f < nfam; ++f) {
       VkBool32 present = VK_TRUE;
-      if (c->surface_ != VK_NULL_HANDLE) vkGetPhysicalDeviceSurfaceSupportKHR(devices[i], f, c->surface_, &present);
+      if (surface_ != VK_NULL_HANDLE) vkGetPhysicalDeviceSurfaceSupportKHR(devices[i], f, surface_, &present);
       if ((families[f].queueFlags & VK_QUEUE_GRAPHICS_BIT) != 0 && present == VK_TRUE) {
         usable.push_back({devices[i], props, f});
         break;
@@ -223,51 +236,56 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
                            "name); devices found:" +
                            listing +
                            (usable.empty() ? "\n  none of them offers Vulkan 1.1 graphics" +
-                                                 std::string(c->surface_ != VK_NULL_HANDLE ? " and presentation to the window" : "")
+                                                 std::string(surface_ != VK_NULL_HANDLE ? " and presentation to the window" : "")
                                            : ""));
   }
-  c->physical_ = chosen->device;
-  c->queue_family_ = chosen->family;
-  c->device_name_ = chosen->props.deviceName;
-  c->cpu_device_ = chosen->props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
-  vkGetPhysicalDeviceMemoryProperties(c->physical_, &c->memory_properties_);
+  physical_ = chosen->device;
+  queue_family_ = chosen->family;
+  device_name_ = chosen->props.deviceName;
+  cpu_device_ = chosen->props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  device_type_ = chosen->props.deviceType;
+  vkGetPhysicalDeviceMemoryProperties(physical_, &memory_properties_);
 
   VkPhysicalDeviceMultiviewFeatures multiview{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MULTIVIEW_FEATURES};
   VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
   features.pNext = &multiview;
-  vkGetPhysicalDeviceFeatures2(c->physical_, &features);
-  c->multiview_ = multiview.multiview == VK_TRUE;
+  vkGetPhysicalDeviceFeatures2(physical_, &features);
+  multiview_ = multiview.multiview == VK_TRUE;
+  fill_mode_non_solid_ = features.features.fillModeNonSolid == VK_TRUE;
 
-  // ---- device
+  return {};
+}
+
+// The logical device with one graphics queue (multiview enabled where supported) and the
+// command pool.
+std::expected<void, std::string> Context::create_device() {
   const float priority = 1.0f;
   VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-  qci.queueFamilyIndex = c->queue_family_;
+  qci.queueFamilyIndex = queue_family_;
   qci.queueCount = 1;
   qci.pQueuePriorities = &priority;
   VkPhysicalDeviceMultiviewFeatures enable_multiview{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MULTIVIEW_FEATURES};
-  enable_multiview.multiview = c->multiview_ ? VK_TRUE : VK_FALSE;
+  enable_multiview.multiview = multiview_ ? VK_TRUE : VK_FALSE;
   VkPhysicalDeviceFeatures2 enable{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
   enable.pNext = &enable_multiview;
-  enable.features.fillModeNonSolid = features.features.fillModeNonSolid;
+  enable.features.fillModeNonSolid = fill_mode_non_solid_ ? VK_TRUE : VK_FALSE;
   std::vector<const char*> device_extensions;
-  if (c->surface_ != VK_NULL_HANDLE) device_extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+  if (surface_ != VK_NULL_HANDLE) device_extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
   VkDeviceCreateInfo dci2{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
   dci2.pNext = &enable;
   dci2.queueCreateInfoCount = 1;
   dci2.pQueueCreateInfos = &qci;
   dci2.enabledExtensionCount = static_cast<std::uint32_t>(device_extensions.size());
   dci2.ppEnabledExtensionNames = device_extensions.data();
-  if (const VkResult r = vkCreateDevice(c->physical_, &dci2, nullptr, &c->device_); r != VK_SUCCESS) {
-    return std::unexpected("cannot create a Vulkan device on " + c->device_name_ + ": " + result_string(r));
+  if (const VkResult r = vkCreateDevice(physical_, &dci2, nullptr, &device_); r != VK_SUCCESS) {
+    return std::unexpected("cannot create a Vulkan device on " + device_name_ + ": " + result_string(r));
   }
-  vkGetDeviceQueue(c->device_, c->queue_family_, 0, &c->queue_);
+  vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
   VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
   pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-  pci.queueFamilyIndex = c->queue_family_;
-  RHOT_VK_CHECK(vkCreateCommandPool(c->device_, &pci, nullptr, &c->command_pool_));
-  spdlog::info("Vulkan device: {} ({}){}", c->device_name_, type_name(chosen->props.deviceType),
-               c->validation_enabled_ ? ", validation on" : "");
-  return c;
+  pci.queueFamilyIndex = queue_family_;
+  RHOT_VK_CHECK(vkCreateCommandPool(device_, &pci, nullptr, &command_pool_));
+  return {};
 }
 
 Context::~Context() {

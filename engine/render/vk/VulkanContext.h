@@ -85,6 +85,10 @@ class Context {
 
  private:
   Context() = default;
+  // create()'s steps, in order.
+  [[nodiscard]] std::expected<void, std::string> create_instance(const Options& options);
+  [[nodiscard]] std::expected<void, std::string> choose_device(const Options& options);
+  [[nodiscard]] std::expected<void, std::string> create_device();
   std::uint32_t memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags properties) const;
   static VKAPI_ATTR VkBool32 VKAPI_CALL on_debug_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                          VkDebugUtilsMessageTypeFlagsEXT types,
@@ -100,6 +104,8 @@ class Context {
   VkCommandPool command_pool_ = VK_NULL_HANDLE;
   VkPhysicalDeviceMemoryProperties memory_properties_{};
   std::string device_name_;
+  VkPhysicalDeviceType device_type_ = VK_PHYSICAL_DEVICE_TYPE_OTHER;
+  bool fill_mode_non_solid_ = false;  // the device can draw wireframes
   bool cpu_device_ = false;
   bool multiview_ = false;
   bool validation_enabled_ = false;
