@@ -22,18 +22,6 @@ namespace {
 
 std::size_t expected_bytes(const Image& im) { return static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height) * 4; }
 
-bool well_formed(const Image& im) { return im.width >= 0 && im.height >= 0 && im.rgba.size() == expected_bytes(im); }
-
-// "64x32" or "64x32 with 100 bytes of RGBA (8192 expected)" when the pixel buffer does not fit.
-std::string describe(const Image& im) {
-  std::string s = std::to_string(im.width) + "x" + std::to_string(im.height);
-  if (!well_formed(im)) {
-    s += " with " + std::to_string(im.rgba.size()) + " bytes of RGBA";
-    if (im.width >= 0 && im.height >= 0) s += " (" + std::to_string(expected_bytes(im)) + " expected)";
-  }
-  return s;
-}
-
 std::string errno_text(int err) { return std::error_code(err, std::generic_category()).message(); }
 
 // Reads a whole file; the error is the reason only (the caller names the file).
@@ -80,6 +68,17 @@ std::expected<void, std::string> write_file_atomically(const std::vector<std::ui
 }
 
 }  // namespace
+
+bool well_formed(const Image& im) { return im.width >= 0 && im.height >= 0 && im.rgba.size() == expected_bytes(im); }
+
+std::string describe(const Image& im) {
+  std::string s = std::to_string(im.width) + "x" + std::to_string(im.height);
+  if (!well_formed(im)) {
+    s += " with " + std::to_string(im.rgba.size()) + " bytes of RGBA";
+    if (im.width >= 0 && im.height >= 0) s += " (" + std::to_string(expected_bytes(im)) + " expected)";
+  }
+  return s;
+}
 
 std::expected<void, std::string> write_png(const Image& image, const std::filesystem::path& file) {
   const std::string name = file.string();

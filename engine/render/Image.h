@@ -35,6 +35,11 @@ struct Image {
 // could decode them. Errors: "<file>: file not found", "<file>: not a PNG image: <reason>".
 [[nodiscard]] std::expected<Image, std::string> read_png(const std::filesystem::path& file);
 
+// Whether the pixel buffer holds width * height RGBA pixels (and the sizes are not negative).
+bool well_formed(const Image& image);
+// "64x32", or "64x32 with 100 bytes of RGBA (8192 expected)" for a malformed image: for messages.
+std::string describe(const Image& image);
+
 // Places images side by side, left to right: `left` at x = 0, `right` at x = left.width.
 // Precondition: equal heights and well-formed images (rgba of width * height * 4 bytes).
 Image side_by_side(const Image& left, const Image& right);

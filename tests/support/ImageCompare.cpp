@@ -9,20 +9,6 @@ namespace rhot {
 
 namespace {
 
-std::size_t expected_bytes(const Image& im) { return static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height) * 4; }
-
-bool well_formed(const Image& im) { return im.width >= 0 && im.height >= 0 && im.rgba.size() == expected_bytes(im); }
-
-// "64x32" or "64x32 with 100 bytes of RGBA (8192 expected)" when the pixel buffer does not fit.
-std::string describe(const Image& im) {
-  std::string s = std::to_string(im.width) + "x" + std::to_string(im.height);
-  if (!well_formed(im)) {
-    s += " with " + std::to_string(im.rgba.size()) + " bytes of RGBA";
-    if (im.width >= 0 && im.height >= 0) s += " (" + std::to_string(expected_bytes(im)) + " expected)";
-  }
-  return s;
-}
-
 // Largest absolute difference over the four channels of two RGBA pixels.
 inline int channel_difference(const std::uint8_t* p, const std::uint8_t* q) {
   const int d0 = std::abs(p[0] - q[0]);
