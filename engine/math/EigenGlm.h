@@ -34,4 +34,6 @@ inline glm::mat4 to_glm(const Rigid3d& b_from_a) {
 
 inline Eigen::Vector3d to_eigen(const glm::vec3& v) { return {v.x, v.y, v.z}; }
 
+inline Eigen::Quaterniond to_eigen(const glm::quat& q) { return {q.w, q.x, q.y, q.z}; }
+
 }  // namespace rhot

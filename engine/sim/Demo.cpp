@@ -4,6 +4,7 @@
 
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
+#include "engine/math/EigenGlm.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/sim/SimulatedRig.h"
@@ -137,7 +138,7 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
                                 World& world = self->runtime_->world();
                                 const Entity cube = find_named(world, self->script_->right_target());
                                 if (const Transform* t = world.find<Transform>(cube)) {
-                                  self->script_->reaim(t_s, Eigen::Vector3d(t->position.x, t->position.y, t->position.z));
+                                  self->script_->reaim(t_s, to_eigen(t->position));
                                 }
                               }});
     }

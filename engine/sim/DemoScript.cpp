@@ -1,5 +1,6 @@
 #include "engine/sim/DemoScript.h"
 
+#include "engine/math/EigenGlm.h"
 #include <algorithm>
 
 #include <glm/gtc/quaternion.hpp>
@@ -13,9 +14,8 @@ namespace {
 Rigid3d pose_of(const EntityDesc& e) {
   // Scene-file transforms of root entities (the script's objects are roots).
   Rigid3d r;
-  r.translation = Eigen::Vector3d(e.transform.position.x, e.transform.position.y, e.transform.position.z);
-  r.rotation =
-      Eigen::Quaterniond(e.transform.rotation.w, e.transform.rotation.x, e.transform.rotation.y, e.transform.rotation.z).normalized();
+  r.translation = to_eigen(e.transform.position);
+  r.rotation = to_eigen(e.transform.rotation).normalized();
   return r;
 }
 

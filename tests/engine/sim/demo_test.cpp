@@ -8,6 +8,7 @@
 
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
+#include "engine/math/EigenGlm.h"
 #include "engine/sim/Demo.h"
 #include "engine/tracked/Recording.h"
 #include "engine/scene/SceneLoader.h"
@@ -59,14 +60,14 @@ DemoRun run_default_scene(int frames, bool perfect_hands = false) {
     const auto& seen_ids = p.tracking().results().counts.seen_star_ids;
     if (std::find(seen_ids.begin(), seen_ids.end(), 0) != seen_ids.end()) {
       ++r.mug_seen_frames;
-      r.mug_worst_error_m = std::max(r.mug_worst_error_m, (Eigen::Vector3d(m.x, m.y, m.z) - truth).norm());
+      r.mug_worst_error_m = std::max(r.mug_worst_error_m, (to_eigen(m) - truth).norm());
     }
     r.mug_lift_m = std::max(r.mug_lift_m, static_cast<double>(m.y - mug_y0));
     const TrackingCounts& counts = p.tracking().results().counts;
     seen += (counts.hands_seen[0] ? 1 : 0) + (counts.hands_seen[1] ? 1 : 0);
   }
   const glm::vec3 b = world.get<Transform>(block).position;
-  r.block_end = Eigen::Vector3d(b.x, b.y, b.z);
+  r.block_end = to_eigen(b);
   r.hands_seen_fraction = static_cast<double>(seen) / (2.0 * frames);
   return r;
 }
