@@ -128,6 +128,10 @@ TEST(DemoCli, MissingSceneAndBadFlagsAreReported) {
   EXPECT_NE(nan_sigma.output.find("sigma: the simulated pixel noise must be a number from 0 to 50 pixels, got nan"), std::string::npos)
       << nan_sigma.output;
 
+  const DemoRun nan_rate = run_demo("--headless --rate-hz nan");
+  EXPECT_EQ(nan_rate.exit_code, 1) << nan_rate.output;
+  EXPECT_NE(nan_rate.output.find("rate_hz must be from 1 to 10000, got nan"), std::string::npos) << nan_rate.output;
+
   const DemoRun unknown = run_demo("--fly");
   EXPECT_NE(unknown.exit_code, 0);
   EXPECT_NE(unknown.output.find("--fly"), std::string::npos) << unknown.output;

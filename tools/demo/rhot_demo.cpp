@@ -163,6 +163,10 @@ bool resolve_options(Options& o) {
     spdlog::error("{}", checked.error());
     return false;
   }
+  if (auto checked = o.loop.check(); !checked) {
+    spdlog::error("{}", checked.error());
+    return false;
+  }
   if (!o.eye_size.empty() && !parse_size(o.eye_size, o.render.eye_width_px, o.render.eye_height_px)) {
     spdlog::error("--eye: expected WIDTHxHEIGHT in pixels, such as 1080x1200, got \"{}\"", o.eye_size);
     return false;
