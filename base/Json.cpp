@@ -8,6 +8,20 @@ namespace rhot {
 
 using nlohmann::json;
 
+std::string json_pointer_token(std::string_view key) {
+  std::string out;
+  for (const char c : key) {
+    if (c == '~') {
+      out += "~0";
+    } else if (c == '/') {
+      out += "~1";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
 std::string JsonError::to_string() const {
   std::string s = file;
   if (!json_path.empty()) s += (json_path.front() == '/' ? ": " : ":") + json_path;
@@ -81,7 +95,7 @@ class DuplicateKeyCheck {
   }
   std::string path() const {
     std::string p;
-    for (const Frame& f : frames_) p += "/" + (f.is_array ? std::to_string(f.index) : f.key);
+    for (const Frame& f : frames_) p += "/" + (f.is_array ? std::to_string(f.index) : json_pointer_token(f.key));
     return p;
   }
   std::vector<Frame> frames_;

@@ -31,6 +31,9 @@ struct JsonFailure {
   std::string message;
 };
 
+// A key as a JSON pointer spells it (RFC 6901): "~" as "~0", "/" as "~1".
+std::string json_pointer_token(std::string_view key);
+
 // A value as a message quotes it: numbers as written (NaN, infinity spelled out), strings quoted
 // and cut at 40 characters, "an object" or "an array".
 std::string describe_json(const nlohmann::json& j);
@@ -39,6 +42,7 @@ std::string describe_json(const nlohmann::json& j);
 class JsonNode {
  public:
   JsonNode(const nlohmann::json& value, std::string path) : j_(value), path_(std::move(path)) {}
+  JsonNode(nlohmann::json&&, std::string) = delete;  // it keeps a reference: the value must outlive it
 
   const std::string& path() const { return path_; }
   const nlohmann::json& raw() const { return j_; }
@@ -54,7 +58,7 @@ class JsonNode {
       if (!known) {
         std::string list;
         for (const std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-        JsonNode(value, path_ + "/" + key).fail("unknown key \"" + key + "\"; expected one of: " + list);
+        JsonNode(value, path_ + "/" + json_pointer_token(key)).fail("unknown key \"" + key + "\"; expected one of: " + list);
       }
     }
   }
@@ -62,11 +66,11 @@ class JsonNode {
   bool has(const char* key) const { return j_.contains(key); }
   JsonNode operator[](const char* key) const {
     if (!j_.contains(key)) fail(std::string("missing required key \"") + key + "\"");
-    return JsonNode(j_.at(key), path_ + "/" + key);
+    return JsonNode(j_.at(key), path_ + "/" + json_pointer_token(key));
   }
   std::optional<JsonNode> optional(const char* key) const {
     if (!j_.contains(key)) return std::nullopt;
-    return JsonNode(j_.at(key), path_ + "/" + key);
+    return JsonNode(j_.at(key), path_ + "/" + json_pointer_token(key));
   }
   std::vector<JsonNode> elements() const {
     if (!j_.is_array()) fail("expected an array, got " + describe_json(j_));

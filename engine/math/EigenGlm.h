@@ -1,7 +1,7 @@
 #pragma once
 // The one place where tracking's maths (Eigen, double) meets the engine's (GLM, float). Every
-// conversion rounds to the nearest float; quaternions keep their components (GLM stores w first,
-// Eigen last, which the constructors below take care of).
+// conversion rounds to the nearest float; quaternions keep their components (GLM's and Eigen's
+// constructors both take w first; the calls below name each component).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

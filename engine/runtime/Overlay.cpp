@@ -114,7 +114,7 @@ void Overlay::tracking_panel() {
     ImGui::Text("%zu cameras, detections: %s", rig->cameras.size(), per_camera.c_str());
     ImGui::Text("%zu points, reprojection RMS %.2f px", c.points, c.mean_reprojection_rms_px);
   } else {
-    ImGui::TextUnformatted("replaying a recording: no cameras");
+    ImGui::TextUnformatted(tracking.playback() ? "playing back a recording: no cameras" : "no cameras");
   }
   std::string stars;
   for (const int id : c.seen_star_ids) stars += (stars.empty() ? "" : ", ") + std::to_string(id);

@@ -12,6 +12,7 @@
 // build() makes the Dear ImGui calls of one frame; Runtime calls it once the renderer's
 // overlay frame has begun.
 
+#include <cstdint>
 #include <deque>
 #include <string>
 

@@ -33,8 +33,9 @@
 #include "engine/render/Renderer.h"
 #include "engine/render/SceneRenderer.h"
 #include "engine/scene/SceneDesc.h"
-#include "engine/tracked/ReplaySource.h"
+#include "engine/hand/HandComponents.h"
 #include "engine/tracked/ResultSource.h"
+#include "engine/tracked/SessionRecorder.h"
 #include "engine/tracked/TrackedObjects.h"
 
 namespace rhot {

@@ -6,6 +6,7 @@
 #include "engine/core/World.h"
 #include "engine/math/EigenGlm.h"
 #include "engine/scene/SceneLoader.h"
+#include "engine/tracked/ReplaySource.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/sim/SimulatedRig.h"
 #include "tracking/source/VideoSource.h"
@@ -36,6 +37,9 @@ std::expected<void, std::string> DemoSettings::check() const {
     return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
   }
   if (!video_devices.empty() && !replay.empty()) return std::unexpected(std::string("choose video devices or a replay, not both"));
+  if (!replay.empty() && perfect_hands) {
+    return std::unexpected(std::string("perfect hands need the simulated rig's truth; a replay has none"));
+  }
   return {};
 }
 
@@ -124,12 +128,13 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
   if (d->world_) {
     Runtime& r = *d->runtime_;
     if (settings.perfect_hands) {
-      r.add_stage("hands", {"perfect-hands", [self](double) {
-                              const auto& truth = self->world_->truth();
-                              if (!truth) return;
+      // The script's hands at the frame's own time (the simulated world may have been asked for
+      // later moments since, by unsynchronised cameras).
+      r.add_stage("hands", {"perfect-hands", [self](double t_s) {
+                              const SceneTruth truth = self->script_->at(t_s);
                               TrackingResults& results = self->runtime_->tracking().results();
                               for (std::size_t h = 0; h < 2; ++h) {
-                                results.hands[h] = hand_input(truth->hands[h].world_from_hand, truth->hands[h].pose);
+                                results.hands[h] = hand_input(truth.hands[h].world_from_hand, truth.hands[h].pose);
                               }
                             }});
     }

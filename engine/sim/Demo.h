@@ -61,7 +61,7 @@ class DemoWorld final : public SimulatedWorld {
  public:
   DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects);
   WorldSnapshot at(double t_s) override;
-  // The truth at the time last asked for.
+  // The truth at the time last asked for (with unsynchronised cameras, the last camera's moment).
   const std::optional<SceneTruth>& truth() const { return truth_; }
 
  private:
@@ -78,6 +78,10 @@ class DemoWorld final : public SimulatedWorld {
 
 class Demo {
  public:
+  // Its stages capture it: it stays where it was made.
+  Demo(const Demo&) = delete;
+  Demo& operator=(const Demo&) = delete;
+
   // Fails naming what is wrong: bad settings, a rig, star set or hand layout that cannot be read,
   // video devices that cannot be opened or do not fit the rig, a recording that cannot be read or
   // written, a physics error; video with perfect hands or with a replay.

@@ -1,5 +1,8 @@
 #include "engine/tracked/LiveTracking.h"
 
+#include <optional>
+#include <string>
+
 #include <spdlog/spdlog.h>
 
 #include "tracking/geometry/Matching.h"
@@ -35,16 +38,59 @@ std::vector<TrackingStage> LiveTracking::stages() {
           {"hands", [this](double t) { track_hands(t); }}};
 }
 
+namespace {
+
+// What is wrong with a frame from outside, for matching: it needs one CameraFrame per camera of
+// the rig, in rig order (else the frame is dropped whole), with finite pixels (else those
+// detections are dropped).
+struct FrameProblem {
+  bool drop = false;
+  std::string what;
+};
+
+std::optional<FrameProblem> sanitise(RigFrame& frame, std::size_t cameras) {
+  const std::string at = "frame " + std::to_string(frame.index) + ": ";
+  if (frame.cameras.size() != cameras) {
+    return FrameProblem{true, at + std::to_string(frame.cameras.size()) + " cameras for a rig of " + std::to_string(cameras)};
+  }
+  std::size_t non_finite = 0;
+  for (std::size_t c = 0; c < cameras; ++c) {
+    CameraFrame& cf = frame.cameras[c];
+    if (cf.camera != static_cast<int>(c)) {
+      return FrameProblem{true, at + "camera " + std::to_string(cf.camera) + " where camera " + std::to_string(c) + " belongs"};
+    }
+    non_finite += std::erase_if(cf.detections, [](const Detection& d) { return !d.pixel.allFinite(); });
+  }
+  if (non_finite > 0) return FrameProblem{false, at + std::to_string(non_finite) + " non-finite detection(s)"};
+  return std::nullopt;
+}
+
+}  // namespace
+
 void LiveTracking::read_source(double t_s) {
   results_.t_s = t_s;
   results_.counts = {};
-  if (auto frame = ended_ ? std::nullopt : source_->next(t_s)) {
+  const std::size_t cameras = source_->rig().cameras.size();
+  std::optional<RigFrame> frame = ended_ ? std::nullopt : source_->next(t_s);
+  bool dropped = false;
+  if (frame) {
+    if (const auto problem = sanitise(*frame, cameras)) {
+      dropped = problem->drop;
+      if (++bad_frames_ >= next_bad_frame_told_) {  // told at the 1st, 10th, 100th ... bad frame
+        spdlog::warn("source: {}, {} ({} bad frame(s) so far)", problem->what, dropped ? "frame dropped" : "those dropped", bad_frames_);
+        next_bad_frame_told_ *= 10;
+      }
+    }
+  } else if (!ended_) {
+    spdlog::info("source: the stream has ended after {} frames", frame_.cameras.empty() ? 0 : frame_.index + 1);
+    ended_ = true;
+  }
+  if (frame && !dropped) {
     frame_ = std::move(*frame);
   } else {
-    if (!ended_) spdlog::info("source: the stream has ended after {} frames", frame_.cameras.empty() ? 0 : frame_.index + 1);
-    ended_ = true;
-    frame_.cameras.assign(source_->rig().cameras.size(), CameraFrame{});
-    for (std::size_t c = 0; c < frame_.cameras.size(); ++c) frame_.cameras[c].camera = static_cast<int>(c);
+    // Nothing to see this frame: one empty CameraFrame per camera.
+    frame_.cameras.assign(cameras, CameraFrame{});
+    for (std::size_t c = 0; c < cameras; ++c) frame_.cameras[c].camera = static_cast<int>(c);
   }
   for (const std::string& warning : source_->take_warnings()) spdlog::warn("{}", warning);
   for (const auto& camera : frame_.cameras) {

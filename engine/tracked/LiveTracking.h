@@ -8,9 +8,12 @@
 //   hands     each hand's star and fingertip markers -> a 26-joint hand (HandTracker)
 //
 // Once the source has ended, frames have no detections (nothing is seen, hands ease to rest) and
-// ended() is true.
+// ended() is true. A frame from outside never stops the runtime: one whose cameras are not the
+// rig's, in rig order, is dropped (the frame has no detections), and non-finite detections are
+// dropped; both are logged at the 1st, 10th, 100th ... bad frame.
 
 #include <array>
+#include <cstdint>
 #include <expected>
 #include <memory>
 #include <string>
@@ -68,6 +71,8 @@ class LiveTracking final : public ResultSource {
   RigFrame frame_;
   TrackingResults results_;
   bool ended_ = false;
+  std::uint64_t bad_frames_ = 0;
+  std::uint64_t next_bad_frame_told_ = 1;
 };
 
 }  // namespace rhot

@@ -1,7 +1,7 @@
 #pragma once
 // Recordings of tracked sessions (seed 000 section 9): every frame's hands (26 joints each, with
 // radii and confidences) and star-tracked objects' poses, with timestamps, so a session can be
-// played back at any speed, inspected, or converted to glTF (tools/replay).
+// played back at any speed, inspected, or converted to glTF (tools/gltf); played back as tracking results by ReplaySource.h.
 //
 // Format: JSON Lines (docs/recording-format.md). The first line is a header:
 //   {"format": "rhot-recording", "version": 1, "rate_hz": 90, "joints": [26 OpenXR joint names],
@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 

@@ -45,20 +45,4 @@ class ReplaySource final : public ResultSource, public Playback {
   bool started_ = false;
 };
 
-// Writes what tracking delivered each frame into a recording (Recording.h): the hands, and each
-// named tracked object where it was last seen.
-class SessionRecorder {
- public:
-  [[nodiscard]] static std::expected<SessionRecorder, std::string> open(const std::filesystem::path& file, double rate_hz,
-                                                                        const TrackedObjects& objects);
-  // Appends one frame; after a write error it logs once and records nothing more.
-  void record(const TrackingResults& results);
-
- private:
-  SessionRecorder(RecordingWriter writer, const TrackedObjects& objects);
-  std::optional<RecordingWriter> writer_;
-  std::map<int, std::string> name_of_star_;
-  std::map<std::string, Rigid3d> last_pose_;  // by entity name, as last tracked
-};
-
 }  // namespace rhot

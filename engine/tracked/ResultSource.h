@@ -31,7 +31,11 @@ class Playback {
 
 class ResultSource {
  public:
+  ResultSource() = default;
   virtual ~ResultSource() = default;
+  // Stages capture the source: it stays where it was made.
+  ResultSource(const ResultSource&) = delete;
+  ResultSource& operator=(const ResultSource&) = delete;
 
   // The stages of one frame, in order; after the last, results() holds the frame's results.
   virtual std::vector<TrackingStage> stages() = 0;
@@ -43,7 +47,8 @@ class ResultSource {
   // The cameras the results come from; nothing for a recording.
   virtual const CameraRig* rig() const { return nullptr; }
 
-  // Whether the input is over (video files ran out); the runtime then stops.
+  // Whether the input is over (video files ran out); whoever runs the frame loop stops then
+  // (rhot-demo does).
   virtual bool ended() const { return false; }
 
   // Playback controls, for a recording; nothing for live tracking.

@@ -47,10 +47,13 @@ TEST(Json, EveryFailureNamesTheFileThePointerAndWhatWasExpected) {
   EXPECT_EQ(error_of(R"({"x": 1, "name": ""})"), "p.json: /name: expected a non-empty string");
   EXPECT_EQ(error_of(R"({"x": 1, "colour": 2})"), "p.json: /colour: unknown key \"colour\"; expected one of: x, n, name");
   EXPECT_EQ(error_of(R"([1, 2])"), "p.json: /: expected an object, got an array");
+  // Keys are spelled as JSON pointers spell them (RFC 6901).
+  EXPECT_EQ(error_of(R"({"x": 1, "a/b~c": 2})"), "p.json: /a~1b~0c: unknown key \"a/b~c\"; expected one of: x, n, name");
 }
 
 TEST(Json, SyntaxDuplicatesAndNumbersNoDoubleHoldsAreRefused) {
-  EXPECT_EQ(error_of("{\"x\": 1,\n \"n\": }"), "p.json:2:7: invalid JSON: syntax error while parsing value - unexpected '}'; expected '[', '{', or a literal");
+  EXPECT_EQ(error_of("{\"x\": 1,\n \"n\": }"),
+            "p.json:2:7: invalid JSON: syntax error while parsing value - unexpected '}'; expected '[', '{', or a literal");
   EXPECT_EQ(error_of(R"({"x": 1, "x": 2})"), "p.json: /x: duplicate key \"x\"");
   EXPECT_EQ(error_of(R"({"x": 1e999})"), "p.json:1:7: invalid JSON: the number 1e999 is out of range");
   EXPECT_EQ(error_of(R"({"x": 1e39})"), "p.json: /x: expected a number within float range (magnitude up to 3.4e38), got 1e+39");

@@ -71,6 +71,14 @@ TEST(EvalCli, ANoiseNoSimulationCanUseIsAClearError) {
   }
 }
 
+TEST(EvalCli, ANonFiniteVolumeIsAClearError) {
+  const auto r = rhot::test::run_program(
+      "rhot-eval", std::string("triangulation --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --volume-m nan 1 1 --frames 2 --json",
+      "2>&1");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("rhot-eval: --volume-m: expected finite numbers, got nan"), std::string::npos) << r.output;
+}
+
 TEST(EvalCli, HandsReportsJointErrorsForEveryMotion) {
   const EvalRun r = run_eval(std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --motion all --frames 30 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -8,7 +8,8 @@
 # folders that folder's code may include. base/ may be included by every folder. A file belongs
 # to the longest listed folder its path starts with (engine/render/vk/ is engine/render's). Also
 # refused, with a message of its own: a runtime library including simulation code (tracking/sim,
-# engine/sim), and a folder under tracking/ or engine/ that no table lists.
+# engine/sim), and a file under base/, tracking/ or engine/ in no listed folder. Includes are read
+# in both forms, "..." and <...>.
 #
 # PRETEND_FILE is checked as if it were at PRETEND_PATH (the layout tests feed it bad includes to
 # show that the check fails).
@@ -72,9 +73,9 @@ foreach(entry IN LISTS checked)
     list(APPEND problems "${path}: its folder ${dir}/ has no row in its README's table")
     continue()
   endif()
-  file(STRINGS "${file}" includes REGEX "^[ \t]*#[ \t]*include[ \t]*\"(base|tracking|engine|tools|tests)/")
+  file(STRINGS "${file}" includes REGEX "^[ \t]*#[ \t]*include[ \t]*[\"<](base|tracking|engine|tools|tests)/")
   foreach(line IN LISTS includes)
-    string(REGEX MATCH "\"([^\"]+)\"" _ "${line}")
+    string(REGEX MATCH "[\"<]([^\">]+)[\">]" _ "${line}")
     set(target "${CMAKE_MATCH_1}")
     owner("${target}" to)
     if(to STREQUAL from OR to STREQUAL "base")

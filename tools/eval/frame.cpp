@@ -1,16 +1,4 @@
-// rhot-eval: measurements a user sizing a rig wants, as one JSON object on stdout.
-//
-//   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M]
-//                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
-//   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--sigma PX] [--frames N] --json
-//   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
-//   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
-//                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
-//
-// Markers wander through a box: the flags', else the rig file's tracking volume, else a 1 m cube
-// where the cameras' optical axes meet (least squares); the simulated rig sees them with Gaussian noise and dropouts; matching and
-// triangulation recover them; the result is compared with ground truth and with the Cramer-Rao
-// bound of each point for the cameras that saw it.
+// rhot-eval frame: the demo's whole frame headless, every stage timed (engine/sim/Demo.h).
 
 #include <array>
 #include <chrono>

@@ -133,6 +133,16 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
   frame_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
+  // CLI11's range checks let NaN through (every comparison with it is false).
+  for (const auto& [flag, values] :
+       {std::pair<const char*, const std::vector<double>*>{"--volume-m", &volume}, {"--volume-centre-m", &volume_centre}}) {
+    for (const double v : *values) {
+      if (!std::isfinite(v)) {
+        std::cerr << "rhot-eval: " << flag << ": expected finite numbers, got " << v << "\n";
+        return 1;
+      }
+    }
+  }
   if (grasp_cmd->parsed()) return grasp(scenario);
   if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading));
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
