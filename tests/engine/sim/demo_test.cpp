@@ -147,27 +147,6 @@ TEST(Demo, ARecordingReplaysToThePosesItRecorded) {
   EXPECT_LT(worst_mug, 1e-6f);
 }
 
-TEST(Demo, BrokenRecordingsAreRefusedNamingTheLine) {
-  const std::string file = ::testing::TempDir() + "rhot_bad_recording.jsonl";
-  {
-    std::ofstream out(file);
-    out << R"({"format": "rhot-recording", "version": 1, "rate_hz": 90, "objects": []})"
-        << "\n";
-    out << R"({"t": 0.0, "hands": [], "objects": {}})"
-        << "\n";
-  }
-  const auto r = load_recording(file);
-  ASSERT_FALSE(r.has_value());
-  EXPECT_EQ(r.error(), file + ":2: /hands: expected [left, right]");
-  {
-    std::ofstream out(file);
-    out << R"({"format": "rhot-recording", "version": 2, "rate_hz": 90})"
-        << "\n";
-  }
-  EXPECT_EQ(load_recording(file).error(), file + ":1: /version: expected an integer from 1 to 1, got 2");
-  EXPECT_EQ(load_recording(file + ".missing").error(), file + ".missing: cannot read the recording");
-}
-
 // Frame-to-frame motion of the tracked right index tip while the script holds the hand still
 // above the cube (0.1-0.8 s): pixel noise only.
 double resting_tip_jitter_m(bool filter) {
