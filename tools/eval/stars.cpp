@@ -31,6 +31,73 @@
 
 namespace rhot::eval {
 
+namespace {
+
+// The matched points of a frame, each with the simulated body it belongs to (-1: none, or
+// several), and per body the points that are cleanly its.
+struct LabelledPoints {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<int> body;
+  std::vector<int> clean;
+};
+
+LabelledPoints label_points(const rhot::RigFrame& frame, const std::vector<rhot::MatchedPoint>& matched, int bodies) {
+  LabelledPoints out;
+  out.clean.assign(static_cast<std::size_t>(bodies), 0);
+  for (const rhot::MatchedPoint& m : matched) {
+    out.points.push_back(m.point.position_world);
+    // Markers of one star lie millimetres apart, so a point may mix two markers of one body: it is
+    // still that body's.
+    int body = -2;
+    for (std::size_t k = 0; k < m.observations.size() && body != -1; ++k) {
+      const int marker = frame.cameras[static_cast<std::size_t>(m.observations[k].camera)]
+                             .detections[static_cast<std::size_t>(m.detection[k])]
+                             .truth_marker;
+      const int b = marker < 0 ? -1 : frame.truth_marker_body[static_cast<std::size_t>(marker)];
+      body = (body == -2 || body == b) ? b : -1;
+    }
+    if (body < 0) {
+      // Detections of markers of different bodies (two stars passing close): the body of the true
+      // marker the point lies at, if it lies within a millimetre of one.
+      body = -1;
+      double nearest = 0.001;
+      for (std::size_t t = 0; t < frame.truth_position_m.size(); ++t) {
+        const double d = (frame.truth_position_m[t] - m.point.position_world).norm();
+        if (d < nearest) {
+          nearest = d;
+          body = frame.truth_marker_body[t];
+        }
+      }
+    }
+    out.body.push_back(body);
+    if (body >= 0) ++out.clean[static_cast<std::size_t>(body)];
+  }
+  return out;
+}
+
+// Whether a tracked star stands at its own body's markers only: at least one point of its body,
+// none of another's.
+bool at_its_own_markers(const rhot::TrackedStar& t, const rhot::RigFrame& frame, const std::vector<Eigen::Vector3d>& points,
+                        const std::vector<int>& point_body) {
+  bool other = false;
+  bool own = false;
+  for (const int p : t.point) {
+    if (p < 0) continue;
+    // A point within a millimetre of one of the star's own markers is the star's, whichever
+    // marker's detections it was built from (two bodies' markers can meet in space).
+    int body = point_body[static_cast<std::size_t>(p)];
+    for (std::size_t k = 0; k < frame.truth_position_m.size(); ++k) {
+      if (frame.truth_marker_body[k] == t.star && (frame.truth_position_m[k] - points[static_cast<std::size_t>(p)]).norm() < 0.001)
+        body = t.star;
+    }
+    other = other || (body >= 0 && body != t.star);
+    own = own || body == t.star;
+  }
+  return own && !other;
+}
+
+}  // namespace
+
 // Marker stars moving through the volume (25 of a set by default), matched, triangulated and
 // tracked; identities against the truth, poses against the true poses.
 int stars(const std::string& rig_file, const std::string& set_file, int bodies, double sigma, int frames, unsigned seed, double dropout,
@@ -82,59 +149,17 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   std::vector<double> ms;
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
-    const auto matched = rhot::match_and_triangulate(*rig, frame);
-    std::vector<Eigen::Vector3d> points;
-    std::vector<int> point_body;  // the body all of a point's detections belong to; -1: none, or several
-    std::vector<int> clean(static_cast<std::size_t>(bodies), 0);
-    for (const rhot::MatchedPoint& m : matched) {
-      points.push_back(m.point.position_world);
-      // Markers of one star lie millimetres apart, so a point may mix two markers of one body: it is
-      // still that body's.
-      int body = -2;
-      for (std::size_t k = 0; k < m.observations.size() && body != -1; ++k) {
-        const int marker = frame.cameras[static_cast<std::size_t>(m.observations[k].camera)]
-                               .detections[static_cast<std::size_t>(m.detection[k])]
-                               .truth_marker;
-        const int b = marker < 0 ? -1 : frame.truth_marker_body[static_cast<std::size_t>(marker)];
-        body = (body == -2 || body == b) ? b : -1;
-      }
-      if (body < 0) {
-        // Detections of markers of different bodies (two stars passing close): the body of the true
-        // marker the point lies at, if it lies within a millimetre of one.
-        body = -1;
-        double nearest = 0.001;
-        for (std::size_t t = 0; t < frame.truth_position_m.size(); ++t) {
-          const double d = (frame.truth_position_m[t] - m.point.position_world).norm();
-          if (d < nearest) {
-            nearest = d;
-            body = frame.truth_marker_body[t];
-          }
-        }
-      }
-      point_body.push_back(body);
-      if (point_body.back() >= 0) ++clean[static_cast<std::size_t>(point_body.back())];
-    }
+    const LabelledPoints labelled = label_points(frame, rhot::match_and_triangulate(*rig, frame), bodies);
+    const std::vector<Eigen::Vector3d>& points = labelled.points;
+    const std::vector<int>& point_body = labelled.body;
+    const std::vector<int>& clean = labelled.clean;
     const auto start = std::chrono::steady_clock::now();
     const auto& tracked = tracker.update(frame.time_s, points);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     for (int b = 0; b < bodies; ++b) identifiable += clean[static_cast<std::size_t>(b)] >= 3 ? 1 : 0;
     for (const rhot::TrackedStar& t : tracked) {
       if (!t.seen_now()) continue;
-      bool other = false;
-      bool own = false;
-      for (const int p : t.point) {
-        if (p < 0) continue;
-        // A point within a millimetre of one of the star's own markers is the star's, whichever
-        // marker's detections it was built from (two bodies' markers can meet in space).
-        int body = point_body[static_cast<std::size_t>(p)];
-        for (std::size_t k = 0; k < frame.truth_position_m.size(); ++k) {
-          if (frame.truth_marker_body[k] == t.star && (frame.truth_position_m[k] - points[static_cast<std::size_t>(p)]).norm() < 0.001)
-            body = t.star;
-        }
-        other = other || (body >= 0 && body != t.star);
-        own = own || body == t.star;
-      }
-      if (other || !own) {
+      if (!at_its_own_markers(t, frame, points, point_body)) {
         ++wrong;
         continue;
       }
