@@ -1,0 +1,128 @@
+// Runs the real rhot-calib: a simulated wand session through `wand`, the world from a simulated
+// L-frame, two rigs merged, and the errors a user sees for bad input.
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/RunCommand.h"
+#include "tracking/camera/RigFile.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+rhot::test::CommandRun calib(const std::string& args) { return rhot::test::run_program("rhot-calib", args, "2>&1"); }
+// stdout only: the JSON report.
+rhot::test::CommandRun calib_json(const std::string& args) { return rhot::test::run_program("rhot-calib", args, "2>/dev/null"); }
+
+fs::path temp_dir() {
+  const fs::path d = fs::path(::testing::TempDir()) / "rhot_calib_cli" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::string asset(const std::string& path) { return std::string(RHOT_ASSET_DIR) + "/" + path; }
+
+TEST(CalibCli, HelpListsTheSubcommands) {
+  const auto r = calib("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* sub : {"intrinsics", "wand", "world", "merge", "simulate"}) {
+    EXPECT_NE(r.output.find(sub), std::string::npos) << sub << " missing from:\n" << r.output;
+  }
+  const auto wand = calib("wand --help");
+  EXPECT_EQ(wand.exit_code, 0);
+  for (const char* option : {"--intrinsics", "--detections", "--wand-mm", "--wand-markers", "--refine", "--json", "--out"}) {
+    EXPECT_NE(wand.output.find(option), std::string::npos) << option << " missing from:\n" << wand.output;
+  }
+}
+
+TEST(CalibCli, SimulatedWandSessionToAMetricRigAndItsWorld) {
+  const fs::path dir = temp_dir();
+  const std::string truth = asset("rigs/stereo-2.yaml");
+  const auto sim = calib("simulate wand --rig " + truth + " --frames 600 --wand-mm 300 --seed 4 --out " + (dir / "wand.csv").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  const auto wand = calib_json("wand --intrinsics " + truth + " --detections " + (dir / "wand.csv").string() + " --wand-mm 300 --json --out " +
+                               (dir / "rig.yaml").string());
+  ASSERT_EQ(wand.exit_code, 0) << wand.output;
+  const nlohmann::json j = nlohmann::json::parse(wand.output);
+  EXPECT_TRUE(j["metric"].get<bool>());
+  EXPECT_LT(j["rms_px"].get<double>(), 0.5);
+  EXPECT_LT(j["wand_rms_mm"].get<double>(), 0.5);
+  ASSERT_EQ(j["cameras"].size(), 2u);
+  ASSERT_EQ(j["graph"].size(), 1u);
+  EXPECT_GT(j["graph"][0]["shared_points"].get<int>(), 500);
+  for (const auto& p : j["pictures"]) EXPECT_TRUE(fs::is_regular_file(p.get<std::string>())) << p;
+  EXPECT_EQ(j["pictures"].size(), 3u);  // two cameras' residuals and the rig from above
+  // The rig file reads back, with the report's figures beside the cameras.
+  const auto rig = rhot::load_rig(dir / "rig.yaml");
+  ASSERT_TRUE(rig) << rig.error();
+  std::ifstream text(dir / "rig.yaml");
+  const std::string yaml((std::istreambuf_iterator<char>(text)), std::istreambuf_iterator<char>());
+  EXPECT_NE(yaml.find("calibration:"), std::string::npos);
+  EXPECT_NE(yaml.find("wand_rms_mm:"), std::string::npos);
+
+  // The world from an L-frame lying at the truth's origin: the cameras land where the truth has them.
+  const auto frame = calib("simulate lframe --rig " + truth + " --seed 5 --out " + (dir / "lframe.csv").string());
+  ASSERT_EQ(frame.exit_code, 0) << frame.output;
+  const auto world = calib_json("world --lframe --rig " + (dir / "rig.yaml").string() + " --detections " + (dir / "lframe.csv").string() +
+                                " --json --out " + (dir / "world.yaml").string());
+  ASSERT_EQ(world.exit_code, 0) << world.output;
+  const nlohmann::json w = nlohmann::json::parse(world.output);
+  EXPECT_LT(w["rms_mm"].get<double>(), 2.0);
+  const auto placed = rhot::load_rig(dir / "world.yaml");
+  const auto truth_rig = rhot::load_rig(truth);
+  ASSERT_TRUE(placed && truth_rig);
+  for (std::size_t c = 0; c < truth_rig->cameras.size(); ++c) {
+    EXPECT_LT((placed->cameras[c].centre_world() - truth_rig->cameras[c].centre_world()).norm(), 0.005) << c;
+  }
+}
+
+TEST(CalibCli, BadInputGetsOneLineNamingIt) {
+  const fs::path dir = temp_dir();
+  {
+    std::ofstream(dir / "broken.csv") << "frame,camera,x,y\n0,0,1,2\n0,1,three,4\n";
+  }
+  const auto broken = calib("wand --intrinsics " + asset("rigs/stereo-2.yaml") + " --detections " + (dir / "broken.csv").string() + " --out " +
+                            (dir / "rig.yaml").string());
+  EXPECT_EQ(broken.exit_code, 1);
+  EXPECT_EQ(broken.output, "rhot-calib: error: " + (dir / "broken.csv").string() + ":3: x: expected a finite number, got \"three\"\n");
+  EXPECT_FALSE(fs::exists(dir / "rig.yaml"));
+  const auto refine = calib("wand --intrinsics " + asset("rigs/stereo-2.yaml") + " --detections " + (dir / "broken.csv").string() +
+                            " --refine focal,zoom --out " + (dir / "rig.yaml").string());
+  EXPECT_EQ(refine.exit_code, 1);
+  EXPECT_NE(refine.output.find("rhot-calib: error: --refine: expected focal, principal or k1, got \"zoom\""), std::string::npos) << refine.output;
+  const auto no_mode = calib("world --rig " + asset("rigs/stereo-2.yaml") + " --detections " + (dir / "broken.csv").string() + " --out x.yaml");
+  EXPECT_EQ(no_mode.exit_code, 1);
+  EXPECT_EQ(no_mode.output, "rhot-calib: error: give one of --lframe and --floor\n");
+  const auto missing = calib("merge " + asset("rigs/stereo-2.yaml") + " " + (dir / "none.yaml").string() + " --out x.yaml");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_EQ(missing.output, "rhot-calib: error: " + (dir / "none.yaml").string() + ": rig file not found\n");
+}
+
+TEST(CalibCli, MergesTwoRigsThroughASharedCamera) {
+  const fs::path dir = temp_dir();
+  const auto room = rhot::load_rig(asset("rigs/room-8.yaml"));
+  ASSERT_TRUE(room);
+  rhot::CameraRig a, b;
+  for (int c = 0; c < 5; ++c) a.cameras.push_back(room->cameras[static_cast<std::size_t>(c)]);
+  for (int c = 4; c < 8; ++c) b.cameras.push_back(room->cameras[static_cast<std::size_t>(c)]);
+  ASSERT_TRUE(rhot::save_rig(a, dir / "a.yaml"));
+  ASSERT_TRUE(rhot::save_rig(b, dir / "b.yaml"));
+  const auto merged = calib_json("merge " + (dir / "a.yaml").string() + " " + (dir / "b.yaml").string() + " --json --out " + (dir / "ab.yaml").string());
+  ASSERT_EQ(merged.exit_code, 0) << merged.output;
+  const nlohmann::json j = nlohmann::json::parse(merged.output);
+  EXPECT_EQ(j["cameras"], 8);
+  EXPECT_EQ(j["shared_cameras"].size(), 1u);
+  EXPECT_LT(j["centre_rms_mm"].get<double>(), 1e-6);
+  const auto ab = rhot::load_rig(dir / "ab.yaml");
+  ASSERT_TRUE(ab) << ab.error();
+  EXPECT_EQ(ab->cameras.size(), 8u);
+}
+
+}  // namespace

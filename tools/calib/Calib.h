@@ -1,0 +1,33 @@
+#pragma once
+// rhot-calib's subcommands, one file each (intrinsics.cpp, wand.cpp, world.cpp, merge.cpp,
+// simulate.cpp), and what they share. Each add_* registers its subcommand on the app; when that
+// subcommand runs, its callback stores the process's exit code in `exit_code` (0 on success, 1 on
+// bad input or a failed calibration, with one line on stderr saying what was wrong).
+//
+// Conventions shared by every subcommand: progress goes to stderr through spdlog; `--json` prints
+// one JSON report on stdout; pictures are PNG files beside the output (`--pictures DIR`, default:
+// the output file's folder).
+
+#include <filesystem>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+namespace rhot::calib_tool {
+
+void add_intrinsics(CLI::App& app, int& exit_code);
+void add_wand(CLI::App& app, int& exit_code);
+void add_world(CLI::App& app, int& exit_code);
+void add_merge(CLI::App& app, int& exit_code);
+// `simulate` has subcommands of its own: wand, lframe, floor (simulate.cpp) and board.
+void add_simulate(CLI::App& app, int& exit_code);
+void add_simulate_board(CLI::App& simulate, int& exit_code);
+
+// The folder pictures go to: `pictures` when given, else the folder of `out`.
+std::filesystem::path pictures_dir(const std::string& pictures, const std::string& out);
+
+// Prints a report as indented JSON on stdout.
+void print_json(const nlohmann::json& report);
+
+}  // namespace rhot::calib_tool

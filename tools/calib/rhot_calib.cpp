@@ -1,0 +1,54 @@
+// rhot-calib: from a box of cameras to a metric rig.
+//
+//   rhot-calib intrinsics --board chess:COLSxROWS:SQUARE_MM IMAGES... --out CAM.yaml [--json]
+//   rhot-calib wand --intrinsics RIG.yaml --detections PATH [--wand-mm L] --out RIG.yaml [--json]
+//   rhot-calib world --rig RIG.yaml --detections PATH (--lframe | --floor) --out RIG.yaml [--json]
+//   rhot-calib merge RIG_A.yaml RIG_B.yaml --out RIG.yaml [--json]
+//   rhot-calib simulate wand|lframe|floor|board ...
+//
+// docs/calibration.md walks through them in order.
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/cfg/env.h>
+#include <spdlog/sinks/stderr_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "tools/calib/Calib.h"
+
+namespace rhot::calib_tool {
+
+std::filesystem::path pictures_dir(const std::string& pictures, const std::string& out) {
+  if (!pictures.empty()) return pictures;
+  const std::filesystem::path parent = std::filesystem::path(out).parent_path();
+  return parent.empty() ? std::filesystem::path(".") : parent;
+}
+
+void print_json(const nlohmann::json& report) { std::cout << report.dump(2) << "\n"; }
+
+}  // namespace rhot::calib_tool
+
+int main(int argc, char** argv) {
+  // Progress and warnings on stderr, so stdout holds only the JSON report.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-calib"));
+  spdlog::set_pattern("rhot-calib: %^%l%$: %v");
+  spdlog::cfg::load_env_levels();
+
+  CLI::App app{"rhot-calib: calibrate cameras into a metric rig (intrinsics, wand, world frame, merge), or simulate sessions to try it"};
+  app.require_subcommand(1);
+  int exit_code = 0;
+  rhot::calib_tool::add_intrinsics(app, exit_code);
+  rhot::calib_tool::add_wand(app, exit_code);
+  rhot::calib_tool::add_world(app, exit_code);
+  rhot::calib_tool::add_merge(app, exit_code);
+  rhot::calib_tool::add_simulate(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  return exit_code;
+}

@@ -1,0 +1,50 @@
+#include "tracking/calib/Similarity.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+
+namespace rhot {
+
+Similarity3 Similarity3::inverse() const {
+  Similarity3 inv;
+  inv.scale = 1.0 / scale;
+  inv.rotation = rotation.transpose();
+  inv.translation = -inv.scale * (inv.rotation * translation);
+  return inv;
+}
+
+std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to, bool with_scale) {
+  if (from.size() != to.size() || from.size() < 3) return std::nullopt;
+  const auto n = static_cast<Eigen::Index>(from.size());
+  Eigen::Matrix3Xd a(3, n), b(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!from[static_cast<std::size_t>(i)].allFinite() || !to[static_cast<std::size_t>(i)].allFinite()) return std::nullopt;
+    a.col(i) = from[static_cast<std::size_t>(i)];
+    b.col(i) = to[static_cast<std::size_t>(i)];
+  }
+  // Collinear points leave the rotation about their line free.
+  const Eigen::Matrix3Xd centred = a.colwise() - a.rowwise().mean();
+  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(centred);
+  const Eigen::Vector3d sv = svd.singularValues();
+  if (!(sv[1] > 1e-9 * std::max(sv[0], 1e-300))) return std::nullopt;
+  const Eigen::Matrix4d m = Eigen::umeyama(a, b, with_scale);
+  if (!m.allFinite()) return std::nullopt;
+  Similarity3 s;
+  s.scale = with_scale ? m.block<3, 3>(0, 0).col(0).norm() : 1.0;
+  s.rotation = m.block<3, 3>(0, 0) / s.scale;
+  s.translation = m.block<3, 1>(0, 3);
+  return s;
+}
+
+Camera transform_camera(const Camera& camera, const Similarity3& new_from_old) {
+  // x_cam = R_c x_old + t_c and x_old = (R^T (x_new - t)) / s; the camera frame scales with the
+  // scene, so x_cam' = s x_cam = R_c R^T x_new + (s t_c - R_c R^T t).
+  Camera out = camera;
+  const Eigen::Matrix3d rc = camera.cam_from_world.rotation.toRotationMatrix();
+  const Eigen::Matrix3d r = rc * new_from_old.rotation.transpose();
+  out.cam_from_world.rotation = Eigen::Quaterniond(r).normalized();
+  out.cam_from_world.translation = new_from_old.scale * camera.cam_from_world.translation - r * new_from_old.translation;
+  return out;
+}
+
+}  // namespace rhot

@@ -1,0 +1,101 @@
+#include "tracking/sim/CalibrationSessions.h"
+
+#include <random>
+
+#include <Eigen/Dense>
+
+namespace rhot {
+
+namespace {
+
+// The frames of a simulated rig as detections, with strays and outliers added.
+Detections to_detections(SimulatedRig& sim, const CameraRig& rig, int frames, bool labelled, const SessionNoise& noise,
+                         const std::vector<bool>* keep_frame = nullptr) {
+  std::mt19937_64 rng(noise.rig.seed * 7919ULL + 17ULL);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Detections d;
+  d.camera_count = static_cast<int>(rig.cameras.size());
+  for (int f = 0; f < frames; ++f) {
+    const RigFrame frame = sim.next();
+    if (keep_frame && !(*keep_frame)[static_cast<std::size_t>(f)]) continue;
+    DetectionFrame df;
+    df.frame = f;
+    for (const CameraFrame& cf : frame.cameras) {
+      const CameraIntrinsics& k = rig.cameras[static_cast<std::size_t>(cf.camera)].intrinsics;
+      for (const Detection& det : cf.detections) {
+        Eigen::Vector2d pixel = det.pixel;
+        if (noise.outliers > 0 && unit(rng) < noise.outliers) {
+          const double angle = 2 * M_PI * unit(rng);
+          const double distance = 3.0 + 27.0 * unit(rng);
+          pixel += distance * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+          pixel = pixel.cwiseMax(Eigen::Vector2d(0, 0)).cwiseMin(Eigen::Vector2d(k.width_px - 1, k.height_px - 1));
+        }
+        df.observations.push_back({cf.camera, pixel, labelled ? det.truth_marker : -1});
+      }
+      if (noise.strays > 0 && unit(rng) < noise.strays) {
+        df.observations.push_back({cf.camera, {unit(rng) * (k.width_px - 1), unit(rng) * (k.height_px - 1)}, -1});
+      }
+    }
+    if (!df.observations.empty()) d.frames.push_back(std::move(df));
+  }
+  return d;
+}
+
+Trajectory still(const Eigen::Vector3d& p) {
+  Trajectory t;
+  t.centre_m = p;
+  return t;
+}
+
+}  // namespace
+
+TrackingVolume session_box(const CameraRig& rig) {
+  if (rig.volume) return *rig.volume;
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const Camera& c : rig.cameras) {
+    const Eigen::Vector3d o = c.centre_world();
+    const Eigen::Vector3d d = c.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
+    a += p;
+    b += p * o;
+  }
+  return TrackingVolume{a.ldlt().solve(b), Eigen::Vector3d::Ones()};
+}
+
+Detections simulate_wand_session(const CameraRig& rig, const WandSession& session, const SessionNoise& noise) {
+  const Eigen::Vector3d half = session.box_size_m / 2;
+  const auto ends = wand_trajectories(session.wand_length_m, session.box_centre_m - half, session.box_centre_m + half);
+  std::vector<Trajectory> markers{ends[0]};
+  if (session.markers >= 2) markers.push_back(ends[1]);
+  SimulatedRig sim(rig, markers, noise.rig);
+  return to_detections(sim, rig, session.frames, session.markers >= 2, noise);
+}
+
+Detections simulate_lframe_session(const CameraRig& rig, const LFrame& frame, const Rigid3d& world_from_frame, int frames,
+                                   const SessionNoise& noise) {
+  std::vector<Trajectory> markers;
+  for (const Eigen::Vector3d& m : frame.markers_world()) markers.push_back(still(world_from_frame * m));
+  SimulatedRig sim(rig, markers, noise.rig);
+  return to_detections(sim, rig, frames, false, noise);
+}
+
+Detections simulate_floor_session(const CameraRig& rig, const std::vector<Eigen::Vector3d>& places_on_floor, double height_m,
+                                  int frames_per_place, const SessionNoise& noise) {
+  constexpr int kMoving = 10;
+  const int period = frames_per_place + kMoving;
+  const int frames = period * static_cast<int>(places_on_floor.size());
+  std::vector<bool> keep(static_cast<std::size_t>(frames));
+  for (int f = 0; f < frames; ++f) keep[static_cast<std::size_t>(f)] = f % period < frames_per_place;
+  SimulatedRig sim(rig, {}, noise.rig);
+  const double rate = noise.rig.rate_hz;
+  const std::vector<Eigen::Vector3d> places = places_on_floor;
+  sim.set_scripted_markers([places, height_m, period, rate](double t_s) {
+    const auto f = static_cast<int>(std::lround(t_s * rate));
+    const auto i = std::min(places.size() - 1, static_cast<std::size_t>(f / period));
+    return std::vector<Eigen::Vector3d>{places[i] + Eigen::Vector3d(0, height_m, 0)};
+  });
+  return to_detections(sim, rig, frames, false, noise, &keep);
+}
+
+}  // namespace rhot
