@@ -43,11 +43,13 @@ struct ReprojectionError {
   double u, v, aspect, k2, p1, p2, k3;
 };
 
-// Holds camera 1's centre at its distance from camera 0's centre (the reconstruction's unit).
-struct HoldDistance {
+// A weak prior on camera 1's distance from camera 0 (whose pose is held): the scale is a gauge
+// freedom of the reprojection error, and this residual makes the normal equations regular without
+// pulling on anything the pixels decide. Weight: a 1 % change of the distance costs as much as a
+// 1 px residual.
+struct ScalePrior {
   double distance;
   Eigen::Vector3d c0;
-  double weight;
   template <typename T>
   bool operator()(const T* pose, T* residual) const {
     // centre = -R^T t: rotate -t by the inverse rotation.
@@ -56,7 +58,7 @@ struct HoldDistance {
     T centre[3];
     ceres::AngleAxisRotatePoint(minus_r, minus_t, centre);
     const T dx = centre[0] - T(c0.x()), dy = centre[1] - T(c0.y()), dz = centre[2] - T(c0.z());
-    residual[0] = T(weight) * (ceres::sqrt(dx * dx + dy * dy + dz * dz) - T(distance));
+    residual[0] = (ceres::sqrt(dx * dx + dy * dy + dz * dz) - T(distance)) / T(0.01 * distance);
     return true;
   }
 };
@@ -179,16 +181,12 @@ std::expected<BundleSummary, std::string> bundle_adjust(std::vector<Camera>& cam
     }
     if (c == 0 && settings.hold_first_pose) problem.SetParameterBlockConstant(b.pose);
   }
-  // The scale: camera 1's centre stays at its distance from camera 0's. With camera 0 held, that
-  // is a constraint on camera 1's pose alone; it is held through the centre's norm when camera 0
-  // sits at the origin (as the wand calibration arranges), else through a stiff residual.
-  if (settings.hold_scale && n_cameras >= 2 && used[0] && used[1] && !held(settings, 1)) {
+  if (settings.hold_first_pose && n_cameras >= 2 && used[0] && used[1] && !held(settings, 1) && !held(settings, 0)) {
     const double distance = (cameras[1].centre_world() - cameras[0].centre_world()).norm();
-    const Eigen::Vector3d c0 = cameras[0].centre_world();
-    // Stiff: a 1e-6 relative change in the distance costs as much as a 1000-pixel error.
-    const double weight = 1e9 / std::max(distance, 1e-9);
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<HoldDistance, 1, 6>(new HoldDistance{distance, c0, weight}), nullptr,
-                             blocks[1].pose);
+    if (distance > 0) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ScalePrior, 1, 6>(new ScalePrior{distance, cameras[0].centre_world()}), nullptr,
+                               blocks[1].pose);
+    }
   }
 
   ceres::Solver::Options options;

@@ -3,10 +3,11 @@
 // observation's pixel error under OpenCV's distortion model, a robust (Huber) loss, and per
 // camera optionally its focal length (aspect kept), principal point and k1.
 //
-// The gauge: the first camera's pose is held; the distance between the first and the second
-// camera's centres is held too (their distance is the reconstruction's unit until a scale is
-// known), unless `hold_scale` is off (when something else, such as points of known positions,
-// fixes it).
+// The gauge: the first camera's pose is held (or the cameras named in `held_cameras`). The scale
+// is held only weakly: a prior on camera 1's distance from camera 0, which the pixels cannot see,
+// keeps the normal equations regular. A stiff constraint there (tried first) slowed convergence
+// badly, leaving 30 % more residual than the noise after 100 iterations. Callers scale the result
+// themselves (the wand calibration from the wand's length) or hold two cameras (a merge).
 
 #include <expected>
 #include <string>
@@ -32,7 +33,6 @@ struct BundleSettings {
   int max_iterations = 100;
   int threads = 2;
   bool hold_first_pose = true;
-  bool hold_scale = true;  // the distance between camera 0 and camera 1 (needs two cameras)
   std::vector<int> held_cameras;  // cameras whose pose and intrinsics are not refined at all
 };
 

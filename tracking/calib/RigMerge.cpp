@@ -136,8 +136,8 @@ std::expected<MergeResult, std::string> merge_rigs(const CameraRig& a, const Cam
     if (points.size() < 20) return std::unexpected("merge: only " + std::to_string(points.size()) + " points of the two sessions fit the merged rig within 3 px");
     BundleSettings bs;
     bs.huber_px = 1.0;
-    // The gauge: camera 0's pose and its distance to camera 1, as the similarity left them.
-    bs.hold_scale = out.rig.cameras.size() >= 2;
+    // The gauge: A's first two cameras as the similarity left them (A's frame and metric scale).
+    bs.held_cameras = {0, 1};
     std::vector<Camera> cameras = out.rig.cameras;
     const auto summary = bundle_adjust(cameras, points, observations, bs);
     if (!summary) return std::unexpected("merge: " + summary.error());

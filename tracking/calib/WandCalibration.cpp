@@ -123,7 +123,6 @@ std::expected<BundleSummary, std::string> adjust(State& s, BundleSettings settin
       observations.push_back({pos, p, t.pixels[k]});
     }
   }
-  settings.hold_scale = cameras.size() >= 2;
   const auto summary = bundle_adjust(cameras, points, observations, settings);
   if (!summary) return std::unexpected(summary.error());
   for (std::size_t k = 0; k < s.order.size(); ++k) s.cameras[static_cast<std::size_t>(s.order[k])] = cameras[k];
@@ -181,7 +180,8 @@ cv::Mat identity() { return cv::Mat::eye(3, 3, CV_64F); }
 
 // The first pair: the best-connected edge whose essential matrix gives a well-conditioned
 // reconstruction (enough inliers, rays meeting at more than a degree).
-std::expected<void, std::string> place_first_pair(State& s, const std::vector<GraphEdge>& edges, int min_shared, const CameraRig& rig) {
+std::expected<void, std::string> place_first_pair(State& s, const std::vector<GraphEdge>& edges, int min_shared, double tolerance_px,
+                                                  const CameraRig& rig) {
   std::vector<GraphEdge> sorted = edges;
   std::sort(sorted.begin(), sorted.end(), [](const GraphEdge& x, const GraphEdge& y) { return x.shared_points > y.shared_points; });
   std::string last_reason = "no pair of cameras shares enough points";
@@ -205,7 +205,7 @@ std::expected<void, std::string> place_first_pair(State& s, const std::vector<Gr
     cv::Mat mask;
     cv::Mat essential;
     try {
-      essential = cv::findEssentialMat(p1, p2, identity(), cv::RANSAC, 0.999, 3.0 / f, 2000, mask);
+      essential = cv::findEssentialMat(p1, p2, identity(), cv::RANSAC, 0.999, tolerance_px / f, 2000, mask);
     } catch (const cv::Exception&) {
       essential = cv::Mat();
     }
@@ -234,7 +234,7 @@ std::expected<void, std::string> place_first_pair(State& s, const std::vector<Gr
     cb.cam_from_world.translation = tb;
     trial.placed[static_cast<std::size_t>(e.a)] = trial.placed[static_cast<std::size_t>(e.b)] = true;
     trial.order = {e.a, e.b};
-    triangulate_new(trial, 8.0);
+    triangulate_new(trial, 2.5 * tolerance_px);
     // The rays' angle at each point: a reconstruction from nearly parallel rays is unreliable.
     std::vector<double> angles;
     const Eigen::Vector3d oa = ca.centre_world(), ob = cb.centre_world();
@@ -258,7 +258,7 @@ std::expected<void, std::string> place_first_pair(State& s, const std::vector<Gr
 
 // Places one more camera against the reconstructed points (PnP with RANSAC in normalised
 // coordinates). Returns false when the points it sees do not fit one pose.
-bool place_camera(State& s, int c) {
+bool place_camera(State& s, int c, double tolerance_px) {
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
   for (const Track& t : s.tracks) {
@@ -275,7 +275,7 @@ bool place_camera(State& s, int c) {
   const double f = s.cameras[static_cast<std::size_t>(c)].intrinsics.fx;
   bool ok = false;
   try {
-    ok = cv::solvePnPRansac(object, image, identity(), cv::noArray(), rvec, tvec, false, 500, static_cast<float>(3.0 / f), 0.999, inliers, cv::SOLVEPNP_EPNP);
+    ok = cv::solvePnPRansac(object, image, identity(), cv::noArray(), rvec, tvec, false, 500, static_cast<float>(tolerance_px / f), 0.999, inliers, cv::SOLVEPNP_EPNP);
     if (ok && inliers.size() >= 6) {
       std::vector<cv::Point3d> o2;
       std::vector<cv::Point2d> i2;
@@ -333,7 +333,10 @@ struct Solved {
 // One whole attempt from the given intrinsics: graph initialisation, adjustment, outliers.
 std::expected<Solved, std::string> solve(State s, const std::vector<GraphEdge>& edges, const WandSettings& settings, const CameraRig& rig,
                                          const std::function<void(const std::string&)>& progress) {
-  if (const auto ok = place_first_pair(s, edges, settings.min_shared_points, rig); !ok) return std::unexpected(ok.error());
+  // Before the adjustment, intrinsics that are to be refined may be off by several pixels.
+  const bool refining = settings.refine_focal || settings.refine_principal_point || settings.refine_k1 || settings.search_focal;
+  const double tolerance_px = settings.initial_tolerance_px > 0 ? settings.initial_tolerance_px : (refining ? 10.0 : 3.0);
+  if (const auto ok = place_first_pair(s, edges, settings.min_shared_points, tolerance_px, rig); !ok) return std::unexpected(ok.error());
   if (const double thin = thinness(s); thin < 0.02) {
     return std::unexpected("the wave is nearly planar (its thinnest direction spans " + fmt(100.0 * thin, 1) +
                            " % of its widest): wave up and down and in depth too, through the whole volume");
@@ -361,14 +364,14 @@ std::expected<Solved, std::string> solve(State s, const std::vector<GraphEdge>& 
       }
     }
     if (best < 0) break;
-    if (!place_camera(s, best)) {
+    if (!place_camera(s, best, tolerance_px)) {
       return std::unexpected("cannot place " + camera_label(rig, best) + ": the " + std::to_string(best_count) +
                              " reconstructed points it saw do not fit one camera pose; are the detections' camera streams in the rig's order, "
                              "and are its intrinsics its own?");
     }
-    triangulate_new(s, 8.0);
+    triangulate_new(s, 2.5 * tolerance_px);
     if (const auto b = adjust(s, quick); !b) return std::unexpected(b.error());
-    triangulate_new(s, 8.0);
+    triangulate_new(s, 2.5 * tolerance_px);
     if (progress) progress("placed " + camera_label(rig, best) + " against " + std::to_string(best_count) + " points");
   }
   for (int c = 0; c < n; ++c) {
@@ -476,6 +479,9 @@ std::expected<void, std::string> WandSettings::check() const {
   }
   if (marker_a < 0 || marker_b < 0 || marker_a == marker_b) return std::unexpected("wand markers: expected two different non-negative ids");
   if (!(outlier_px >= 0.0) || !std::isfinite(outlier_px)) return std::unexpected("outlier threshold: expected 0 (automatic) or a positive number of pixels");
+  if (!(initial_tolerance_px >= 0.0) || !std::isfinite(initial_tolerance_px)) {
+    return std::unexpected("initial tolerance: expected 0 (automatic) or a positive number of pixels");
+  }
   if (min_shared_points < 5) return std::unexpected("min_shared_points: expected at least 5");
   if (min_points < 6) return std::unexpected("min_points: expected at least 6");
   if (threads < 1) return std::unexpected("threads: expected at least 1");
@@ -702,6 +708,10 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
     report.wand_rms_mm = std::sqrt(sum_sq / static_cast<double>(lengths.size()));
     report.wand_max_mm = max_abs;
   } else {
+    // The unit: the distance between the first two cameras placed.
+    scale = 1.0 / std::max(1e-12, (s.cameras[static_cast<std::size_t>(s.order[0])].centre_world() -
+                                   s.cameras[static_cast<std::size_t>(s.order[1])].centre_world())
+                                      .norm());
     report.warnings.push_back("no wand length given: the rig is not metric (its unit is the distance between the first two cameras placed)");
   }
   Similarity3 world_from_old;

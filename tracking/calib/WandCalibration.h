@@ -43,6 +43,9 @@ struct WandSettings {
   // image widths and keep the one that explains the detections best. Implies refine_focal.
   bool search_focal = false;
   double outlier_px = 0.0;     // observations further off are dropped; 0: 5 robust sigmas, at least 1 px
+  // How far off a detection may be from the starting intrinsics' model while the cameras are
+  // placed (essential matrix, PnP); 0: 3 px, or 10 px when intrinsics are to be refined.
+  double initial_tolerance_px = 0.0;
   int min_shared_points = 15;  // points two cameras must share for an edge of the camera graph
   int min_points = 30;         // points a camera must see
   int threads = 2;

@@ -331,7 +331,7 @@ std::vector<Rigid3d> board_poses(const CameraIntrinsics& camera, const BoardLayo
     outline.emplace_back(lo.x(), hi.y() - f * size.y(), 0.0);
   }
   const double max_r2 = 0.9 * Distortion(camera.distortion).fold_r2();
-  const double margin_px = 0.03 * camera.width_px;
+  const double margin_px = 0.01 * camera.width_px;
   Camera view{"board", camera, Rigid3d::identity()};
   const auto fits = [&](const Rigid3d& camera_from_board) {
     for (const Eigen::Vector3d& p : outline) {
@@ -351,16 +351,18 @@ std::vector<Rigid3d> board_poses(const CameraIntrinsics& camera, const BoardLayo
   for (int k = 0; k < count; ++k) {
     // Board centres on a 3 x 3 grid over the image, jittered, visiting the cells in a scattered order.
     const int cell = (k * 4) % 9;
-    Eigen::Vector2d target((0.15 + 0.35 * (cell % 3) + rng.uniform(-0.05, 0.05)) * camera.width_px,
-                           (0.15 + 0.35 * (cell / 3) + rng.uniform(-0.05, 0.05)) * camera.height_px);
+    // Aimed at the image's edge for the outer cells, then pulled in until the board fits: corners
+    // near the edges are what pins the distortion down there.
+    Eigen::Vector2d target((0.5 * (cell % 3) + (cell % 3 == 1 ? rng.uniform(-0.05, 0.05) : 0.0)) * camera.width_px,
+                           (0.5 * (cell / 3) + (cell / 3 == 1 ? rng.uniform(-0.05, 0.05) : 0.0)) * camera.height_px);
     const double tilt = rng.uniform(10.0, 45.0) * deg;
     const double axis_angle = k * 137.5 * deg + rng.uniform(-20.0, 20.0) * deg;  // golden-angle steps
     const double roll = rng.uniform(-20.0, 20.0) * deg;
-    const double fill = rng.uniform(0.35, 0.65);
+    const double fill = cell == 4 ? rng.uniform(0.4, 0.6) : rng.uniform(0.25, 0.45);
     const Eigen::Quaterniond rotation =
         Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(axis_angle), std::sin(axis_angle), 0.0)) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ());
     double depth_m = camera.fx * size.x() / (fill * camera.width_px);
-    for (int attempt = 0; attempt < 60; ++attempt) {
+    for (int attempt = 0; attempt < 150; ++attempt) {
       view.cam_from_world = Rigid3d::identity();
       const Eigen::Vector2d n = view.undistort(target);
       Rigid3d camera_from_board;
@@ -370,8 +372,8 @@ std::vector<Rigid3d> board_poses(const CameraIntrinsics& camera, const BoardLayo
         poses.push_back(camera_from_board);
         break;
       }
-      target += 0.15 * (image_centre - target);
-      depth_m *= 1.05;
+      target += 0.05 * (image_centre - target);
+      depth_m *= 1.01;
     }
   }
   return poses;

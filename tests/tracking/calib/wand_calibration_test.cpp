@@ -178,6 +178,8 @@ TEST(WandCalibration, OneMarkerWithoutAWandIsRightUpToScale) {
   const Agreement a = compare(result->rig, truth);
   EXPECT_LT(a.centre_rms_mm, 1.0);
   EXPECT_LT(a.rotation_max_deg, 0.03);
+  const double floor = noise_floor_px(result->report, 0.3, 4);
+  EXPECT_NEAR(result->report.rms_px, floor, 0.1 * floor);
 }
 
 TEST(WandCalibration, RefinesAFocalLengthThatWasWrong) {

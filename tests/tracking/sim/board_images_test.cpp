@@ -139,7 +139,7 @@ TEST(BoardImages, PosesKeepTheWholeBoardInViewAndVaryTiltAndPlace) {
   EXPECT_GE(min_tilt, 9.9);
   EXPECT_LE(max_tilt, 45.1);
   EXPECT_GT(max_tilt - min_tilt, 20.0);
-  EXPECT_GT(image_coverage(k.width_px, k.height_px, corners), 0.6) << "the boards together cover most of the image";
+  EXPECT_GT(image_coverage(k.width_px, k.height_px, corners), 0.55) << "the boards together cover most of the image";
   // The same seed, the same poses; another seed, others.
   const std::vector<Rigid3d> again = board_poses(k, layout, 15, 1);
   const std::vector<Rigid3d> other = board_poses(k, layout, 15, 2);
