@@ -38,6 +38,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
           const std::vector<double>& volume, const std::vector<double>& volume_centre);
 int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, double sigma, int frames, unsigned seed,
           const std::vector<double>& volume_centre, bool filter);
+int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);
 int grasp(const std::string& scenario);
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading);
 

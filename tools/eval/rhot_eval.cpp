@@ -4,6 +4,7 @@
 //                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
 //   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--sigma PX] [--frames N] --json
 //   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
+//   rhot-eval calibration --rig FILE [--wand-mm 500] [--sigma PX] [--frames 2000] [--seed S] [--dropout P] --json
 //   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
 //                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
 //
@@ -132,6 +133,16 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
   frame_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  auto* calib_cmd = app.add_subcommand("calibration", "a simulated wand session calibrated from unknown extrinsics, against the true rig");
+  int calib_frames = 2000;
+  double calib_wand_mm = 500.0;
+  calib_cmd->add_option("--rig", rig_file, "the true rig (OpenCV YAML); its intrinsics are given to the calibration")->required();
+  calib_cmd->add_option("--wand-mm", calib_wand_mm, "wand length")->capture_default_str()->check(CLI::Range(10.0, 5000.0));
+  calib_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
+  calib_cmd->add_option("--frames", calib_frames, "frames of the wave")->capture_default_str()->check(CLI::Range(10, 1000000));
+  calib_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
+  calib_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  calib_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
   // CLI11's range checks let NaN through (every comparison with it is false).
   for (const auto& [flag, values] :
@@ -144,6 +155,7 @@ int main(int argc, char** argv) {
     }
   }
   if (grasp_cmd->parsed()) return grasp(scenario);
+  if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
   if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading));
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
   if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, sigma, hand_frames, seed, volume_centre, filter);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <numeric>
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
@@ -267,7 +268,10 @@ cv::Mat render_board(const CameraIntrinsics& camera, const Rigid3d& camera_from_
   // column, so an edge at any angle is located to about 1/count of a pixel.
   const int samples = layout.pattern == BoardPattern::texture ? std::min(settings.samples_per_pixel, 16) : settings.samples_per_pixel;
   std::vector<Eigen::Vector2d> sub_samples;
-  const int generator = std::max(1, static_cast<int>(std::lround(samples / std::numbers::phi)));
+  // The generator must share no factor with the count, or the rows repeat and leave the pattern
+  // off centre.
+  int generator = std::max(1, static_cast<int>(std::lround(samples / std::numbers::phi)));
+  while (std::gcd(generator, samples) != 1) ++generator;
   for (int i = 0; i < samples; ++i) {
     sub_samples.emplace_back((i + 0.5) / samples, (static_cast<int>(static_cast<long>(i) * generator % samples) + 0.5) / samples);
   }
