@@ -4,10 +4,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include <Eigen/Geometry>
 
 #include "tests/support/RunCommand.h"
 #include "tracking/camera/RigFile.h"
@@ -53,7 +56,10 @@ TEST(CalibCli, SimulatedWandSessionToAMetricRigAndItsWorld) {
   const nlohmann::json j = nlohmann::json::parse(wand.output);
   EXPECT_TRUE(j["metric"].get<bool>());
   EXPECT_LT(j["rms_px"].get<double>(), 0.5);
-  EXPECT_LT(j["wand_rms_mm"].get<double>(), 0.5);
+  // stereo-2's two cameras triangulate each end to about 1 mm: the true rig itself measures this
+  // wave's wand at 1.5 mm RMS (rhot-eval wand --rig assets/rigs/stereo-2.yaml --length-mm 300).
+  EXPECT_LT(j["wand_rms_mm"].get<double>(), 1.8);
+  EXPECT_LT(std::abs(j["wand_mean_mm"].get<double>()), 0.1);
   ASSERT_EQ(j["cameras"].size(), 2u);
   ASSERT_EQ(j["graph"].size(), 1u);
   EXPECT_GT(j["graph"][0]["shared_points"].get<int>(), 500);
@@ -63,14 +69,19 @@ TEST(CalibCli, SimulatedWandSessionToAMetricRigAndItsWorld) {
   const auto rig = rhot::load_rig(dir / "rig.yaml");
   ASSERT_TRUE(rig) << rig.error();
   std::ifstream text(dir / "rig.yaml");
-  const std::string yaml((std::istreambuf_iterator<char>(text)), std::istreambuf_iterator<char>());
+  std::stringstream buffer;
+  buffer << text.rdbuf();
+  const std::string yaml = buffer.str();
   EXPECT_NE(yaml.find("calibration:"), std::string::npos);
   EXPECT_NE(yaml.find("wand_rms_mm:"), std::string::npos);
 
   // The world from an L-frame lying at the truth's origin: the cameras land where the truth has them.
-  const auto frame = calib("simulate lframe --rig " + truth + " --seed 5 --out " + (dir / "lframe.csv").string());
+  // A 400 x 250 mm L-frame on a stand in front of the cameras (y = 0.9 m), its corner at
+  // x = -0.12, z = -0.25.
+  const auto frame = calib("simulate lframe --rig " + truth + " --lframe-mm 400,250 --at-m -0.12,0.9,-0.25 --seed 5 --out " +
+                           (dir / "lframe.csv").string());
   ASSERT_EQ(frame.exit_code, 0) << frame.output;
-  const auto world = calib_json("world --lframe --rig " + (dir / "rig.yaml").string() + " --detections " + (dir / "lframe.csv").string() +
+  const auto world = calib_json("world --lframe --lframe-mm 400,250 --rig " + (dir / "rig.yaml").string() + " --detections " + (dir / "lframe.csv").string() +
                                 " --json --out " + (dir / "world.yaml").string());
   ASSERT_EQ(world.exit_code, 0) << world.output;
   const nlohmann::json w = nlohmann::json::parse(world.output);
@@ -78,9 +89,51 @@ TEST(CalibCli, SimulatedWandSessionToAMetricRigAndItsWorld) {
   const auto placed = rhot::load_rig(dir / "world.yaml");
   const auto truth_rig = rhot::load_rig(truth);
   ASSERT_TRUE(placed && truth_rig);
+  // The frame's own pose is known only as well as its three markers: with two cameras, ~1 mm
+  // over a 250 mm arm, 0.2 degrees, which moves cameras 0.5 m away by a few millimetres.
+  const Eigen::Vector3d corner(-0.12, 0.9, -0.25);
+  const double lever_m = (truth_rig->cameras[0].centre_world() - corner).norm();
+  const double allowed_m = 0.002 + lever_m * 2.0 * (w["rms_mm"].get<double>() / 250.0);
   for (std::size_t c = 0; c < truth_rig->cameras.size(); ++c) {
-    EXPECT_LT((placed->cameras[c].centre_world() - truth_rig->cameras[c].centre_world()).norm(), 0.005) << c;
+    EXPECT_LT((placed->cameras[c].centre_world() - (truth_rig->cameras[c].centre_world() - corner)).norm(), allowed_m) << c;
   }
+  EXPECT_LT(allowed_m, 0.012);
+}
+
+TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
+  // The whole path from images: simulated camera images of one marker, the blob detector through
+  // `record`, then `wand` (not metric without a wand: compared with the truth up to scale).
+  const fs::path dir = temp_dir();
+  const std::string truth = asset("rigs/stereo-2.yaml");
+  const auto sim = calib("simulate wand --rig " + truth + " --markers 1 --frames 160 --rate-hz 8 --seed 3 --out " + (dir / "truth.csv").string() +
+                         " --images " + (dir / "images").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  const std::string source = "video:" + (dir / "images" / "cam0_%04d.png").string() + "," + (dir / "images" / "cam1_%04d.png").string();
+  const auto record = calib("record --rig " + truth + " --source " + source + " --out " + (dir / "recorded.csv").string());
+  ASSERT_EQ(record.exit_code, 0) << record.output;
+  EXPECT_NE(record.output.find("of 160 frames"), std::string::npos) << record.output;
+  const auto wand = calib_json("wand --intrinsics " + truth + " --detections " + (dir / "recorded.csv").string() + " --json --out " +
+                               (dir / "rig.yaml").string());
+  ASSERT_EQ(wand.exit_code, 0) << wand.output;
+  const nlohmann::json j = nlohmann::json::parse(wand.output);
+  EXPECT_FALSE(j["metric"].get<bool>());
+  EXPECT_LT(j["rms_px"].get<double>(), 0.5);
+  // The same wave calibrated from the simulation's own detections: the images and the blob
+  // detector add little, and both are near the truth up to scale (the second camera's rotation
+  // relative to the first; 160 positions of one marker pin it to about 0.1 degrees).
+  const auto direct = calib("wand --intrinsics " + truth + " --detections " + (dir / "truth.csv").string() + " --out " + (dir / "direct.yaml").string());
+  ASSERT_EQ(direct.exit_code, 0) << direct.output;
+  const auto rig = rhot::load_rig(dir / "rig.yaml");
+  const auto direct_rig = rhot::load_rig(dir / "direct.yaml");
+  const auto truth_rig = rhot::load_rig(truth);
+  ASSERT_TRUE(rig && direct_rig && truth_rig);
+  const auto relative = [](const rhot::CameraRig& r) { return r.cameras[1].cam_from_world.rotation * r.cameras[0].cam_from_world.rotation.conjugate(); };
+  const auto degrees = [](const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) { return a.angularDistance(b) * 180.0 / M_PI; };
+  EXPECT_LT(degrees(relative(*rig), relative(*direct_rig)), 0.05);
+  EXPECT_LT(degrees(relative(*rig), relative(*truth_rig)), 0.3);
+  const auto bad = calib("record --rig " + truth + " --source video:" + (dir / "none_%04d.png").string() + " --out x.csv");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("rhot-calib: error: "), std::string::npos) << bad.output;
 }
 
 TEST(CalibCli, BadInputGetsOneLineNamingIt) {

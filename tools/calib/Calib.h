@@ -22,6 +22,7 @@
 namespace rhot::calib_tool {
 
 void add_intrinsics(CLI::App& app, int& exit_code);
+void add_record(CLI::App& app, int& exit_code);
 void add_wand(CLI::App& app, int& exit_code);
 void add_world(CLI::App& app, int& exit_code);
 void add_merge(CLI::App& app, int& exit_code);

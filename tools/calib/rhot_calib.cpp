@@ -1,6 +1,7 @@
 // rhot-calib: from a box of cameras to a metric rig.
 //
 //   rhot-calib intrinsics --board chess:COLSxROWS:SQUARE_MM IMAGES... --out CAM.yaml [--json]
+//   rhot-calib record --rig RIG.yaml --source video:DEV[,DEV...] --out DETECTIONS.csv
 //   rhot-calib wand --intrinsics RIG.yaml --detections PATH [--wand-mm L] --out RIG.yaml [--json]
 //   rhot-calib world --rig RIG.yaml --detections PATH (--lframe | --floor) --out RIG.yaml [--json]
 //   rhot-calib merge RIG_A.yaml RIG_B.yaml --out RIG.yaml [--json]
@@ -40,6 +41,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   int exit_code = 0;
   rhot::calib_tool::add_intrinsics(app, exit_code);
+  rhot::calib_tool::add_record(app, exit_code);
   rhot::calib_tool::add_wand(app, exit_code);
   rhot::calib_tool::add_world(app, exit_code);
   rhot::calib_tool::add_merge(app, exit_code);

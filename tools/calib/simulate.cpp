@@ -12,6 +12,9 @@
 #include "tracking/calib/Detections.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/sim/CalibrationSessions.h"
+#include "tracking/sim/SyntheticImages.h"
+
+#include <opencv2/imgcodecs.hpp>
 
 namespace rhot::calib_tool {
 
@@ -36,10 +39,11 @@ struct SimulateOptions {
   int markers = 2;
   std::vector<double> volume;
   std::vector<double> volume_centre;
+  std::string images;
   // lframe
   std::vector<double> lframe_mm{500, 300};
   double height_mm = 0.0;
-  std::vector<double> at_m{0, 0};
+  std::vector<double> at_m{0, 0, 0};
   double yaw_deg = 0.0;
   // floor
   std::vector<double> places;
@@ -71,7 +75,7 @@ std::expected<std::pair<CameraRig, SessionNoise>, std::string> prepare(const Sim
 
 int write(const Detections& d, const SimulateOptions& o, const std::string& what) {
   if (d.frames.empty()) {
-    spdlog::error("no camera saw anything: is the {} inside the cameras' view?", what);
+    spdlog::error("no camera saw anything: is {} inside the cameras' view?", what);
     return 1;
   }
   if (const auto ok = write_detections_csv(d, o.out); !ok) {
@@ -79,6 +83,36 @@ int write(const Detections& d, const SimulateOptions& o, const std::string& what
     return 1;
   }
   spdlog::info("{}: {} detections in {} frames ({})", o.out, d.count(), d.frames.size(), what);
+  return 0;
+}
+
+// Every frame of every camera as the image a camera would take (a blurred spot per detection),
+// DIR/cam<i>_%04d.png, for `record` to find again.
+int write_images(const Detections& d, const CameraRig& rig, int frames, const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  SyntheticImageSettings look;
+  look.noise_sigma = 2.0;
+  std::size_t next = 0;
+  for (int f = 0; f < frames; ++f) {
+    std::vector<CameraFrame> cameras(rig.cameras.size());
+    for (std::size_t c = 0; c < cameras.size(); ++c) cameras[c].camera = static_cast<int>(c);
+    if (next < d.frames.size() && d.frames[next].frame == f) {
+      for (const MarkerObservation& o : d.frames[next].observations) cameras[static_cast<std::size_t>(o.camera)].detections.push_back({o.pixel, o.marker});
+      ++next;
+    }
+    for (std::size_t c = 0; c < cameras.size(); ++c) {
+      look.seed = static_cast<std::uint64_t>(f) * 131 + c;
+      char name[64];
+      std::snprintf(name, sizeof name, "/cam%zu_%04d.png", c, f);
+      if (!cv::imwrite(dir + name, draw_blobs(rig.cameras[c].intrinsics, cameras[c], look))) {
+        spdlog::error("{}{}: cannot write the image", dir, name);
+        return 1;
+      }
+    }
+    if ((f + 1) % 100 == 0) spdlog::info("images: {} of {} frames", f + 1, frames);
+  }
+  spdlog::info("{}: {} frames of {} cameras as cam<i>_%04d.png", dir, frames, rig.cameras.size());
   return 0;
 }
 
@@ -101,7 +135,9 @@ int run_wand(const SimulateOptions& o) {
                   session.box_size_m.y(), session.box_size_m.z());
     return 1;
   }
-  return write(simulate_wand_session(rig, session, noise), o, o.markers >= 2 ? "a two-marker wand" : "one marker");
+  const Detections d = simulate_wand_session(rig, session, noise);
+  if (const int written = write(d, o, o.markers >= 2 ? "a two-marker wand" : "one marker"); written != 0) return written;
+  return o.images.empty() ? 0 : write_images(d, rig, session.frames, o.images);
 }
 
 int run_lframe(const SimulateOptions& o) {
@@ -122,7 +158,7 @@ int run_lframe(const SimulateOptions& o) {
   }
   Rigid3d world_from_frame;
   world_from_frame.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(o.yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()));
-  world_from_frame.translation = Eigen::Vector3d(o.at_m[0], 0.0, o.at_m[1]);
+  world_from_frame.translation = Eigen::Vector3d(o.at_m[0], o.at_m[1], o.at_m[2]);
   return write(simulate_lframe_session(rig, frame, world_from_frame, o.frames, noise), o, "an L-frame");
 }
 
@@ -166,6 +202,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
   wand->add_option("--markers", o->markers, "2: a wand with labelled ends; 1: one unlabelled marker")->capture_default_str()->check(CLI::Range(1, 2));
   wand->add_option("--volume-m", o->volume, "size of the box waved through, X Y Z metres (default: the rig's volume)")->expected(3);
   wand->add_option("--volume-centre-m", o->volume_centre, "its centre, X Y Z metres")->expected(3);
+  wand->add_option("--images", o->images, "also draw every camera's frames as PNG image sequences DIR/cam<i>_%04d.png (for `record`)");
   add_noise_options(wand, o->noise);
   wand->callback([o, &exit_code] { exit_code = run_wand(*o); });
 
@@ -176,7 +213,10 @@ void add_simulate(CLI::App& app, int& exit_code) {
   lframe->add_option("--frames", o->frames, "frames")->default_val(60)->check(CLI::Range(1, 1000000));
   lframe->add_option("--lframe-mm", o->lframe_mm, "long arm, short arm[, middle marker] in mm")->delimiter(',')->expected(2, 3)->capture_default_str();
   lframe->add_option("--height-mm", o->height_mm, "the markers' centres above the floor")->capture_default_str();
-  lframe->add_option("--at-m", o->at_m, "where the corner lies, X Z metres")->delimiter(',')->expected(2)->capture_default_str();
+  lframe->add_option("--at-m", o->at_m, "where the corner lies, X,Y,Z metres (Y: the floor's or desk's height)")
+      ->delimiter(',')
+      ->expected(3)
+      ->capture_default_str();
   lframe->add_option("--yaw-deg", o->yaw_deg, "the frame turned about +Y")->capture_default_str();
   add_noise_options(lframe, o->noise);
   lframe->callback([o, &exit_code] { exit_code = run_lframe(*o); });

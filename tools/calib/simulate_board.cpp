@@ -14,7 +14,6 @@
 #include <system_error>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -34,7 +33,7 @@ namespace fs = std::filesystem;
 struct SimulateBoardOptions {
   std::string out;
   std::string board = "chess:9x6:25";
-  int views = 15;
+  int views = 20;
   std::string size = "1280x720";
   double fx = 1000.0;
   std::optional<double> fy, cx, cy;
@@ -108,8 +107,8 @@ int run_simulate_board(const SimulateBoardOptions& o) {
   camera.height_px = size->second;
   camera.fx = o.fx;
   camera.fy = o.fy.value_or(o.fx);
-  camera.cx = o.cx.value_or(0.5 * camera.width_px);
-  camera.cy = o.cy.value_or(0.5 * camera.height_px);
+  camera.cx = o.cx.value_or(0.5 * (camera.width_px - 1));
+  camera.cy = o.cy.value_or(0.5 * (camera.height_px - 1));
   camera.distortion = {o.k1, o.k2, o.p1, o.p2, o.k3};
   CameraRig truth;
   truth.name = "truth";

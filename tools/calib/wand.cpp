@@ -112,11 +112,6 @@ bool append_report(const std::string& file, const WandCalibration& c) {
 }
 
 int run(const WandOptions& o) {
-  const auto detections = read_detections(o.detections);
-  if (!detections) {
-    spdlog::error("{}", detections.error());
-    return 1;
-  }
   WandSettings settings;
   if (o.wand_mm > 0) settings.wand_length_m = o.wand_mm / 1000.0;
   if (o.wand_markers.size() != 2) {
@@ -142,6 +137,11 @@ int run(const WandOptions& o) {
   settings.min_shared_points = o.min_shared;
   if (const auto ok = settings.check(); !ok) {
     spdlog::error("{}", ok.error());
+    return 1;
+  }
+  const auto detections = read_detections(o.detections);
+  if (!detections) {
+    spdlog::error("{}", detections.error());
     return 1;
   }
   CameraRig rig;

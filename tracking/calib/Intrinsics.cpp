@@ -8,9 +8,9 @@
 #include <map>
 #include <numbers>
 #include <set>
+#include <system_error>
 #include <utility>
 
-#include <Eigen/LU>
 #include <opencv2/aruco.hpp>
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/calib3d.hpp>
@@ -219,46 +219,52 @@ void refine_corners(const cv::Mat& grey, const std::vector<int>& ids, int ids_pe
   cv::Sobel(smooth, gx, CV_32F, 1, 0, 3);
   cv::Sobel(smooth, gy, CV_32F, 0, 1, 3);
   const double sigma = half / 2.0;
+  // On plain doubles: the sums run over every pixel of every window, and so stay quick in the
+  // sanitizer builds too.
   for (cv::Point2f& corner : corners) {
-    Eigen::Vector2d q(static_cast<double>(corner.x), static_cast<double>(corner.y));
-    const Eigen::Vector2d start = q;
+    const double start_x = static_cast<double>(corner.x), start_y = static_cast<double>(corner.y);
+    double qx = start_x, qy = start_y;
     bool ok = true;
     for (int iteration = 0; iteration < 20; ++iteration) {
-      Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
-      Eigen::Vector2d b = Eigen::Vector2d::Zero();
-      const int x0 = static_cast<int>(std::lround(q.x())), y0 = static_cast<int>(std::lround(q.y()));
+      double a00 = 0.0, a01 = 0.0, a11 = 0.0, b0 = 0.0, b1 = 0.0;
+      const int x0 = static_cast<int>(std::lround(qx)), y0 = static_cast<int>(std::lround(qy));
       for (int y = std::max(0, y0 - half); y <= std::min(grey.rows - 1, y0 + half); ++y) {
         const auto* row_x = gx.ptr<float>(y);
         const auto* row_y = gy.ptr<float>(y);
         for (int x = std::max(0, x0 - half); x <= std::min(grey.cols - 1, x0 + half); ++x) {
-          const Eigen::Vector2d p(x, y);
-          const Eigen::Vector2d g(static_cast<double>(row_x[x]), static_cast<double>(row_y[x]));
-          const double g2 = g.squaredNorm();
+          const double g0 = static_cast<double>(row_x[x]), g1 = static_cast<double>(row_y[x]);
+          const double g2 = g0 * g0 + g1 * g1;
           if (g2 <= 0.0) continue;
-          // How far the edge line through p passes from q, in pixels: edges of the X-junction pass
-          // through it, anything else in the window (a ChArUco marker's edge) does not and is
-          // down-weighted (Cauchy, 1 pixel).
-          const double miss = g.dot(p - q) / std::sqrt(g2);
-          const double weight = std::exp(-(p - q).squaredNorm() / (2.0 * sigma * sigma)) / (1.0 + miss * miss);
-          const Eigen::Matrix2d m = weight * g * g.transpose();
-          a += m;
-          b += m * p;
+          const double px = x - qx, py = y - qy;
+          // How far the edge line through this pixel passes from q, in pixels: the X-junction's
+          // edges pass through it, anything else in the window (a ChArUco marker's edge) does not
+          // and is down-weighted (Cauchy, 1 pixel).
+          const double miss2 = (g0 * px + g1 * py) * (g0 * px + g1 * py) / g2;
+          const double weight = std::exp(-(px * px + py * py) / (2.0 * sigma * sigma)) / (1.0 + miss2);
+          const double m00 = weight * g0 * g0, m01 = weight * g0 * g1, m11 = weight * g1 * g1;
+          a00 += m00;
+          a01 += m01;
+          a11 += m11;
+          b0 += m00 * x + m01 * y;
+          b1 += m01 * x + m11 * y;
         }
       }
-      if (!(a.determinant() > 1e-12 * a.squaredNorm())) {
+      const double det = a00 * a11 - a01 * a01;
+      if (!(det > 1e-12 * (a00 * a00 + 2.0 * a01 * a01 + a11 * a11))) {
         ok = false;
         break;
       }
-      const Eigen::Vector2d next = a.inverse() * b;
-      const double step = (next - q).norm();
-      q = next;
-      if (!q.allFinite() || (q - start).norm() > 0.5 * half) {
+      const double next_x = (a11 * b0 - a01 * b1) / det, next_y = (a00 * b1 - a01 * b0) / det;
+      const double step = std::hypot(next_x - qx, next_y - qy);
+      qx = next_x;
+      qy = next_y;
+      if (!std::isfinite(qx) || !std::isfinite(qy) || std::hypot(qx - start_x, qy - start_y) > 0.5 * half) {
         ok = false;
         break;
       }
       if (step < 1e-5) break;
     }
-    if (ok) corner = cv::Point2f(static_cast<float>(q.x()), static_cast<float>(q.y()));
+    if (ok) corner = cv::Point2f(static_cast<float>(qx), static_cast<float>(qy));
   }
 }
 
@@ -432,9 +438,17 @@ std::expected<BoardSpec, std::string> parse_board_spec(const std::string& spec) 
   const int markers = board.cols * board.rows / 2;
   const NamedDictionary* d = find_dictionary(board.dictionary);
   if (markers > d->markers) {
+    // Suggest the smallest dictionary with enough markers, of the same marker size where one has.
+    const auto family = [](const NamedDictionary& n) { return std::string(n.name).substr(0, 4); };
+    const NamedDictionary* suggestion = nullptr;
+    for (const NamedDictionary& n : kDictionaries) {
+      if (n.markers < markers) continue;
+      const auto rank = [&](const NamedDictionary& m) { return std::pair{family(m) != family(*d), m.markers}; };
+      if (suggestion == nullptr || rank(n) < rank(*suggestion)) suggestion = &n;
+    }
     return std::unexpected(quoted + std::to_string(board.cols) + "x" + std::to_string(board.rows) + " squares hold " + std::to_string(markers) +
-                           " markers but dictionary " + d->name + " has " + std::to_string(d->markers) + "; name a larger one, e.g. " +
-                           std::string(d->name).substr(0, 4) + "_1000");
+                           " markers but dictionary " + d->name + " has " + std::to_string(d->markers) +
+                           (suggestion != nullptr ? std::string("; name a larger one, e.g. ") + suggestion->name : std::string("; use fewer squares")));
   }
   return board;
 }
@@ -497,13 +511,15 @@ std::expected<BoardPicture, std::string> board_picture(const BoardSpec& board, i
 }
 
 std::expected<BoardView, std::string> detect_board(const std::filesystem::path& image, const BoardSpec& board) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(image, error)) return std::unexpected(image.string() + ": no such file");
   cv::Mat grey;
   try {
     grey = cv::imread(image.string(), cv::IMREAD_GRAYSCALE);
   } catch (const cv::Exception&) {
     grey.release();
   }
-  if (grey.empty()) return std::unexpected(image.string() + ": cannot read the image (missing, or not a format OpenCV reads)");
+  if (grey.empty()) return std::unexpected(image.string() + ": cannot read the image (not a format OpenCV reads, or damaged)");
   BoardView view;
   view.name = image.filename().string();
   view.width_px = grey.cols;
@@ -584,6 +600,10 @@ std::expected<BoardView, std::string> detect_board(const std::filesystem::path& 
 std::expected<std::vector<BoardView>, std::string> detect_boards(const std::vector<std::filesystem::path>& images, const BoardSpec& board,
                                                                  const DetectProgress& progress) {
   if (images.empty()) return std::unexpected("no images: give the pictures of the board (files, or folders of them)");
+  for (const std::filesystem::path& image : images) {  // a mistyped name fails before minutes of detection
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(image, error)) return std::unexpected(image.string() + ": no such file");
+  }
   std::vector<BoardView> views;
   int found = 0;
   for (std::size_t i = 0; i < images.size(); ++i) {

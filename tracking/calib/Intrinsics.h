@@ -82,8 +82,8 @@ struct BoardView {
   bool found() const { return !corners_px.empty(); }
 };
 
-// Finds the board in one picture (read as grey). Errors: the file cannot be read as an image
-// ("<file>: cannot read the image ..."). A picture without the whole board (for ChArUco: without
+// Finds the board in one picture (read as grey). Errors: no such file ("<file>: no such file"), or
+// not an image ("<file>: cannot read the image ..."). A picture without the whole board (for ChArUco: without
 // at least 6 corners off one line) gives a view with no corners: the board was not found. Cost:
 // tens of milliseconds for 1280 x 720, more where the board is missing.
 [[nodiscard]] std::expected<BoardView, std::string> detect_board(const std::filesystem::path& image, const BoardSpec& board);

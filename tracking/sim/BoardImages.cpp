@@ -21,22 +21,16 @@ std::unexpected<std::string> bad(const char* field, const char* expected, double
   return std::unexpected(std::string(field) + ": expected " + expected + ", got " + text);
 }
 
-// OpenCV's distortion of normalised coordinates (x, y) and its Jacobian.
+// OpenCV's distortion of normalised coordinates (x, y), and its inverse.
 struct Distortion {
   double k1, k2, p1, p2, k3;
 
   explicit Distortion(const std::array<double, 5>& k) : k1(k[0]), k2(k[1]), p1(k[2]), p2(k[3]), k3(k[4]) {}
 
-  Eigen::Vector2d apply(const Eigen::Vector2d& n, Eigen::Matrix2d* jacobian = nullptr) const {
+  Eigen::Vector2d apply(const Eigen::Vector2d& n) const {
     const double x = n.x(), y = n.y();
     const double r2 = x * x + y * y;
     const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-    if (jacobian != nullptr) {
-      const double dradial_dr2 = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3);
-      const double dradial_dx = 2.0 * x * dradial_dr2, dradial_dy = 2.0 * y * dradial_dr2;
-      (*jacobian) << radial + x * dradial_dx + 2.0 * p1 * y + 6.0 * p2 * x, x * dradial_dy + 2.0 * p1 * x + 2.0 * p2 * y,
-          y * dradial_dx + 2.0 * p1 * x + 2.0 * p2 * y, radial + y * dradial_dy + 6.0 * p1 * y + 2.0 * p2 * x;
-    }
     return {x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x), y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y};
   }
 
@@ -53,18 +47,27 @@ struct Distortion {
     return kMaxR2;
   }
 
-  // Distorted -> undistorted normalised coordinates by Newton's method from `n` (the caller's
-  // guess, e.g. a neighbour's answer). False when it does not converge or lands where the model
-  // has folded over.
-  bool invert(const Eigen::Vector2d& distorted, Eigen::Vector2d& n, double max_r2) const {
+  // Distorted (dx, dy) -> undistorted (nx, ny) normalised coordinates by Newton's method from
+  // (nx, ny) as given (the caller's guess, e.g. a neighbour's answer). False when it does not
+  // converge or lands where the model has folded over.
+  bool invert(double dx, double dy, double& nx, double& ny, double max_r2) const {
     for (int iteration = 0; iteration < 30; ++iteration) {
-      Eigen::Matrix2d j;
-      const Eigen::Vector2d residual = apply(n, &j) - distorted;
-      const double det = j.determinant();
+      const double x = nx, y = ny;
+      const double r2 = x * x + y * y;
+      const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+      const double dradial_dr2 = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3);
+      const double ex = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - dx;
+      const double ey = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - dy;
+      const double j00 = radial + 2.0 * x * x * dradial_dr2 + 2.0 * p1 * y + 6.0 * p2 * x;
+      const double j01 = 2.0 * x * y * dradial_dr2 + 2.0 * p1 * x + 2.0 * p2 * y;
+      const double j10 = 2.0 * x * y * dradial_dr2 + 2.0 * p1 * x + 2.0 * p2 * y;
+      const double j11 = radial + 2.0 * y * y * dradial_dr2 + 6.0 * p1 * y + 2.0 * p2 * x;
+      const double det = j00 * j11 - j01 * j10;
       if (!(det > 1e-9)) return false;
-      if (residual.squaredNorm() < 1e-26) return n.squaredNorm() < max_r2;
-      n -= j.inverse() * residual;
-      if (!n.allFinite() || n.squaredNorm() > 4.0 * max_r2 + 1.0) return false;
+      if (ex * ex + ey * ey < 1e-26) return r2 < max_r2;
+      nx -= (j11 * ex - j01 * ey) / det;
+      ny -= (j00 * ey - j10 * ex) / det;
+      if (!std::isfinite(nx) || !std::isfinite(ny) || nx * nx + ny * ny > 4.0 * max_r2 + 1.0) return false;
     }
     return false;
   }
@@ -229,35 +232,50 @@ cv::Mat render_board(const CameraIntrinsics& camera, const Rigid3d& camera_from_
   homography << r.col(0), r.col(1), camera_from_board.translation;
   const Eigen::Matrix3d board_from_ray = homography.inverse();
 
+  const double h00 = board_from_ray(0, 0), h01 = board_from_ray(0, 1), h02 = board_from_ray(0, 2);
+  const double h10 = board_from_ray(1, 0), h11 = board_from_ray(1, 1), h12 = board_from_ray(1, 2);
+  const double h20 = board_from_ray(2, 0), h21 = board_from_ray(2, 1), h22 = board_from_ray(2, 2);
+
   // The board point under every pixel corner (pixel centres are at integer coordinates, so the
-  // corners are at half-integers).
+  // corners are at half-integers). The loops below are written on plain doubles: they run a
+  // million times a picture, and so stay quick in the sanitizer builds too.
   const int lw = w + 1;
-  std::vector<Eigen::Vector2d> corner_uv(static_cast<std::size_t>(lw) * (h + 1));
-  std::vector<std::uint8_t> corner_ok(corner_uv.size(), 0);
-  Eigen::Vector2d row_start(0, 0);
+  const std::size_t corner_count = static_cast<std::size_t>(lw) * (h + 1);
+  std::vector<double> corner_u(corner_count, 0.0), corner_v(corner_count, 0.0);
+  std::vector<std::uint8_t> corner_ok(corner_count, 0);
+  double row_start_x = 0.0, row_start_y = 0.0;
   bool row_start_ok = false;
   for (int y = 0; y <= h; ++y) {
-    Eigen::Vector2d n(0, 0);
+    const double dy = (y - 0.5 - camera.cy) / camera.fy;
+    double nx = 0.0, ny = 0.0;
     bool previous_ok = false;
     for (int x = 0; x <= w; ++x) {
-      const Eigen::Vector2d distorted((x - 0.5 - camera.cx) / camera.fx, (y - 0.5 - camera.cy) / camera.fy);
-      if (!previous_ok) n = (x == 0 && row_start_ok) ? row_start : distorted;
-      bool ok = distortion.invert(distorted, n, max_r2);
+      const double dx = (x - 0.5 - camera.cx) / camera.fx;
+      if (!previous_ok) {
+        nx = (x == 0 && row_start_ok) ? row_start_x : dx;
+        ny = (x == 0 && row_start_ok) ? row_start_y : dy;
+      }
+      bool ok = distortion.invert(dx, dy, nx, ny, max_r2);
       if (!ok && previous_ok) {  // a bad warm start: try again from the distorted point itself
-        n = distorted;
-        ok = distortion.invert(distorted, n, max_r2);
+        nx = dx;
+        ny = dy;
+        ok = distortion.invert(dx, dy, nx, ny, max_r2);
       }
       previous_ok = ok;
       if (x == 0) {
-        row_start = n;
+        row_start_x = nx;
+        row_start_y = ny;
         row_start_ok = ok;
       }
       if (!ok) continue;
-      const Eigen::Vector3d q = board_from_ray * Eigen::Vector3d(n.x(), n.y(), 1.0);
-      if (!(q.z() > 1e-12)) continue;
+      const double qz = h20 * nx + h21 * ny + h22;
+      if (!(qz > 1e-12)) continue;
+      const double u = (h00 * nx + h01 * ny + h02) / qz, v = (h10 * nx + h11 * ny + h12) / qz;
+      if (!std::isfinite(u) || !std::isfinite(v)) continue;
       const std::size_t k = static_cast<std::size_t>(y) * lw + x;
-      corner_uv[k] = q.head<2>() / q.z();
-      corner_ok[k] = corner_uv[k].allFinite() ? 1 : 0;
+      corner_u[k] = u;
+      corner_v[k] = v;
+      corner_ok[k] = 1;
     }
   }
 
@@ -267,41 +285,42 @@ cv::Mat render_board(const CameraIntrinsics& camera, const Rigid3d& camera_from_
   // which sees an edge parallel to the pixel rows in steps of 1/S, every point has its own row and
   // column, so an edge at any angle is located to about 1/count of a pixel.
   const int samples = layout.pattern == BoardPattern::texture ? std::min(settings.samples_per_pixel, 16) : settings.samples_per_pixel;
-  std::vector<Eigen::Vector2d> sub_samples;
   // The generator must share no factor with the count, or the rows repeat and leave the pattern
   // off centre.
   int generator = std::max(1, static_cast<int>(std::lround(samples / std::numbers::phi)));
   while (std::gcd(generator, samples) != 1) ++generator;
+  std::vector<double> sub_x(static_cast<std::size_t>(samples)), sub_y(static_cast<std::size_t>(samples));
   for (int i = 0; i < samples; ++i) {
-    sub_samples.emplace_back((i + 0.5) / samples, (static_cast<int>(static_cast<long>(i) * generator % samples) + 0.5) / samples);
+    sub_x[static_cast<std::size_t>(i)] = (i + 0.5) / samples;
+    sub_y[static_cast<std::size_t>(i)] = (static_cast<int>(static_cast<long>(i) * generator % samples) + 0.5) / samples;
   }
   cv::Mat light(h, w, CV_64FC1);
   for (int y = 0; y < h; ++y) {
     auto* row = light.ptr<double>(y);
+    const std::size_t top = static_cast<std::size_t>(y) * lw, bottom = top + lw;
     for (int x = 0; x < w; ++x) {
-      const std::size_t k00 = static_cast<std::size_t>(y) * lw + x, k10 = k00 + 1, k01 = k00 + lw, k11 = k01 + 1;
+      const std::size_t k00 = top + x, k10 = k00 + 1, k01 = bottom + x, k11 = k01 + 1;
       if (!(corner_ok[k00] && corner_ok[k10] && corner_ok[k01] && corner_ok[k11])) {
         row[x] = settings.background;
         continue;
       }
-      const Eigen::Vector2d& c00 = corner_uv[k00];
-      const Eigen::Vector2d& c10 = corner_uv[k10];
-      const Eigen::Vector2d& c01 = corner_uv[k01];
-      const Eigen::Vector2d& c11 = corner_uv[k11];
-      const Eigen::Vector2d centre = 0.25 * (c00 + c10 + c01 + c11);
+      const double u00 = corner_u[k00], u10 = corner_u[k10], u01 = corner_u[k01], u11 = corner_u[k11];
+      const double v00 = corner_v[k00], v10 = corner_v[k10], v01 = corner_v[k01], v11 = corner_v[k11];
+      const double uc = 0.25 * (u00 + u10 + u01 + u11), vc = 0.25 * (v00 + v10 + v01 + v11);
       // Over one pixel the map to the board is affine to a part in 1e3 of a pixel or better, so the
       // footprint lies within the disc through its farthest corner.
-      const double reach = std::sqrt(std::max({(c00 - centre).squaredNorm(), (c10 - centre).squaredNorm(), (c01 - centre).squaredNorm(),
-                                               (c11 - centre).squaredNorm()}));
-      if (shading.edge_distance(centre.x(), centre.y()) > 1.01 * reach) {
-        row[x] = shading.grey(centre.x(), centre.y());
+      const auto d2 = [&](double u, double v) { return (u - uc) * (u - uc) + (v - vc) * (v - vc); };
+      const double reach = std::sqrt(std::max(std::max(d2(u00, v00), d2(u10, v10)), std::max(d2(u01, v01), d2(u11, v11))));
+      if (shading.edge_distance(uc, vc) > 1.01 * reach) {
+        row[x] = shading.grey(uc, vc);
         continue;
       }
       double sum = 0.0;
-      for (const Eigen::Vector2d& f : sub_samples) {
-        const Eigen::Vector2d left = c00 + f.y() * (c01 - c00), right = c10 + f.y() * (c11 - c10);
-        const Eigen::Vector2d p = left + f.x() * (right - left);
-        sum += shading.grey(p.x(), p.y());
+      for (int i = 0; i < samples; ++i) {
+        const double fx = sub_x[static_cast<std::size_t>(i)], fy = sub_y[static_cast<std::size_t>(i)];
+        const double left_u = u00 + fy * (u01 - u00), left_v = v00 + fy * (v01 - v00);
+        const double right_u = u10 + fy * (u11 - u10), right_v = v10 + fy * (v11 - v10);
+        sum += shading.grey(left_u + fx * (right_u - left_u), left_v + fx * (right_v - left_v));
       }
       row[x] = sum / samples;
     }

@@ -234,11 +234,11 @@ TEST(Intrinsics, BadPicturesGetMessagesNamingTheFile) {
 
   r = detect_boards({dir / "missing.png"}, board);
   ASSERT_FALSE(r.has_value());
-  EXPECT_EQ(r.error(), (dir / "missing.png").string() + ": cannot read the image (missing, or not a format OpenCV reads)");
+  EXPECT_EQ(r.error(), (dir / "missing.png").string() + ": no such file");
   std::ofstream(dir / "text.png") << "not a picture";
   r = detect_boards({dir / "text.png"}, board);
   ASSERT_FALSE(r.has_value());
-  EXPECT_EQ(r.error(), (dir / "text.png").string() + ": cannot read the image (missing, or not a format OpenCV reads)");
+  EXPECT_EQ(r.error(), (dir / "text.png").string() + ": cannot read the image (not a format OpenCV reads, or damaged)");
 
   // Pictures of a 9 x 6 board looked for as 8 x 6: not found anywhere.
   const CameraIntrinsics camera = webcam(640, 480, 600.0);
@@ -310,10 +310,14 @@ TEST(Intrinsics, BoardSpecsAreReadOrRefusedWithTheReason) {
             "board \"charuco:11x8:20\": expected charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT] (e.g. charuco:11x8:20:15:4X4_50)");
   EXPECT_EQ(refused("charuco:11x8:20:25"),
             "board \"charuco:11x8:20:25\": MARKER_MM must be a positive number of millimetres less than SQUARE_MM (20), got \"25\"");
-  EXPECT_EQ(refused("charuco:11x8:20:15:9X9_50").substr(0, 93),
-            "board \"charuco:11x8:20:15:9X9_50\": unknown dictionary \"9X9_50\"; expected one of 4X4_50, 4X4_100, 4X4_250");
+  EXPECT_TRUE(refused("charuco:11x8:20:15:9X9_50")
+                  .starts_with("board \"charuco:11x8:20:15:9X9_50\": unknown dictionary \"9X9_50\"; expected one of 4X4_50, 4X4_100, 4X4_250, "))
+      << refused("charuco:11x8:20:15:9X9_50");
   EXPECT_EQ(refused("charuco:12x10:20:15"),
-            "board \"charuco:12x10:20:15\": 12x10 squares hold 60 markers but dictionary 4X4_50 has 50; name a larger one, e.g. 4X4_1000");
+            "board \"charuco:12x10:20:15\": 12x10 squares hold 60 markers but dictionary 4X4_50 has 50; name a larger one, e.g. 4X4_100");
+  EXPECT_EQ(refused("charuco:30x30:20:15:APRILTAG_16h5"),
+            "board \"charuco:30x30:20:15:APRILTAG_16h5\": 30x30 squares hold 450 markers but dictionary APRILTAG_16h5 has 30; name a larger "
+            "one, e.g. APRILTAG_36h11");
   EXPECT_EQ(refused("").substr(0, 44), "board \"\": expected chess:COLSxROWS:SQUARE_MM");
 }
 

@@ -1,0 +1,91 @@
+// rhot-calib record: detections of a waved marker recorded live from cameras, video files or image
+// sequences (one per rig camera, as rhot-demo --source video:...), written as rhot's CSV for
+// `wand`. The blob detector finds the marker in every image; nothing is labelled.
+
+#include <memory>
+#include <string>
+
+#include <spdlog/spdlog.h>
+
+#include "tools/calib/Calib.h"
+#include "tracking/calib/Detections.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/source/VideoSource.h"
+
+namespace rhot::calib_tool {
+
+namespace {
+
+struct RecordOptions {
+  std::string rig;
+  std::string source;
+  std::string out;
+  int frames = 0;
+  int blob_threshold = -1;
+};
+
+int run(const RecordOptions& o) {
+  const auto rig = load_rig(o.rig);
+  if (!rig) {
+    spdlog::error("{}", rig.error());
+    return 1;
+  }
+  if (o.source.rfind("video:", 0) != 0) {
+    spdlog::error("--source: expected video:DEV[,DEV...], got \"{}\"", o.source);
+    return 1;
+  }
+  const auto devices = parse_video_devices(o.source.substr(6));
+  if (!devices) {
+    spdlog::error("--source: {}", devices.error());
+    return 1;
+  }
+  VideoSourceSettings settings;
+  settings.detector.threshold = o.blob_threshold;
+  auto source = VideoSource::open(*rig, *devices, settings);
+  if (!source) {
+    spdlog::error("{}", source.error());
+    return 1;
+  }
+  Detections d;
+  d.camera_count = static_cast<int>(rig->cameras.size());
+  long frame = 0;
+  while (o.frames <= 0 || frame < o.frames) {
+    const auto f = source->next();
+    if (!f) break;
+    DetectionFrame df;
+    df.frame = frame;
+    for (const CameraFrame& c : f->cameras) {
+      for (const Detection& det : c.detections) df.observations.push_back({c.camera, det.pixel, -1});
+    }
+    if (!df.observations.empty()) d.frames.push_back(std::move(df));
+    for (const std::string& w : source->take_warnings()) spdlog::warn("{}", w);
+    if (++frame % 300 == 0) spdlog::info("{} frames, {} detections", frame, d.count());
+  }
+  for (const std::string& line : source->summary()) spdlog::info("{}", line);
+  if (d.frames.empty()) {
+    spdlog::error("no camera saw a marker in {} frames: is the marker bright enough (--blob-threshold), and in view?", frame);
+    return 1;
+  }
+  if (const auto ok = write_detections_csv(d, o.out); !ok) {
+    spdlog::error("{}", ok.error());
+    return 1;
+  }
+  spdlog::info("{}: {} detections in {} of {} frames", o.out, d.count(), d.frames.size(), frame);
+  return 0;
+}
+
+}  // namespace
+
+void add_record(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<RecordOptions>();
+  CLI::App* cmd = app.add_subcommand("record", "record a waved marker's detections from cameras, videos or image sequences, for `wand`");
+  cmd->add_option("--rig", o->rig, "the cameras' intrinsics (OpenCV YAML), in device order")->required();
+  cmd->add_option("--source", o->source, "video:DEV[,DEV...]: a capture device index, video file or image sequence (cam0_%04d.png) per camera")
+      ->required();
+  cmd->add_option("--out", o->out, "detections CSV to write")->required();
+  cmd->add_option("--frames", o->frames, "frames to record (default: until the files end; Ctrl-C stops a camera)")->check(CLI::Range(0, 10000000));
+  cmd->add_option("--blob-threshold", o->blob_threshold, "grey level of a marker pixel (default -1: automatic)")->capture_default_str()->check(CLI::Range(-1, 255));
+  cmd->callback([o, &exit_code] { exit_code = run(*o); });
+}
+
+}  // namespace rhot::calib_tool
