@@ -33,6 +33,9 @@ void add_simulate_board(CLI::App& simulate, int& exit_code);
 // The folder pictures go to: `pictures` when given, else the folder of `out`.
 std::filesystem::path pictures_dir(const std::string& pictures, const std::string& out);
 
+// Creates the folder an output file goes to (nothing when it exists or the path has none).
+void make_parent_folder(const std::string& file);
+
 // Prints a report as indented JSON on stdout.
 void print_json(const nlohmann::json& report);
 

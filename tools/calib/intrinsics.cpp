@@ -96,8 +96,9 @@ int run_intrinsics(const IntrinsicsOptions& o) {
   const CameraIntrinsics& k = report->intrinsics;
   char held_out[64] = "";
   if (report->leave_one_out_rms_px) std::snprintf(held_out, sizeof held_out, " (leave-one-out %.3f px)", *report->leave_one_out_rms_px);
-  spdlog::info("rms {:.3f} px{}; fx {:.2f} fy {:.2f} cx {:.2f} cy {:.2f} px; k1 {:.5f} k2 {:.5f} p1 {:.5f} p2 {:.5f} k3 {:.5f}", report->rms_px,
-               held_out, k.fx, k.fy, k.cx, k.cy, k.distortion[0], k.distortion[1], k.distortion[2], k.distortion[3], k.distortion[4]);
+  spdlog::info("rms {:.3f} px{}; fx {:.2f} fy {:.2f} cx {:.2f} cy {:.2f} px; k1 {:.5f} k2 {:.5f} p1 {:.5f} p2 {:.5f} k3 {:.5f}",
+               report->rms_px, held_out, k.fx, k.fy, k.cx, k.cy, k.distortion[0], k.distortion[1], k.distortion[2], k.distortion[3],
+               k.distortion[4]);
   for (const std::string& w : report->warnings) spdlog::warn("{}", w);
 
   // The camera as a one-camera rig at the world origin: `rhot-calib wand --intrinsics` reads it.
@@ -187,7 +188,9 @@ void add_intrinsics(CLI::App& app, int& exit_code) {
   cmd->add_flag("--json", o->json, "Print a JSON report on stdout: rms_px, fx, fy, cx, cy, dist, per-view RMS, worst views, warnings");
   cmd->add_flag("--fix-k3,!--free-k3", o->fix_k3,
                 "Keep k3 at 0 (the default: k3 helps only wide-angle lenses); --free-k3 estimates it too");
-  cmd->add_flag("--leave-one-out,!--no-leave-one-out", o->leave_one_out, "Measure each view with intrinsics calibrated without it (the default; recalibrates once per view); --no-leave-one-out skips it");
+  cmd->add_flag(
+      "--leave-one-out,!--no-leave-one-out", o->leave_one_out,
+      "Measure each view with intrinsics calibrated without it (the default; recalibrates once per view); --no-leave-one-out skips it");
   cmd->callback([o, &exit_code] { exit_code = run_intrinsics(*o); });
 }
 

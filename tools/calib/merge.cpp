@@ -60,6 +60,7 @@ int run(const MergeOptions& o) {
     spdlog::error("{}", merged.error());
     return 1;
   }
+  make_parent_folder(o.out);
   if (const auto saved = save_rig(merged->rig, o.out); !saved) {
     spdlog::error("{}", saved.error());
     return 1;

@@ -66,6 +66,7 @@ int run(const RecordOptions& o) {
     spdlog::error("no camera saw a marker in {} frames: is the marker bright enough (--blob-threshold), and in view?", frame);
     return 1;
   }
+  make_parent_folder(o.out);
   if (const auto ok = write_detections_csv(d, o.out); !ok) {
     spdlog::error("{}", ok.error());
     return 1;

@@ -27,6 +27,12 @@ std::filesystem::path pictures_dir(const std::string& pictures, const std::strin
   return parent.empty() ? std::filesystem::path(".") : parent;
 }
 
+void make_parent_folder(const std::string& file) {
+  const std::filesystem::path parent = std::filesystem::path(file).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+}
+
 void print_json(const nlohmann::json& report) { std::cout << report.dump(2) << "\n"; }
 
 }  // namespace rhot::calib_tool

@@ -78,6 +78,7 @@ int write(const Detections& d, const SimulateOptions& o, const std::string& what
     spdlog::error("no camera saw anything: is {} inside the cameras' view?", what);
     return 1;
   }
+  make_parent_folder(o.out);
   if (const auto ok = write_detections_csv(d, o.out); !ok) {
     spdlog::error("{}", ok.error());
     return 1;

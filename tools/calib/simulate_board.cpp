@@ -158,8 +158,8 @@ int run_simulate_board(const SimulateBoardOptions& o) {
     j["out"] = o.out;
     j["images"] = written;
     j["truth"] = truth_file.string();
-    j["camera"] = {{"width", camera.width_px}, {"height", camera.height_px}, {"fx", camera.fx}, {"fy", camera.fy},
-                   {"cx", camera.cx},          {"cy", camera.cy},            {"dist", camera.distortion}};
+    j["camera"] = {{"width", camera.width_px}, {"height", camera.height_px}, {"fx", camera.fx}, {"fy", camera.fy}, {"cx", camera.cx},
+                   {"cy", camera.cy},          {"dist", camera.distortion}};
     j["noise_sigma"] = o.noise;
     j["blur_sigma_px"] = o.blur;
     j["seed"] = o.seed;
@@ -172,11 +172,13 @@ int run_simulate_board(const SimulateBoardOptions& o) {
 
 void add_simulate_board(CLI::App& simulate, int& exit_code) {
   CLI::App* cmd = simulate.add_subcommand(
-      "board", "Pictures of a calibration board from a camera with known intrinsics and distortion, and that camera (truth.yaml): "
-               "something to try `rhot-calib intrinsics` on, and to check it against");
+      "board",
+      "Pictures of a calibration board from a camera with known intrinsics and distortion, and that camera (truth.yaml): "
+      "something to try `rhot-calib intrinsics` on, and to check it against");
   auto o = std::make_shared<SimulateBoardOptions>();
   cmd->add_option("--out", o->out, "Folder to write board_NN.png and truth.yaml into (created if missing)");
-  cmd->add_option("--board", o->board, "The board, as `intrinsics --board` takes it (chess, circles, acircles, charuco)")->capture_default_str();
+  cmd->add_option("--board", o->board, "The board, as `intrinsics --board` takes it (chess, circles, acircles, charuco)")
+      ->capture_default_str();
   cmd->add_option("--views", o->views, "How many pictures, each from a different pose")->capture_default_str();
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT, pixels")->capture_default_str();
   cmd->add_option("--fx", o->fx, "Focal length, pixels")->capture_default_str();

@@ -190,6 +190,7 @@ int run(const WandOptions& o) {
     return 1;
   }
   for (const std::string& w : result->report.warnings) spdlog::warn("{}", w);
+  make_parent_folder(o.out);
   if (const auto saved = save_rig(result->rig, o.out); !saved) {
     spdlog::error("{}", saved.error());
     return 1;

@@ -69,6 +69,7 @@ int run(const WorldOptions& o) {
     spdlog::error("{}", result.error());
     return 1;
   }
+  make_parent_folder(o.out);
   if (const auto saved = save_rig(result->rig, o.out); !saved) {
     spdlog::error("{}", saved.error());
     return 1;

@@ -69,13 +69,20 @@ std::expected<void, std::string> write_residual_picture(const std::filesystem::p
   for (const ResidualSample& s : samples) {
     if (!s.pixel.allFinite() || !s.residual_px.allFinite()) continue;
     const cv::Point2d p(s.pixel.x() * scale, s.pixel.y() * scale);
-    const cv::Point2d q = p + cv::Point2d(s.residual_px.x(), s.residual_px.y()) * (magnify * scale);
-    const cv::Scalar colour = s.inlier ? error_colour(s.residual_px.norm()) : cv::Scalar(0, 0, 255);
-    cv::line(image, p, q, colour, 1, cv::LINE_AA);
-    cv::circle(image, p, 1, s.inlier ? cv::Scalar(230, 230, 230) : cv::Scalar(0, 0, 255), cv::FILLED, cv::LINE_AA);
+    if (!s.inlier) {
+      // An outlier's residual is off any useful scale: a red cross where it was seen.
+      cv::drawMarker(image, p, cv::Scalar(0, 0, 255), cv::MARKER_TILTED_CROSS, 7, 1, cv::LINE_AA);
+      continue;
+    }
+    // The magnified residual, at most 40 picture pixels long.
+    cv::Point2d d = cv::Point2d(s.residual_px.x(), s.residual_px.y()) * (magnify * scale);
+    const double length = std::hypot(d.x, d.y);
+    if (length > 40.0) d *= 40.0 / length;
+    cv::line(image, p, p + d, error_colour(s.residual_px.norm()), 1, cv::LINE_AA);
+    cv::circle(image, p, 1, cv::Scalar(230, 230, 230), cv::FILLED, cv::LINE_AA);
   }
   char caption[256];
-  std::snprintf(caption, sizeof caption, "residuals x%.0f, green 0 px .. red 2 px; dark cells: not covered", magnify);
+  std::snprintf(caption, sizeof caption, "residuals x%.0f, green 0 px .. red 2 px; red crosses: outliers; dark cells: not covered", magnify);
   cv::putText(image, title, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   cv::putText(image, caption, cv::Point(8, 40), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(220, 220, 220), 1, cv::LINE_AA);
   return write_png(file, image);

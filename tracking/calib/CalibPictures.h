@@ -22,7 +22,8 @@ struct ResidualSample {
 
 // One camera's image: a 16 x 16 grid with the cells no observation fell in shaded (coverage), a
 // dot per observation, and its residual as a line magnified `magnify` times, coloured from green
-// (0 px) to red (>= 2 px); `title` and the magnification written in the corner. The picture is the
+// (0 px) to red (>= 2 px) and cut at 40 picture pixels, outliers as red crosses; `title` and the
+// magnification written in the corner. The picture is the
 // image size, halved until it is at most 1280 wide.
 [[nodiscard]] std::expected<void, std::string> write_residual_picture(const std::filesystem::path& file, int width_px, int height_px,
                                                                       const std::vector<ResidualSample>& samples, double magnify,

@@ -196,9 +196,11 @@ std::vector<cv::Point2f> dark_blobs(const cv::Mat& grey) {
 // picture's own pixel grid (gradients of the picture smoothed with a 1-pixel Gaussian).
 // cornerSubPix solves the same equations on a window resampled bilinearly around its estimate,
 // which leaves errors of 0.03-0.05 px on rendered corners; on the same corners Förstner's are
-// 0.015 px. The window reaches `reach` of the closest spacing between grid neighbours (2 to 12
-// pixels): 0.35 keeps a chessboard's clear of the next corner.
-void refine_corners(const cv::Mat& grey, const std::vector<int>& ids, int ids_per_row, double reach, std::vector<cv::Point2f>& corners) {
+// 0.015 px. The window reaches 0.35 of the closest spacing between grid neighbours (2 to 12
+// pixels), clear of the next corner; `markers_nearby` (ChArUco) discounts edges that do not pass
+// through the corner.
+void refine_corners(const cv::Mat& grey, const std::vector<int>& ids, int ids_per_row, bool markers_nearby,
+                    std::vector<cv::Point2f>& corners) {
   std::map<int, std::size_t> index_of;
   for (std::size_t i = 0; i < ids.size(); ++i) index_of[ids[i]] = i;
   double spacing = 1e300;
@@ -209,7 +211,7 @@ void refine_corners(const cv::Mat& grey, const std::vector<int>& ids, int ids_pe
     }
   }
   if (spacing > 1e299) return;
-  const int half = static_cast<int>(std::clamp(std::floor(reach * spacing), 2.0, 12.0));
+  const int half = static_cast<int>(std::clamp(std::floor(0.35 * spacing), 2.0, 12.0));
   const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-4);
   cv::cornerSubPix(grey, corners, cv::Size(half, half), cv::Size(-1, -1), criteria);
 
@@ -236,11 +238,13 @@ void refine_corners(const cv::Mat& grey, const std::vector<int>& ids, int ids_pe
           const double g2 = g0 * g0 + g1 * g1;
           if (g2 <= 0.0) continue;
           const double px = x - qx, py = y - qy;
-          // How far the edge line through this pixel passes from q, in pixels: the X-junction's
-          // edges pass through it, anything else in the window (a ChArUco marker's edge) does not
-          // and is down-weighted (Cauchy, 1 pixel).
-          const double miss2 = (g0 * px + g1 * py) * (g0 * px + g1 * py) / g2;
-          const double weight = std::exp(-(px * px + py * py) / (2.0 * sigma * sigma)) / (1.0 + miss2);
+          double weight = std::exp(-(px * px + py * py) / (2.0 * sigma * sigma));
+          if (markers_nearby) {
+            // How far the edge line through this pixel passes from q, in pixels: the X-junction's
+            // edges pass through it, a marker's edge does not and is down-weighted (Cauchy, 1 pixel).
+            // Only where there are markers: on a plain chessboard it costs accuracy.
+            weight /= 1.0 + (g0 * px + g1 * py) * (g0 * px + g1 * py) / g2;
+          }
           const double m00 = weight * g0 * g0, m01 = weight * g0 * g1, m11 = weight * g1 * g1;
           a00 += m00;
           a01 += m01;
@@ -289,7 +293,7 @@ class BoardColour {
         marker_in_square_[static_cast<std::size_t>(r * board.cols + c)] = static_cast<int>(m);
       }
       cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(cb->dictionary->bytesList.rowRange(cb->ids[m], cb->ids[m] + 1),
-                                                                 cb->dictionary->markerSize);
+                                                                cb->dictionary->markerSize);
       marker_bits_.push_back(bits);
       marker_corner_.emplace_back(x, y);
     }
@@ -446,9 +450,10 @@ std::expected<BoardSpec, std::string> parse_board_spec(const std::string& spec) 
       const auto rank = [&](const NamedDictionary& m) { return std::pair{family(m) != family(*d), m.markers}; };
       if (suggestion == nullptr || rank(n) < rank(*suggestion)) suggestion = &n;
     }
-    return std::unexpected(quoted + std::to_string(board.cols) + "x" + std::to_string(board.rows) + " squares hold " + std::to_string(markers) +
-                           " markers but dictionary " + d->name + " has " + std::to_string(d->markers) +
-                           (suggestion != nullptr ? std::string("; name a larger one, e.g. ") + suggestion->name : std::string("; use fewer squares")));
+    return std::unexpected(
+        quoted + std::to_string(board.cols) + "x" + std::to_string(board.rows) + " squares hold " + std::to_string(markers) +
+        " markers but dictionary " + d->name + " has " + std::to_string(d->markers) +
+        (suggestion != nullptr ? std::string("; name a larger one, e.g. ") + suggestion->name : std::string("; use fewer squares")));
   }
   return board;
 }
@@ -491,7 +496,8 @@ std::expected<BoardPicture, std::string> board_picture(const BoardSpec& board, i
   picture.width_px = static_cast<int>(std::ceil(hi.x() / picture.pixel_m - 1e-9) - first_x);
   picture.height_px = static_cast<int>(std::ceil(hi.y() / picture.pixel_m - 1e-9) - first_y);
   if (static_cast<double>(picture.width_px) * picture.height_px > 2.5e8) {
-    return std::unexpected("board picture: " + size_text(picture.width_px, picture.height_px) + " pixels is too large; use fewer pixels per square");
+    return std::unexpected("board picture: " + size_text(picture.width_px, picture.height_px) +
+                           " pixels is too large; use fewer pixels per square");
   }
   picture.grey.resize(static_cast<std::size_t>(picture.width_px) * picture.height_px);
   constexpr int kSub = 4;  // sub-samples per pixel side, for anti-aliased circles and marker edges off the pixel grid
@@ -504,7 +510,8 @@ std::expected<BoardPicture, std::string> board_picture(const BoardSpec& board, i
                         picture.corner_board_m.y() + (y + (b + 0.5) / kSub) * picture.pixel_m);
         }
       }
-      picture.grey[static_cast<std::size_t>(y) * picture.width_px + x] = static_cast<std::uint8_t>(std::lround(255.0 * sum / (kSub * kSub)));
+      picture.grey[static_cast<std::size_t>(y) * picture.width_px + x] =
+          static_cast<std::uint8_t>(std::lround(255.0 * sum / (kSub * kSub)));
     }
   }
   return picture;
@@ -540,7 +547,7 @@ std::expected<BoardView, std::string> detect_board(const std::filesystem::path& 
         if (found) {
           std::vector<int> grid_ids(corners.size());
           for (std::size_t i = 0; i < grid_ids.size(); ++i) grid_ids[i] = static_cast<int>(i);
-          refine_corners(grey, grid_ids, board.cols, 0.35, corners);
+          refine_corners(grey, grid_ids, board.cols, false, corners);
         } else {
           corners.clear();
         }
@@ -573,7 +580,7 @@ std::expected<BoardView, std::string> detect_board(const std::filesystem::path& 
           corners.clear();
           ids.clear();
         } else {
-          refine_corners(grey, ids, board.cols - 1, 0.35, corners);
+          refine_corners(grey, ids, board.cols - 1, true, corners);
         }
         break;
       }
@@ -818,7 +825,8 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
   // The worst views, and the warnings.
   std::vector<std::size_t> order(report.views.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return report.views[a].rms_px > report.views[b].rms_px; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return report.views[a].rms_px > report.views[b].rms_px; });
   for (std::size_t i = 0; i < order.size() && static_cast<int>(i) < settings.worst_view_count; ++i) {
     report.worst_views.push_back(report.views[order[i]].name);
   }
@@ -827,8 +835,8 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
     std::string names;
     for (std::size_t i = 0; i < report.skipped.size() && i < 5; ++i) names += (i == 0 ? "" : ", ") + report.skipped[i];
     if (report.skipped.size() > 5) names += ", ...";
-    report.warnings.push_back("the board was not found in " + std::to_string(report.skipped.size()) + " of " + std::to_string(views.size()) +
-                              " images (" + names + "); they were left out");
+    report.warnings.push_back("the board was not found in " + std::to_string(report.skipped.size()) + " of " +
+                              std::to_string(views.size()) + " images (" + names + "); they were left out");
   }
   if (static_cast<int>(report.views.size()) < settings.recommended_views) {
     report.warnings.push_back("only " + views_text + " views found the board; " + std::to_string(settings.recommended_views) +
@@ -850,7 +858,8 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
   const double median = rms[rms.size() / 2];
   for (const ViewResult& v : report.views) {
     if (v.rms_px > settings.outlier_view_factor * median && v.rms_px > 0.5) {
-      report.warnings.push_back("view " + v.name + " has an RMS of " + format("%.2f", v.rms_px) + " px, " + format("%.1f", v.rms_px / median) +
+      report.warnings.push_back("view " + v.name + " has an RMS of " + format("%.2f", v.rms_px) + " px, " +
+                                format("%.1f", v.rms_px / median) +
                                 " times the median: blurred, or the board misdetected? Drop it and calibrate again");
     }
   }

@@ -34,10 +34,10 @@ enum class BoardKind {
 
 struct BoardSpec {
   BoardKind kind = BoardKind::chess;
-  int cols = 9;  // chess: inner corners along a row; circles: circles per row; charuco: squares along a row
-  int rows = 6;  // chess: inner corners down a column; circles: rows of circles; charuco: squares down a column
-  double square_mm = 25.0;  // chess, charuco: a square's side; circles: OpenCV's spacing (see BoardKind)
-  double marker_mm = 0.0;   // charuco: a marker's side, less than square_mm
+  int cols = 9;                       // chess: inner corners along a row; circles: circles per row; charuco: squares along a row
+  int rows = 6;                       // chess: inner corners down a column; circles: rows of circles; charuco: squares down a column
+  double square_mm = 25.0;            // chess, charuco: a square's side; circles: OpenCV's spacing (see BoardKind)
+  double marker_mm = 0.0;             // charuco: a marker's side, less than square_mm
   std::string dictionary = "4X4_50";  // charuco: an OpenCV predefined dictionary without "DICT_"
 
   // The spec as parse_board_spec reads it ("chess:9x6:25").
@@ -95,10 +95,10 @@ using DetectProgress = std::function<void(int index, int count, const std::strin
 // a picture of another size than the first (naming both files and sizes); the board found in none
 // of them (quoting the spec and how its numbers count).
 [[nodiscard]] std::expected<std::vector<BoardView>, std::string> detect_boards(const std::vector<std::filesystem::path>& images,
-                                                                              const BoardSpec& board, const DetectProgress& progress = {});
+                                                                               const BoardSpec& board, const DetectProgress& progress = {});
 
 struct IntrinsicsSettings {
-  bool fix_k3 = true;  // k3 only helps wide lenses, and over-fits the rest
+  bool fix_k3 = true;         // k3 only helps wide lenses, and over-fits the rest
   bool leave_one_out = true;  // recalibrates once per view: N times the work
   int worst_view_count = 3;
   // Warnings (the result stands, but should not be trusted blindly) when:
@@ -132,10 +132,10 @@ struct IntrinsicsReport {
   double rms_px = 0.0;  // over every point of every view
   // Over every point of every view, each view measured with intrinsics calibrated without it.
   std::optional<double> leave_one_out_rms_px;
-  std::vector<ViewResult> views;          // the views that found the board, in input order
-  std::vector<std::string> skipped;       // names of the views that did not
-  std::vector<std::string> worst_views;   // highest RMS first
-  double coverage = 0.0;                  // fraction of a 16 x 16 grid over the image holding a corner
+  std::vector<ViewResult> views;         // the views that found the board, in input order
+  std::vector<std::string> skipped;      // names of the views that did not
+  std::vector<std::string> worst_views;  // highest RMS first
+  double coverage = 0.0;                 // fraction of a 16 x 16 grid over the image holding a corner
   double tilt_min_deg = 0.0, tilt_max_deg = 0.0;
   double orientation_spread_deg = 0.0;  // the largest angle between two views' board normals
   std::vector<std::string> warnings;    // one sentence each, saying what to do about it

@@ -182,8 +182,10 @@ std::expected<void, std::string> BoardRenderSettings::check() const {
   for (const auto& [field, value] : {std::pair{"black", black}, std::pair{"white", white}, std::pair{"background", background}}) {
     if (!std::isfinite(value) || value < 0.0 || value > 255.0) return bad(field, "0 to 255 grey levels", value);
   }
-  if (!std::isfinite(blur_sigma_px) || blur_sigma_px < 0.0 || blur_sigma_px > 20.0) return bad("blur_sigma_px", "0 to 20 pixels", blur_sigma_px);
-  if (!std::isfinite(noise_sigma) || noise_sigma < 0.0 || noise_sigma > 100.0) return bad("noise_sigma", "0 to 100 grey levels", noise_sigma);
+  if (!std::isfinite(blur_sigma_px) || blur_sigma_px < 0.0 || blur_sigma_px > 20.0)
+    return bad("blur_sigma_px", "0 to 20 pixels", blur_sigma_px);
+  if (!std::isfinite(noise_sigma) || noise_sigma < 0.0 || noise_sigma > 100.0)
+    return bad("noise_sigma", "0 to 100 grey levels", noise_sigma);
   return {};
 }
 
@@ -325,7 +327,8 @@ cv::Mat render_board(const CameraIntrinsics& camera, const Rigid3d& camera_from_
       row[x] = sum / samples;
     }
   }
-  if (settings.blur_sigma_px > 0.0) cv::GaussianBlur(light, light, cv::Size(0, 0), settings.blur_sigma_px, settings.blur_sigma_px, cv::BORDER_REPLICATE);
+  if (settings.blur_sigma_px > 0.0)
+    cv::GaussianBlur(light, light, cv::Size(0, 0), settings.blur_sigma_px, settings.blur_sigma_px, cv::BORDER_REPLICATE);
   if (settings.noise_sigma > 0.0) {
     cv::RNG rng(settings.seed);  // OpenCV's generator: the same seed gives the same noise everywhere
     cv::Mat noise(light.size(), CV_64FC1);
@@ -382,8 +385,8 @@ std::vector<Rigid3d> board_poses(const CameraIntrinsics& camera, const BoardLayo
     const double axis_angle = k * 137.5 * deg + rng.uniform(-20.0, 20.0) * deg;  // golden-angle steps
     const double roll = rng.uniform(-20.0, 20.0) * deg;
     const double fill = cell == 4 ? rng.uniform(0.4, 0.6) : rng.uniform(0.25, 0.45);
-    const Eigen::Quaterniond rotation =
-        Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(axis_angle), std::sin(axis_angle), 0.0)) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ());
+    const Eigen::Quaterniond rotation = Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(axis_angle), std::sin(axis_angle), 0.0)) *
+                                        Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ());
     double depth_m = camera.fx * size.x() / (fill * camera.width_px);
     for (int attempt = 0; attempt < 150; ++attempt) {
       view.cam_from_world = Rigid3d::identity();

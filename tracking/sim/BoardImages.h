@@ -63,9 +63,9 @@ struct BoardRenderSettings {
   // Sub-samples averaged in a pixel an edge crosses (texture: in every pixel, at most 16); edges
   // land within about 1/samples_per_pixel of a pixel of where the camera model puts them.
   int samples_per_pixel = 144;
-  double black = 25.0;       // grey levels of the pattern's dark parts,
-  double white = 225.0;      // its light parts,
-  double background = 110.0;  // and of whatever is not the board
+  double black = 25.0;         // grey levels of the pattern's dark parts,
+  double white = 225.0;        // its light parts,
+  double background = 110.0;   // and of whatever is not the board
   double blur_sigma_px = 0.0;  // Gaussian blur of the picture (a lens slightly out of focus), pixels; 0: none
   double noise_sigma = 0.0;    // Gaussian noise added to every pixel after the blur, grey levels
   std::uint64_t seed = 1;      // for the noise
@@ -86,9 +86,8 @@ cv::Mat render_board(const CameraIntrinsics& camera, const Rigid3d& camera_from_
 // `count` board poses (camera_from_board) a careful person would photograph for calibration: the
 // whole board in view with a margin of 1 % of the image width, its centre spread over a 3 x 3
 // grid reaching towards the image's edges and corners, filling 30-60 % of the image width, tilted
-// 10-45 degrees about axes in varied directions and rolled up to 20 degrees. The same seed gives the same poses. A pose that cannot fit the board in
-// view after pulling it back and towards the centre is dropped, so fewer may come back for a board
-// too large for the camera.
+// 10-45 degrees about axes in varied directions and rolled up to 20 degrees. The same seed gives the same poses. A pose that cannot fit the
+// board in view after pulling it back and towards the centre is dropped, so fewer may come back for a board too large for the camera.
 std::vector<Rigid3d> board_poses(const CameraIntrinsics& camera, const BoardLayout& layout, int count, std::uint64_t seed = 1);
 
 }  // namespace rhot
