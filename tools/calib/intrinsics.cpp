@@ -172,25 +172,25 @@ int run_intrinsics(const IntrinsicsOptions& o) {
 }  // namespace
 
 void add_intrinsics(CLI::App& app, int& exit_code) {
-  CLI::App* cmd = app.add_subcommand(
-      "intrinsics",
-      "One camera's focal length, principal point and lens distortion from pictures of a flat board (Zhang's method, OpenCV). "
-      "Writes the camera as a one-camera rig (readable by `wand --intrinsics`) and a picture of corner coverage and residuals.");
+  CLI::App* cmd =
+      app.add_subcommand("intrinsics",
+                         "one camera's focal length, principal point and lens distortion from pictures of a flat board (Zhang's method); "
+                         "writes a one-camera rig for `wand --intrinsics`");
   auto o = std::make_shared<IntrinsicsOptions>();
-  cmd->add_option("images", o->images, "Pictures of the board from one camera (files, or folders of .png/.jpg/...), 10-20 tilted views");
+  cmd->add_option("images", o->images, "pictures of the board from one camera (files, or folders of .png/.jpg/...), 10-20 tilted views");
   cmd->add_option("--board", o->board,
-                  "The board: chess:COLSxROWS:SQUARE_MM (COLS x ROWS inner corners, as OpenCV counts: 10 x 7 squares is chess:9x6), "
+                  "the board: chess:COLSxROWS:SQUARE_MM (COLS x ROWS inner corners, as OpenCV counts: 10 x 7 squares is chess:9x6), "
                   "circles:COLSxROWS:SPACING_MM, acircles:COLSxROWS:SPACING_MM (OpenCV's asymmetric grid), or "
                   "charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT] (COLS x ROWS squares; DICT default 4X4_50)");
-  cmd->add_option("--out", o->out, "The camera file to write (OpenCV YAML rig with one camera), e.g. cam0.yaml");
-  cmd->add_option("--name", o->name, "The camera's name in the file and pictures (default: the --out file's stem)");
-  cmd->add_option("--pictures", o->pictures, "Folder for the picture <name>_intrinsics.png (default: the folder of --out)");
-  cmd->add_flag("--json", o->json, "Print a JSON report on stdout: rms_px, fx, fy, cx, cy, dist, per-view RMS, worst views, warnings");
+  cmd->add_option("--out", o->out, "the camera file to write (OpenCV YAML rig with one camera), e.g. cam0.yaml");
+  cmd->add_option("--name", o->name, "the camera's name in the file and pictures (default: the --out file's stem)");
+  cmd->add_option("--pictures", o->pictures, "folder for the picture <name>_intrinsics.png (default: the folder of --out)");
+  cmd->add_flag("--json", o->json, "print a JSON report on stdout: rms_px, fx, fy, cx, cy, dist, per-view RMS, worst views, warnings");
   cmd->add_flag("--fix-k3,!--free-k3", o->fix_k3,
-                "Keep k3 at 0 (the default: k3 helps only wide-angle lenses); --free-k3 estimates it too");
+                "keep k3 at 0 (the default: k3 helps only wide-angle lenses); --free-k3 estimates it too");
   cmd->add_flag(
       "--leave-one-out,!--no-leave-one-out", o->leave_one_out,
-      "Measure each view with intrinsics calibrated without it (the default; recalibrates once per view); --no-leave-one-out skips it");
+      "measure each view with intrinsics calibrated without it (the default; recalibrates once per view); --no-leave-one-out skips it");
   cmd->callback([o, &exit_code] { exit_code = run_intrinsics(*o); });
 }
 

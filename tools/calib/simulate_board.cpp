@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <expected>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -171,29 +172,29 @@ int run_simulate_board(const SimulateBoardOptions& o) {
 }  // namespace
 
 void add_simulate_board(CLI::App& simulate, int& exit_code) {
-  CLI::App* cmd = simulate.add_subcommand(
-      "board",
-      "Pictures of a calibration board from a camera with known intrinsics and distortion, and that camera (truth.yaml): "
-      "something to try `rhot-calib intrinsics` on, and to check it against");
+  CLI::App* cmd =
+      simulate.add_subcommand("board",
+                              "pictures of a calibration board from a camera of known intrinsics and distortion, and that camera "
+                              "(truth.yaml), to try `intrinsics` on");
   auto o = std::make_shared<SimulateBoardOptions>();
-  cmd->add_option("--out", o->out, "Folder to write board_NN.png and truth.yaml into (created if missing)");
-  cmd->add_option("--board", o->board, "The board, as `intrinsics --board` takes it (chess, circles, acircles, charuco)")
+  cmd->add_option("--out", o->out, "folder to write board_NN.png and truth.yaml into (created if missing)");
+  cmd->add_option("--board", o->board, "the board, as `intrinsics --board` takes it (chess, circles, acircles, charuco)")
       ->capture_default_str();
-  cmd->add_option("--views", o->views, "How many pictures, each from a different pose")->capture_default_str();
-  cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT, pixels")->capture_default_str();
-  cmd->add_option("--fx", o->fx, "Focal length, pixels")->capture_default_str();
-  cmd->add_option("--fy", o->fy, "Vertical focal length, pixels (default: fx)");
-  cmd->add_option("--cx", o->cx, "Principal point x, pixels (default: the image centre)");
-  cmd->add_option("--cy", o->cy, "Principal point y, pixels (default: the image centre)");
-  cmd->add_option("--k1", o->k1, "Radial distortion k1 (OpenCV's model)")->capture_default_str();
-  cmd->add_option("--k2", o->k2, "Radial distortion k2")->capture_default_str();
-  cmd->add_option("--p1", o->p1, "Tangential distortion p1")->capture_default_str();
-  cmd->add_option("--p2", o->p2, "Tangential distortion p2")->capture_default_str();
-  cmd->add_option("--k3", o->k3, "Radial distortion k3")->capture_default_str();
+  cmd->add_option("--views", o->views, "how many pictures, each from a different pose")->capture_default_str();
+  cmd->add_option("--size", o->size, "image size WIDTHxHEIGHT, pixels")->capture_default_str();
+  cmd->add_option("--fx", o->fx, "focal length, pixels")->capture_default_str();
+  cmd->add_option("--fy", o->fy, "vertical focal length, pixels (default: fx)");
+  cmd->add_option("--cx", o->cx, "principal point x, pixels (default: the image centre)");
+  cmd->add_option("--cy", o->cy, "principal point y, pixels (default: the image centre)");
+  cmd->add_option("--k1", o->k1, "radial distortion k1 (OpenCV's model)")->capture_default_str();
+  cmd->add_option("--k2", o->k2, "radial distortion k2")->capture_default_str();
+  cmd->add_option("--p1", o->p1, "tangential distortion p1")->capture_default_str();
+  cmd->add_option("--p2", o->p2, "tangential distortion p2")->capture_default_str();
+  cmd->add_option("--k3", o->k3, "radial distortion k3")->capture_default_str();
   cmd->add_option("--noise", o->noise, "Gaussian noise per pixel, grey levels (of 255)")->capture_default_str();
   cmd->add_option("--blur", o->blur, "Gaussian blur (focus), pixels")->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Seed for the poses and the noise: the same seed gives the same pictures")->capture_default_str();
-  cmd->add_flag("--json", o->json, "Print a JSON report on stdout: the pictures, the true camera");
+  cmd->add_option("--seed", o->seed, "seed for the poses and the noise: the same seed gives the same pictures")->capture_default_str();
+  cmd->add_flag("--json", o->json, "print a JSON report on stdout: the pictures, the true camera");
   cmd->callback([o, &exit_code] { exit_code = run_simulate_board(*o); });
 }
 

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tools/eval/Eval.h"
+#include "tracking/calib/RigMerge.h"
 #include "tracking/calib/Similarity.h"
 #include "tracking/calib/WandCalibration.h"
 #include "tracking/camera/RigFile.h"
@@ -83,7 +84,12 @@ int calibration(const std::string& rig_file, double length_mm, double sigma, int
     from.push_back(result->rig.cameras[c].centre_world());
     to.push_back(truth->cameras[c].centre_world());
   }
-  const auto fit = fit_similarity(from, to, true);
+  // Two cameras' centres leave the rotation about their baseline free: then their orientations
+  // fix it too (the merge's alignment).
+  std::optional<Similarity3> fit = fit_similarity(from, to, true);
+  if (!fit) {
+    if (const auto merged = merge_rigs(*truth, result->rig, MergeSettings{}); merged) fit = merged->report.a_from_b;
+  }
   double centre_sq = 0, rotation_max = 0;
   for (std::size_t c = 0; c < truth->cameras.size() && fit; ++c) {
     const Camera moved = transform_camera(result->rig.cameras[c], *fit);
