@@ -50,8 +50,8 @@ TEST(CalibCli, SimulatedWandSessionToAMetricRigAndItsWorld) {
   const std::string truth = asset("rigs/stereo-2.yaml");
   const auto sim = calib("simulate wand --rig " + truth + " --frames 600 --wand-mm 300 --seed 4 --out " + (dir / "wand.csv").string());
   ASSERT_EQ(sim.exit_code, 0) << sim.output;
-  const auto wand = calib_json("wand --intrinsics " + truth + " --detections " + (dir / "wand.csv").string() + " --wand-mm 300 --json --out " +
-                               (dir / "rig.yaml").string());
+  const auto wand = calib_json("wand --intrinsics " + truth + " --detections " + (dir / "wand.csv").string() +
+                               " --wand-mm 300 --json --out " + (dir / "rig.yaml").string());
   ASSERT_EQ(wand.exit_code, 0) << wand.output;
   const nlohmann::json j = nlohmann::json::parse(wand.output);
   EXPECT_TRUE(j["metric"].get<bool>());
@@ -81,8 +81,8 @@ TEST(CalibCli, SimulatedWandSessionToAMetricRigAndItsWorld) {
   const auto frame = calib("simulate lframe --rig " + truth + " --lframe-mm 400,250 --at-m -0.12,0.9,-0.25 --seed 5 --out " +
                            (dir / "lframe.csv").string());
   ASSERT_EQ(frame.exit_code, 0) << frame.output;
-  const auto world = calib_json("world --lframe --lframe-mm 400,250 --rig " + (dir / "rig.yaml").string() + " --detections " + (dir / "lframe.csv").string() +
-                                " --json --out " + (dir / "world.yaml").string());
+  const auto world = calib_json("world --lframe --lframe-mm 400,250 --rig " + (dir / "rig.yaml").string() + " --detections " +
+                                (dir / "lframe.csv").string() + " --json --out " + (dir / "world.yaml").string());
   ASSERT_EQ(world.exit_code, 0) << world.output;
   const nlohmann::json w = nlohmann::json::parse(world.output);
   EXPECT_LT(w["rms_mm"].get<double>(), 2.0);
@@ -105,8 +105,8 @@ TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
   // `record`, then `wand` (not metric without a wand: compared with the truth up to scale).
   const fs::path dir = temp_dir();
   const std::string truth = asset("rigs/stereo-2.yaml");
-  const auto sim = calib("simulate wand --rig " + truth + " --markers 1 --frames 160 --rate-hz 8 --seed 3 --out " + (dir / "truth.csv").string() +
-                         " --images " + (dir / "images").string());
+  const auto sim = calib("simulate wand --rig " + truth + " --markers 1 --frames 160 --rate-hz 8 --seed 3 --out " +
+                         (dir / "truth.csv").string() + " --images " + (dir / "images").string());
   ASSERT_EQ(sim.exit_code, 0) << sim.output;
   const std::string source = "video:" + (dir / "images" / "cam0_%04d.png").string() + "," + (dir / "images" / "cam1_%04d.png").string();
   const auto record = calib("record --rig " + truth + " --source " + source + " --out " + (dir / "recorded.csv").string());
@@ -121,13 +121,16 @@ TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
   // The same wave calibrated from the simulation's own detections: the images and the blob
   // detector add little, and both are near the truth up to scale (the second camera's rotation
   // relative to the first; 160 positions of one marker pin it to about 0.1 degrees).
-  const auto direct = calib("wand --intrinsics " + truth + " --detections " + (dir / "truth.csv").string() + " --out " + (dir / "direct.yaml").string());
+  const auto direct =
+      calib("wand --intrinsics " + truth + " --detections " + (dir / "truth.csv").string() + " --out " + (dir / "direct.yaml").string());
   ASSERT_EQ(direct.exit_code, 0) << direct.output;
   const auto rig = rhot::load_rig(dir / "rig.yaml");
   const auto direct_rig = rhot::load_rig(dir / "direct.yaml");
   const auto truth_rig = rhot::load_rig(truth);
   ASSERT_TRUE(rig && direct_rig && truth_rig);
-  const auto relative = [](const rhot::CameraRig& r) { return r.cameras[1].cam_from_world.rotation * r.cameras[0].cam_from_world.rotation.conjugate(); };
+  const auto relative = [](const rhot::CameraRig& r) {
+    return r.cameras[1].cam_from_world.rotation * r.cameras[0].cam_from_world.rotation.conjugate();
+  };
   const auto degrees = [](const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) { return a.angularDistance(b) * 180.0 / M_PI; };
   EXPECT_LT(degrees(relative(*rig), relative(*direct_rig)), 0.05);
   EXPECT_LT(degrees(relative(*rig), relative(*truth_rig)), 0.3);
@@ -138,19 +141,19 @@ TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
 
 TEST(CalibCli, BadInputGetsOneLineNamingIt) {
   const fs::path dir = temp_dir();
-  {
-    std::ofstream(dir / "broken.csv") << "frame,camera,x,y\n0,0,1,2\n0,1,three,4\n";
-  }
-  const auto broken = calib("wand --intrinsics " + asset("rigs/stereo-2.yaml") + " --detections " + (dir / "broken.csv").string() + " --out " +
-                            (dir / "rig.yaml").string());
+  { std::ofstream(dir / "broken.csv") << "frame,camera,x,y\n0,0,1,2\n0,1,three,4\n"; }
+  const auto broken = calib("wand --intrinsics " + asset("rigs/stereo-2.yaml") + " --detections " + (dir / "broken.csv").string() +
+                            " --out " + (dir / "rig.yaml").string());
   EXPECT_EQ(broken.exit_code, 1);
   EXPECT_EQ(broken.output, "rhot-calib: error: " + (dir / "broken.csv").string() + ":3: x: expected a finite number, got \"three\"\n");
   EXPECT_FALSE(fs::exists(dir / "rig.yaml"));
   const auto refine = calib("wand --intrinsics " + asset("rigs/stereo-2.yaml") + " --detections " + (dir / "broken.csv").string() +
                             " --refine focal,zoom --out " + (dir / "rig.yaml").string());
   EXPECT_EQ(refine.exit_code, 1);
-  EXPECT_NE(refine.output.find("rhot-calib: error: --refine: expected focal, principal or k1, got \"zoom\""), std::string::npos) << refine.output;
-  const auto no_mode = calib("world --rig " + asset("rigs/stereo-2.yaml") + " --detections " + (dir / "broken.csv").string() + " --out x.yaml");
+  EXPECT_NE(refine.output.find("rhot-calib: error: --refine: expected focal, principal or k1, got \"zoom\""), std::string::npos)
+      << refine.output;
+  const auto no_mode =
+      calib("world --rig " + asset("rigs/stereo-2.yaml") + " --detections " + (dir / "broken.csv").string() + " --out x.yaml");
   EXPECT_EQ(no_mode.exit_code, 1);
   EXPECT_EQ(no_mode.output, "rhot-calib: error: give one of --lframe and --floor\n");
   const auto missing = calib("merge " + asset("rigs/stereo-2.yaml") + " " + (dir / "none.yaml").string() + " --out x.yaml");
@@ -167,7 +170,8 @@ TEST(CalibCli, MergesTwoRigsThroughASharedCamera) {
   for (int c = 4; c < 8; ++c) b.cameras.push_back(room->cameras[static_cast<std::size_t>(c)]);
   ASSERT_TRUE(rhot::save_rig(a, dir / "a.yaml"));
   ASSERT_TRUE(rhot::save_rig(b, dir / "b.yaml"));
-  const auto merged = calib_json("merge " + (dir / "a.yaml").string() + " " + (dir / "b.yaml").string() + " --json --out " + (dir / "ab.yaml").string());
+  const auto merged =
+      calib_json("merge " + (dir / "a.yaml").string() + " " + (dir / "b.yaml").string() + " --json --out " + (dir / "ab.yaml").string());
   ASSERT_EQ(merged.exit_code, 0) << merged.output;
   const nlohmann::json j = nlohmann::json::parse(merged.output);
   EXPECT_EQ(j["cameras"], 8);

@@ -35,23 +35,23 @@ std::string read(const fs::path& file) {
 TEST(CalibIntrinsicsCli, HelpNamesEveryOption) {
   auto r = run_program("rhot-calib", "intrinsics --help", "2>&1");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* option : {"--board", "--out", "--name", "--pictures", "--json", "--fix-k3", "--free-k3", "--no-leave-one-out", "chess:COLSxROWS",
-                             "charuco:COLSxROWS:SQUARE_MM:MARKER_MM", "inner corners"}) {
+  for (const char* option : {"--board", "--out", "--name", "--pictures", "--json", "--fix-k3", "--free-k3", "--no-leave-one-out",
+                             "chess:COLSxROWS", "charuco:COLSxROWS:SQUARE_MM:MARKER_MM", "inner corners"}) {
     EXPECT_NE(r.output.find(option), std::string::npos) << option << "\n" << r.output;
   }
   r = run_program("rhot-calib", "simulate board --help", "2>&1");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* option : {"--out", "--board", "--views", "--size", "--fx", "--fy", "--cx", "--cy", "--k1", "--k2", "--p1", "--p2", "--k3",
-                             "--noise", "--blur", "--seed", "--json"}) {
+  for (const char* option : {"--out", "--board", "--views", "--size", "--fx", "--fy", "--cx", "--cy", "--k1", "--k2", "--p1", "--p2",
+                             "--k3", "--noise", "--blur", "--seed", "--json"}) {
     EXPECT_NE(r.output.find(option), std::string::npos) << option << "\n" << r.output;
   }
 }
 
 TEST(CalibIntrinsicsCli, SimulatedBoardPicturesGiveBackTheCamera) {
   const fs::path dir = temp_dir();
-  auto r = run_program("rhot-calib",
-                       "simulate board --out " + (dir / "pictures").string() + " --views 12 --size 960x540 --fx 760 --cx 486.5 --cy 265 --k1 -0.12",
-                       "2>&1");
+  auto r = run_program(
+      "rhot-calib",
+      "simulate board --out " + (dir / "pictures").string() + " --views 12 --size 960x540 --fx 760 --cx 486.5 --cy 265 --k1 -0.12", "2>&1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("rendering board 12/12: board_11.png"), std::string::npos) << r.output;
   ASSERT_TRUE(fs::exists(dir / "pictures" / "board_11.png"));
@@ -63,9 +63,10 @@ TEST(CalibIntrinsicsCli, SimulatedBoardPicturesGiveBackTheCamera) {
 
   // A folder of pictures; the report on stdout, progress on stderr.
   const fs::path log = dir / "stderr.txt";
-  r = run_program("rhot-calib",
-                  "intrinsics --board chess:9x6:25 " + (dir / "pictures").string() + " --out " + (dir / "out" / "cam0.yaml").string() + " --json",
-                  "2>" + log.string());
+  r = run_program(
+      "rhot-calib",
+      "intrinsics --board chess:9x6:25 " + (dir / "pictures").string() + " --out " + (dir / "out" / "cam0.yaml").string() + " --json",
+      "2>" + log.string());
   ASSERT_EQ(r.exit_code, 0) << r.output << read(log);
   const std::string progress = read(log);
   EXPECT_NE(progress.find("detecting corners 1/12: board_00.png"), std::string::npos) << progress;
@@ -109,7 +110,7 @@ TEST(CalibIntrinsicsCli, BadInputIsRefusedWithTheReason) {
   EXPECT_EQ(r.output, "rhot-calib: no images: give the pictures of the board (files, or folders of them)\n");
   r = run_program("rhot-calib", "simulate board --out " + dir.string() + " --size 12", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(r.output, "rhot-calib: simulate board: --size must be WIDTHxHEIGHT in pixels, each 64 to 8192 (e.g. 1280x720), got \"12\"\n");
+  EXPECT_EQ(r.output, "rhot-calib: simulate board: --size must be WIDTHxHEIGHT in pixels, each 64 to 4096 (e.g. 1280x720), got \"12\"\n");
   EXPECT_FALSE(fs::exists(dir / "cam.yaml"));
 }
 

@@ -8,8 +8,10 @@
 // one JSON report on stdout; pictures are PNG files beside the output (`--pictures DIR`, default:
 // the output file's folder).
 
+#include <expected>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 // GCC 12 reports -Wnull-dereference inside CLI11's string splitting (a false positive through
 // inlined libstdc++ code), as in the other tools.
@@ -18,6 +20,8 @@
 #include <CLI/CLI.hpp>
 #pragma GCC diagnostic pop
 #include <nlohmann/json.hpp>
+
+#include "tracking/camera/Camera.h"
 
 namespace rhot::calib_tool {
 
@@ -35,6 +39,11 @@ std::filesystem::path pictures_dir(const std::string& pictures, const std::strin
 
 // Creates the folder an output file goes to (nothing when it exists or the path has none).
 void make_parent_folder(const std::string& file);
+
+// The cameras of one or more rig files, in order, as one rig (poses as the files have them): one
+// intrinsics file per camera from `intrinsics`, or a rig file with them all. Fails on a file that
+// does not load, or two cameras of one name.
+[[nodiscard]] std::expected<rhot::CameraRig, std::string> load_cameras(const std::vector<std::string>& files);
 
 // Prints a report as indented JSON on stdout.
 void print_json(const nlohmann::json& report);

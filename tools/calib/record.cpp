@@ -17,7 +17,7 @@ namespace rhot::calib_tool {
 namespace {
 
 struct RecordOptions {
-  std::string rig;
+  std::vector<std::string> rig;
   std::string source;
   std::string out;
   int frames = 0;
@@ -25,7 +25,7 @@ struct RecordOptions {
 };
 
 int run(const RecordOptions& o) {
-  const auto rig = load_rig(o.rig);
+  const auto rig = load_cameras(o.rig);
   if (!rig) {
     spdlog::error("{}", rig.error());
     return 1;
@@ -80,12 +80,17 @@ int run(const RecordOptions& o) {
 void add_record(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<RecordOptions>();
   CLI::App* cmd = app.add_subcommand("record", "record a waved marker's detections from cameras, videos or image sequences, for `wand`");
-  cmd->add_option("--rig", o->rig, "the cameras' intrinsics (OpenCV YAML), in device order")->required();
-  cmd->add_option("--source", o->source, "video:DEV[,DEV...]: a capture device index, video file or image sequence (cam0_%04d.png) per camera")
+  cmd->add_option("--rig", o->rig, "the cameras' intrinsics (OpenCV YAML): one file per camera or one with them all, in device order")
+      ->required();
+  cmd->add_option("--source", o->source,
+                  "video:DEV[,DEV...]: a capture device index, video file or image sequence (cam0_%04d.png) per camera")
       ->required();
   cmd->add_option("--out", o->out, "detections CSV to write")->required();
-  cmd->add_option("--frames", o->frames, "frames to record (default: until the files end; Ctrl-C stops a camera)")->check(CLI::Range(0, 10000000));
-  cmd->add_option("--blob-threshold", o->blob_threshold, "grey level of a marker pixel (default -1: automatic)")->capture_default_str()->check(CLI::Range(-1, 255));
+  cmd->add_option("--frames", o->frames, "frames to record (default: until the files end; Ctrl-C stops a camera)")
+      ->check(CLI::Range(0, 10000000));
+  cmd->add_option("--blob-threshold", o->blob_threshold, "grey level of a marker pixel (default -1: automatic)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 255));
   cmd->callback([o, &exit_code] { exit_code = run(*o); });
 }
 

@@ -18,6 +18,7 @@
 #include <spdlog/spdlog.h>
 
 #include "tools/calib/Calib.h"
+#include "tracking/camera/RigFile.h"
 
 namespace rhot::calib_tool {
 
@@ -31,6 +32,25 @@ void make_parent_folder(const std::string& file) {
   const std::filesystem::path parent = std::filesystem::path(file).parent_path();
   std::error_code ec;
   if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+}
+
+std::expected<rhot::CameraRig, std::string> load_cameras(const std::vector<std::string>& files) {
+  rhot::CameraRig rig;
+  for (const std::string& file : files) {
+    auto loaded = rhot::load_rig(file);
+    if (!loaded) return std::unexpected(loaded.error());
+    if (rig.name.empty()) rig.name = loaded->name;
+    for (rhot::Camera& c : loaded->cameras) {
+      for (const rhot::Camera& other : rig.cameras) {
+        if (other.name == c.name) {
+          return std::unexpected(file + ": camera \"" + c.name +
+                                 "\" is already in an earlier file; name each camera apart (intrinsics --name)");
+        }
+      }
+      rig.cameras.push_back(std::move(c));
+    }
+  }
+  return rig;
 }
 
 void print_json(const nlohmann::json& report) { std::cout << report.dump(2) << "\n"; }

@@ -52,9 +52,15 @@ struct SimulateOptions {
 
 void add_noise_options(CLI::App* cmd, NoiseOptions& n) {
   cmd->add_option("--sigma", n.sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(0.0, 50.0));
-  cmd->add_option("--dropout", n.dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--strays", n.strays, "per camera and frame: probability of a stray blob")->capture_default_str()->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--outliers", n.outliers, "per detection: probability it is displaced 3 to 30 px")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--dropout", n.dropout, "probability a camera misses a visible marker")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--strays", n.strays, "per camera and frame: probability of a stray blob")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--outliers", n.outliers, "per detection: probability it is displaced 3 to 30 px")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--seed", n.seed, "random seed")->capture_default_str();
   cmd->add_option("--rate-hz", n.rate_hz, "frames per second")->capture_default_str()->check(CLI::Range(1.0, 10000.0));
 }
@@ -99,7 +105,8 @@ int write_images(const Detections& d, const CameraRig& rig, int frames, const st
     std::vector<CameraFrame> cameras(rig.cameras.size());
     for (std::size_t c = 0; c < cameras.size(); ++c) cameras[c].camera = static_cast<int>(c);
     if (next < d.frames.size() && d.frames[next].frame == f) {
-      for (const MarkerObservation& o : d.frames[next].observations) cameras[static_cast<std::size_t>(o.camera)].detections.push_back({o.pixel, o.marker});
+      for (const MarkerObservation& o : d.frames[next].observations)
+        cameras[static_cast<std::size_t>(o.camera)].detections.push_back({o.pixel, o.marker});
       ++next;
     }
     for (std::size_t c = 0; c < cameras.size(); ++c) {
@@ -129,11 +136,12 @@ int run_wand(const SimulateOptions& o) {
   session.wand_length_m = o.wand_mm / 1000.0;
   session.markers = o.markers;
   const TrackingVolume box = session_box(rig);
-  session.box_centre_m = o.volume_centre.size() == 3 ? Eigen::Vector3d(o.volume_centre[0], o.volume_centre[1], o.volume_centre[2]) : box.centre_m;
+  session.box_centre_m =
+      o.volume_centre.size() == 3 ? Eigen::Vector3d(o.volume_centre[0], o.volume_centre[1], o.volume_centre[2]) : box.centre_m;
   session.box_size_m = o.volume.size() == 3 ? Eigen::Vector3d(o.volume[0], o.volume[1], o.volume[2]) : box.size_m;
   if (session.box_size_m.minCoeff() <= session.wand_length_m) {
-    spdlog::error("--wand-mm: a {} mm wand does not fit the {:.2f} x {:.2f} x {:.2f} m volume it is waved in", o.wand_mm, session.box_size_m.x(),
-                  session.box_size_m.y(), session.box_size_m.z());
+    spdlog::error("--wand-mm: a {} mm wand does not fit the {:.2f} x {:.2f} x {:.2f} m volume it is waved in", o.wand_mm,
+                  session.box_size_m.x(), session.box_size_m.y(), session.box_size_m.z());
     return 1;
   }
   const Detections d = simulate_wand_session(rig, session, noise);
@@ -199,8 +207,12 @@ void add_simulate(CLI::App& app, int& exit_code) {
   wand->add_option("--rig", o->rig, "the true rig (OpenCV YAML)")->required();
   wand->add_option("--out", o->out, "detections CSV to write")->required();
   wand->add_option("--frames", o->frames, "frames")->capture_default_str()->check(CLI::Range(1, 1000000));
-  wand->add_option("--wand-mm", o->wand_mm, "distance between the wand's markers 0 and 1")->capture_default_str()->check(CLI::Range(10.0, 5000.0));
-  wand->add_option("--markers", o->markers, "2: a wand with labelled ends; 1: one unlabelled marker")->capture_default_str()->check(CLI::Range(1, 2));
+  wand->add_option("--wand-mm", o->wand_mm, "distance between the wand's markers 0 and 1")
+      ->capture_default_str()
+      ->check(CLI::Range(10.0, 5000.0));
+  wand->add_option("--markers", o->markers, "2: a wand with labelled ends; 1: one unlabelled marker")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 2));
   wand->add_option("--volume-m", o->volume, "size of the box waved through, X Y Z metres (default: the rig's volume)")->expected(3);
   wand->add_option("--volume-centre-m", o->volume_centre, "its centre, X Y Z metres")->expected(3);
   wand->add_option("--images", o->images, "also draw every camera's frames as PNG image sequences DIR/cam<i>_%04d.png (for `record`)");
@@ -212,7 +224,10 @@ void add_simulate(CLI::App& app, int& exit_code) {
   lframe->add_option("--rig", o->rig, "the true rig (OpenCV YAML)")->required();
   lframe->add_option("--out", o->out, "detections CSV to write")->required();
   lframe->add_option("--frames", o->frames, "frames")->default_val(60)->check(CLI::Range(1, 1000000));
-  lframe->add_option("--lframe-mm", o->lframe_mm, "long arm, short arm[, middle marker] in mm")->delimiter(',')->expected(2, 3)->capture_default_str();
+  lframe->add_option("--lframe-mm", o->lframe_mm, "long arm, short arm[, middle marker] in mm")
+      ->delimiter(',')
+      ->expected(2, 3)
+      ->capture_default_str();
   lframe->add_option("--height-mm", o->height_mm, "the markers' centres above the floor")->capture_default_str();
   lframe->add_option("--at-m", o->at_m, "where the corner lies, X,Y,Z metres (Y: the floor's or desk's height)")
       ->delimiter(',')
@@ -227,7 +242,9 @@ void add_simulate(CLI::App& app, int& exit_code) {
   floor->add_option("--rig", o->rig, "the true rig (OpenCV YAML)")->required();
   floor->add_option("--out", o->out, "detections CSV to write")->required();
   floor->add_option("--places", o->places, "X,Z,X,Z,... metres (default: four corners of the volume's floor)")->delimiter(',');
-  floor->add_option("--frames-per-place", o->frames_per_place, "frames held at each place")->capture_default_str()->check(CLI::Range(1, 100000));
+  floor->add_option("--frames-per-place", o->frames_per_place, "frames held at each place")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
   floor->add_option("--height-mm", o->height_mm, "the marker's centre above the floor")->capture_default_str();
   add_noise_options(floor, o->noise);
   floor->callback([o, &exit_code] { exit_code = run_floor(*o); });

@@ -98,8 +98,8 @@ int run_simulate_board(const SimulateBoardOptions& o) {
   const auto board = parse_board_spec(o.board);
   if (!board) return fail(board.error());
   const auto size = parse_size(o.size);
-  if (!size || size->first < 64 || size->second < 64 || size->first > 8192 || size->second > 8192) {
-    return fail("simulate board: --size must be WIDTHxHEIGHT in pixels, each 64 to 8192 (e.g. 1280x720), got \"" + o.size + "\"");
+  if (!size || size->first < 64 || size->second < 64 || size->first > 4096 || size->second > 4096) {
+    return fail("simulate board: --size must be WIDTHxHEIGHT in pixels, each 64 to 4096 (e.g. 1280x720), got \"" + o.size + "\"");
   }
   if (o.views < 1 || o.views > 500) return fail("simulate board: --views must be 1 to 500, got " + std::to_string(o.views));
 

@@ -21,7 +21,7 @@ namespace rhot::calib_tool {
 namespace {
 
 struct WandOptions {
-  std::string intrinsics;
+  std::vector<std::string> intrinsics;
   std::string detections;
   std::string out;
   std::string pictures;
@@ -94,12 +94,13 @@ bool append_report(const std::string& file, const WandCalibration& c) {
   std::ofstream out(file, std::ios::app);
   char line[256];
   out << "calibration:\n   method: \"rhot-calib wand\"\n";
-  std::snprintf(line, sizeof line, "   rms_px: %.4f\n   points: %d\n   outliers: %d\n", c.report.rms_px, c.report.points, c.report.outliers);
+  std::snprintf(line, sizeof line, "   rms_px: %.4f\n   points: %d\n   outliers: %d\n", c.report.rms_px, c.report.points,
+                c.report.outliers);
   out << line;
   out << "   metric: " << (c.report.metric ? 1 : 0) << "\n";
   if (c.report.metric) {
-    std::snprintf(line, sizeof line, "   wand_mean_mm: %.4f\n   wand_rms_mm: %.4f\n   wand_max_mm: %.4f\n", c.report.wand_mean_mm, c.report.wand_rms_mm,
-                  c.report.wand_max_mm);
+    std::snprintf(line, sizeof line, "   wand_mean_mm: %.4f\n   wand_rms_mm: %.4f\n   wand_max_mm: %.4f\n", c.report.wand_mean_mm,
+                  c.report.wand_rms_mm, c.report.wand_max_mm);
     out << line;
   }
   out << "   cameras_rms_px: [";
@@ -146,7 +147,7 @@ int run(const WandOptions& o) {
   }
   CameraRig rig;
   if (!o.intrinsics.empty()) {
-    auto loaded = load_rig(o.intrinsics);
+    auto loaded = load_cameras(o.intrinsics);
     if (!loaded) {
       spdlog::error("{}", loaded.error());
       return 1;
@@ -170,8 +171,9 @@ int run(const WandOptions& o) {
     for (int c = 0; c < detections->camera_count; ++c) {
       Camera cam;
       cam.name = "cam" + std::to_string(c);
-      const Eigen::Vector2i size = c < static_cast<int>(detections->image_sizes_px.size()) ? detections->image_sizes_px[static_cast<std::size_t>(c)]
-                                                                                          : Eigen::Vector2i(w, h);
+      const Eigen::Vector2i size = c < static_cast<int>(detections->image_sizes_px.size())
+                                       ? detections->image_sizes_px[static_cast<std::size_t>(c)]
+                                       : Eigen::Vector2i(w, h);
       cam.intrinsics.width_px = size.x();
       cam.intrinsics.height_px = size.y();
       cam.intrinsics.fx = cam.intrinsics.fy = size.x();
@@ -183,7 +185,8 @@ int run(const WandOptions& o) {
     settings.search_focal = true;
     spdlog::info("no --intrinsics: starting from the image centre and no distortion, searching the focal length");
   }
-  spdlog::info("{}: {} detections in {} frames, {} cameras", o.detections, detections->count(), detections->frames.size(), rig.cameras.size());
+  spdlog::info("{}: {} detections in {} frames, {} cameras", o.detections, detections->count(), detections->frames.size(),
+               rig.cameras.size());
   const auto result = calibrate_wand(rig, *detections, settings, [](const std::string& line) { spdlog::info("{}", line); });
   if (!result) {
     spdlog::error("{}", result.error());
@@ -210,14 +213,16 @@ int run(const WandOptions& o) {
     char title[160];
     std::snprintf(title, sizeof title, "%s: %.3f px RMS, %d points, %d outliers", cam.name.c_str(), result->report.cameras[c].rms_px,
                   result->report.cameras[c].inliers, result->report.cameras[c].outliers);
-    if (const auto ok = write_residual_picture(file, cam.intrinsics.width_px, cam.intrinsics.height_px, result->residuals[c], 50.0, title); !ok) {
+    if (const auto ok = write_residual_picture(file, cam.intrinsics.width_px, cam.intrinsics.height_px, result->residuals[c], 50.0, title);
+        !ok) {
       spdlog::warn("{}", ok.error());
     } else {
       pictures.push_back(file.string());
     }
   }
   const std::filesystem::path top = dir / (stem + "_top.png");
-  if (const auto ok = write_rig_top_view(top, result->rig, result->points_world, result->rig.name.empty() ? "rig" : result->rig.name); !ok) {
+  if (const auto ok = write_rig_top_view(top, result->rig, result->points_world, result->rig.name.empty() ? "rig" : result->rig.name);
+      !ok) {
     spdlog::warn("{}", ok.error());
   } else {
     pictures.push_back(top.string());
@@ -238,18 +243,24 @@ void add_wand(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<WandOptions>();
   CLI::App* cmd = app.add_subcommand("wand", "extrinsics of 2 to 32 cameras from a marker or a wand waved through the volume");
   cmd->add_option("--intrinsics", o->intrinsics,
-                  "rig file (OpenCV YAML) with every camera's name, image size and intrinsics, in detection order; poses are ignored. "
-                  "Without it: rough intrinsics from the image size and the focal length searched");
+                  "rig files (OpenCV YAML): one per camera from `intrinsics`, or one with every camera, in detection order; "
+                  "poses are ignored. Without it: rough intrinsics from the image size and the focal length searched");
   cmd->add_option("--detections", o->detections, "rhot's CSV (frame,camera,x,y[,marker]) or a MultiCamSelfCal folder")->required();
   cmd->add_option("--out", o->out, "the calibrated rig (OpenCV YAML, the report's figures beside it)")->required();
-  cmd->add_option("--wand-mm", o->wand_mm, "distance between wand markers A and B; none: the rig is not metric")->check(CLI::Range(1.0, 10000.0));
-  cmd->add_option("--wand-markers", o->wand_markers, "the marker ids of the wand's ends A,B")->delimiter(',')->expected(2)->capture_default_str();
+  cmd->add_option("--wand-mm", o->wand_mm, "distance between wand markers A and B; none: the rig is not metric")
+      ->check(CLI::Range(1.0, 10000.0));
+  cmd->add_option("--wand-markers", o->wand_markers, "the marker ids of the wand's ends A,B")
+      ->delimiter(',')
+      ->expected(2)
+      ->capture_default_str();
   cmd->add_option("--refine", o->refine, "also refine per camera: focal, principal, k1 (comma-separated)")->delimiter(',');
   cmd->add_flag("--search-focal", o->search_focal, "the intrinsics' focal lengths are rough: search 0.5 to 2 image widths first");
   cmd->add_option("--image-size", o->image_size, "WIDTHxHEIGHT of every camera, without --intrinsics");
   cmd->add_option("--outlier-px", o->outlier_px, "drop observations further off (default 0: 5 robust sigmas, at least 1 px)")
       ->check(CLI::Range(0.0, 1000.0));
-  cmd->add_option("--min-shared", o->min_shared, "points two cameras must share to be connected")->capture_default_str()->check(CLI::Range(5, 100000));
+  cmd->add_option("--min-shared", o->min_shared, "points two cameras must share to be connected")
+      ->capture_default_str()
+      ->check(CLI::Range(5, 100000));
   cmd->add_option("--pictures", o->pictures, "folder for the residual pictures and the rig from above (default: --out's folder)");
   cmd->add_flag("--json", o->json, "print the report as JSON on stdout");
   cmd->callback([o, &exit_code] { exit_code = run(*o); });

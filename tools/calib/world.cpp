@@ -81,7 +81,9 @@ int run(const WorldOptions& o) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   const std::filesystem::path top = dir / (std::filesystem::path(o.out).stem().string() + "_top.png");
-  if (const auto ok = write_rig_top_view(top, result->rig, r.measured_world, "world from " + std::string(o.lframe ? "L-frame" : "floor points")); !ok) {
+  if (const auto ok =
+          write_rig_top_view(top, result->rig, r.measured_world, "world from " + std::string(o.lframe ? "L-frame" : "floor points"));
+      !ok) {
     spdlog::warn("{}", ok.error());
   }
   if (o.json) {
@@ -109,7 +111,8 @@ void add_world(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<WorldOptions>();
   CLI::App* cmd = app.add_subcommand("world", "set the world frame (Y up, metres) from an L-frame or from points touched on the floor");
   cmd->add_option("--rig", o->rig, "the calibrated rig (OpenCV YAML)")->required();
-  cmd->add_option("--detections", o->detections, "detections of the L-frame lying still, or of the marker touched on the floor (CSV)")->required();
+  cmd->add_option("--detections", o->detections, "detections of the L-frame lying still, or of the marker touched on the floor (CSV)")
+      ->required();
   cmd->add_option("--out", o->out, "the rig in its new world (OpenCV YAML)")->required();
   cmd->add_flag("--lframe", o->lframe, "an L-frame: corner = origin, long arm along -Z, short arm along +X");
   cmd->add_flag("--floor", o->floor, "floor points: the first = origin, the second along +X, the floor's normal = +Y");
@@ -118,9 +121,14 @@ void add_world(CLI::App& app, int& exit_code) {
       ->expected(2, 3)
       ->capture_default_str();
   cmd->add_option("--height-mm", o->height_mm, "the markers' centres above the floor")->capture_default_str();
-  cmd->add_flag("--rescale", o->rescale, "also scale the rig so the L-frame's arms have their true lengths (a rig calibrated without a wand)");
-  cmd->add_option("--tolerance-mm", o->tolerance_mm, "the most a marker may lie from its place on the L-frame")->capture_default_str()->check(CLI::Range(0.1, 1000.0));
-  cmd->add_option("--min-frames", o->min_frames, "floor points: frames the marker must stay still at a place")->capture_default_str()->check(CLI::Range(1, 100000));
+  cmd->add_flag("--rescale", o->rescale,
+                "also scale the rig so the L-frame's arms have their true lengths (a rig calibrated without a wand)");
+  cmd->add_option("--tolerance-mm", o->tolerance_mm, "the most a marker may lie from its place on the L-frame")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 1000.0));
+  cmd->add_option("--min-frames", o->min_frames, "floor points: frames the marker must stay still at a place")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
   cmd->add_option("--pictures", o->pictures, "folder for the picture of the rig from above (default: --out's folder)");
   cmd->add_flag("--json", o->json, "print the report as JSON on stdout");
   cmd->callback([o, &exit_code] { exit_code = run(*o); });

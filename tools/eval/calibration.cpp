@@ -94,7 +94,8 @@ int calibration(const std::string& rig_file, double length_mm, double sigma, int
   for (std::size_t c = 0; c < truth->cameras.size() && fit; ++c) {
     const Camera moved = transform_camera(result->rig.cameras[c], *fit);
     centre_sq += (moved.centre_world() - truth->cameras[c].centre_world()).squaredNorm();
-    rotation_max = std::max(rotation_max, moved.cam_from_world.rotation.angularDistance(truth->cameras[c].cam_from_world.rotation) * 180.0 / M_PI);
+    rotation_max =
+        std::max(rotation_max, moved.cam_from_world.rotation.angularDistance(truth->cameras[c].cam_from_world.rotation) * 180.0 / M_PI);
   }
   const WandReport& r = result->report;
   int observations = 0;

@@ -141,7 +141,9 @@ int main(int argc, char** argv) {
   calib_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
   calib_cmd->add_option("--frames", calib_frames, "frames of the wave")->capture_default_str()->check(CLI::Range(10, 1000000));
   calib_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  calib_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  calib_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   calib_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
   // CLI11's range checks let NaN through (every comparison with it is false).

@@ -20,7 +20,13 @@ struct CameraBlock {
 
 struct ReprojectionError {
   ReprojectionError(const Eigen::Vector2d& pixel, const CameraIntrinsics& k)
-      : u(pixel.x()), v(pixel.y()), aspect(k.fy / k.fx), k2(k.distortion[1]), p1(k.distortion[2]), p2(k.distortion[3]), k3(k.distortion[4]) {}
+      : u(pixel.x()),
+        v(pixel.y()),
+        aspect(k.fy / k.fx),
+        k2(k.distortion[1]),
+        p1(k.distortion[2]),
+        p2(k.distortion[3]),
+        k3(k.distortion[4]) {}
 
   template <typename T>
   bool operator()(const T* pose, const T* intrinsics, const T* point, T* residual) const {
@@ -123,7 +129,8 @@ std::vector<Eigen::Vector2d> reprojection_residuals(const std::vector<Camera>& c
 }
 
 std::expected<BundleSummary, std::string> bundle_adjust(std::vector<Camera>& cameras, std::vector<Eigen::Vector3d>& points,
-                                                        const std::vector<BundleObservation>& observations, const BundleSettings& settings) {
+                                                        const std::vector<BundleObservation>& observations,
+                                                        const BundleSettings& settings) {
   const int n_cameras = static_cast<int>(cameras.size());
   const int n_points = static_cast<int>(points.size());
   for (const BundleObservation& o : observations) {
@@ -184,8 +191,8 @@ std::expected<BundleSummary, std::string> bundle_adjust(std::vector<Camera>& cam
   if (settings.hold_first_pose && n_cameras >= 2 && used[0] && used[1] && !held(settings, 1) && !held(settings, 0)) {
     const double distance = (cameras[1].centre_world() - cameras[0].centre_world()).norm();
     if (distance > 0) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ScalePrior, 1, 6>(new ScalePrior{distance, cameras[0].centre_world()}), nullptr,
-                               blocks[1].pose);
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ScalePrior, 1, 6>(new ScalePrior{distance, cameras[0].centre_world()}),
+                               nullptr, blocks[1].pose);
     }
   }
 

@@ -62,7 +62,8 @@ std::expected<void, std::string> write_residual_picture(const std::filesystem::p
   for (int gy = 0; gy < kGrid; ++gy) {
     for (int gx = 0; gx < kGrid; ++gx) {
       const cv::Rect cell(gx * w / kGrid, gy * h / kGrid, (gx + 1) * w / kGrid - gx * w / kGrid, (gy + 1) * h / kGrid - gy * h / kGrid);
-      cv::rectangle(image, cell, hit[static_cast<std::size_t>(gy * kGrid + gx)] ? cv::Scalar(90, 90, 90) : cv::Scalar(25, 25, 60), cv::FILLED);
+      cv::rectangle(image, cell, hit[static_cast<std::size_t>(gy * kGrid + gx)] ? cv::Scalar(90, 90, 90) : cv::Scalar(25, 25, 60),
+                    cv::FILLED);
       cv::rectangle(image, cell, cv::Scalar(60, 60, 60), 1);
     }
   }
@@ -82,7 +83,8 @@ std::expected<void, std::string> write_residual_picture(const std::filesystem::p
     cv::circle(image, p, 1, cv::Scalar(230, 230, 230), cv::FILLED, cv::LINE_AA);
   }
   char caption[256];
-  std::snprintf(caption, sizeof caption, "residuals x%.0f, green 0 px .. red 2 px; red crosses: outliers; dark cells: not covered", magnify);
+  std::snprintf(caption, sizeof caption, "residuals x%.0f, green 0 px .. red 2 px; red crosses: outliers; dark cells: not covered",
+                magnify);
   cv::putText(image, title, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   cv::putText(image, caption, cv::Point(8, 40), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(220, 220, 220), 1, cv::LINE_AA);
   return write_png(file, image);

@@ -36,6 +36,7 @@ double image_coverage(int width_px, int height_px, const std::vector<Eigen::Vect
 // centre, name and a wedge along its view direction, and the points (e.g. the wand's
 // reconstruction) as grey dots; a scale bar in metres.
 [[nodiscard]] std::expected<void, std::string> write_rig_top_view(const std::filesystem::path& file, const CameraRig& rig,
-                                                                  const std::vector<Eigen::Vector3d>& points_world, const std::string& title);
+                                                                  const std::vector<Eigen::Vector3d>& points_world,
+                                                                  const std::string& title);
 
 }  // namespace rhot

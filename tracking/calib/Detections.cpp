@@ -99,7 +99,8 @@ std::expected<Detections, std::string> read_detections_csv(const std::filesystem
     }
     long frame = 0, camera = 0, marker = -1;
     double x = 0, y = 0;
-    if (!parse_long(f[0], frame) || frame < 0) return std::unexpected(where + "frame: expected a non-negative integer, got \"" + f[0] + "\"");
+    if (!parse_long(f[0], frame) || frame < 0)
+      return std::unexpected(where + "frame: expected a non-negative integer, got \"" + f[0] + "\"");
     if (!parse_long(f[1], camera) || camera < 0 || camera >= 256) {
       return std::unexpected(where + "camera: expected a camera index 0 to 255, got \"" + f[1] + "\"");
     }
@@ -138,8 +139,10 @@ std::expected<Detections, std::string> read_multicamselfcal(const std::filesyste
   const std::filesystem::path points_file = folder / "points.dat";
   const std::filesystem::path ids_file = folder / "IdMat.dat";
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(points_file, ec)) return std::unexpected(folder.string() + ": no points.dat (not a MultiCamSelfCal folder)");
-  if (!std::filesystem::is_regular_file(ids_file, ec)) return std::unexpected(folder.string() + ": no IdMat.dat (not a MultiCamSelfCal folder)");
+  if (!std::filesystem::is_regular_file(points_file, ec))
+    return std::unexpected(folder.string() + ": no points.dat (not a MultiCamSelfCal folder)");
+  if (!std::filesystem::is_regular_file(ids_file, ec))
+    return std::unexpected(folder.string() + ": no IdMat.dat (not a MultiCamSelfCal folder)");
   const auto points = read_matrix_file(points_file);
   if (!points) return std::unexpected(points.error());
   const auto ids = read_matrix_file(ids_file);

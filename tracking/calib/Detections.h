@@ -39,10 +39,10 @@ struct DetectionFrame {
 };
 
 struct Detections {
-  int camera_count = 0;                             // 1 + the highest camera index seen, or the folder's camera count
-  std::vector<DetectionFrame> frames;               // in increasing frame order, each frame once
-  std::vector<Eigen::Vector2i> image_sizes_px;      // per camera, when the source says (MultiCamSelfCal's Res.dat)
-  std::size_t count() const;                        // observations in all frames
+  int camera_count = 0;                         // 1 + the highest camera index seen, or the folder's camera count
+  std::vector<DetectionFrame> frames;           // in increasing frame order, each frame once
+  std::vector<Eigen::Vector2i> image_sizes_px;  // per camera, when the source says (MultiCamSelfCal's Res.dat)
+  std::size_t count() const;                    // observations in all frames
 };
 
 // rhot's CSV. Errors name the file and line: "FILE:LINE: expected 4 or 5 comma-separated fields

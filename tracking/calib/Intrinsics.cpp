@@ -143,18 +143,18 @@ cv::Ptr<cv::aruco::CharucoBoard> charuco_board(const BoardSpec& board) {
 
 // Dark round blobs, as candidates for findCirclesGrid: Otsu's threshold finds them, and each centre
 // is the centroid of darkness (white level minus grey) over the blob and a 2-pixel rim, which
-// follows an anti-aliased edge to a small fraction of a pixel. (OpenCV's SimpleBlobDetector would
-// do instead, but it lives in features2d, which rhot does not link.)
+// follows an anti-aliased edge to a small fraction of a pixel where the binary centroids of OpenCV's
+// SimpleBlobDetector move in whole-pixel steps (and it lives in features2d, which this library
+// does not link).
 std::vector<cv::Point2f> dark_blobs(const cv::Mat& grey) {
   cv::Mat dark;
-  const double threshold = cv::threshold(grey, dark, 0, 255, cv::THRESH_BINARY_INV | cv::THRESH_OTSU);
+  cv::threshold(grey, dark, 0, 255, cv::THRESH_BINARY_INV | cv::THRESH_OTSU);
   // The two classes' mean levels set the weights' scale.
   const cv::Scalar dark_mean = cv::mean(grey, dark);
   cv::Mat light_mask;
   cv::bitwise_not(dark, light_mask);
   const cv::Scalar light_mean = cv::mean(grey, light_mask);
   const double span = std::max(1.0, light_mean[0] - dark_mean[0]);
-  (void)threshold;
   std::vector<std::vector<cv::Point>> contours;
   cv::findContours(dark, contours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE);
   std::vector<cv::Point2f> centres;

@@ -43,13 +43,15 @@ std::expected<MergeResult, std::string> merge_rigs(const CameraRig& a, const Cam
     const auto it = in_a.find(b.cameras[j].name);
     if (it == in_a.end()) continue;
     if (!same_intrinsics(a.cameras[it->second].intrinsics, b.cameras[j].intrinsics)) {
-      return std::unexpected("merge: camera \"" + b.cameras[j].name +
-                             "\" is in both rigs with different intrinsics (image size, focal length or principal point differ by more than 1 %)");
+      return std::unexpected(
+          "merge: camera \"" + b.cameras[j].name +
+          "\" is in both rigs with different intrinsics (image size, focal length or principal point differ by more than 1 %)");
     }
     shared.emplace_back(it->second, j);
   }
   if (shared.empty()) {
-    return std::unexpected("merge: the rigs share no camera (cameras are matched by name); calibrate so that at least one camera is in both waves");
+    return std::unexpected(
+        "merge: the rigs share no camera (cameras are matched by name); calibrate so that at least one camera is in both waves");
   }
   MergeResult out;
   MergeReport& r = out.report;
@@ -57,7 +59,8 @@ std::expected<MergeResult, std::string> merge_rigs(const CameraRig& a, const Cam
   std::vector<Eigen::Matrix3d> rotations;
   for (const auto& [i, j] : shared) {
     r.shared_cameras.push_back(a.cameras[i].name);
-    rotations.push_back(a.cameras[i].cam_from_world.rotation.toRotationMatrix().transpose() * b.cameras[j].cam_from_world.rotation.toRotationMatrix());
+    rotations.push_back(a.cameras[i].cam_from_world.rotation.toRotationMatrix().transpose() *
+                        b.cameras[j].cam_from_world.rotation.toRotationMatrix());
   }
   Similarity3 a_from_b;
   a_from_b.rotation = mean_rotation(rotations);
@@ -133,7 +136,8 @@ std::expected<MergeResult, std::string> merge_rigs(const CameraRig& a, const Cam
     for (std::size_t i = 0; i < a.cameras.size(); ++i) a_index[i] = static_cast<int>(i);
     add_session(*detections_a, a_index);
     add_session(*detections_b, b_index);
-    if (points.size() < 20) return std::unexpected("merge: only " + std::to_string(points.size()) + " points of the two sessions fit the merged rig within 3 px");
+    if (points.size() < 20)
+      return std::unexpected("merge: only " + std::to_string(points.size()) + " points of the two sessions fit the merged rig within 3 px");
     BundleSettings bs;
     bs.huber_px = 1.0;
     // The gauge: A's first two cameras as the similarity left them (A's frame and metric scale).

@@ -13,7 +13,8 @@ Similarity3 Similarity3::inverse() const {
   return inv;
 }
 
-std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to, bool with_scale) {
+std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to,
+                                          bool with_scale) {
   if (from.size() != to.size() || from.size() < 3) return std::nullopt;
   const auto n = static_cast<Eigen::Index>(from.size());
   Eigen::Matrix3Xd a(3, n), b(3, n);

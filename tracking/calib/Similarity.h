@@ -24,7 +24,8 @@ struct Similarity3 {
 // The similarity taking `from[i]` nearest to `to[i]` in the least-squares sense (scale fixed at 1
 // when `with_scale` is false). Nothing for fewer than 3 pairs, points all on one line, or
 // non-finite input.
-std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to, bool with_scale);
+std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to,
+                                          bool with_scale);
 
 // The same camera described in the new frame: its image of any scene point is unchanged.
 Camera transform_camera(const Camera& camera, const Similarity3& new_from_old);

@@ -130,7 +130,8 @@ std::expected<BundleSummary, std::string> adjust(State& s, BundleSettings settin
   // Normalised coordinates follow refined intrinsics.
   if (settings.refine_focal || settings.refine_principal_point || settings.refine_k1) {
     for (Track& t : s.tracks) {
-      for (std::size_t k = 0; k < t.cameras.size(); ++k) t.normalised[k] = s.cameras[static_cast<std::size_t>(t.cameras[k])].undistort(t.pixels[k]);
+      for (std::size_t k = 0; k < t.cameras.size(); ++k)
+        t.normalised[k] = s.cameras[static_cast<std::size_t>(t.cameras[k])].undistort(t.pixels[k]);
     }
   }
   return *summary;
@@ -201,7 +202,8 @@ std::expected<void, std::string> place_first_pair(State& s, const std::vector<Gr
       p2.emplace_back(t.normalised[static_cast<std::size_t>(kb)].x(), t.normalised[static_cast<std::size_t>(kb)].y());
       which.push_back(i);
     }
-    const double f = 0.5 * (s.cameras[static_cast<std::size_t>(e.a)].intrinsics.fx + s.cameras[static_cast<std::size_t>(e.b)].intrinsics.fx);
+    const double f =
+        0.5 * (s.cameras[static_cast<std::size_t>(e.a)].intrinsics.fx + s.cameras[static_cast<std::size_t>(e.b)].intrinsics.fx);
     cv::Mat mask;
     cv::Mat essential;
     try {
@@ -275,7 +277,8 @@ bool place_camera(State& s, int c, double tolerance_px) {
   const double f = s.cameras[static_cast<std::size_t>(c)].intrinsics.fx;
   bool ok = false;
   try {
-    ok = cv::solvePnPRansac(object, image, identity(), cv::noArray(), rvec, tvec, false, 500, static_cast<float>(tolerance_px / f), 0.999, inliers, cv::SOLVEPNP_EPNP);
+    ok = cv::solvePnPRansac(object, image, identity(), cv::noArray(), rvec, tvec, false, 500, static_cast<float>(tolerance_px / f), 0.999,
+                            inliers, cv::SOLVEPNP_EPNP);
     if (ok && inliers.size() >= 6) {
       std::vector<cv::Point3d> o2;
       std::vector<cv::Point2d> i2;
@@ -346,7 +349,8 @@ std::expected<Solved, std::string> solve(State s, const std::vector<GraphEdge>& 
   quick.threads = settings.threads;
   quick.huber_px = 2.0;
   if (const auto b = adjust(s, quick); !b) return std::unexpected(b.error());
-  if (progress) progress("placed " + camera_label(rig, s.order[0]) + " and " + camera_label(rig, s.order[1]) + " from their essential matrix");
+  if (progress)
+    progress("placed " + camera_label(rig, s.order[0]) + " and " + camera_label(rig, s.order[1]) + " from their essential matrix");
   const int n = static_cast<int>(s.cameras.size());
   while (static_cast<int>(s.order.size()) < n) {
     // The unplaced camera that sees the most reconstructed points.
@@ -365,9 +369,10 @@ std::expected<Solved, std::string> solve(State s, const std::vector<GraphEdge>& 
     }
     if (best < 0) break;
     if (!place_camera(s, best, tolerance_px)) {
-      return std::unexpected("cannot place " + camera_label(rig, best) + ": the " + std::to_string(best_count) +
-                             " reconstructed points it saw do not fit one camera pose; are the detections' camera streams in the rig's order, "
-                             "and are its intrinsics its own?");
+      return std::unexpected(
+          "cannot place " + camera_label(rig, best) + ": the " + std::to_string(best_count) +
+          " reconstructed points it saw do not fit one camera pose; are the detections' camera streams in the rig's order, "
+          "and are its intrinsics its own?");
     }
     triangulate_new(s, 2.5 * tolerance_px);
     if (const auto b = adjust(s, quick); !b) return std::unexpected(b.error());
@@ -420,15 +425,15 @@ std::expected<void, std::string> check_inputs(const CameraRig& rig, const Detect
   const int n = static_cast<int>(rig.cameras.size());
   if (n < 2 || n > 32) return std::unexpected("the rig has " + std::to_string(n) + " cameras; a wand calibration needs 2 to 32");
   if (d.camera_count > n) {
-    return std::unexpected("the detections name camera " + std::to_string(d.camera_count - 1) + " but the rig has only " + std::to_string(n) +
-                           " cameras (0 to " + std::to_string(n - 1) + ")");
+    return std::unexpected("the detections name camera " + std::to_string(d.camera_count - 1) + " but the rig has only " +
+                           std::to_string(n) + " cameras (0 to " + std::to_string(n - 1) + ")");
   }
   for (std::size_t c = 0; c < d.image_sizes_px.size() && c < rig.cameras.size(); ++c) {
     const CameraIntrinsics& k = rig.cameras[c].intrinsics;
     if (d.image_sizes_px[c] != Eigen::Vector2i(k.width_px, k.height_px)) {
-      return std::unexpected(camera_label(rig, static_cast<int>(c)) + ": the detections' images are " + std::to_string(d.image_sizes_px[c].x()) +
-                             "x" + std::to_string(d.image_sizes_px[c].y()) + " but its intrinsics are for " + std::to_string(k.width_px) +
-                             "x" + std::to_string(k.height_px));
+      return std::unexpected(camera_label(rig, static_cast<int>(c)) + ": the detections' images are " +
+                             std::to_string(d.image_sizes_px[c].x()) + "x" + std::to_string(d.image_sizes_px[c].y()) +
+                             " but its intrinsics are for " + std::to_string(k.width_px) + "x" + std::to_string(k.height_px));
     }
   }
   std::vector<int> outside(static_cast<std::size_t>(n), 0);
@@ -440,7 +445,8 @@ std::expected<void, std::string> check_inputs(const CameraRig& rig, const Detect
       // carry them a little past the edge, so only 2 px past it counts as off the image.
       if (o.pixel.x() < -2.0 || o.pixel.y() < -2.0 || o.pixel.x() > k.width_px + 1.5 || o.pixel.y() > k.height_px + 1.5) {
         if (outside[static_cast<std::size_t>(o.camera)]++ == 0) {
-          example[static_cast<std::size_t>(o.camera)] = "frame " + std::to_string(f.frame) + " at (" + fmt(o.pixel.x(), 1) + ", " + fmt(o.pixel.y(), 1) + ")";
+          example[static_cast<std::size_t>(o.camera)] =
+              "frame " + std::to_string(f.frame) + " at (" + fmt(o.pixel.x(), 1) + ", " + fmt(o.pixel.y(), 1) + ")";
         }
       }
     }
@@ -448,9 +454,10 @@ std::expected<void, std::string> check_inputs(const CameraRig& rig, const Detect
   for (int c = 0; c < n; ++c) {
     if (outside[static_cast<std::size_t>(c)] > 0) {
       const CameraIntrinsics& k = rig.cameras[static_cast<std::size_t>(c)].intrinsics;
-      return std::unexpected(camera_label(rig, c) + ": " + std::to_string(outside[static_cast<std::size_t>(c)]) + " detections lie outside its " +
-                             std::to_string(k.width_px) + "x" + std::to_string(k.height_px) + " image (first: " +
-                             example[static_cast<std::size_t>(c)] + "); are the detections' cameras in the rig's order?");
+      return std::unexpected(camera_label(rig, c) + ": " + std::to_string(outside[static_cast<std::size_t>(c)]) +
+                             " detections lie outside its " + std::to_string(k.width_px) + "x" + std::to_string(k.height_px) +
+                             " image (first: " + example[static_cast<std::size_t>(c)] +
+                             "); are the detections' cameras in the rig's order?");
     }
   }
   return {};
@@ -460,7 +467,9 @@ std::expected<void, std::string> check_inputs(const CameraRig& rig, const Detect
 std::vector<std::vector<int>> graph_groups(int n, const std::vector<GraphEdge>& edges, int min_shared) {
   std::vector<int> group(static_cast<std::size_t>(n));
   std::iota(group.begin(), group.end(), 0);
-  const std::function<int(int)> root = [&](int c) { return group[static_cast<std::size_t>(c)] == c ? c : root(group[static_cast<std::size_t>(c)]); };
+  const std::function<int(int)> root = [&](int c) {
+    return group[static_cast<std::size_t>(c)] == c ? c : root(group[static_cast<std::size_t>(c)]);
+  };
   for (const GraphEdge& e : edges) {
     if (e.shared_points >= min_shared) group[static_cast<std::size_t>(root(e.a))] = root(e.b);
   }
@@ -478,7 +487,8 @@ std::expected<void, std::string> WandSettings::check() const {
     return std::unexpected("wand length: expected 1 mm to 10 m, got " + fmt(*wand_length_m * 1000.0, 3) + " mm");
   }
   if (marker_a < 0 || marker_b < 0 || marker_a == marker_b) return std::unexpected("wand markers: expected two different non-negative ids");
-  if (!(outlier_px >= 0.0) || !std::isfinite(outlier_px)) return std::unexpected("outlier threshold: expected 0 (automatic) or a positive number of pixels");
+  if (!(outlier_px >= 0.0) || !std::isfinite(outlier_px))
+    return std::unexpected("outlier threshold: expected 0 (automatic) or a positive number of pixels");
   if (!(initial_tolerance_px >= 0.0) || !std::isfinite(initial_tolerance_px)) {
     return std::unexpected("initial tolerance: expected 0 (automatic) or a positive number of pixels");
   }
@@ -514,8 +524,8 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
     start.tracks.push_back(std::move(t));
   }
   if (static_cast<int>(start.tracks.size()) < settings.min_points) {
-    return std::unexpected("too few frames: " + std::to_string(start.tracks.size()) + " marker positions were seen by two cameras or more (need " +
-                           std::to_string(settings.min_points) + ")");
+    return std::unexpected("too few frames: " + std::to_string(start.tracks.size()) +
+                           " marker positions were seen by two cameras or more (need " + std::to_string(settings.min_points) + ")");
   }
   for (int c = 0; c < n; ++c) {
     if (points_per_camera[static_cast<std::size_t>(c)] < settings.min_points) {
@@ -574,7 +584,8 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
         c.intrinsics.fy = c.intrinsics.fx * aspect;
       }
       for (Track& t : trial.tracks) {
-        for (std::size_t k = 0; k < t.cameras.size(); ++k) t.normalised[k] = trial.cameras[static_cast<std::size_t>(t.cameras[k])].undistort(t.pixels[k]);
+        for (std::size_t k = 0; k < t.cameras.size(); ++k)
+          t.normalised[k] = trial.cameras[static_cast<std::size_t>(t.cameras[k])].undistort(t.pixels[k]);
       }
       const auto solved = solve(trial, edges, settings, intrinsics, {});
       const double r = solved ? inlier_rms(solved->state) : 1e300;
@@ -646,8 +657,9 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
     for (int c = 0; c < n; ++c) {
       const auto& cr = report.cameras[static_cast<std::size_t>(c)];
       if (cr.rms_px > std::max(1.0, 3.0 * median_rms)) {
-        return std::unexpected(camera_label(intrinsics, c) + " does not fit the others: " + fmt(cr.rms_px) + " px RMS against a median of " +
-                               fmt(median_rms) + " px; are the detections' camera streams in the rig's order, and are its intrinsics its own?");
+        return std::unexpected(camera_label(intrinsics, c) + " does not fit the others: " + fmt(cr.rms_px) +
+                               " px RMS against a median of " + fmt(median_rms) +
+                               " px; are the detections' camera streams in the rig's order, and are its intrinsics its own?");
       }
     }
   }
@@ -712,7 +724,8 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
     scale = 1.0 / std::max(1e-12, (s.cameras[static_cast<std::size_t>(s.order[0])].centre_world() -
                                    s.cameras[static_cast<std::size_t>(s.order[1])].centre_world())
                                       .norm());
-    report.warnings.push_back("no wand length given: the rig is not metric (its unit is the distance between the first two cameras placed)");
+    report.warnings.push_back(
+        "no wand length given: the rig is not metric (its unit is the distance between the first two cameras placed)");
   }
   Similarity3 world_from_old;
   const Eigen::Matrix3d flip = Eigen::Vector3d(1, -1, -1).asDiagonal();

@@ -42,7 +42,7 @@ struct WandSettings {
   // The intrinsics are rough guesses (no intrinsic calibration): try focal lengths from 0.5 to 2
   // image widths and keep the one that explains the detections best. Implies refine_focal.
   bool search_focal = false;
-  double outlier_px = 0.0;     // observations further off are dropped; 0: 5 robust sigmas, at least 1 px
+  double outlier_px = 0.0;  // observations further off are dropped; 0: 5 robust sigmas, at least 1 px
   // How far off a detection may be from the starting intrinsics' model while the cameras are
   // placed (essential matrix, PnP); 0: 3 px, or 10 px when intrinsics are to be refined.
   double initial_tolerance_px = 0.0;
@@ -60,7 +60,7 @@ struct CameraCalibrationReport {
   double p95_px = 0.0;
   int inliers = 0;
   int outliers = 0;
-  int frames_seen = 0;  // frames in which the camera saw at least one inlier
+  int frames_seen = 0;    // frames in which the camera saw at least one inlier
   double coverage = 0.0;  // of the image, by a 16 x 16 grid (CalibPictures.h)
 };
 
@@ -74,23 +74,23 @@ struct WandReport {
   std::vector<CameraCalibrationReport> cameras;
   std::vector<GraphEdge> graph;  // every pair that shares a point
   std::vector<int> placement_order;
-  int points = 0;           // 3D points (tracks) in the final adjustment
-  int outliers = 0;         // observations dropped as outliers
-  int ambiguous = 0;        // observations dropped before: several unlabelled blobs in one camera
-  bool metric = false;      // scaled by a wand
-  int wand_frames = 0;      // frames with both wand ends reconstructed
+  int points = 0;             // 3D points (tracks) in the final adjustment
+  int outliers = 0;           // observations dropped as outliers
+  int ambiguous = 0;          // observations dropped before: several unlabelled blobs in one camera
+  bool metric = false;        // scaled by a wand
+  int wand_frames = 0;        // frames with both wand ends reconstructed
   double wand_mean_mm = 0.0;  // signed mean of (measured - true) length
   double wand_rms_mm = 0.0;
-  double wand_max_mm = 0.0;  // largest absolute error
+  double wand_max_mm = 0.0;        // largest absolute error
   double focal_searched_px = 0.0;  // the focal length the search chose (search_focal only)
-  int iterations = 0;  // of the final bundle adjustment
+  int iterations = 0;              // of the final bundle adjustment
   std::vector<std::string> warnings;
 };
 
 struct WandCalibration {
   CameraRig rig;
   WandReport report;
-  std::vector<Eigen::Vector3d> points_world;            // every reconstructed point, in the rig's world
+  std::vector<Eigen::Vector3d> points_world;           // every reconstructed point, in the rig's world
   std::vector<std::vector<ResidualSample>> residuals;  // per camera, for pictures
 };
 

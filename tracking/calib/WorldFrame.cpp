@@ -53,9 +53,11 @@ std::expected<void, std::string> LFrame::check() const {
                            fmt(long_m * 1000) + " mm and " + fmt(short_m * 1000) + " mm");
   }
   if (middle_m && !(std::isfinite(*middle_m) && *middle_m > 0.02 && *middle_m < long_m - 0.02 && std::abs(*middle_m - short_m) > 0.02)) {
-    return std::unexpected("L-frame: the middle marker must lie on the long arm, 2 cm or more from either end, and 2 cm or more from the short arm's length");
+    return std::unexpected(
+        "L-frame: the middle marker must lie on the long arm, 2 cm or more from either end, and 2 cm or more from the short arm's length");
   }
-  if (!(std::isfinite(height_m) && std::abs(height_m) < 0.5)) return std::unexpected("L-frame: marker height expected within 0.5 m of the floor");
+  if (!(std::isfinite(height_m) && std::abs(height_m) < 0.5))
+    return std::unexpected("L-frame: marker height expected within 0.5 m of the floor");
   return {};
 }
 
@@ -161,13 +163,14 @@ std::expected<WorldFrameResult, std::string> world_from_lframe(const CameraRig& 
   r.angle_error_deg = std::acos(std::clamp(long_arm.normalized().dot(short_arm.normalized()), -1.0, 1.0)) * 180.0 / M_PI - 90.0;
   if (r.max_mm > tolerance_m * 1000.0) {
     return std::unexpected("the points found do not fit the L-frame: a marker lies " + fmt(r.max_mm) + " mm from its place (tolerance " +
-                           fmt(tolerance_m * 1000.0) + " mm); check the frame's dimensions" + (rescale ? "" : ", or whether the rig is metric"));
+                           fmt(tolerance_m * 1000.0) + " mm); check the frame's dimensions" +
+                           (rescale ? "" : ", or whether the rig is metric"));
   }
   return out;
 }
 
-std::expected<WorldFrameResult, std::string> world_from_floor_points(const CameraRig& rig, const Detections& detections, double marker_height_m,
-                                                                     int min_frames) {
+std::expected<WorldFrameResult, std::string> world_from_floor_points(const CameraRig& rig, const Detections& detections,
+                                                                     double marker_height_m, int min_frames) {
   if (!(std::isfinite(marker_height_m) && std::abs(marker_height_m) < 0.5)) {
     return std::unexpected("marker height: expected within 0.5 m of the floor");
   }
@@ -182,7 +185,8 @@ std::expected<WorldFrameResult, std::string> world_from_floor_points(const Camer
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (const auto& p : found) cov += (p.position - mean) * (p.position - mean).transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  if (!(eig.eigenvalues()[1] > 1e-4)) return std::unexpected("floor points: the places lie on one line; touch the floor at three corners of a wide triangle");
+  if (!(eig.eigenvalues()[1] > 1e-4))
+    return std::unexpected("floor points: the places lie on one line; touch the floor at three corners of a wide triangle");
   Eigen::Vector3d up = eig.eigenvectors().col(0).normalized();
   // Up is the side the cameras are on.
   Eigen::Vector3d cameras_mean = Eigen::Vector3d::Zero();

@@ -85,9 +85,11 @@ cv::Mat render_board(const CameraIntrinsics& camera, const Rigid3d& camera_from_
 
 // `count` board poses (camera_from_board) a careful person would photograph for calibration: the
 // whole board in view with a margin of 1 % of the image width, its centre spread over a 3 x 3
-// grid reaching towards the image's edges and corners, filling 30-60 % of the image width, tilted
-// 10-45 degrees about axes in varied directions and rolled up to 20 degrees. The same seed gives the same poses. A pose that cannot fit the
-// board in view after pulling it back and towards the centre is dropped, so fewer may come back for a board too large for the camera.
+// grid reaching towards the image's edges and corners, filling 25-60 % of the image width, tilted
+// 10-45 degrees about axes in varied directions and rolled up to 20 degrees. The same seed gives
+// the same poses. A pose whose board cannot be fitted in view by pulling it back and towards the
+// centre (where the lens model folds over inside the image) is dropped, so fewer may come back;
+// none for a camera without a size or focal length.
 std::vector<Rigid3d> board_poses(const CameraIntrinsics& camera, const BoardLayout& layout, int count, std::uint64_t seed = 1);
 
 }  // namespace rhot

@@ -17,9 +17,9 @@
 namespace rhot {
 
 struct SessionNoise {
-  SimulatedRigSettings rig;   // pixel noise, dropout, rate, seed
-  double strays = 0.0;        // per camera and frame: the probability of one stray blob anywhere in the image (unlabelled)
-  double outliers = 0.0;      // per detection: the probability it is displaced 3 to 30 px (a reflection merged into it)
+  SimulatedRigSettings rig;  // pixel noise, dropout, rate, seed
+  double strays = 0.0;       // per camera and frame: the probability of one stray blob anywhere in the image (unlabelled)
+  double outliers = 0.0;     // per detection: the probability it is displaced 3 to 30 px (a reflection merged into it)
 };
 
 struct WandSession {

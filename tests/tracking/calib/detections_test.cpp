@@ -25,7 +25,8 @@ fs::path write_file(const fs::path& file, const std::string& text) {
 
 TEST(Detections, CsvRoundTripsWithAndWithoutMarkers) {
   const fs::path dir = temp_dir();
-  const fs::path file = write_file(dir / "d.csv", "frame,camera,x,y,marker\n# a comment\n3,0,10.5,20.25,0\n3,1,11,21,1\n1,2,5,6\n7,0,1,2,-1\n");
+  const fs::path file =
+      write_file(dir / "d.csv", "frame,camera,x,y,marker\n# a comment\n3,0,10.5,20.25,0\n3,1,11,21,1\n1,2,5,6\n7,0,1,2,-1\n");
   const auto d = rhot::read_detections_csv(file);
   ASSERT_TRUE(d) << d.error();
   EXPECT_EQ(d->camera_count, 3);

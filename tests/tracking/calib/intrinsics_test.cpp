@@ -148,11 +148,14 @@ TEST(Intrinsics, CircleGridsAndCharucoBoardsCalibrateToo) {
   const CameraIntrinsics truth = webcam(800, 600, 700.0);
   struct Case {
     const char* spec;
-    double fx_tolerance;  // relative
+    double fx_tolerance;          // relative
+    double distortion_tolerance;  // pixels, across the image
   };
-  // Circle centres carry perspective bias (an ellipse's centre is not the projected circle
-  // centre), so circle grids are held to 0.5 %.
-  for (const Case c : {Case{"circles:7x6:20", 0.005}, Case{"acircles:4x11:15", 0.005}, Case{"charuco:7x5:30:20:4X4_50", 0.002}}) {
+  // Looser than for the chessboard: circle centres carry perspective bias (an ellipse's centre is
+  // not the projected circle centre), and these boards give fewer points (ChArUco: 24 a view, some
+  // views only part of them), so the image's edges are extrapolated from further away.
+  for (const Case c :
+       {Case{"circles:7x6:20", 0.005, 0.3}, Case{"acircles:4x11:15", 0.005, 0.3}, Case{"charuco:7x5:30:20:4X4_50", 0.002, 0.5}}) {
     SCOPED_TRACE(c.spec);
     const auto board = parse_board_spec(c.spec);
     ASSERT_TRUE(board.has_value()) << board.error();
@@ -183,9 +186,11 @@ TEST(Intrinsics, CircleGridsAndCharucoBoardsCalibrateToo) {
     EXPECT_GE(report->views.size(), 10u);
     EXPECT_FALSE(report->leave_one_out_rms_px.has_value());
     const double fx_error = std::abs(report->intrinsics.fx / truth.fx - 1.0);
+    const double distortion_error_px = max_distortion_difference_px(truth, report->intrinsics);
     std::printf("%s: %zu views, fx error %.4f %%, rms %.4f px, distortion %.4f px\n", c.spec, report->views.size(), 100 * fx_error,
-                report->rms_px, max_distortion_difference_px(truth, report->intrinsics));
+                report->rms_px, distortion_error_px);
     EXPECT_LT(fx_error, c.fx_tolerance);
+    EXPECT_LT(distortion_error_px, c.distortion_tolerance);
     EXPECT_LT(report->rms_px, 0.3);
   }
 }
@@ -199,7 +204,8 @@ TEST(Intrinsics, PoorViewsAreCalibratedButWarnedAbout) {
   std::vector<fs::path> files;
   for (int i = 0; i < 5; ++i) {
     Rigid3d camera_from_board;
-    camera_from_board.rotation = Eigen::AngleAxisd(0.06 * i, Eigen::Vector3d(1, 1, 0).normalized()) * Eigen::AngleAxisd(0.1 * i, Eigen::Vector3d::UnitZ());
+    camera_from_board.rotation =
+        Eigen::AngleAxisd(0.06 * i, Eigen::Vector3d(1, 1, 0).normalized()) * Eigen::AngleAxisd(0.1 * i, Eigen::Vector3d::UnitZ());
     camera_from_board.translation = Eigen::Vector3d(-0.1 + 0.005 * i, -0.06, 0.9);
     files.push_back(dir / ("v" + std::to_string(i) + ".png"));
     ASSERT_TRUE(cv::imwrite(files.back().string(), render_board(truth, camera_from_board, layout)));
@@ -253,7 +259,8 @@ TEST(Intrinsics, BadPicturesGetMessagesNamingTheFile) {
   ASSERT_TRUE(cv::imwrite((dir / "small.png").string(), cv::Mat(240, 320, CV_8UC1, cv::Scalar(128))));
   r = detect_boards({files[0], dir / "small.png"}, board);
   ASSERT_FALSE(r.has_value());
-  EXPECT_EQ(r.error(), "small.png: the image is 320x240 but view_00.png is 640x480; every image must come from one camera at one resolution");
+  EXPECT_EQ(r.error(),
+            "small.png: the image is 320x240 but view_00.png is 640x480; every image must come from one camera at one resolution");
 
   // Too few views for Zhang's method.
   r = detect_boards({files[0], files[1]}, board);
@@ -300,7 +307,8 @@ TEST(Intrinsics, BoardSpecsAreReadOrRefusedWithTheReason) {
             "circles:7x6:20), acircles:COLSxROWS:SPACING_MM (e.g. acircles:4x11:20) or charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT] "
             "(e.g. charuco:11x8:20:15:4X4_50)");
   EXPECT_EQ(refused("chess:9x6"), "board \"chess:9x6\": expected chess:COLSxROWS:SQUARE_MM (e.g. chess:9x6:25)");
-  EXPECT_EQ(refused("chess:9by6:25"), "board \"chess:9by6:25\": COLSxROWS must be two whole numbers joined by 'x' (e.g. 9x6), got \"9by6\"");
+  EXPECT_EQ(refused("chess:9by6:25"),
+            "board \"chess:9by6:25\": COLSxROWS must be two whole numbers joined by 'x' (e.g. 9x6), got \"9by6\"");
   EXPECT_EQ(refused("chess:1x6:25"),
             "board \"chess:1x6:25\": COLS and ROWS must each be 2 to 100, got 1x6; chess COLSxROWS counts inner corners (a board of 10 x 7 "
             "squares is chess:9x6)");
@@ -310,14 +318,16 @@ TEST(Intrinsics, BoardSpecsAreReadOrRefusedWithTheReason) {
             "board \"charuco:11x8:20\": expected charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT] (e.g. charuco:11x8:20:15:4X4_50)");
   EXPECT_EQ(refused("charuco:11x8:20:25"),
             "board \"charuco:11x8:20:25\": MARKER_MM must be a positive number of millimetres less than SQUARE_MM (20), got \"25\"");
-  EXPECT_TRUE(refused("charuco:11x8:20:15:9X9_50")
-                  .starts_with("board \"charuco:11x8:20:15:9X9_50\": unknown dictionary \"9X9_50\"; expected one of 4X4_50, 4X4_100, 4X4_250, "))
+  EXPECT_TRUE(
+      refused("charuco:11x8:20:15:9X9_50")
+          .starts_with("board \"charuco:11x8:20:15:9X9_50\": unknown dictionary \"9X9_50\"; expected one of 4X4_50, 4X4_100, 4X4_250, "))
       << refused("charuco:11x8:20:15:9X9_50");
   EXPECT_EQ(refused("charuco:12x10:20:15"),
             "board \"charuco:12x10:20:15\": 12x10 squares hold 60 markers but dictionary 4X4_50 has 50; name a larger one, e.g. 4X4_100");
-  EXPECT_EQ(refused("charuco:30x30:20:15:APRILTAG_16h5"),
-            "board \"charuco:30x30:20:15:APRILTAG_16h5\": 30x30 squares hold 450 markers but dictionary APRILTAG_16h5 has 30; name a larger "
-            "one, e.g. APRILTAG_36h11");
+  EXPECT_EQ(
+      refused("charuco:30x30:20:15:APRILTAG_16h5"),
+      "board \"charuco:30x30:20:15:APRILTAG_16h5\": 30x30 squares hold 450 markers but dictionary APRILTAG_16h5 has 30; name a larger "
+      "one, e.g. APRILTAG_36h11");
   EXPECT_EQ(refused("").substr(0, 44), "board \"\": expected chess:COLSxROWS:SQUARE_MM");
 }
 

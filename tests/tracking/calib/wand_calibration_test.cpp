@@ -46,8 +46,8 @@ Agreement compare(const rhot::CameraRig& estimate, const rhot::CameraRig& truth)
   for (std::size_t c = 0; c < truth.cameras.size(); ++c) {
     const rhot::Camera moved = rhot::transform_camera(estimate.cameras[c], *fit);
     sq += (moved.centre_world() - truth.cameras[c].centre_world()).squaredNorm();
-    a.rotation_max_deg =
-        std::max(a.rotation_max_deg, moved.cam_from_world.rotation.angularDistance(truth.cameras[c].cam_from_world.rotation) * 180.0 / M_PI);
+    a.rotation_max_deg = std::max(a.rotation_max_deg,
+                                  moved.cam_from_world.rotation.angularDistance(truth.cameras[c].cam_from_world.rotation) * 180.0 / M_PI);
   }
   a.centre_rms_mm = std::sqrt(sq / static_cast<double>(truth.cameras.size())) * 1000.0;
   return a;
@@ -84,8 +84,8 @@ double wand_rms_mm_with(const rhot::CameraRig& rig, const rhot::Detections& d) {
   return n > 0 ? std::sqrt(sq / n) : 1e9;
 }
 
-rhot::Detections wand_session(const rhot::CameraRig& rig, int frames, double sigma, unsigned seed, double dropout = 0.0, double strays = 0.0,
-                              double outliers = 0.0) {
+rhot::Detections wand_session(const rhot::CameraRig& rig, int frames, double sigma, unsigned seed, double dropout = 0.0,
+                              double strays = 0.0, double outliers = 0.0) {
   rhot::WandSession session;
   session.frames = frames;
   session.wand_length_m = 0.5;
@@ -219,7 +219,8 @@ TEST(WandCalibration, RefusesACameraTheRigLacksAndTooFewFrames) {
   rhot::Detections d = wand_session(truth, 200, 0.3, 1);
   d.frames[0].observations.push_back({4, {10, 10}, 0});
   d.camera_count = 5;
-  EXPECT_EQ(rhot::calibrate_wand(truth, d, rhot::WandSettings{}).error(), "the detections name camera 4 but the rig has only 2 cameras (0 to 1)");
+  EXPECT_EQ(rhot::calibrate_wand(truth, d, rhot::WandSettings{}).error(),
+            "the detections name camera 4 but the rig has only 2 cameras (0 to 1)");
   const rhot::Detections few = wand_session(truth, 10, 0.3, 1);
   EXPECT_EQ(rhot::calibrate_wand(truth, few, rhot::WandSettings{}).error(),
             "too few frames: 20 marker positions were seen by two cameras or more (need 30)");

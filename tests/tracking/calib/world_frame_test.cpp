@@ -36,7 +36,8 @@ void expect_same_cameras(const rhot::CameraRig& a, const rhot::CameraRig& b, dou
   ASSERT_EQ(a.cameras.size(), b.cameras.size());
   for (std::size_t c = 0; c < a.cameras.size(); ++c) {
     EXPECT_LT((a.cameras[c].centre_world() - b.cameras[c].centre_world()).norm() * 1000.0, mm) << a.cameras[c].name;
-    EXPECT_LT(a.cameras[c].cam_from_world.rotation.angularDistance(b.cameras[c].cam_from_world.rotation) * 180.0 / M_PI, deg) << a.cameras[c].name;
+    EXPECT_LT(a.cameras[c].cam_from_world.rotation.angularDistance(b.cameras[c].cam_from_world.rotation) * 180.0 / M_PI, deg)
+        << a.cameras[c].name;
   }
 }
 
@@ -114,9 +115,10 @@ TEST(WorldFrame, RefusesAFrameWithMissingMarkers) {
   const rhot::Detections d = rhot::simulate_lframe_session(truth, rhot::LFrame{}, on_the_desk(), 30, noise(4));
   const auto result = rhot::world_from_lframe(truth, d, four, false);
   ASSERT_FALSE(result);
-  EXPECT_EQ(result.error(),
-            "the L-frame has 4 markers, but 3 points stayed still in at least half of the 30 frames; is the frame in view of two cameras or "
-            "more, and nothing else still in view?");
+  EXPECT_EQ(
+      result.error(),
+      "the L-frame has 4 markers, but 3 points stayed still in at least half of the 30 frames; is the frame in view of two cameras or "
+      "more, and nothing else still in view?");
   rhot::LFrame bad;
   bad.short_m = 0.5;
   EXPECT_EQ(rhot::world_from_lframe(truth, d, bad, false).error(),
