@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
-#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,36 +16,9 @@
 #include "tracking/calib/Similarity.h"
 #include "tracking/calib/WandCalibration.h"
 #include "tracking/camera/RigFile.h"
-#include "tracking/geometry/Triangulation.h"
 #include "tracking/sim/CalibrationSessions.h"
 
 namespace rhot::eval {
-
-namespace {
-
-// The RMS error (mm) of the wand's length with each end triangulated by `rig`: with the true rig,
-// the floor the pixel noise sets for any calibration.
-double wand_rms_mm(const CameraRig& rig, const Detections& d, double length_m) {
-  std::map<long, std::array<std::optional<Eigen::Vector3d>, 2>> ends;
-  for (const PointTrack& t : split_tracks(d).tracks) {
-    if (t.marker < 0 || t.marker > 1) continue;
-    std::vector<Observation> observations;
-    for (const auto& [camera, pixel] : t.views) observations.push_back({camera, pixel});
-    const auto x = triangulate(rig, observations);
-    if (x) ends[t.frame][static_cast<std::size_t>(t.marker)] = x->position_world;
-  }
-  double sq = 0;
-  int n = 0;
-  for (const auto& [frame, e] : ends) {
-    if (!e[0] || !e[1]) continue;
-    const double error = ((*e[0] - *e[1]).norm() - length_m) * 1000.0;
-    sq += error * error;
-    ++n;
-  }
-  return n > 0 ? std::sqrt(sq / n) : 0.0;
-}
-
-}  // namespace
 
 int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout) {
   const auto truth = load_rig(rig_file);
@@ -119,7 +91,7 @@ int calibration(const std::string& rig_file, double length_mm, double sigma, int
   j["worst_camera_rms_vs_floor"] = worst_camera;
   j["wand_rms_mm"] = r.wand_rms_mm;
   j["wand_mean_mm"] = r.wand_mean_mm;
-  j["wand_rms_mm_true_rig"] = wand_rms_mm(*truth, d, session.wand_length_m);
+  j["wand_rms_mm_true_rig"] = wand_length_rms_mm(*truth, d, session.wand_length_m);
   j["points"] = r.points;
   j["outliers"] = r.outliers;
   std::cout << j.dump(2) << "\n";

@@ -1,8 +1,13 @@
 #include "tracking/sim/CalibrationSessions.h"
 
+#include <array>
+#include <map>
+#include <optional>
 #include <random>
 
 #include <Eigen/Dense>
+
+#include "tracking/geometry/Triangulation.h"
 
 namespace rhot {
 
@@ -48,6 +53,26 @@ Trajectory still(const Eigen::Vector3d& p) {
 }
 
 }  // namespace
+
+double wand_length_rms_mm(const CameraRig& rig, const Detections& detections, double wand_length_m) {
+  std::map<long, std::array<std::optional<Eigen::Vector3d>, 2>> ends;
+  for (const PointTrack& t : split_tracks(detections).tracks) {
+    if (t.marker < 0 || t.marker > 1) continue;
+    std::vector<Observation> observations;
+    for (const auto& [camera, pixel] : t.views) observations.push_back({camera, pixel});
+    const auto x = triangulate(rig, observations);
+    if (x) ends[t.frame][static_cast<std::size_t>(t.marker)] = x->position_world;
+  }
+  double sq = 0;
+  int n = 0;
+  for (const auto& [frame, e] : ends) {
+    if (!e[0] || !e[1]) continue;
+    const double error = ((*e[0] - *e[1]).norm() - wand_length_m) * 1000.0;
+    sq += error * error;
+    ++n;
+  }
+  return n > 0 ? std::sqrt(sq / n) : 0.0;
+}
 
 TrackingVolume session_box(const CameraRig& rig) {
   if (rig.volume) return *rig.volume;

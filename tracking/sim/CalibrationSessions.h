@@ -45,6 +45,11 @@ Detections simulate_lframe_session(const CameraRig& rig, const LFrame& frame, co
 Detections simulate_floor_session(const CameraRig& rig, const std::vector<Eigen::Vector3d>& places_on_floor, double height_m,
                                   int frames_per_place, const SessionNoise& noise);
 
+// The RMS error (mm) of a wand's length over every frame with both ends (markers 0 and 1) seen,
+// each end triangulated by `rig` on its own: with the true rig, the floor the pixel noise sets for
+// any calibration's wand figure.
+double wand_length_rms_mm(const CameraRig& rig, const Detections& detections, double wand_length_m);
+
 // The box a rig is meant to track: its volume when it has one, else a metre cube where the
 // cameras' optical axes pass closest (least squares).
 TrackingVolume session_box(const CameraRig& rig);

@@ -4,17 +4,13 @@
 
 #include "tracking/calib/WandCalibration.h"
 
-#include <array>
 #include <cmath>
-#include <map>
-#include <optional>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include "tracking/calib/Similarity.h"
 #include "tracking/camera/RigFile.h"
-#include "tracking/geometry/Triangulation.h"
 #include "tracking/sim/CalibrationSessions.h"
 
 namespace {
@@ -62,28 +58,6 @@ double noise_floor_px(const rhot::WandReport& r, double sigma, int cameras) {
   return sigma * std::sqrt(2.0) * std::sqrt(1.0 - parameters / (2.0 * observations));
 }
 
-// The RMS error (mm) of a 0.5 m wand's length with each end triangulated by the given rig: with
-// the true rig, what the pixel noise alone leaves.
-double wand_rms_mm_with(const rhot::CameraRig& rig, const rhot::Detections& d) {
-  std::map<long, std::array<std::optional<Eigen::Vector3d>, 2>> ends;
-  for (const rhot::PointTrack& t : rhot::split_tracks(d).tracks) {
-    if (t.marker < 0 || t.marker > 1) continue;
-    std::vector<rhot::Observation> observations;
-    for (const auto& [camera, pixel] : t.views) observations.push_back({camera, pixel});
-    const auto x = rhot::triangulate(rig, observations);
-    if (x) ends[t.frame][static_cast<std::size_t>(t.marker)] = x->position_world;
-  }
-  double sq = 0;
-  int n = 0;
-  for (const auto& [frame, e] : ends) {
-    if (!e[0] || !e[1]) continue;
-    const double error = ((*e[0] - *e[1]).norm() - 0.5) * 1000.0;
-    sq += error * error;
-    ++n;
-  }
-  return n > 0 ? std::sqrt(sq / n) : 1e9;
-}
-
 rhot::Detections wand_session(const rhot::CameraRig& rig, int frames, double sigma, unsigned seed, double dropout = 0.0,
                               double strays = 0.0, double outliers = 0.0) {
   rhot::WandSession session;
@@ -115,7 +89,7 @@ TEST(WandCalibration, SeatedFourFromAWandMatchesTheTruth) {
   const rhot::WandReport& r = result->report;
   EXPECT_TRUE(r.metric);
   // The length error per frame is the ends' triangulation noise: within 10 % of the true rig's.
-  const double truth_wand_rms = wand_rms_mm_with(truth, d);
+  const double truth_wand_rms = rhot::wand_length_rms_mm(truth, d, 0.5);
   EXPECT_LE(r.wand_rms_mm, 1.1 * truth_wand_rms);
   EXPECT_LT(std::abs(r.wand_mean_mm), 0.05);
   EXPECT_GT(r.wand_frames, 500);
@@ -147,7 +121,7 @@ TEST(WandCalibration, RoomEightWithDropoutStraysAndOutliers) {
   const rhot::WandReport& r = result->report;
   // The same session without the strays and outliers (they come from a random stream of their
   // own), triangulated with the true rig.
-  EXPECT_LE(r.wand_rms_mm, 1.1 * wand_rms_mm_with(truth, wand_session(truth, 1000, 0.3, 5, 0.1)));
+  EXPECT_LE(r.wand_rms_mm, 1.1 * rhot::wand_length_rms_mm(truth, wand_session(truth, 1000, 0.3, 5, 0.1), 0.5));
   EXPECT_GT(r.outliers, 0) << "1 % of detections were displaced by 3 to 30 px";
   const double floor = noise_floor_px(r, 0.3, 8);
   EXPECT_NEAR(r.rms_px, floor, 0.1 * floor);
