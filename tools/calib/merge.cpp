@@ -66,6 +66,9 @@ int run(const MergeOptions& o) {
     return 1;
   }
   const MergeReport& r = merged->report;
+  if (r.shared_cameras.empty()) {
+    spdlog::info("joined through {} shared points ({:.2f} mm RMS after the alignment)", r.shared_points, r.point_rms_mm);
+  }
   spdlog::info("{}: {} cameras ({} shared); shared centres agree within {:.2f} mm RMS, orientations {:.3f} degrees{}", o.out,
                merged->rig.cameras.size(), r.shared_cameras.size(), r.centre_rms_mm, r.rotation_rms_deg,
                r.adjusted ? fmt::format("; adjusted together: {:.3f} px RMS over {} points", r.rms_px, r.points) : std::string());
@@ -79,6 +82,10 @@ int run(const MergeOptions& o) {
     j["rig"] = o.out;
     j["cameras"] = merged->rig.cameras.size();
     j["shared_cameras"] = r.shared_cameras;
+    if (r.shared_cameras.empty()) {
+      j["shared_points"] = r.shared_points;
+      j["point_rms_mm"] = r.point_rms_mm;
+    }
     j["scale_b_to_a"] = r.a_from_b.scale;
     j["centre_rms_mm"] = r.centre_rms_mm;
     j["rotation_rms_deg"] = r.rotation_rms_deg;
@@ -97,11 +104,14 @@ int run(const MergeOptions& o) {
 
 void add_merge(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<MergeOptions>();
-  CLI::App* cmd = app.add_subcommand("merge", "join two rigs calibrated apart through the cameras they share (same names)");
+  CLI::App* cmd = app.add_subcommand(
+      "merge", "join two rigs calibrated apart through the cameras they share (same names), or the points of one wave both saw");
   cmd->add_option("rig_a", o->a, "the first rig: its world is kept (OpenCV YAML)")->required();
   cmd->add_option("rig_b", o->b, "the second rig, moved into the first's world")->required();
   cmd->add_option("--out", o->out, "the merged rig")->required();
-  cmd->add_option("--detections-a", o->detections_a, "the first rig's wand session: with --detections-b, one bundle adjustment over both");
+  cmd->add_option("--detections-a", o->detections_a,
+                  "the first rig's wand session: with --detections-b, one bundle adjustment over both (and, for rigs sharing no camera, "
+                  "the points both saw)");
   cmd->add_option("--detections-b", o->detections_b, "the second rig's wand session");
   cmd->add_option("--pictures", o->pictures, "folder for the picture of the merged rig from above (default: --out's folder)");
   cmd->add_flag("--json", o->json, "print the report as JSON on stdout");

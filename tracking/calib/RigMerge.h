@@ -2,7 +2,10 @@
 // Two rigs calibrated apart (for rooms where no single wave reaches every camera) joined into
 // one through the cameras they share (the same name in both): Horn's closed-form similarity from
 // the shared cameras' centres (scale too, with two shared cameras or more) and their
-// orientations, then the shared cameras' two poses averaged. With both sessions' detections, one
+// orientations, then the shared cameras' two poses averaged. Rigs that share no camera are joined
+// through shared points instead: the marker positions of one wave both saw (the same frame
+// numbers in both sessions' detections), each triangulated by its own rig, aligned by the
+// closed-form similarity. With both sessions' detections, one
 // bundle adjustment over all of them follows (BundleAdjustment.h), every observation triangulated
 // with the merged rig first.
 
@@ -23,6 +26,8 @@ struct MergeSettings {
 
 struct MergeReport {
   std::vector<std::string> shared_cameras;
+  int shared_points = 0;      // with no shared camera: marker positions both rigs reconstructed
+  double point_rms_mm = 0.0;  // those points after the alignment, A against B
   Similarity3 a_from_b;
   double centre_rms_mm = 0.0;     // the shared cameras' centres after the alignment, A against B
   double rotation_rms_deg = 0.0;  // their orientations likewise
@@ -37,7 +42,8 @@ struct MergeResult {
 };
 
 // `detections_a`/`detections_b`: each session's detections, camera indices into its own rig; both
-// or neither. Fails when the rigs share no camera, or their shared cameras' intrinsics differ.
+// or neither. Fails when the rigs share neither a camera nor (with detections) 10 points, or their
+// shared cameras' intrinsics differ.
 [[nodiscard]] std::expected<MergeResult, std::string> merge_rigs(const CameraRig& a, const CameraRig& b, const MergeSettings& settings,
                                                                  const Detections* detections_a = nullptr,
                                                                  const Detections* detections_b = nullptr);
