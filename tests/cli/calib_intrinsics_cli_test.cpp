@@ -100,17 +100,18 @@ TEST(CalibIntrinsicsCli, BadInputIsRefusedWithTheReason) {
   const fs::path dir = temp_dir();
   auto r = run_program("rhot-calib", "intrinsics --board chess:9x6 x.png --out " + (dir / "cam.yaml").string(), "2>&1");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(r.output, "rhot-calib: board \"chess:9x6\": expected chess:COLSxROWS:SQUARE_MM (e.g. chess:9x6:25)\n");
+  EXPECT_EQ(r.output, "rhot-calib: error: board \"chess:9x6\": expected chess:COLSxROWS:SQUARE_MM (e.g. chess:9x6:25)\n");
   r = run_program("rhot-calib", "intrinsics --board chess:9x6:25 " + (dir / "nope.png").string() + " --out " + (dir / "cam.yaml").string(),
                   "2>&1");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(r.output, "rhot-calib: " + (dir / "nope.png").string() + ": no such file\n") << "found missing before any detection";
+  EXPECT_EQ(r.output, "rhot-calib: error: " + (dir / "nope.png").string() + ": no such file\n") << "found missing before any detection";
   r = run_program("rhot-calib", "intrinsics --board chess:9x6:25 --out " + (dir / "cam.yaml").string(), "2>&1");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(r.output, "rhot-calib: no images: give the pictures of the board (files, or folders of them)\n");
+  EXPECT_EQ(r.output, "rhot-calib: error: no images: give the pictures of the board (files, or folders of them)\n");
   r = run_program("rhot-calib", "simulate board --out " + dir.string() + " --size 12", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(r.output, "rhot-calib: simulate board: --size must be WIDTHxHEIGHT in pixels, each 64 to 4096 (e.g. 1280x720), got \"12\"\n");
+  EXPECT_EQ(r.output,
+            "rhot-calib: error: simulate board: --size must be WIDTHxHEIGHT in pixels, each 64 to 4096 (e.g. 1280x720), got \"12\"\n");
   EXPECT_FALSE(fs::exists(dir / "cam.yaml"));
 }
 

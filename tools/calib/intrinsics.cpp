@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <iostream>
 #include <memory>
 #include <string>
 #include <system_error>
@@ -66,7 +65,7 @@ std::vector<fs::path> expand(const std::vector<std::string>& arguments) {
 }
 
 int fail(const std::string& message) {
-  std::cerr << "rhot-calib: " << message << "\n";
+  spdlog::error("{}", message);
   return 1;
 }
 
@@ -107,6 +106,7 @@ int run_intrinsics(const IntrinsicsOptions& o) {
   rig.cameras.push_back(Camera{name, k, Rigid3d::identity()});
   std::error_code error;
   if (const fs::path parent = fs::path(o.out).parent_path(); !parent.empty()) fs::create_directories(parent, error);
+  make_parent_folder(o.out);
   if (auto saved = save_rig(rig, o.out); !saved) return fail(saved.error());
   spdlog::info("wrote {}", o.out);
 

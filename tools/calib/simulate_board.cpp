@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <expected>
 #include <filesystem>
-#include <iostream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -46,7 +45,7 @@ struct SimulateBoardOptions {
 };
 
 int fail(const std::string& message) {
-  std::cerr << "rhot-calib: " << message << "\n";
+  spdlog::error("{}", message);
   return 1;
 }
 
