@@ -34,6 +34,10 @@ void add_merge(CLI::App& app, int& exit_code);
 void add_simulate(CLI::App& app, int& exit_code);
 void add_simulate_board(CLI::App& simulate, int& exit_code);
 
+// A check for every number option: CLI11's range checks let NaN through (each comparison with it
+// is false), and infinity is no size or threshold either.
+const CLI::Validator& finite_number();
+
 // The folder pictures go to: `pictures` when given, else the folder of `out`.
 std::filesystem::path pictures_dir(const std::string& pictures, const std::string& out);
 

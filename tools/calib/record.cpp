@@ -2,6 +2,8 @@
 // sequences (one per rig camera, as rhot-demo --source video:...), written as rhot's CSV for
 // `wand`. The blob detector finds the marker in every image; nothing is labelled.
 
+#include <atomic>
+#include <csignal>
 #include <memory>
 #include <string>
 
@@ -15,6 +17,10 @@
 namespace rhot::calib_tool {
 
 namespace {
+
+// Ctrl-C (or SIGTERM) ends the recording; what was recorded is still written.
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop.store(true); }
 
 struct RecordOptions {
   std::vector<std::string> rig;
@@ -49,7 +55,11 @@ int run(const RecordOptions& o) {
   Detections d;
   d.camera_count = static_cast<int>(rig->cameras.size());
   long frame = 0;
-  while (o.frames <= 0 || frame < o.frames) {
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  spdlog::info("recording{}; Ctrl-C stops and writes what was recorded",
+               o.frames > 0 ? fmt::format(" {} frames", o.frames) : std::string());
+  while ((o.frames <= 0 || frame < o.frames) && !g_stop.load()) {
     const auto f = source->next();
     if (!f) break;
     DetectionFrame df;
@@ -86,8 +96,7 @@ void add_record(CLI::App& app, int& exit_code) {
                   "video:DEV[,DEV...]: a capture device index, video file or image sequence (cam0_%04d.png) per camera")
       ->required();
   cmd->add_option("--out", o->out, "detections CSV to write")->required();
-  cmd->add_option("--frames", o->frames, "frames to record (default: until the files end; Ctrl-C stops a camera)")
-      ->check(CLI::Range(0, 10000000));
+  cmd->add_option("--frames", o->frames, "frames to record (default: until the files end or Ctrl-C)")->check(CLI::Range(0, 10000000));
   cmd->add_option("--blob-threshold", o->blob_threshold, "grey level of a marker pixel (default -1: automatic)")
       ->capture_default_str()
       ->check(CLI::Range(-1, 255));

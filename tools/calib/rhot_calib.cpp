@@ -9,7 +9,9 @@
 //
 // docs/calibration.md walks through them in order.
 
+#include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <iostream>
 
@@ -21,6 +23,21 @@
 #include "tracking/camera/RigFile.h"
 
 namespace rhot::calib_tool {
+
+const CLI::Validator& finite_number() {
+  static const CLI::Validator validator(
+      [](std::string& text) -> std::string {
+        double value = 0.0;
+        try {
+          value = std::stod(text);
+        } catch (const std::exception&) {
+          return {};  // not a number at all: CLI11's own conversion says so
+        }
+        return std::isfinite(value) ? std::string() : "expected a finite number, got " + text;
+      },
+      "");
+  return validator;
+}
 
 std::filesystem::path pictures_dir(const std::string& pictures, const std::string& out) {
   if (!pictures.empty()) return pictures;

@@ -51,18 +51,27 @@ struct SimulateOptions {
 };
 
 void add_noise_options(CLI::App* cmd, NoiseOptions& n) {
-  cmd->add_option("--sigma", n.sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(0.0, 50.0));
+  cmd->add_option("--sigma", n.sigma, "pixel noise, standard deviation per axis")
+      ->check(finite_number())
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 50.0));
   cmd->add_option("--dropout", n.dropout, "probability a camera misses a visible marker")
+      ->check(finite_number())
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--strays", n.strays, "per camera and frame: probability of a stray blob")
+      ->check(finite_number())
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--outliers", n.outliers, "per detection: probability it is displaced 3 to 30 px")
+      ->check(finite_number())
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--seed", n.seed, "random seed")->capture_default_str();
-  cmd->add_option("--rate-hz", n.rate_hz, "frames per second")->capture_default_str()->check(CLI::Range(1.0, 10000.0));
+  cmd->add_option("--rate-hz", n.rate_hz, "frames per second")
+      ->check(finite_number())
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 10000.0));
 }
 
 std::expected<std::pair<CameraRig, SessionNoise>, std::string> prepare(const SimulateOptions& o) {
@@ -208,13 +217,16 @@ void add_simulate(CLI::App& app, int& exit_code) {
   wand->add_option("--out", o->out, "detections CSV to write")->required();
   wand->add_option("--frames", o->frames, "frames")->capture_default_str()->check(CLI::Range(1, 1000000));
   wand->add_option("--wand-mm", o->wand_mm, "distance between the wand's markers 0 and 1")
+      ->check(finite_number())
       ->capture_default_str()
       ->check(CLI::Range(10.0, 5000.0));
   wand->add_option("--markers", o->markers, "2: a wand with labelled ends; 1: one unlabelled marker")
       ->capture_default_str()
       ->check(CLI::Range(1, 2));
-  wand->add_option("--volume-m", o->volume, "size of the box waved through, X Y Z metres (default: the rig's volume)")->expected(3);
-  wand->add_option("--volume-centre-m", o->volume_centre, "its centre, X Y Z metres")->expected(3);
+  wand->add_option("--volume-m", o->volume, "size of the box waved through, X Y Z metres (default: the rig's volume)")
+      ->check(finite_number())
+      ->expected(3);
+  wand->add_option("--volume-centre-m", o->volume_centre, "its centre, X Y Z metres")->check(finite_number())->expected(3);
   wand->add_option("--images", o->images, "also draw every camera's frames as PNG image sequences DIR/cam<i>_%04d.png (for `record`)");
   add_noise_options(wand, o->noise);
   wand->callback([o, &exit_code] { exit_code = run_wand(*o); });
@@ -225,15 +237,17 @@ void add_simulate(CLI::App& app, int& exit_code) {
   lframe->add_option("--out", o->out, "detections CSV to write")->required();
   lframe->add_option("--frames", o->frames, "frames")->default_val(60)->check(CLI::Range(1, 1000000));
   lframe->add_option("--lframe-mm", o->lframe_mm, "long arm, short arm[, middle marker] in mm")
+      ->check(finite_number())
       ->delimiter(',')
       ->expected(2, 3)
       ->capture_default_str();
-  lframe->add_option("--height-mm", o->height_mm, "the markers' centres above the floor")->capture_default_str();
+  lframe->add_option("--height-mm", o->height_mm, "the markers' centres above the floor")->check(finite_number())->capture_default_str();
   lframe->add_option("--at-m", o->at_m, "where the corner lies, X,Y,Z metres (Y: the floor's or desk's height)")
+      ->check(finite_number())
       ->delimiter(',')
       ->expected(3)
       ->capture_default_str();
-  lframe->add_option("--yaw-deg", o->yaw_deg, "the frame turned about +Y")->capture_default_str();
+  lframe->add_option("--yaw-deg", o->yaw_deg, "the frame turned about +Y")->check(finite_number())->capture_default_str();
   add_noise_options(lframe, o->noise);
   lframe->callback([o, &exit_code] { exit_code = run_lframe(*o); });
 
@@ -241,11 +255,13 @@ void add_simulate(CLI::App& app, int& exit_code) {
   CLI::App* floor = simulate->add_subcommand("floor", "one marker held still at places on the floor, one after the other");
   floor->add_option("--rig", o->rig, "the true rig (OpenCV YAML)")->required();
   floor->add_option("--out", o->out, "detections CSV to write")->required();
-  floor->add_option("--places", o->places, "X,Z,X,Z,... metres (default: four corners of the volume's floor)")->delimiter(',');
+  floor->add_option("--places", o->places, "X,Z,X,Z,... metres (default: four corners of the volume's floor)")
+      ->check(finite_number())
+      ->delimiter(',');
   floor->add_option("--frames-per-place", o->frames_per_place, "frames held at each place")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
-  floor->add_option("--height-mm", o->height_mm, "the marker's centre above the floor")->capture_default_str();
+  floor->add_option("--height-mm", o->height_mm, "the marker's centre above the floor")->check(finite_number())->capture_default_str();
   add_noise_options(floor, o->noise);
   floor->callback([o, &exit_code] { exit_code = run_floor(*o); });
 

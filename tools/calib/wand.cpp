@@ -199,6 +199,8 @@ int run(const WandOptions& o) {
     return 1;
   }
   if (!append_report(o.out, *result)) {
+    std::error_code removed;
+    std::filesystem::remove(o.out, removed);  // no rig without its report
     spdlog::error("{}: cannot append the report", o.out);
     return 1;
   }
@@ -248,6 +250,7 @@ void add_wand(CLI::App& app, int& exit_code) {
   cmd->add_option("--detections", o->detections, "rhot's CSV (frame,camera,x,y[,marker]) or a MultiCamSelfCal folder")->required();
   cmd->add_option("--out", o->out, "the calibrated rig (OpenCV YAML, the report's figures beside it)")->required();
   cmd->add_option("--wand-mm", o->wand_mm, "distance between wand markers A and B; none: the rig is not metric")
+      ->check(finite_number())
       ->check(CLI::Range(1.0, 10000.0));
   cmd->add_option("--wand-markers", o->wand_markers, "the marker ids of the wand's ends A,B")
       ->delimiter(',')
@@ -257,6 +260,7 @@ void add_wand(CLI::App& app, int& exit_code) {
   cmd->add_flag("--search-focal", o->search_focal, "the intrinsics' focal lengths are rough: search 0.5 to 2 image widths first");
   cmd->add_option("--image-size", o->image_size, "WIDTHxHEIGHT of every camera, without --intrinsics");
   cmd->add_option("--outlier-px", o->outlier_px, "drop observations further off (default 0: 5 robust sigmas, at least 1 px)")
+      ->check(finite_number())
       ->check(CLI::Range(0.0, 1000.0));
   cmd->add_option("--min-shared", o->min_shared, "points two cameras must share to be connected")
       ->capture_default_str()

@@ -117,13 +117,15 @@ void add_world(CLI::App& app, int& exit_code) {
   cmd->add_flag("--lframe", o->lframe, "an L-frame: corner = origin, long arm along -Z, short arm along +X");
   cmd->add_flag("--floor", o->floor, "floor points: the first = origin, the second along +X, the floor's normal = +Y");
   cmd->add_option("--lframe-mm", o->lframe_mm, "the L-frame: long arm, short arm[, middle marker on the long arm], mm")
+      ->check(finite_number())
       ->delimiter(',')
       ->expected(2, 3)
       ->capture_default_str();
-  cmd->add_option("--height-mm", o->height_mm, "the markers' centres above the floor")->capture_default_str();
+  cmd->add_option("--height-mm", o->height_mm, "the markers' centres above the floor")->check(finite_number())->capture_default_str();
   cmd->add_flag("--rescale", o->rescale,
                 "also scale the rig so the L-frame's arms have their true lengths (a rig calibrated without a wand)");
   cmd->add_option("--tolerance-mm", o->tolerance_mm, "the most a marker may lie from its place on the L-frame")
+      ->check(finite_number())
       ->capture_default_str()
       ->check(CLI::Range(0.1, 1000.0));
   cmd->add_option("--min-frames", o->min_frames, "floor points: frames the marker must stay still at a place")

@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <sstream>
 
@@ -106,6 +107,8 @@ std::expected<Detections, std::string> read_detections_csv(const std::filesystem
     }
     if (!parse_double(f[2], x) || !std::isfinite(x)) return std::unexpected(where + "x: expected a finite number, got \"" + f[2] + "\"");
     if (!parse_double(f[3], y) || !std::isfinite(y)) return std::unexpected(where + "y: expected a finite number, got \"" + f[3] + "\"");
+    if (std::abs(x) > 1e6 || std::abs(y) > 1e6)
+      return std::unexpected(where + "x,y: expected a pixel within 1e6 of the image, got " + f[2] + "," + f[3]);
     if (f.size() == 5 && !f[4].empty() && (!parse_long(f[4], marker) || marker < -1 || marker > 1000000)) {
       return std::unexpected(where + "marker: expected -1 (unknown) or a marker id 0 to 1000000, got \"" + f[4] + "\"");
     }
@@ -123,11 +126,10 @@ std::expected<void, std::string> write_detections_csv(const Detections& detectio
   std::ofstream out(file);
   if (!out) return std::unexpected(file.string() + ": cannot write");
   out << "frame,camera,x,y,marker\n";
-  char line[160];
+  out << std::fixed << std::setprecision(4);
   for (const DetectionFrame& f : detections.frames) {
     for (const MarkerObservation& o : f.observations) {
-      std::snprintf(line, sizeof line, "%ld,%d,%.4f,%.4f,%d\n", f.frame, o.camera, o.pixel.x(), o.pixel.y(), o.marker);
-      out << line;
+      out << f.frame << ',' << o.camera << ',' << o.pixel.x() << ',' << o.pixel.y() << ',' << o.marker << '\n';
     }
   }
   out.flush();
@@ -212,35 +214,29 @@ std::expected<Detections, std::string> read_detections(const std::filesystem::pa
 TrackSplit split_tracks(const Detections& detections) {
   TrackSplit out;
   for (const DetectionFrame& f : detections.frames) {
-    std::map<int, PointTrack> labelled;
-    std::map<int, std::vector<Eigen::Vector2d>> unlabelled;  // per camera
+    // Per camera: its blobs of each marker id (-1: unlabelled).
+    std::map<int, std::map<int, std::vector<Eigen::Vector2d>>> by_marker;
+    bool any_labelled = false;
     for (const MarkerObservation& o : f.observations) {
-      if (o.marker >= 0) {
-        PointTrack& t = labelled[o.marker];
-        t.frame = f.frame;
-        t.marker = o.marker;
-        bool duplicate = false;
-        for (auto& [camera, pixel] : t.views) duplicate = duplicate || camera == o.camera;
-        if (duplicate) {
-          ++out.ambiguous;
-          continue;
+      by_marker[o.marker][o.camera].push_back(o.pixel);
+      any_labelled = any_labelled || o.marker >= 0;
+    }
+    for (const auto& [marker, cameras] : by_marker) {
+      // In a frame with labelled markers, unlabelled blobs are strays: they cannot be matched.
+      if (marker < 0 && any_labelled) {
+        for (const auto& [camera, pixels] : cameras) out.ambiguous += pixels.size();
+        continue;
+      }
+      PointTrack t;
+      t.frame = f.frame;
+      t.marker = marker;
+      for (const auto& [camera, pixels] : cameras) {
+        if (pixels.size() == 1) {
+          t.views.emplace_back(camera, pixels[0]);
+        } else {
+          out.ambiguous += pixels.size();  // which of them is the marker cannot be told
         }
-        t.views.emplace_back(o.camera, o.pixel);
-      } else {
-        unlabelled[o.camera].push_back(o.pixel);
       }
-    }
-    PointTrack single;
-    single.frame = f.frame;
-    for (const auto& [camera, pixels] : unlabelled) {
-      if (pixels.size() == 1) {
-        single.views.emplace_back(camera, pixels[0]);
-      } else {
-        out.ambiguous += pixels.size();
-      }
-    }
-    if (single.views.size() >= 2) out.tracks.push_back(std::move(single));
-    for (auto& [marker, t] : labelled) {
       if (t.views.size() >= 2) out.tracks.push_back(std::move(t));
     }
   }

@@ -69,8 +69,10 @@ struct TrackSplit {
 };
 
 // Groups the observations into tracks: by (frame, marker) where markers are labelled; where they
-// are not, a frame is one track, and a camera that saw more than one blob in it is left out of
-// that frame (its blobs cannot be told apart). Tracks seen by fewer than two cameras are dropped.
+// are not, a frame is one track. A camera that saw more than one blob of one marker (or more than
+// one unlabelled blob) in a frame is left out of that track: its blobs cannot be told apart. In a
+// frame with labelled markers, unlabelled blobs are strays and are dropped. Dropped blobs are
+// counted as ambiguous. Tracks seen by fewer than two cameras are dropped.
 TrackSplit split_tracks(const Detections& detections);
 
 }  // namespace rhot

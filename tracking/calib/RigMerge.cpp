@@ -88,7 +88,7 @@ std::expected<MergeResult, std::string> finish(const CameraRig& a, const CameraR
     b_index[j] = static_cast<int>(out.rig.cameras.size());
     out.rig.cameras.push_back(transform_camera(b.cameras[j], a_from_b));
   }
-  if (b.volume && !out.rig.volume) out.rig.volume = TrackingVolume{a_from_b.apply(b.volume->centre_m), b.volume->size_m * a_from_b.scale};
+  if (b.volume && !out.rig.volume) out.rig.volume = transform_volume(*b.volume, a_from_b);
 
   if (detections_a != nullptr) {
     // One adjustment over both sessions: each single-view-per-camera track triangulated with the

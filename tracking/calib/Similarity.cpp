@@ -1,5 +1,7 @@
 #include "tracking/calib/Similarity.h"
 
+#include <cmath>
+
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
@@ -32,9 +34,22 @@ std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& fr
   if (!m.allFinite()) return std::nullopt;
   Similarity3 s;
   s.scale = with_scale ? m.block<3, 3>(0, 0).col(0).norm() : 1.0;
+  if (!(s.scale > 1e-12) || !std::isfinite(s.scale)) return std::nullopt;  // `to` all in one place
   s.rotation = m.block<3, 3>(0, 0) / s.scale;
   s.translation = m.block<3, 1>(0, 3);
+  if (!s.rotation.allFinite() || !s.translation.allFinite()) return std::nullopt;
   return s;
+}
+
+TrackingVolume transform_volume(const TrackingVolume& volume, const Similarity3& new_from_old) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d sign((corner & 1) ? 0.5 : -0.5, (corner & 2) ? 0.5 : -0.5, (corner & 4) ? 0.5 : -0.5);
+    const Eigen::Vector3d p = new_from_old.apply(volume.centre_m + sign.cwiseProduct(volume.size_m));
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return TrackingVolume{(lo + hi) / 2, hi - lo};
 }
 
 Camera transform_camera(const Camera& camera, const Similarity3& new_from_old) {

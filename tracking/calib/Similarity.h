@@ -27,6 +27,9 @@ struct Similarity3 {
 std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to,
                                           bool with_scale);
 
+// The smallest axis-aligned box of the new frame that holds the old box (all 8 corners moved).
+TrackingVolume transform_volume(const TrackingVolume& volume, const Similarity3& new_from_old);
+
 // The same camera described in the new frame: its image of any scene point is unchanged.
 Camera transform_camera(const Camera& camera, const Similarity3& new_from_old);
 

@@ -436,6 +436,15 @@ std::expected<void, std::string> check_inputs(const CameraRig& rig, const Detect
                              " but its intrinsics are for " + std::to_string(k.width_px) + "x" + std::to_string(k.height_px));
     }
   }
+  for (const DetectionFrame& f : d.frames) {
+    for (const MarkerObservation& o : f.observations) {
+      if (o.camera < 0 || o.camera >= n) {
+        return std::unexpected("frame " + std::to_string(f.frame) + ": a detection names camera " + std::to_string(o.camera) +
+                               " but the rig has cameras 0 to " + std::to_string(n - 1));
+      }
+      if (!o.pixel.allFinite()) return std::unexpected("frame " + std::to_string(f.frame) + ": a detection's pixel is not finite");
+    }
+  }
   std::vector<int> outside(static_cast<std::size_t>(n), 0);
   std::vector<std::string> example(static_cast<std::size_t>(n));
   for (const DetectionFrame& f : d.frames) {
@@ -483,7 +492,7 @@ std::vector<std::vector<int>> graph_groups(int n, const std::vector<GraphEdge>& 
 }  // namespace
 
 std::expected<void, std::string> WandSettings::check() const {
-  if (wand_length_m && !(std::isfinite(*wand_length_m) && *wand_length_m > 0.001 && *wand_length_m < 10.0)) {
+  if (wand_length_m && !(std::isfinite(*wand_length_m) && *wand_length_m >= 0.001 && *wand_length_m <= 10.0)) {
     return std::unexpected("wand length: expected 1 mm to 10 m, got " + fmt(*wand_length_m * 1000.0, 3) + " mm");
   }
   if (marker_a < 0 || marker_b < 0 || marker_a == marker_b) return std::unexpected("wand markers: expected two different non-negative ids");
@@ -529,9 +538,21 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
   }
   for (int c = 0; c < n; ++c) {
     if (points_per_camera[static_cast<std::size_t>(c)] < settings.min_points) {
+      // Blobs it could not tell apart: a fixed reflection or a second light in its view.
+      int ambiguous = 0;
+      for (const DetectionFrame& f : detections.frames) {
+        int blobs = 0;
+        for (const MarkerObservation& o : f.observations) blobs += (o.camera == c && o.marker < 0) ? 1 : 0;
+        ambiguous += blobs > 1 ? 1 : 0;
+      }
+      std::string why = "wave where it can see";
+      if (ambiguous > 0) {
+        why = "in " + std::to_string(ambiguous) +
+              " frames it saw several unlabelled blobs that cannot be told apart (a reflection or a second light in its view?)";
+      }
       return std::unexpected(camera_label(intrinsics, c) + " saw only " + std::to_string(points_per_camera[static_cast<std::size_t>(c)]) +
                              " marker positions that another camera saw too (need " + std::to_string(settings.min_points) +
-                             "): it cannot be connected to the rig; wave where it can see");
+                             "): it cannot be connected to the rig; " + why);
     }
   }
   // The camera graph.

@@ -32,10 +32,7 @@ WorldFrameResult apply(const CameraRig& rig, const Similarity3& new_from_old) {
   out.rig = rig;
   out.rig.cameras.clear();
   for (const Camera& c : rig.cameras) out.rig.cameras.push_back(transform_camera(c, new_from_old));
-  if (rig.volume) {
-    // The box's centre moves with the world; its size scales (its axes stay the world's).
-    out.rig.volume = TrackingVolume{new_from_old.apply(rig.volume->centre_m), rig.volume->size_m * new_from_old.scale};
-  }
+  if (rig.volume) out.rig.volume = transform_volume(*rig.volume, new_from_old);
   return out;
 }
 
@@ -56,16 +53,21 @@ std::expected<void, std::string> LFrame::check() const {
     return std::unexpected(
         "L-frame: the middle marker must lie on the long arm, 2 cm or more from either end, and 2 cm or more from the short arm's length");
   }
-  if (!(std::isfinite(height_m) && std::abs(height_m) < 0.5))
-    return std::unexpected("L-frame: marker height expected within 0.5 m of the floor");
+  if (!(std::isfinite(height_m) && std::abs(height_m) <= 3.0))
+    return std::unexpected("L-frame: marker height expected within 3 m of the floor");
   return {};
 }
 
 std::vector<StillPoint> still_points(const CameraRig& rig, const Detections& detections, double radius_m, int min_frames) {
+  // A run of points near one another in frames close in time; a moving marker leaves runs too,
+  // spread along its path, which the spread test below refuses.
+  constexpr long kMaxGapFrames = 10;
+  constexpr double kStill_m = 0.005;
   struct Cluster {
     std::vector<Eigen::Vector3d> points;
     Eigen::Vector3d mean{0, 0, 0};
     long first_frame = 0;
+    long last_frame = 0;
   };
   std::vector<Cluster> clusters;
   for (const DetectionFrame& f : detections.frames) {
@@ -74,36 +76,67 @@ std::vector<StillPoint> still_points(const CameraRig& rig, const Detections& det
     frame.cameras.resize(rig.cameras.size());
     for (std::size_t c = 0; c < rig.cameras.size(); ++c) frame.cameras[c].camera = static_cast<int>(c);
     for (const MarkerObservation& o : f.observations) {
-      if (o.camera < 0 || o.camera >= static_cast<int>(rig.cameras.size())) continue;
+      if (o.camera < 0 || o.camera >= static_cast<int>(rig.cameras.size()) || !o.pixel.allFinite()) continue;
       frame.cameras[static_cast<std::size_t>(o.camera)].detections.push_back({o.pixel, -1});
     }
     for (const MatchedPoint& m : match_and_triangulate(rig, frame)) {
       const Eigen::Vector3d p = m.point.position_world;
       if (!p.allFinite()) continue;
-      Cluster* near = nullptr;
+      Cluster* nearest = nullptr;
+      double nearest_m = radius_m;
       for (Cluster& c : clusters) {
-        if ((c.mean - p).norm() < radius_m) near = &c;
+        const double d = (c.mean - p).norm();
+        if (f.frame - c.last_frame <= kMaxGapFrames && d < nearest_m) {
+          nearest = &c;
+          nearest_m = d;
+        }
       }
-      if (!near) {
-        clusters.push_back({{}, p, f.frame});
-        near = &clusters.back();
+      if (!nearest) {
+        clusters.push_back({{}, p, f.frame, f.frame});
+        nearest = &clusters.back();
       }
-      near->points.push_back(p);
-      near->mean += (p - near->mean) / static_cast<double>(near->points.size());
+      nearest->points.push_back(p);
+      nearest->mean += (p - nearest->mean) / static_cast<double>(nearest->points.size());
+      nearest->last_frame = f.frame;
     }
   }
   std::vector<StillPoint> out;
   for (const Cluster& c : clusters) {
     if (static_cast<int>(c.points.size()) < min_frames) continue;
-    StillPoint s;
+    // The still part: the points within kStill_m of the median. A group gathered from a marker
+    // moving (even slowly, as it sets off or arrives) keeps too few of them.
+    Eigen::Vector3d centre;
     for (int axis = 0; axis < 3; ++axis) {
       std::vector<double> v;
       for (const auto& p : c.points) v.push_back(p[axis]);
+      centre[axis] = median(v);
+    }
+    std::vector<Eigen::Vector3d> still;
+    for (const auto& p : c.points) {
+      if ((p - centre).norm() <= kStill_m) still.push_back(p);
+    }
+    if (static_cast<int>(still.size()) < min_frames) continue;
+    StillPoint s;
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<double> v;
+      for (const auto& p : still) v.push_back(p[axis]);
       s.position[axis] = median(v);
     }
-    s.frames = static_cast<int>(c.points.size());
+    s.frames = static_cast<int>(still.size());
     s.first_frame = c.first_frame;
-    out.push_back(s);
+    // The same place again after a gap: one point.
+    StillPoint* same = nullptr;
+    for (StillPoint& o : out) {
+      if ((o.position - s.position).norm() < radius_m) same = &o;
+    }
+    if (same) {
+      const double w = static_cast<double>(s.frames) / (s.frames + same->frames);
+      same->position += w * (s.position - same->position);
+      same->frames += s.frames;
+      same->first_frame = std::min(same->first_frame, s.first_frame);
+    } else {
+      out.push_back(s);
+    }
   }
   std::sort(out.begin(), out.end(), [](const StillPoint& a, const StillPoint& b) { return a.first_frame < b.first_frame; });
   return out;
@@ -161,18 +194,31 @@ std::expected<WorldFrameResult, std::string> world_from_lframe(const CameraRig& 
   const Eigen::Vector3d long_arm = r.measured_world[1] - r.measured_world[0];
   const Eigen::Vector3d short_arm = r.measured_world[2] - r.measured_world[0];
   r.angle_error_deg = std::acos(std::clamp(long_arm.normalized().dot(short_arm.normalized()), -1.0, 1.0)) * 180.0 / M_PI - 90.0;
-  if (r.max_mm > tolerance_m * 1000.0) {
-    return std::unexpected("the points found do not fit the L-frame: a marker lies " + fmt(r.max_mm) + " mm from its place (tolerance " +
-                           fmt(tolerance_m * 1000.0) + " mm); check the frame's dimensions" +
+  if (!(r.max_mm <= tolerance_m * 1000.0)) {
+    static const char* const kNames[] = {"the corner", "the long arm's end", "the short arm's end", "the middle marker"};
+    const auto worst =
+        static_cast<std::size_t>(std::max_element(r.marker_residual_mm.begin(), r.marker_residual_mm.end()) - r.marker_residual_mm.begin());
+    return std::unexpected("the points found do not fit the L-frame: " + std::string(kNames[worst]) + " lies " + fmt(r.max_mm) +
+                           " mm from its place (tolerance " + fmt(tolerance_m * 1000.0) + " mm); check the frame's dimensions" +
                            (rescale ? "" : ", or whether the rig is metric"));
+  }
+  // Three or four markers in one plane fit their mirror image as well as themselves: a frame laid
+  // mirrored (the short arm to the left) or seen from below fits, with the world upside down.
+  Eigen::Vector3d cameras_mean = Eigen::Vector3d::Zero();
+  for (const Camera& c : out.rig.cameras) cameras_mean += c.centre_world();
+  cameras_mean /= static_cast<double>(out.rig.cameras.size());
+  if (!(cameras_mean.y() > frame.height_m)) {
+    return std::unexpected(
+        "the L-frame reads as mirrored: with it, the cameras would be below the floor; lay it with the short arm to the right of the long "
+        "arm (seen from above, the long arm pointing away from you)");
   }
   return out;
 }
 
 std::expected<WorldFrameResult, std::string> world_from_floor_points(const CameraRig& rig, const Detections& detections,
                                                                      double marker_height_m, int min_frames) {
-  if (!(std::isfinite(marker_height_m) && std::abs(marker_height_m) < 0.5)) {
-    return std::unexpected("marker height: expected within 0.5 m of the floor");
+  if (!(std::isfinite(marker_height_m) && std::abs(marker_height_m) <= 3.0)) {
+    return std::unexpected("marker height: expected within 3 m of the floor");
   }
   const std::vector<StillPoint> found = still_points(rig, detections, 0.02, min_frames);
   if (found.size() < 3) {

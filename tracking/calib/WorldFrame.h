@@ -39,7 +39,9 @@ struct LFrame {
 };
 
 // A marker that stayed in one place over several frames, found by matching and triangulating
-// every frame (tracking/geometry) and grouping the points within `radius_m` of each other.
+// every frame (tracking/geometry) and grouping the points within `radius_m` of each other in frames
+// at most 10 apart. Only a group's points within 5 mm of its median count, and it needs
+// `min_frames` of them: a marker moving, even slowly, leaves too few; groups at one place are joined.
 struct StillPoint {
   Eigen::Vector3d position{0, 0, 0};  // the median of its frames' points, in the rig's world
   int frames = 0;

@@ -14,15 +14,13 @@ namespace rhot {
 namespace {
 
 // The frames of a simulated rig as detections, with strays and outliers added.
-Detections to_detections(SimulatedRig& sim, const CameraRig& rig, int frames, bool labelled, const SessionNoise& noise,
-                         const std::vector<bool>* keep_frame = nullptr) {
+Detections to_detections(SimulatedRig& sim, const CameraRig& rig, int frames, bool labelled, const SessionNoise& noise) {
   std::mt19937_64 rng(noise.rig.seed * 7919ULL + 17ULL);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   Detections d;
   d.camera_count = static_cast<int>(rig.cameras.size());
   for (int f = 0; f < frames; ++f) {
     const RigFrame frame = sim.next();
-    if (keep_frame && !(*keep_frame)[static_cast<std::size_t>(f)]) continue;
     DetectionFrame df;
     df.frame = f;
     for (const CameraFrame& cf : frame.cameras) {
@@ -107,20 +105,27 @@ Detections simulate_lframe_session(const CameraRig& rig, const LFrame& frame, co
 
 Detections simulate_floor_session(const CameraRig& rig, const std::vector<Eigen::Vector3d>& places_on_floor, double height_m,
                                   int frames_per_place, const SessionNoise& noise) {
-  constexpr int kMoving = 10;
+  // Between places the marker is carried over in kMoving frames, lifted up to 10 cm, starting and
+  // stopping gently (a smoothstep), as a hand would.
+  constexpr int kMoving = 30;
   const int period = frames_per_place + kMoving;
-  const int frames = period * static_cast<int>(places_on_floor.size());
-  std::vector<bool> keep(static_cast<std::size_t>(frames));
-  for (int f = 0; f < frames; ++f) keep[static_cast<std::size_t>(f)] = f % period < frames_per_place;
+  const int frames = period * static_cast<int>(places_on_floor.size()) - kMoving;
   SimulatedRig sim(rig, {}, noise.rig);
   const double rate = noise.rig.rate_hz;
   const std::vector<Eigen::Vector3d> places = places_on_floor;
-  sim.set_scripted_markers([places, height_m, period, rate](double t_s) {
+  sim.set_scripted_markers([places, height_m, period, frames_per_place, rate](double t_s) {
     const auto f = static_cast<int>(std::lround(t_s * rate));
     const auto i = std::min(places.size() - 1, static_cast<std::size_t>(f / period));
-    return std::vector<Eigen::Vector3d>{places[i] + Eigen::Vector3d(0, height_m, 0)};
+    const int into = f % period;
+    Eigen::Vector3d p = places[i];
+    if (into >= frames_per_place && i + 1 < places.size()) {
+      const double t = static_cast<double>(into - frames_per_place + 1) / (period - frames_per_place + 1);
+      const double eased = t * t * (3 - 2 * t);
+      p = places[i] + eased * (places[i + 1] - places[i]) + Eigen::Vector3d(0, 0.1 * std::sin(M_PI * t), 0);
+    }
+    return std::vector<Eigen::Vector3d>{p + Eigen::Vector3d(0, height_m, 0)};
   });
-  return to_detections(sim, rig, frames, false, noise, &keep);
+  return to_detections(sim, rig, frames, false, noise);
 }
 
 }  // namespace rhot

@@ -40,8 +40,8 @@ Detections simulate_lframe_session(const CameraRig& rig, const LFrame& frame, co
                                    const SessionNoise& noise);
 
 // One marker `height_m` above each place on the floor (or a desk: a place's y is its surface's
-// height) held at each in turn for
-// `frames_per_place` frames, with 10 frames of moving between places left out (nothing seen).
+// height), held still at each in turn for `frames_per_place` frames and carried to the next
+// between them (30 frames, lifted up to 10 cm).
 Detections simulate_floor_session(const CameraRig& rig, const std::vector<Eigen::Vector3d>& places_on_floor, double height_m,
                                   int frames_per_place, const SessionNoise& noise);
 

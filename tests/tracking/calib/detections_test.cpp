@@ -64,6 +64,7 @@ TEST(Detections, BrokenCsvLinesAreNamedByLine) {
       {"0,0,nan,2\n", ":1: x: expected a finite number, got \"nan\""},
       {"0,0,1,inf\n", ":1: y: expected a finite number, got \"inf\""},
       {"0,0,1,2,-2\n", ":1: marker: expected -1 (unknown) or a marker id 0 to 1000000, got \"-2\""},
+      {"0,0,1e300,2\n", ":1: x,y: expected a pixel within 1e6 of the image, got 1e300,2"},
   };
   for (std::size_t i = 0; i < cases.size(); ++i) {
     const fs::path file = write_file(dir / ("bad" + std::to_string(i) + ".csv"), cases[i].text);
@@ -112,12 +113,18 @@ TEST(Detections, TracksGroupLabelledMarkersAndDropAmbiguousBlobs) {
   d.frames.push_back({1, {{0, {1, 1}, -1}, {1, {2, 2}, -1}, {2, {3, 3}, -1}, {2, {4, 4}, -1}}});
   // Frame 2: seen by one camera only.
   d.frames.push_back({2, {{0, {1, 1}, -1}}});
+  // Frame 3: marker 0 twice in camera 0 (a reflection labelled like it): neither is kept; a stray
+  // unlabelled blob in a labelled frame is dropped.
+  d.frames.push_back({3, {{0, {1, 1}, 0}, {0, {9, 9}, 0}, {1, {2, 2}, 0}, {2, {3, 3}, 0}, {1, {7, 7}, -1}}});
   const rhot::TrackSplit split = rhot::split_tracks(d);
-  ASSERT_EQ(split.tracks.size(), 3u);
-  EXPECT_EQ(split.ambiguous, 2u);
+  ASSERT_EQ(split.tracks.size(), 4u);
+  EXPECT_EQ(split.ambiguous, 2u + 2u + 1u);
   int views = 0;
   for (const auto& t : split.tracks) views += static_cast<int>(t.views.size());
-  EXPECT_EQ(views, 3 + 2 + 2);
+  EXPECT_EQ(views, 3 + 2 + 2 + 2);
+  const rhot::PointTrack& last = split.tracks.back();
+  EXPECT_EQ(last.frame, 3);
+  for (const auto& [camera, pixel] : last.views) EXPECT_NE(camera, 0);
 }
 
 }  // namespace

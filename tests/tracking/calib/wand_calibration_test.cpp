@@ -99,7 +99,6 @@ TEST(WandCalibration, SeatedFourFromAWandMatchesTheTruth) {
   for (const auto& c : r.cameras) {
     EXPECT_NEAR(c.rms_px, floor, 0.1 * floor) << c.name;
     EXPECT_GT(c.frames_seen, 300) << c.name;
-    EXPECT_LE(c.median_px, c.p95_px) << c.name;
   }
   // Until `world`, the world is camera 0's in rhot's axes: camera 0 at the origin looking along -Z.
   EXPECT_LT(result->rig.cameras[0].centre_world().norm(), 1e-9);
@@ -125,11 +124,15 @@ TEST(WandCalibration, RoomEightWithDropoutStraysAndOutliers) {
   EXPECT_GT(r.outliers, 0) << "1 % of detections were displaced by 3 to 30 px";
   const double floor = noise_floor_px(r, 0.3, 8);
   EXPECT_NEAR(r.rms_px, floor, 0.1 * floor);
-  // The graph: every pair that shares points, each counted once.
+  // The graph: room-8's cameras face each other across the room; every one shares points with
+  // several others.
+  std::vector<int> degree(8, 0);
   for (const auto& e : r.graph) {
-    EXPECT_LT(e.a, e.b);
-    EXPECT_GT(e.shared_points, 0);
+    if (e.shared_points < 15) continue;
+    ++degree[static_cast<std::size_t>(e.a)];
+    ++degree[static_cast<std::size_t>(e.b)];
   }
+  for (int c = 0; c < 8; ++c) EXPECT_GE(degree[static_cast<std::size_t>(c)], 2) << truth.cameras[static_cast<std::size_t>(c)].name;
 }
 
 TEST(WandCalibration, OneMarkerWithoutAWandIsRightUpToScale) {
@@ -195,6 +198,9 @@ TEST(WandCalibration, RefusesACameraTheRigLacksAndTooFewFrames) {
   d.camera_count = 5;
   EXPECT_EQ(rhot::calibrate_wand(truth, d, rhot::WandSettings{}).error(),
             "the detections name camera 4 but the rig has only 2 cameras (0 to 1)");
+  d.camera_count = 2;  // understated: the observation itself is checked
+  EXPECT_EQ(rhot::calibrate_wand(truth, d, rhot::WandSettings{}).error(),
+            "frame " + std::to_string(d.frames[0].frame) + ": a detection names camera 4 but the rig has cameras 0 to 1");
   const rhot::Detections few = wand_session(truth, 10, 0.3, 1);
   EXPECT_EQ(rhot::calibrate_wand(truth, few, rhot::WandSettings{}).error(),
             "too few frames: 20 marker positions were seen by two cameras or more (need 30)");
@@ -251,6 +257,10 @@ TEST(WandCalibration, SettingsAreChecked) {
   rhot::WandSettings s;
   s.wand_length_m = std::nan("");
   EXPECT_EQ(s.check().error(), "wand length: expected 1 mm to 10 m, got nan mm");
+  s.wand_length_m = 10.0;
+  EXPECT_TRUE(s.check());
+  s.wand_length_m = 10.001;
+  EXPECT_EQ(s.check().error(), "wand length: expected 1 mm to 10 m, got 10001.000 mm");
   s.wand_length_m = 0.5;
   s.marker_b = 0;
   EXPECT_EQ(s.check().error(), "wand markers: expected two different non-negative ids");

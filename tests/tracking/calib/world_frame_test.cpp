@@ -150,3 +150,30 @@ TEST(WorldFrame, FloorPointsOnALineAreRefused) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(WorldFrame, AMirroredFrameIsRefusedNotTurnedUpsideDown) {
+  // Laid with the short arm to the left: the same as the frame turned over about its long arm.
+  const rhot::CameraRig truth = seated();
+  rhot::Rigid3d mirrored = on_the_desk();
+  mirrored.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()));
+  const rhot::Detections d = rhot::simulate_lframe_session(truth, rhot::LFrame{}, mirrored, 60, noise(8));
+  const auto result = rhot::world_from_lframe(moved(truth, 1.0), d, rhot::LFrame{}, false);
+  ASSERT_FALSE(result);
+  EXPECT_EQ(
+      result.error(),
+      "the L-frame reads as mirrored: with it, the cameras would be below the floor; lay it with the short arm to the right of the long "
+      "arm (seen from above, the long arm pointing away from you)");
+}
+
+TEST(WorldFrame, TheTrackedVolumeTurnsWithTheWorld) {
+  rhot::Similarity3 quarter_turn;
+  quarter_turn.rotation = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const rhot::TrackingVolume box{{1, 0, 0}, {2, 1, 0.5}};
+  const rhot::TrackingVolume turned = rhot::transform_volume(box, quarter_turn);
+  EXPECT_LT((turned.centre_m - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
+  EXPECT_LT((turned.size_m - Eigen::Vector3d(0.5, 1, 2)).norm(), 1e-12);
+}
+
+}  // namespace
