@@ -112,8 +112,19 @@ std::expected<void, std::string> write_rig_top_view(const std::filesystem::path&
     return cv::Point2d(size / 2.0 + (p.x() - mid_x) * px_per_m, size / 2.0 + (p.z() - mid_z) * px_per_m);
   };
   cv::Mat image(size, size, CV_8UC3, cv::Scalar(250, 250, 250));
-  for (const Eigen::Vector3d& p : points_world) {
-    if (p.allFinite()) cv::circle(image, to_image(p), 1, cv::Scalar(160, 160, 160), cv::FILLED);
+  // A wave's thousands of points as small grey dots; a few (an L-frame's markers, floor points)
+  // as numbered red discs.
+  const bool few = points_world.size() <= 16;
+  for (std::size_t i = 0; i < points_world.size(); ++i) {
+    const Eigen::Vector3d& p = points_world[i];
+    if (!p.allFinite()) continue;
+    if (few) {
+      cv::circle(image, to_image(p), 5, cv::Scalar(40, 40, 220), cv::FILLED, cv::LINE_AA);
+      cv::putText(image, std::to_string(i), to_image(p) + cv::Point2d(7, 5), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(40, 40, 220), 1,
+                  cv::LINE_AA);
+    } else {
+      cv::circle(image, to_image(p), 1, cv::Scalar(160, 160, 160), cv::FILLED);
+    }
   }
   for (const Camera& c : rig.cameras) {
     const Eigen::Vector3d centre = c.centre_world();

@@ -33,8 +33,8 @@ struct ResidualSample {
 double image_coverage(int width_px, int height_px, const std::vector<Eigen::Vector2d>& pixels);
 
 // The rig from above (world X right, -Z up the picture, +Y towards the viewer): each camera as its
-// centre, name and a wedge along its view direction, and the points (e.g. the wand's
-// reconstruction) as grey dots; a scale bar in metres.
+// centre, name and a wedge along its view direction, and the points as grey dots (a wand's
+// reconstruction) or, 16 or fewer, numbered red discs (an L-frame's markers); a scale bar in metres.
 [[nodiscard]] std::expected<void, std::string> write_rig_top_view(const std::filesystem::path& file, const CameraRig& rig,
                                                                   const std::vector<Eigen::Vector3d>& points_world,
                                                                   const std::string& title);

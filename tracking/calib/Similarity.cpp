@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
+#include <Eigen/Eigenvalues>
 
 namespace rhot {
 
@@ -25,11 +25,11 @@ std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& fr
     a.col(i) = from[static_cast<std::size_t>(i)];
     b.col(i) = to[static_cast<std::size_t>(i)];
   }
-  // Collinear points leave the rotation about their line free.
+  // Collinear points leave the rotation about their line free: their spread's second axis is nil.
   const Eigen::Matrix3Xd centred = a.colwise() - a.rowwise().mean();
-  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(centred);
-  const Eigen::Vector3d sv = svd.singularValues();
-  if (!(sv[1] > 1e-9 * std::max(sv[0], 1e-300))) return std::nullopt;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> spread(centred * centred.transpose());
+  const Eigen::Vector3d ev = spread.eigenvalues();  // ascending: squared singular values
+  if (!(ev[1] > 1e-18 * std::max(ev[2], 1e-300))) return std::nullopt;
   const Eigen::Matrix4d m = Eigen::umeyama(a, b, with_scale);
   if (!m.allFinite()) return std::nullopt;
   Similarity3 s;

@@ -62,7 +62,10 @@ struct State {
 // Linear (DLT) triangulation from the placed, unrejected views, in normalised coordinates; then
 // checked: in front of every camera and within `max_px` of every observation.
 std::optional<Eigen::Vector3d> triangulate(const State& s, const Track& t, double max_px) {
-  Eigen::MatrixXd a(2 * t.cameras.size(), 4);
+  // The homogeneous point minimising |A h| with |h| = 1: the eigenvector of A^T A with the smallest
+  // eigenvalue (A's rows: two per view). In normalised coordinates A is well conditioned, and the
+  // bundle adjustment refines the point anyway.
+  Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
   int rows = 0;
   for (std::size_t k = 0; k < t.cameras.size(); ++k) {
     const auto c = static_cast<std::size_t>(t.cameras[k]);
@@ -70,12 +73,14 @@ std::optional<Eigen::Vector3d> triangulate(const State& s, const Track& t, doubl
     Eigen::Matrix<double, 3, 4> p;
     p.leftCols<3>() = s.cameras[c].cam_from_world.rotation.toRotationMatrix();
     p.col(3) = s.cameras[c].cam_from_world.translation;
-    a.row(rows++) = t.normalised[k].x() * p.row(2) - p.row(0);
-    a.row(rows++) = t.normalised[k].y() * p.row(2) - p.row(1);
+    const Eigen::RowVector4d rx = t.normalised[k].x() * p.row(2) - p.row(0);
+    const Eigen::RowVector4d ry = t.normalised[k].y() * p.row(2) - p.row(1);
+    normal += rx.transpose() * rx + ry.transpose() * ry;
+    rows += 2;
   }
   if (rows < 4) return std::nullopt;
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a.topRows(rows), Eigen::ComputeFullV);
-  const Eigen::Vector4d h = svd.matrixV().col(3);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(normal);
+  const Eigen::Vector4d h = eig.eigenvectors().col(0);
   if (std::abs(h[3]) < 1e-12) return std::nullopt;
   const Eigen::Vector3d x = h.head<3>() / h[3];
   if (!x.allFinite()) return std::nullopt;
