@@ -494,32 +494,11 @@ std::vector<std::vector<int>> graph_groups(int n, const std::vector<GraphEdge>& 
   return out;
 }
 
-}  // namespace
-
-std::expected<void, std::string> WandSettings::check() const {
-  if (wand_length_m && !(std::isfinite(*wand_length_m) && *wand_length_m >= 0.001 && *wand_length_m <= 10.0)) {
-    return std::unexpected("wand length: expected 1 mm to 10 m, got " + fmt(*wand_length_m * 1000.0, 3) + " mm");
-  }
-  if (marker_a < 0 || marker_b < 0 || marker_a == marker_b) return std::unexpected("wand markers: expected two different non-negative ids");
-  if (!(outlier_px >= 0.0) || !std::isfinite(outlier_px))
-    return std::unexpected("outlier threshold: expected 0 (automatic) or a positive number of pixels");
-  if (!(initial_tolerance_px >= 0.0) || !std::isfinite(initial_tolerance_px)) {
-    return std::unexpected("initial tolerance: expected 0 (automatic) or a positive number of pixels");
-  }
-  if (min_shared_points < 5) return std::unexpected("min_shared_points: expected at least 5");
-  if (min_points < 6) return std::unexpected("min_points: expected at least 6");
-  if (threads < 1) return std::unexpected("threads: expected at least 1");
-  return {};
-}
-
-std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intrinsics, const Detections& detections,
-                                                           const WandSettings& settings,
-                                                           const std::function<void(const std::string&)>& progress) {
-  if (const auto ok = settings.check(); !ok) return std::unexpected(ok.error());
-  if (const auto ok = check_inputs(intrinsics, detections); !ok) return std::unexpected(ok.error());
+// The point tracks of the detections, each pixel undistorted with its own camera; refuses too few
+// tracks, and a camera that sees too few of them (saying when its blobs were ambiguous).
+std::expected<State, std::string> start_state(const CameraRig& intrinsics, const Detections& detections, const TrackSplit& split,
+                                              const WandSettings& settings) {
   const int n = static_cast<int>(intrinsics.cameras.size());
-
-  const TrackSplit split = split_tracks(detections);
   State start;
   start.cameras = intrinsics.cameras;
   start.placed.assign(static_cast<std::size_t>(n), false);
@@ -560,7 +539,13 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
                              "): it cannot be connected to the rig; " + why);
     }
   }
-  // The camera graph.
+  return start;
+}
+
+// Every camera pair that shares points; refuses a graph in pieces, naming its groups.
+std::expected<std::vector<GraphEdge>, std::string> camera_graph(const State& start, const CameraRig& intrinsics,
+                                                                const WandSettings& settings) {
+  const int n = static_cast<int>(intrinsics.cameras.size());
   std::vector<std::vector<int>> shared(static_cast<std::size_t>(n), std::vector<int>(static_cast<std::size_t>(n), 0));
   for (const Track& t : start.tracks) {
     for (std::size_t i = 0; i < t.cameras.size(); ++i) {
@@ -591,55 +576,47 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
     message += "; wave where cameras of different groups see the marker at once, or calibrate the groups apart and merge them";
     return std::unexpected(message);
   }
-  if (progress) {
-    progress(std::to_string(start.tracks.size()) + " marker positions seen by two cameras or more, " + std::to_string(edges.size()) +
-             " camera pairs sharing points");
-  }
+  return edges;
+}
 
-  // With rough intrinsics, the focal length is searched first: each candidate gets a whole solve.
-  double searched_focal = 0.0;
-  State best_start = start;
-  if (settings.search_focal) {
-    double best_rms = 1e300;
-    std::string last_error;
-    for (const double factor : {0.5, 0.63, 0.8, 1.0, 1.26, 1.59, 2.0}) {
-      State trial = start;
-      for (Camera& c : trial.cameras) {
-        const double aspect = c.intrinsics.fy / c.intrinsics.fx;
-        c.intrinsics.fx = factor * c.intrinsics.width_px;
-        c.intrinsics.fy = c.intrinsics.fx * aspect;
-      }
-      for (Track& t : trial.tracks) {
-        for (std::size_t k = 0; k < t.cameras.size(); ++k)
-          t.normalised[k] = trial.cameras[static_cast<std::size_t>(t.cameras[k])].undistort(t.pixels[k]);
-      }
-      const auto solved = solve(trial, edges, settings, intrinsics, {});
-      const double r = solved ? inlier_rms(solved->state) : 1e300;
-      if (progress) progress("focal length " + fmt(factor, 2) + " image widths: " + (solved ? fmt(r, 3) + " px RMS" : solved.error()));
-      if (!solved) last_error = solved.error();
-      if (solved && r < best_rms) {
-        best_rms = r;
-        best_start = trial;
-        searched_focal = factor;
-      }
+// With rough intrinsics: a whole solve per candidate focal length (0.5 to 2 image widths), keeping
+// the one that explains the detections best. `factor` receives the chosen one.
+std::expected<Solved, std::string> solve_searching_focal(const State& start, const std::vector<GraphEdge>& edges,
+                                                         const WandSettings& settings, const CameraRig& intrinsics,
+                                                         const std::function<void(const std::string&)>& progress, double& searched_factor) {
+  std::optional<Solved> best;
+  double best_rms = 1e300;
+  std::string last_error;
+  for (const double factor : {0.5, 0.63, 0.8, 1.0, 1.26, 1.59, 2.0}) {
+    State trial = start;
+    for (Camera& c : trial.cameras) {
+      const double aspect = c.intrinsics.fy / c.intrinsics.fx;
+      c.intrinsics.fx = factor * c.intrinsics.width_px;
+      c.intrinsics.fy = c.intrinsics.fx * aspect;
     }
-    if (searched_focal == 0.0) return std::unexpected("no focal length from 0.5 to 2 image widths explains the detections: " + last_error);
+    for (Track& t : trial.tracks) {
+      for (std::size_t k = 0; k < t.cameras.size(); ++k)
+        t.normalised[k] = trial.cameras[static_cast<std::size_t>(t.cameras[k])].undistort(t.pixels[k]);
+    }
+    auto solved = solve(trial, edges, settings, intrinsics, {});
+    const double r = solved ? inlier_rms(solved->state) : 1e300;
+    if (progress) progress("focal length " + fmt(factor, 2) + " image widths: " + (solved ? fmt(r, 3) + " px RMS" : solved.error()));
+    if (!solved) {
+      last_error = solved.error();
+    } else if (r < best_rms) {
+      best_rms = r;
+      best = std::move(*solved);
+      searched_factor = factor;
+    }
   }
-  auto solved = solve(best_start, edges, settings, intrinsics, progress);
-  if (!solved) return std::unexpected(solved.error());
-  State& s = solved->state;
+  if (!best) return std::unexpected("no focal length from 0.5 to 2 image widths explains the detections: " + last_error);
+  return std::move(*best);
+}
 
-  // Per-camera residuals; a camera far worse than the others points at swapped streams or wrong
-  // intrinsics.
-  WandCalibration out;
+// Per camera: residuals (kept for the pictures), RMS, median, p95, inliers, outliers, frames, coverage.
+void report_cameras(const State& s, WandCalibration& out) {
+  const int n = static_cast<int>(s.cameras.size());
   WandReport& report = out.report;
-  report.rms_px = inlier_rms(s);
-  report.iterations = solved->summary.iterations;
-  report.outliers = solved->outliers;
-  report.ambiguous = static_cast<int>(split.ambiguous);
-  report.placement_order = s.order;
-  report.graph = edges;
-  report.focal_searched_px = searched_focal > 0 ? searched_focal * intrinsics.cameras[0].intrinsics.width_px : 0.0;
   out.residuals.assign(static_cast<std::size_t>(n), {});
   std::vector<std::vector<double>> norms(static_cast<std::size_t>(n));
   std::vector<std::set<long>> frames(static_cast<std::size_t>(n));
@@ -676,6 +653,12 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
     cr.coverage = image_coverage(s.cameras[ci].intrinsics.width_px, s.cameras[ci].intrinsics.height_px, seen[ci]);
     report.cameras.push_back(cr);
   }
+}
+
+// A camera far worse than the others (swapped streams, wrong intrinsics) or a wave too small to
+// pin the cameras is refused; a camera the wave covered poorly is a warning.
+std::expected<void, std::string> check_result(const CameraRig& intrinsics, WandReport& report) {
+  const int n = static_cast<int>(intrinsics.cameras.size());
   {
     std::vector<double> camera_rms;
     for (const auto& cr : report.cameras) camera_rms.push_back(cr.rms_px);
@@ -688,11 +671,6 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
                                " px; are the detections' camera streams in the rig's order, and are its intrinsics its own?");
       }
     }
-  }
-  // The shape of the wave: nearly planar, or tiny, it pins the cameras poorly.
-  std::vector<Eigen::Vector3d> points;
-  for (const Track& t : s.tracks) {
-    if (t.point) points.push_back(*t.point);
   }
   {
     double best_coverage = 0;
@@ -709,7 +687,12 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
     }
   }
 
-  // Scale from the wand, then camera 0's frame in rhot's axes.
+  return {};
+}
+
+// The scale: from the wand's ends (least squares over every frame with both), reported as the
+// wand's length errors; without a wand, the distance between the first two cameras placed.
+std::expected<double, std::string> rig_scale(const State& s, const WandSettings& settings, WandReport& report) {
   double scale = 1.0;
   std::vector<double> lengths;
   if (settings.wand_length_m) {
@@ -753,11 +736,71 @@ std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intr
     report.warnings.push_back(
         "no wand length given: the rig is not metric (its unit is the distance between the first two cameras placed)");
   }
+  return scale;
+}
+
+}  // namespace
+
+std::expected<void, std::string> WandSettings::check() const {
+  if (wand_length_m && !(std::isfinite(*wand_length_m) && *wand_length_m >= 0.001 && *wand_length_m <= 10.0)) {
+    return std::unexpected("wand length: expected 1 mm to 10 m, got " + fmt(*wand_length_m * 1000.0, 3) + " mm");
+  }
+  if (marker_a < 0 || marker_b < 0 || marker_a == marker_b) return std::unexpected("wand markers: expected two different non-negative ids");
+  if (!(outlier_px >= 0.0) || !std::isfinite(outlier_px))
+    return std::unexpected("outlier threshold: expected 0 (automatic) or a positive number of pixels");
+  if (!(initial_tolerance_px >= 0.0) || !std::isfinite(initial_tolerance_px)) {
+    return std::unexpected("initial tolerance: expected 0 (automatic) or a positive number of pixels");
+  }
+  if (min_shared_points < 5) return std::unexpected("min_shared_points: expected at least 5");
+  if (min_points < 6) return std::unexpected("min_points: expected at least 6");
+  if (threads < 1) return std::unexpected("threads: expected at least 1");
+  return {};
+}
+
+std::expected<WandCalibration, std::string> calibrate_wand(const CameraRig& intrinsics, const Detections& detections,
+                                                           const WandSettings& settings,
+                                                           const std::function<void(const std::string&)>& progress) {
+  if (const auto ok = settings.check(); !ok) return std::unexpected(ok.error());
+  if (const auto ok = check_inputs(intrinsics, detections); !ok) return std::unexpected(ok.error());
+  const TrackSplit split = split_tracks(detections);
+  const auto start = start_state(intrinsics, detections, split, settings);
+  if (!start) return std::unexpected(start.error());
+  const auto edges = camera_graph(*start, intrinsics, settings);
+  if (!edges) return std::unexpected(edges.error());
+  if (progress) {
+    progress(std::to_string(start->tracks.size()) + " marker positions seen by two cameras or more, " + std::to_string(edges->size()) +
+             " camera pairs sharing points");
+  }
+  double searched_factor = 0.0;
+  auto solved = settings.search_focal ? solve_searching_focal(*start, *edges, settings, intrinsics, progress, searched_factor)
+                                      : solve(*start, *edges, settings, intrinsics, progress);
+  if (!solved) return std::unexpected(solved.error());
+  const State& s = solved->state;
+
+  WandCalibration out;
+  WandReport& report = out.report;
+  report.rms_px = inlier_rms(s);
+  report.iterations = solved->summary.iterations;
+  report.outliers = solved->outliers;
+  report.ambiguous = static_cast<int>(split.ambiguous);
+  report.placement_order = s.order;
+  report.graph = *edges;
+  report.focal_searched_px = searched_factor > 0 ? searched_factor * intrinsics.cameras[0].intrinsics.width_px : 0.0;
+  report_cameras(s, out);
+  if (const auto ok = check_result(intrinsics, report); !ok) return std::unexpected(ok.error());
+  const auto scale = rig_scale(s, settings, report);
+  if (!scale) return std::unexpected(scale.error());
+
+  // Camera 0's frame in rhot's axes, at the wand's scale.
+  std::vector<Eigen::Vector3d> points;
+  for (const Track& t : s.tracks) {
+    if (t.point) points.push_back(*t.point);
+  }
   Similarity3 world_from_old;
   const Eigen::Matrix3d flip = Eigen::Vector3d(1, -1, -1).asDiagonal();
-  world_from_old.scale = scale;
+  world_from_old.scale = *scale;
   world_from_old.rotation = flip * s.cameras[0].cam_from_world.rotation.toRotationMatrix();
-  world_from_old.translation = scale * (flip * s.cameras[0].cam_from_world.translation);
+  world_from_old.translation = *scale * (flip * s.cameras[0].cam_from_world.translation);
   out.rig.name = intrinsics.name;
   for (const Camera& c : s.cameras) out.rig.cameras.push_back(transform_camera(c, world_from_old));
   for (const Eigen::Vector3d& p : points) out.points_world.push_back(world_from_old.apply(p));
