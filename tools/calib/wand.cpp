@@ -112,6 +112,68 @@ bool append_report(const std::string& file, const WandCalibration& c) {
   return static_cast<bool>(out);
 }
 
+// Cameras with rough intrinsics from the image size (--image-size, else MultiCamSelfCal's
+// Res.dat): the principal point at the centre, no distortion, a focal length of one image width
+// (the calibration searches it).
+std::expected<CameraRig, std::string> rough_intrinsics(const WandOptions& o, const Detections& detections) {
+  CameraRig rig;
+  int w = 0, h = 0;
+  if (!o.image_size.empty()) {
+    if (std::sscanf(o.image_size.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16 || w > 65536 || h > 65536) {
+      return std::unexpected("--image-size: expected WIDTHxHEIGHT in pixels, got \"" + o.image_size + "\"");
+    }
+  } else if (!detections.image_sizes_px.empty()) {
+    w = detections.image_sizes_px[0].x();
+    h = detections.image_sizes_px[0].y();
+  } else {
+    return std::unexpected(std::string("without --intrinsics, give --image-size WxH (or a MultiCamSelfCal folder with Res.dat)"));
+  }
+  for (int c = 0; c < detections.camera_count; ++c) {
+    Camera cam;
+    cam.name = "cam" + std::to_string(c);
+    const Eigen::Vector2i size = c < static_cast<int>(detections.image_sizes_px.size())
+                                     ? detections.image_sizes_px[static_cast<std::size_t>(c)]
+                                     : Eigen::Vector2i(w, h);
+    cam.intrinsics.width_px = size.x();
+    cam.intrinsics.height_px = size.y();
+    cam.intrinsics.fx = cam.intrinsics.fy = size.x();
+    cam.intrinsics.cx = (size.x() - 1) / 2.0;
+    cam.intrinsics.cy = (size.y() - 1) / 2.0;
+    rig.cameras.push_back(cam);
+  }
+  rig.name = "wand";
+  return rig;
+}
+
+// Per camera its residuals, and the rig from above with the wave; the files written.
+nlohmann::json write_pictures(const WandCalibration& result, const WandOptions& o) {
+  const std::filesystem::path dir = pictures_dir(o.pictures, o.out);
+  const std::string stem = std::filesystem::path(o.out).stem().string();
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  nlohmann::json pictures = nlohmann::json::array();
+  for (std::size_t c = 0; c < result.rig.cameras.size(); ++c) {
+    const Camera& cam = result.rig.cameras[c];
+    const std::filesystem::path file = dir / (stem + "_" + cam.name + "_residuals.png");
+    char title[160];
+    std::snprintf(title, sizeof title, "%s: %.3f px RMS, %d points, %d outliers", cam.name.c_str(), result.report.cameras[c].rms_px,
+                  result.report.cameras[c].inliers, result.report.cameras[c].outliers);
+    if (const auto ok = write_residual_picture(file, cam.intrinsics.width_px, cam.intrinsics.height_px, result.residuals[c], 50.0, title);
+        !ok) {
+      spdlog::warn("{}", ok.error());
+    } else {
+      pictures.push_back(file.string());
+    }
+  }
+  const std::filesystem::path top = dir / (stem + "_top.png");
+  if (const auto ok = write_rig_top_view(top, result.rig, result.points_world, result.rig.name.empty() ? "rig" : result.rig.name); !ok) {
+    spdlog::warn("{}", ok.error());
+  } else {
+    pictures.push_back(top.string());
+  }
+  return pictures;
+}
+
 int run(const WandOptions& o) {
   WandSettings settings;
   if (o.wand_mm > 0) settings.wand_length_m = o.wand_mm / 1000.0;
@@ -155,33 +217,12 @@ int run(const WandOptions& o) {
     rig = std::move(*loaded);
   } else {
     // No intrinsics: rough ones from the image size, and the focal length searched.
-    int w = 0, h = 0;
-    if (!o.image_size.empty()) {
-      if (std::sscanf(o.image_size.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16 || w > 65536 || h > 65536) {
-        spdlog::error("--image-size: expected WIDTHxHEIGHT in pixels, got \"{}\"", o.image_size);
-        return 1;
-      }
-    } else if (!detections->image_sizes_px.empty()) {
-      w = detections->image_sizes_px[0].x();
-      h = detections->image_sizes_px[0].y();
-    } else {
-      spdlog::error("without --intrinsics, give --image-size WxH (or a MultiCamSelfCal folder with Res.dat)");
+    auto rough = rough_intrinsics(o, *detections);
+    if (!rough) {
+      spdlog::error("{}", rough.error());
       return 1;
     }
-    for (int c = 0; c < detections->camera_count; ++c) {
-      Camera cam;
-      cam.name = "cam" + std::to_string(c);
-      const Eigen::Vector2i size = c < static_cast<int>(detections->image_sizes_px.size())
-                                       ? detections->image_sizes_px[static_cast<std::size_t>(c)]
-                                       : Eigen::Vector2i(w, h);
-      cam.intrinsics.width_px = size.x();
-      cam.intrinsics.height_px = size.y();
-      cam.intrinsics.fx = cam.intrinsics.fy = size.x();
-      cam.intrinsics.cx = (size.x() - 1) / 2.0;
-      cam.intrinsics.cy = (size.y() - 1) / 2.0;
-      rig.cameras.push_back(cam);
-    }
-    rig.name = "wand";
+    rig = std::move(*rough);
     settings.search_focal = true;
     spdlog::info("no --intrinsics: starting from the image centre and no distortion, searching the focal length");
   }
@@ -204,31 +245,7 @@ int run(const WandOptions& o) {
     spdlog::error("{}: cannot append the report", o.out);
     return 1;
   }
-  const std::filesystem::path dir = pictures_dir(o.pictures, o.out);
-  const std::string stem = std::filesystem::path(o.out).stem().string();
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  nlohmann::json pictures = nlohmann::json::array();
-  for (std::size_t c = 0; c < result->rig.cameras.size(); ++c) {
-    const Camera& cam = result->rig.cameras[c];
-    const std::filesystem::path file = dir / (stem + "_" + cam.name + "_residuals.png");
-    char title[160];
-    std::snprintf(title, sizeof title, "%s: %.3f px RMS, %d points, %d outliers", cam.name.c_str(), result->report.cameras[c].rms_px,
-                  result->report.cameras[c].inliers, result->report.cameras[c].outliers);
-    if (const auto ok = write_residual_picture(file, cam.intrinsics.width_px, cam.intrinsics.height_px, result->residuals[c], 50.0, title);
-        !ok) {
-      spdlog::warn("{}", ok.error());
-    } else {
-      pictures.push_back(file.string());
-    }
-  }
-  const std::filesystem::path top = dir / (stem + "_top.png");
-  if (const auto ok = write_rig_top_view(top, result->rig, result->points_world, result->rig.name.empty() ? "rig" : result->rig.name);
-      !ok) {
-    spdlog::warn("{}", ok.error());
-  } else {
-    pictures.push_back(top.string());
-  }
+  const nlohmann::json pictures = write_pictures(*result, o);
   spdlog::info("{}: {} cameras, {:.3f} px RMS{}", o.out, result->rig.cameras.size(), result->report.rms_px,
                result->report.metric ? fmt::format(", wand {:.3f} mm RMS", result->report.wand_rms_mm) : std::string(", not metric"));
   if (o.json) {
