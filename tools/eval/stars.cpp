@@ -139,6 +139,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   rhot::StarSet in_use = *set;
   in_use.stars.resize(static_cast<std::size_t>(bodies));
   rhot::StarTracker tracker{rhot::StarLibrary(in_use)};
+  rhot::PixelSigmaEstimate pixel_sigma;
 
   long identifiable = 0;  // body-frames with three or more of the body's markers triangulated
   long correct = 0;       // ... among them, the body's star reported at the body's markers
@@ -149,12 +150,14 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   std::vector<double> ms;
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
-    const LabelledPoints labelled = label_points(frame, rhot::match_and_triangulate(*rig, frame), bodies);
+    const std::vector<rhot::MatchedPoint> matched = rhot::match_and_triangulate(*rig, frame);
+    const LabelledPoints labelled = label_points(frame, matched, bodies);
     const std::vector<Eigen::Vector3d>& points = labelled.points;
     const std::vector<int>& point_body = labelled.body;
     const std::vector<int>& clean = labelled.clean;
     const auto start = std::chrono::steady_clock::now();
-    const auto& tracked = tracker.update(frame.time_s, points);
+    const std::vector<double> sigmas = rhot::point_sigmas_m(matched, pixel_sigma.update(matched));
+    const auto& tracked = tracker.update(frame.time_s, points, sigmas);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     for (int b = 0; b < bodies; ++b) identifiable += clean[static_cast<std::size_t>(b)] >= 3 ? 1 : 0;
     for (const rhot::TrackedStar& t : tracked) {

@@ -122,6 +122,38 @@ std::optional<Eigen::Vector3d> ray_midpoint(const Eigen::Vector3d& o1, const Eig
 
 }  // namespace
 
+std::optional<double> estimate_pixel_sigma(std::span<const MatchedPoint> points) {
+  double sum = 0.0;
+  double dof = 0.0;
+  for (const MatchedPoint& m : points) {
+    const auto n = static_cast<double>(m.observations.size());
+    if (n < 2.0) continue;
+    sum += n * m.point.reprojection_rms_px * m.point.reprojection_rms_px;
+    dof += 2.0 * n - 3.0;
+  }
+  if (dof <= 0.0) return std::nullopt;
+  return std::sqrt(sum / dof);
+}
+
+double PixelSigmaEstimate::update(std::span<const MatchedPoint> points) {
+  if (const auto now = estimate_pixel_sigma(points)) {
+    // The first frames average evenly, later ones exponentially.
+    ++seen_;
+    const double weight = 1.0 / std::min(static_cast<double>(seen_), frames_);
+    variance_ += weight * (*now * *now - variance_);
+  }
+  return sigma_px();
+}
+
+double PixelSigmaEstimate::sigma_px() const { return std::max(std::sqrt(variance_), floor_px_); }
+
+std::vector<double> point_sigmas_m(std::span<const MatchedPoint> points, double sigma_px) {
+  std::vector<double> out;
+  out.reserve(points.size());
+  for (const MatchedPoint& m : points) out.push_back(m.point.sigma_m_per_px * sigma_px);
+  return out;
+}
+
 int truth_marker(const RigFrame& frame, const MatchedPoint& point) {
   int marker = -1;
   for (std::size_t k = 0; k < point.observations.size(); ++k) {

@@ -22,6 +22,8 @@
 // of view). A marker hidden by occlusion from most cameras that could see it is refused like a
 // ghost: the rule cannot tell the two apart.
 
+#include <optional>
+#include <span>
 #include <vector>
 
 #include "tracking/camera/Camera.h"
@@ -46,6 +48,33 @@ struct MatchedPoint {
 // The ground-truth marker a matched point belongs to (simulated frames only): -1 when its
 // detections come from different markers (a ghost or a mix-up) or carry no truth.
 int truth_marker(const RigFrame& frame, const MatchedPoint& point);
+
+// The detection noise (pixels per axis) that explains the points' reprojection residuals: a
+// point refined from n cameras keeps 2n - 3 of its 2n residuals' degrees of freedom, so
+// sum(n rms^2) / sum(2n - 3) over the points estimates sigma^2. It includes whatever else moves
+// detections off the rig's model (calibration error, unsynchronised exposures). Nothing when no
+// point has a degree of freedom left.
+std::optional<double> estimate_pixel_sigma(std::span<const MatchedPoint> points);
+
+// The detection noise over time: each frame's estimate_pixel_sigma averaged with a time constant
+// of `frames` frames, never below floor_px (detections are never better than that in practice).
+class PixelSigmaEstimate {
+ public:
+  explicit PixelSigmaEstimate(double frames = 30.0, double floor_px = 0.1, double initial_px = 0.5)
+      : frames_(frames), floor_px_(floor_px), variance_(initial_px * initial_px) {}
+  // This frame's points in, the estimate (pixels) out.
+  double update(std::span<const MatchedPoint> points);
+  double sigma_px() const;
+
+ private:
+  double frames_;
+  double floor_px_;
+  double variance_;
+  int seen_ = 0;
+};
+
+// Per point its standard deviation per axis (metres) under sigma_px of detection noise.
+std::vector<double> point_sigmas_m(std::span<const MatchedPoint> points, double sigma_px);
 
 // Precondition: frame.cameras[i].camera == i for every camera of the rig.
 std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings = {});

@@ -1,5 +1,6 @@
 #include "tracking/geometry/Triangulation.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/LU>
@@ -84,11 +85,11 @@ std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> 
     }
     out.max_residual_px = std::sqrt(out.max_residual_px);
     out.reprojection_rms_px = std::sqrt(sum / static_cast<double>(observations.size()));
-    if (it >= max_iterations) break;
     Eigen::Matrix3d inverse;
     bool invertible = false;
     jtj.computeInverseWithCheck(inverse, invertible, 1e-300);
-    if (!invertible) break;
+    out.sigma_m_per_px = invertible ? std::sqrt(std::max(inverse.trace(), 0.0) / 3.0) : 0.0;
+    if (it >= max_iterations || !invertible) break;
     const Eigen::Vector3d step = inverse * jtr;
     if (!step.allFinite() || step.norm() < 1e-9) break;
     out.position_world += step;

@@ -25,6 +25,10 @@ struct TriangulatedPoint {
   double max_residual_px = 0.0;  // the largest observation's residual
   int worst_observation = 0;     // which observation (index into the observations given) that was
   std::vector<int> cameras;      // which cameras saw it
+  // The point's error per axis (RMS over x, y, z, metres) per pixel of detection noise: the
+  // Cramer-Rao bound sqrt(trace((J^T J)^-1) / 3) at the point. Times the pixel noise, the point's
+  // uncertainty; 0 when the cameras cannot fix it.
+  double sigma_m_per_px = 0.0;
 };
 
 // Linear (DLT) estimate from two or more observations, or nothing when the rays are degenerate

@@ -17,6 +17,11 @@ StarLibrary::StarLibrary(const StarSet& set, const StarIdentificationSettings& s
     Star star;
     star.id = set.stars[s].id;
     for (std::size_t m = 0; m < 4; ++m) star.markers_m[m] = set.stars[s].markers_mm[m] * 1e-3;
+    std::array<double, 16> distances{};
+    for (std::size_t a = 0; a < 4; ++a) {
+      for (std::size_t b = 0; b < 4; ++b) distances[4 * a + b] = (star.markers_m[a] - star.markers_m[b]).norm();
+    }
+    edge_.push_back(distances);
     for (const auto& e : kStarEdges) {
       const double length = (star.markers_m[static_cast<std::size_t>(e[0])] - star.markers_m[static_cast<std::size_t>(e[1])]).norm();
       edge_lengths_.push_back(length);
@@ -45,75 +50,109 @@ StarLibrary::StarLibrary(const StarSet& set, const StarIdentificationSettings& s
   std::sort(edge_lengths_.begin(), edge_lengths_.end());
 }
 
-const StarLibrary::Face* StarLibrary::find_face(const std::array<double, 3>& e) const {
-  auto it = std::lower_bound(faces_.begin(), faces_.end(), e[0] - tolerance_m_, [](const Face& f, double v) { return f.edges[0] < v; });
-  for (; it != faces_.end() && it->edges[0] <= e[0] + tolerance_m_; ++it) {
-    if (std::abs(it->edges[1] - e[1]) <= tolerance_m_ && std::abs(it->edges[2] - e[2]) <= tolerance_m_) return &*it;
+void StarLibrary::find_faces(const std::array<double, 3>& e, double tolerance_m, std::vector<const Face*>& out) const {
+  out.clear();
+  auto it = std::lower_bound(faces_.begin(), faces_.end(), e[0] - tolerance_m, [](const Face& f, double v) { return f.edges[0] < v; });
+  for (; it != faces_.end() && it->edges[0] <= e[0] + tolerance_m; ++it) {
+    if (std::abs(it->edges[1] - e[1]) <= tolerance_m && std::abs(it->edges[2] - e[2]) <= tolerance_m) out.push_back(&*it);
   }
-  return nullptr;
 }
 
-bool StarLibrary::is_edge_length(double length_m) const {
-  const auto it = std::lower_bound(edge_lengths_.begin(), edge_lengths_.end(), length_m - tolerance_m_);
-  return it != edge_lengths_.end() && *it <= length_m + tolerance_m_;
+bool StarLibrary::is_edge_length(double length_m, double tolerance_m) const {
+  const auto it = std::lower_bound(edge_lengths_.begin(), edge_lengths_.end(), length_m - tolerance_m);
+  return it != edge_lengths_.end() && *it <= length_m + tolerance_m;
+}
+
+double chi2_limit(int dof) {
+  if (dof <= 0) return 0.0;
+  // Wilson-Hilferty: (chi2 / k)^(1/3) is nearly normal with mean 1 - 2 / 9k, variance 2 / 9k.
+  const double k = dof;
+  const double z = 3.719;  // the normal's upper 1e-4 quantile
+  const double c = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
+  return k * c * c * c;
+}
+
+StarPoints star_points(const StarLibrary& library, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m) {
+  return StarPoints{points_world, sigma_m, library.settings().point_sigma_m};
+}
+
+double edge_chi2(const StarLibrary& library, int star, const std::array<int, 4>& point, const StarPoints& points, int* edges) {
+  double chi2 = 0.0;
+  int count = 0;
+  for (const auto& e : kStarEdges) {
+    const int a = point[static_cast<std::size_t>(e[0])], b = point[static_cast<std::size_t>(e[1])];
+    if (a < 0 || b < 0) continue;
+    const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+    const double measured = (points[ua] - points[ub]).norm();
+    const double difference = measured - library.edge_m(star, e[0], e[1]);
+    chi2 += difference * difference / (points.sigma(ua) * points.sigma(ua) + points.sigma(ub) * points.sigma(ub));
+    ++count;
+  }
+  if (edges) *edges = count;
+  return chi2;
 }
 
 namespace {
 
-// The largest difference between a measured edge and the model's, over the seen markers.
-double worst_edge_error(const StarLibrary::Star& s, const std::array<int, 4>& point, std::span<const Eigen::Vector3d> points) {
-  double worst = 0.0;
+// Whether every edge between the seen markers is within the larger of the library's edge check and
+// gate_sigmas standard deviations of the model's.
+bool edges_agree(const StarLibrary& library, int star, const std::array<int, 4>& point, const StarPoints& points) {
+  const double gate = library.settings().gate_sigmas;
   for (const auto& e : kStarEdges) {
     const int a = point[static_cast<std::size_t>(e[0])], b = point[static_cast<std::size_t>(e[1])];
     if (a < 0 || b < 0) continue;
-    const double measured = (points[static_cast<std::size_t>(a)] - points[static_cast<std::size_t>(b)]).norm();
-    const double model = (s.markers_m[static_cast<std::size_t>(e[0])] - s.markers_m[static_cast<std::size_t>(e[1])]).norm();
-    worst = std::max(worst, std::abs(measured - model));
+    const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+    const double difference = std::abs((points[ua] - points[ub]).norm() - library.edge_m(star, e[0], e[1]));
+    const double sd = std::sqrt(points.sigma(ua) * points.sigma(ua) + points.sigma(ub) * points.sigma(ub));
+    if (difference > std::max(library.edge_check_m(), gate * sd)) return false;
   }
-  return worst;
+  return true;
 }
 
 }  // namespace
 
-std::array<int, 4> best_correspondence(const StarLibrary& library, int star, std::span<const int> point_indices,
-                                       std::span<const Eigen::Vector3d> points_world) {
+std::array<int, 4> best_correspondence(const StarLibrary& library, int star, std::span<const int> point_indices, const StarPoints& points) {
   std::array<int, 4> best{-1, -1, -1, -1};
   if (point_indices.size() < 3 || point_indices.size() > 4) return best;
-  const StarLibrary::Star& s = library.stars()[static_cast<std::size_t>(star)];
   std::array<int, 4> marker_of{0, 1, 2, 3};  // point k is marker marker_of[k]
-  double best_error = std::numeric_limits<double>::infinity();
+  double best_chi2 = std::numeric_limits<double>::infinity();
   do {
     std::array<int, 4> point{-1, -1, -1, -1};
     for (std::size_t k = 0; k < point_indices.size(); ++k) point[static_cast<std::size_t>(marker_of[k])] = point_indices[k];
-    const double error = worst_edge_error(s, point, points_world);
-    if (error < best_error) {
-      best_error = error;
+    const double chi2 = edge_chi2(library, star, point, points);
+    if (chi2 < best_chi2) {
+      best_chi2 = chi2;
       best = point;
     }
   } while (std::next_permutation(marker_of.begin(), marker_of.end()));
   return best;
 }
 
-std::optional<IdentifiedStar> fit_star(const StarLibrary& library, int star, const std::array<int, 4>& point,
-                                       std::span<const Eigen::Vector3d> points_world) {
-  if (worst_edge_error(library.stars()[static_cast<std::size_t>(star)], point, points_world) > library.edge_check_m()) return std::nullopt;
+std::optional<IdentifiedStar> fit_star(const StarLibrary& library, int star, const std::array<int, 4>& point, const StarPoints& points) {
+  if (!edges_agree(library, star, point, points)) return std::nullopt;
   std::array<Eigen::Vector3d, 4> model;
   std::array<Eigen::Vector3d, 4> measured;
+  std::array<double, 4> sigma{};
   std::size_t n = 0;
   const StarLibrary::Star& s = library.stars()[static_cast<std::size_t>(star)];
   for (std::size_t m = 0; m < 4; ++m) {
     if (point[m] < 0) continue;
     model[n] = s.markers_m[m];
-    measured[n] = points_world[static_cast<std::size_t>(point[m])];
+    measured[n] = points[static_cast<std::size_t>(point[m])];
+    sigma[n] = points.sigma(static_cast<std::size_t>(point[m]));
     ++n;
   }
   const auto fit = fit_rigid(std::span(model.data(), n), std::span(measured.data(), n));
-  const StarIdentificationSettings& settings = library.settings();
-  if (!fit || fit->rms_m > settings.max_rms_m || std::abs(fit->scale - 1.0) > settings.max_scale_error) return std::nullopt;
+  if (!fit) return std::nullopt;
+  // The residual's chi-square: 3n coordinates less the six of the pose.
+  double residual_chi2 = 0.0;
+  for (std::size_t k = 0; k < n; ++k) residual_chi2 += (fit->to_from_from * model[k] - measured[k]).squaredNorm() / (sigma[k] * sigma[k]);
+  if (residual_chi2 > chi2_limit(3 * static_cast<int>(n) - 6)) return std::nullopt;
   IdentifiedStar out;
   out.star = star;
   out.world_from_star = fit->to_from_from;
   out.rms_m = fit->rms_m;
+  out.chi2 = edge_chi2(library, star, point, points);
   out.point = point;
   out.markers_seen = static_cast<int>(n);
   return out;
@@ -125,9 +164,18 @@ namespace {
 // along x).
 using Neighbours = std::vector<std::vector<std::pair<int, double>>>;
 
-Neighbours edge_candidates(const StarLibrary& library, std::span<const Eigen::Vector3d> points) {
+// The tolerance of an edge between two points: gate_sigmas standard deviations of its length, at
+// least the library's least tolerance.
+double edge_tolerance(const StarLibrary& library, const StarPoints& points, std::size_t a, std::size_t b) {
+  const double sd = std::sqrt(points.sigma(a) * points.sigma(a) + points.sigma(b) * points.sigma(b));
+  return std::max(library.edge_tolerance_m(), library.settings().gate_sigmas * sd);
+}
+
+Neighbours edge_candidates(const StarLibrary& library, const StarPoints& points) {
   const std::size_t n = points.size();
-  const double reach = library.longest_edge_m() + library.edge_tolerance_m();
+  double largest_sigma = 0.0;
+  for (std::size_t i = 0; i < n; ++i) largest_sigma = std::max(largest_sigma, points.sigma(i));
+  const double reach = library.longest_edge_m() + std::max(library.edge_tolerance_m(), library.settings().gate_sigmas * std::sqrt(2.0) * largest_sigma);
   std::vector<std::size_t> by_x(n);
   for (std::size_t i = 0; i < n; ++i) by_x[i] = i;
   std::sort(by_x.begin(), by_x.end(), [&](std::size_t a, std::size_t b) { return points[a].x() < points[b].x(); });
@@ -137,7 +185,7 @@ Neighbours edge_candidates(const StarLibrary& library, std::span<const Eigen::Ve
     if (!p.allFinite()) continue;
     for (std::size_t b = a + 1; b < n && points[by_x[b]].x() - p.x() <= reach; ++b) {
       const double d = (points[by_x[b]] - p).norm();
-      if (!library.is_edge_length(d)) continue;
+      if (!library.is_edge_length(d, edge_tolerance(library, points, by_x[a], by_x[b]))) continue;
       neighbours[by_x[a]].emplace_back(static_cast<int>(by_x[b]), d);
       neighbours[by_x[b]].emplace_back(static_cast<int>(by_x[a]), d);
     }
@@ -152,15 +200,17 @@ struct Hypotheses {
 
 // A three-marker fit with its fourth marker added where the three put it, if a point is there and
 // the four still fit; else the three.
-IdentifiedStar with_fourth_marker(const StarLibrary& library, const IdentifiedStar& three, std::span<const Eigen::Vector3d> points) {
+IdentifiedStar with_fourth_marker(const StarLibrary& library, const IdentifiedStar& three, const StarPoints& points) {
   const std::array<int, 4>& point = three.point;
   const auto missing = static_cast<std::size_t>(std::find(point.begin(), point.end(), -1) - point.begin());
   const Eigen::Vector3d predicted = three.world_from_star * library.stars()[static_cast<std::size_t>(three.star)].markers_m[missing];
   int best = -1;
-  double best_d = library.settings().fourth_marker_gate_m;
+  double best_d = std::numeric_limits<double>::infinity();
   for (std::size_t q = 0; q < points.size(); ++q) {
     const double d = (points[q] - predicted).norm();
-    if (d <= best_d && static_cast<int>(q) != point[0] && static_cast<int>(q) != point[1] && static_cast<int>(q) != point[2] &&
+    // The prediction carries the three's error too: about twice a point's.
+    const double gate = std::max(library.settings().fourth_marker_gate_m, 2.0 * library.settings().gate_sigmas * points.sigma(q));
+    if (d <= gate && d < best_d && static_cast<int>(q) != point[0] && static_cast<int>(q) != point[1] && static_cast<int>(q) != point[2] &&
         static_cast<int>(q) != point[3]) {
       best_d = d;
       best = static_cast<int>(q);
@@ -174,8 +224,9 @@ IdentifiedStar with_fourth_marker(const StarLibrary& library, const IdentifiedSt
   return three;
 }
 
-// Hypotheses from every candidate triangle (i < j < k) that is a face of the set.
-Hypotheses face_hypotheses(const StarLibrary& library, std::span<const Eigen::Vector3d> points, const Neighbours& neighbours) {
+// Hypotheses from every candidate triangle (i < j < k) that is a face of the set: per triangle, of
+// the stars with a matching face, the reading whose edges match best.
+Hypotheses face_hypotheses(const StarLibrary& library, const StarPoints& points, const Neighbours& neighbours) {
   auto distance_between = [&](int i, int j) -> double {
     for (const auto& [k, d] : neighbours[static_cast<std::size_t>(i)]) {
       if (k == j) return d;
@@ -183,6 +234,7 @@ Hypotheses face_hypotheses(const StarLibrary& library, std::span<const Eigen::Ve
     return -1.0;
   };
   Hypotheses out;
+  std::vector<const StarLibrary::Face*> faces;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto& ni = neighbours[i];
     for (std::size_t x = 0; x < ni.size(); ++x) {
@@ -193,23 +245,39 @@ Hypotheses face_hypotheses(const StarLibrary& library, std::span<const Eigen::Ve
         if (k <= j) continue;
         const double djk = distance_between(j, k);
         if (djk < 0.0) continue;
-        // Edge opposite each point: i -> jk, j -> ik, k -> ij.
-        std::array<std::pair<double, int>, 3> opposite{{{djk, static_cast<int>(i)}, {ni[y].second, j}, {ni[x].second, k}}};
-        std::sort(opposite.begin(), opposite.end());
-        const StarLibrary::Face* face = library.find_face({opposite[0].first, opposite[1].first, opposite[2].first});
-        if (face == nullptr) continue;
+        std::array<double, 3> sorted{djk, ni[y].second, ni[x].second};
+        std::sort(sorted.begin(), sorted.end());
+        const double tolerance = std::max({edge_tolerance(library, points, i, static_cast<std::size_t>(j)),
+                                           edge_tolerance(library, points, i, static_cast<std::size_t>(k)),
+                                           edge_tolerance(library, points, static_cast<std::size_t>(j), static_cast<std::size_t>(k))});
+        library.find_faces(sorted, tolerance, faces);
+        if (faces.empty()) continue;
+        // Under noise the order of nearly equal edges is not the face's: every correspondence of
+        // the three points to each matching star's markers is weighed.
+        const std::array<int, 3> triangle{static_cast<int>(i), j, k};
+        int best_star = -1;
         std::array<int, 4> point{-1, -1, -1, -1};
-        for (std::size_t e = 0; e < 3; ++e) point[static_cast<std::size_t>(face->marker[e])] = opposite[e].second;
+        double best_chi2 = std::numeric_limits<double>::infinity();
+        for (const StarLibrary::Face* face : faces) {
+          if (face->star == best_star) continue;
+          const std::array<int, 4> p = best_correspondence(library, face->star, triangle, points);
+          const double chi2 = edge_chi2(library, face->star, p, points);
+          if (chi2 < best_chi2) {
+            best_chi2 = chi2;
+            best_star = face->star;
+            point = p;
+          }
+        }
         // Another face of a star already found with these markers: more support, no new fit.
         bool known = false;
         for (std::size_t h = 0; h < out.stars.size() && !known; ++h) {
-          if (out.stars[h].star != face->star || out.stars[h].markers_seen != 4) continue;
+          if (out.stars[h].star != best_star || out.stars[h].markers_seen != 4) continue;
           known = true;
           for (std::size_t m = 0; m < 4; ++m) known = known && (point[m] < 0 || point[m] == out.stars[h].point[m]);
           if (known) ++out.support[h];
         }
         if (known) continue;
-        auto three = fit_star(library, face->star, point, points);
+        auto three = fit_star(library, best_star, point, points);
         if (!three) continue;
         out.stars.push_back(with_fourth_marker(library, *three, points));
         out.support.push_back(1);
@@ -244,7 +312,7 @@ Hypotheses merge_duplicates(const Hypotheses& found) {
 // Choosing among conflicting hypotheses (sharing a point, or one star at two places): a chance
 // triangle takes points from two or three real stars, so it conflicts with more hypotheses than
 // a real star does. Repeatedly take the hypothesis with the most markers, then the most support,
-// then the fewest conflicts left, then the smallest residual; drop what it conflicts with.
+// then the fewest conflicts left, then the best matching edges; drop what it conflicts with.
 std::vector<IdentifiedStar> resolve_conflicts(const Hypotheses& hypotheses) {
   const std::vector<IdentifiedStar>& stars = hypotheses.stars;
   const std::size_t h = stars.size();
@@ -277,8 +345,8 @@ std::vector<IdentifiedStar> resolve_conflicts(const Hypotheses& hypotheses) {
       }
       const IdentifiedStar& x = stars[a];
       const IdentifiedStar& y = stars[best];
-      if (std::make_tuple(-x.markers_seen, -hypotheses.support[a], degree[a], x.rms_m) <
-          std::make_tuple(-y.markers_seen, -hypotheses.support[best], degree[best], y.rms_m)) {
+      if (std::make_tuple(-x.markers_seen, -hypotheses.support[a], degree[a], x.chi2) <
+          std::make_tuple(-y.markers_seen, -hypotheses.support[best], degree[best], y.chi2)) {
         best = a;
       }
     }
@@ -296,7 +364,7 @@ std::vector<IdentifiedStar> resolve_conflicts(const Hypotheses& hypotheses) {
 
 }  // namespace
 
-std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span<const Eigen::Vector3d> points) {
+std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, const StarPoints& points) {
   const Neighbours neighbours = edge_candidates(library, points);
   return resolve_conflicts(merge_duplicates(face_hypotheses(library, points, neighbours)));
 }

@@ -6,6 +6,8 @@
 
 #include <Eigen/Geometry>
 
+#include "tracking/rigid/RigidFit.h"
+
 namespace rhot {
 
 StarTracker::StarTracker(StarLibrary library, StarTrackerSettings settings) : library_(std::move(library)), settings_(settings) {
@@ -56,7 +58,134 @@ void StarTracker::accept(TrackedStar& s, const IdentifiedStar& fit, double time_
   s.last_seen_s = time_s;
 }
 
-const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<const Eigen::Vector3d> points) {
+StarTracker::Candidate StarTracker::start_candidate(const IdentifiedStar& found, const StarPoints& points, double time_s) const {
+  Candidate c;
+  c.slot_point = found.point;
+  c.motion.star = found.star;
+  c.motion.id = library_.stars()[static_cast<std::size_t>(found.star)].id;
+  c.motion.world_from_star = found.world_from_star;
+  c.motion.markers_seen = found.markers_seen;
+  c.motion.point = found.point;
+  c.motion.frames_since_seen = 0;
+  c.motion.last_seen_s = time_s;
+  // Every star of the set, every correspondence of the slots to its markers.
+  for (std::size_t star = 0; star < library_.stars().size(); ++star) {
+    std::array<int, 4> marker{0, 1, 2, 3};
+    do {
+      c.readings.push_back({static_cast<int>(star), marker, 0.0});
+    } while (std::next_permutation(marker.begin(), marker.end()));
+  }
+  weigh(c, points);
+  return c;
+}
+
+void StarTracker::weigh(Candidate& c, const StarPoints& points) const {
+  for (Reading& r : c.readings) {
+    for (const auto& e : kStarEdges) {
+      const int a = c.slot_point[static_cast<std::size_t>(e[0])], b = c.slot_point[static_cast<std::size_t>(e[1])];
+      if (a < 0 || b < 0) continue;
+      const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+      const double d = (points[ua] - points[ub]).norm() -
+                       library_.edge_m(r.star, r.slot_marker[static_cast<std::size_t>(e[0])], r.slot_marker[static_cast<std::size_t>(e[1])]);
+      r.chi2 += d * d / (points.sigma(ua) * points.sigma(ua) + points.sigma(ub) * points.sigma(ub));
+    }
+  }
+  std::sort(c.readings.begin(), c.readings.end(), [](const Reading& x, const Reading& y) { return x.chi2 < y.chi2; });
+  const double best = c.readings.front().chi2;
+  std::erase_if(c.readings, [&](const Reading& r) { return r.chi2 > best + settings_.forget_chi2; });
+  double sum = 0.0;
+  for (const Reading& r : c.readings) sum += std::exp(-0.5 * (r.chi2 - best));
+  c.confidence = 1.0 / sum;
+  ++c.frames;
+  // The pose is the best reading's.
+  const Reading& r = c.readings.front();
+  std::array<int, 4> point{-1, -1, -1, -1};
+  for (std::size_t slot = 0; slot < 4; ++slot) point[static_cast<std::size_t>(r.slot_marker[slot])] = c.slot_point[slot];
+  std::array<Eigen::Vector3d, 4> model;
+  std::array<Eigen::Vector3d, 4> measured;
+  std::size_t n = 0;
+  for (std::size_t m = 0; m < 4; ++m) {
+    if (point[m] < 0) continue;
+    model[n] = library_.stars()[static_cast<std::size_t>(r.star)].markers_m[m];
+    measured[n++] = points[static_cast<std::size_t>(point[m])];
+  }
+  if (const auto fit = fit_rigid(std::span(model.data(), n), std::span(measured.data(), n))) {
+    c.motion.star = r.star;
+    c.motion.id = library_.stars()[static_cast<std::size_t>(r.star)].id;
+    c.motion.world_from_star = fit->to_from_from;
+    c.motion.rms_m = fit->rms_m;
+    c.motion.point = point;
+    c.motion.markers_seen = static_cast<int>(n);
+  }
+}
+
+bool StarTracker::follow(Candidate& c, const StarPoints& points, std::vector<bool>& taken, double time_s) const {
+  const Rigid3d predicted = predict(c.motion, time_s);
+  const Reading& best = c.readings.front();
+  const double since = time_s - c.motion.last_seen_s;
+  struct Pairing {
+    double d;
+    int slot, point;
+  };
+  std::vector<Pairing> pairings;
+  for (std::size_t slot = 0; slot < 4; ++slot) {
+    const Eigen::Vector3d at =
+        predicted * library_.stars()[static_cast<std::size_t>(best.star)].markers_m[static_cast<std::size_t>(best.slot_marker[slot])];
+    for (std::size_t q = 0; q < points.size(); ++q) {
+      if (taken[q]) continue;
+      const double gate = settings_.gate_m + 0.5 * settings_.max_acceleration_m_s2 * since * since +
+                          settings_.gate_sigmas * std::sqrt(3.0) * points.sigma(q);
+      const double d = (points[q] - at).norm();
+      if (d <= gate) pairings.push_back({d, static_cast<int>(slot), static_cast<int>(q)});
+    }
+  }
+  std::sort(pairings.begin(), pairings.end(), [](const Pairing& a, const Pairing& b) { return a.d < b.d; });
+  std::array<int, 4> slot_point{-1, -1, -1, -1};
+  std::vector<int> used;
+  for (const Pairing& p : pairings) {
+    if (slot_point[static_cast<std::size_t>(p.slot)] >= 0 || std::find(used.begin(), used.end(), p.point) != used.end()) continue;
+    slot_point[static_cast<std::size_t>(p.slot)] = p.point;
+    used.push_back(p.point);
+  }
+  if (used.size() < 3) return false;
+  // The constellation must still be rigid as its best reading says.
+  std::array<int, 4> point{-1, -1, -1, -1};
+  for (std::size_t slot = 0; slot < 4; ++slot) point[static_cast<std::size_t>(best.slot_marker[slot])] = slot_point[slot];
+  const auto fit = fit_star(library_, best.star, point, points);
+  if (!fit) return false;
+  const Rigid3d before = c.motion.world_from_star;
+  c.slot_point = slot_point;
+  weigh(c, points);
+  if (since > 1e-6) {
+    c.motion.velocity_m_s = (c.motion.world_from_star.translation - before.translation) / since;
+    const Eigen::AngleAxisd turn(c.motion.world_from_star.rotation * before.rotation.conjugate());
+    c.motion.angular_velocity_rad_s = turn.axis() * turn.angle() / since;
+  }
+  c.motion.last_seen_s = time_s;
+  for (const int q : used) taken[static_cast<std::size_t>(q)] = true;
+  return true;
+}
+
+bool StarTracker::may_settle(const Candidate& c, const std::vector<bool>& updated, const std::vector<Rigid3d>& predicted, double time_s) const {
+  const auto s = static_cast<std::size_t>(c.motion.star);
+  if (updated[s]) return false;  // the star is already somewhere else this frame
+  if (c.confidence < settings_.min_confidence) return false;
+  if (c.motion.markers_seen < 4 && c.frames < settings_.confirm_frames) return false;
+  // A label swap: these markers sit where another star, seen moments ago, is predicted.
+  for (std::size_t o = 0; o < stars_.size(); ++o) {
+    if (o != s && recent_and_confirmed(stars_[o]) && !updated[o] &&
+        (predicted[o].translation - c.motion.world_from_star.translation).norm() < settings_.swap_distance_m) {
+      return false;
+    }
+  }
+  const TrackedStar& before = stars_[s];
+  return !(before.confirmed && before.frames_since_seen >= 0 &&
+           (c.motion.world_from_star.translation - before.world_from_star.translation).norm() >
+               settings_.gate_m + settings_.max_speed_m_s * (time_s - before.last_seen_s));
+}
+
+const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<const Eigen::Vector3d> positions, std::span<const double> sigma_m) {
+  const StarPoints points = star_points(library_, positions, sigma_m);
   const std::size_t n = points.size();
   std::vector<bool> taken(n, false);
   std::vector<bool> updated(stars_.size(), false);
@@ -77,7 +206,7 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
       const Eigen::Vector3d at = predicted[s] * library_.stars()[s].markers_m[static_cast<std::size_t>(m)];
       for (std::size_t q = 0; q < n; ++q) {
         const double d = (points[q] - at).norm();
-        if (d <= gate) pairings.push_back({d, static_cast<int>(s), m, static_cast<int>(q)});
+        if (d <= gate + settings_.gate_sigmas * std::sqrt(3.0) * points.sigma(q)) pairings.push_back({d, static_cast<int>(s), m, static_cast<int>(q)});
       }
     }
   }
@@ -99,14 +228,13 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
       if (p >= 0) mine.push_back(p);
     }
     std::optional<IdentifiedStar> fit;
-    if (mine.size() >= 3)
-      fit = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), mine, points), points);
+    if (mine.size() >= 3) fit = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), mine, points), points);
     // One of four points may be wrong (two markers merged into one point): the best three.
     for (std::size_t drop = 0; !fit && mine.size() == 4 && drop < 4; ++drop) {
       std::vector<int> three = mine;
       three.erase(three.begin() + static_cast<std::ptrdiff_t>(drop));
       auto f = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), three, points), points);
-      if (f && (!fit || f->rms_m < fit->rms_m)) fit = f;
+      if (f && (!fit || f->chi2 < fit->chi2)) fit = f;
     }
     if (!fit) continue;
     // A fit turned far from the prediction took the wrong markers for the right ones.
@@ -118,40 +246,62 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
     }
   }
 
-  // 2. Identification from scratch on the points left, for the stars not yet found.
+  // 2. Candidates: followed, weighed, and settled as a star once sure.
+  const auto settle = [&](const Candidate& c) {
+    const auto s = static_cast<std::size_t>(c.motion.star);
+    IdentifiedStar fit;
+    fit.star = c.motion.star;
+    fit.world_from_star = c.motion.world_from_star;
+    fit.rms_m = c.motion.rms_m;
+    fit.point = c.motion.point;
+    fit.markers_seen = c.motion.markers_seen;
+    stars_[s].frames_since_seen = -1;  // velocities start from the candidate's, not a jump from the past
+    accept(stars_[s], fit, time_s);
+    stars_[s].velocity_m_s = c.motion.velocity_m_s;
+    stars_[s].angular_velocity_rad_s = c.motion.angular_velocity_rad_s;
+    stars_[s].confirmed = true;
+    stars_[s].confidence = c.confidence;
+    stars_[s].frames_followed = c.frames;
+    updated[s] = true;
+  };
+  std::vector<Candidate> kept;
+  for (Candidate& c : candidates_) {
+    if (c.frames >= settings_.max_candidate_frames || !follow(c, points, taken, time_s)) continue;
+    if (may_settle(c, updated, predicted, time_s)) {
+      settle(c);
+      continue;
+    }
+    kept.push_back(std::move(c));
+  }
+  candidates_ = std::move(kept);
+
+  // 3. Identification from scratch on the points left: each find a candidate.
   std::vector<Eigen::Vector3d> rest;
+  std::vector<double> rest_sigma;
   std::vector<int> rest_index;
   for (std::size_t q = 0; q < n; ++q) {
     if (taken[q]) continue;
     rest.push_back(points[q]);
+    rest_sigma.push_back(points.sigma(q));
     rest_index.push_back(static_cast<int>(q));
   }
-  for (IdentifiedStar found : identify_stars(library_, rest)) {
-    const auto s = static_cast<std::size_t>(found.star);
-    if (updated[s]) continue;
-    // A label swap: these markers sit where another star, seen moments ago, is predicted.
-    bool swap = false;
-    for (std::size_t o = 0; o < stars_.size() && !swap; ++o) {
-      swap = o != s && recent_and_confirmed(stars_[o]) && !updated[o] &&
-             (predicted[o].translation - found.world_from_star.translation).norm() < settings_.swap_distance_m;
-    }
-    if (swap) continue;
-    const TrackedStar& before = stars_[s];
-    if (before.confirmed && before.frames_since_seen >= 0 &&
-        (found.world_from_star.translation - before.world_from_star.translation).norm() >
-            settings_.gate_m + settings_.max_speed_m_s * (time_s - before.last_seen_s)) {
-      continue;
-    }
-    // Found afresh from three markers, not where and how it was heading: tentative again.
-    if (found.markers_seen < 4 && !(recent(stars_[s]) && near_prediction(stars_[s], predicted[s], found.world_from_star, time_s))) {
-      stars_[s].confirmed = false;
-      stars_[s].frames_since_seen = -1;
-    }
+  for (IdentifiedStar found : identify_stars(library_, star_points(library_, rest, rest_sigma))) {
     for (int& p : found.point) {
       if (p >= 0) p = rest_index[static_cast<std::size_t>(p)];
     }
-    accept(stars_[s], found, time_s);
-    updated[s] = true;
+    const auto s = static_cast<std::size_t>(found.star);
+    // A star seen moments ago found again where it was heading: itself, its identity known.
+    if (!updated[s] && recent_and_confirmed(stars_[s]) && near_prediction(stars_[s], predicted[s], found.world_from_star, time_s)) {
+      accept(stars_[s], found, time_s);
+      updated[s] = true;
+      continue;
+    }
+    Candidate c = start_candidate(found, points, time_s);
+    if (may_settle(c, updated, predicted, time_s)) {
+      settle(c);
+    } else {
+      candidates_.push_back(std::move(c));
+    }
   }
 
   for (std::size_t s = 0; s < stars_.size(); ++s) {
@@ -161,7 +311,7 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
     t.point = {-1, -1, -1, -1};
     t.frames_followed = 0;
     if (!t.confirmed) {
-      t.frames_since_seen = -1;  // a tentative star lost is forgotten
+      t.frames_since_seen = -1;
     } else if (t.frames_since_seen >= 0) {
       ++t.frames_since_seen;
     }

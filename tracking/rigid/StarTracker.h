@@ -1,17 +1,22 @@
 #pragma once
-// Marker stars over time: each star's pose every frame, kept through brief occlusions.
+// Marker stars over time: each star's pose every frame, kept through brief occlusions, and never
+// reported under a name it is not sure of.
 //
 // Every frame, stars seen recently are predicted forward at constant velocity (linear and
-// angular), their markers matched to the nearest free points inside a gate, and refitted; the
-// points left over go to identification from scratch (StarIdentification.h) for the stars not
-// found that way. A fresh identification that lands where another recently seen star is predicted
-// is refused: those are that star's markers, read as a similar star (a label swap).
+// angular), their markers matched to the nearest free points inside a gate that grows with the
+// points' uncertainty, and refitted. Points left over go to identification from scratch
+// (StarIdentification.h), whose every find starts a candidate: a constellation followed from
+// frame to frame like a star, while the evidence for each reading of it (every star of the set,
+// every correspondence of its markers) adds up as the chi-square of its edges against that star's.
+// A candidate becomes its best reading's star once that reading's posterior (all readings equally
+// likely at first) reaches min_confidence; with noisy points that takes several frames, with
+// precise ones one. Three markers of different objects can form a face of some star by chance,
+// so a candidate of three markers is also followed for `confirm_frames` frames first: a chance
+// triangle changes shape as the objects move and is dropped. Only confirmed stars count as seen.
 //
-// Three markers of different objects can form a face of some star by chance; four cannot, in
-// practice (six edges would have to match). So a star first found from three markers is tentative
-// until it has been followed for `confirm_frames` frames in a row (or shows its fourth marker): a
-// chance triangle changes shape as the objects move and is dropped. Only confirmed stars count as
-// seen.
+// A fresh identification that lands where another recently seen star is predicted is refused:
+// those are that star's markers, read as a similar star (a label swap); so is one farther from
+// where the star was last seen than it could have moved.
 
 #include <span>
 #include <vector>
@@ -39,6 +44,13 @@ struct StarTrackerSettings {
   // time since is refused: another constellation that happens to match its edges, since nothing a
   // hand carries moves that fast. (Once it has not been seen for a while, anywhere is reachable.)
   double max_speed_m_s = 5.0;
+  // How sure the tracker must be of a candidate's reading (its posterior among all readings) before
+  // the star counts as seen; readings this far behind the best in chi-square are forgotten.
+  double min_confidence = 0.999;
+  double forget_chi2 = 40.0;
+  int max_candidate_frames = 180;  // a candidate not settled by then is dropped (2 s at 90 Hz)
+  // A gate in metres grows by gate_sigmas times a point's standard deviation (per axis) times sqrt(3).
+  double gate_sigmas = 4.0;
 };
 
 struct TrackedStar {
@@ -52,8 +64,9 @@ struct TrackedStar {
   std::array<int, 4> point{-1, -1, -1, -1};  // this frame's points per marker
   int frames_since_seen = -1;                // 0: seen this frame; -1: never seen
   double last_seen_s = 0.0;
-  bool confirmed = false;   // false while a three-marker acquisition is being checked
+  bool confirmed = false;   // stays false until a candidate is settled as this star
   int frames_followed = 0;  // consecutive frames this star has been fitted
+  double confidence = 0.0;  // the posterior of its identity when it was settled
 
   // The pose is this frame's measurement of a confirmed star.
   bool seen_now() const { return confirmed && frames_since_seen == 0; }
@@ -63,10 +76,13 @@ class StarTracker {
  public:
   explicit StarTracker(StarLibrary library, StarTrackerSettings settings = {});
 
-  // One frame of triangulated points at time_s (non-decreasing). Returns every star of the set.
-  const std::vector<TrackedStar>& update(double time_s, std::span<const Eigen::Vector3d> points_world);
+  // One frame of triangulated points at time_s (non-decreasing), with each point's standard
+  // deviation per axis in metres (empty: the library's point_sigma_m). Returns every star of the set.
+  const std::vector<TrackedStar>& update(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m = {});
   const std::vector<TrackedStar>& stars() const { return stars_; }
   const StarLibrary& library() const { return library_; }
+  // Constellations being weighed (not yet any star).
+  std::size_t candidates() const { return candidates_.size(); }
 
  private:
   bool recent(const TrackedStar& s) const { return s.frames_since_seen >= 0 && s.frames_since_seen <= settings_.max_coast_frames; }
@@ -74,10 +90,30 @@ class StarTracker {
   Rigid3d predict(const TrackedStar& s, double time_s) const;
   bool near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s) const;
   void accept(TrackedStar& s, const IdentifiedStar& fit, double time_s);
+  // One reading of a candidate: its slots (markers of the star it was found as) are this star's
+  // markers slot_marker[slot]; chi2 adds up the evidence against it.
+  struct Reading {
+    int star = 0;
+    std::array<int, 4> slot_marker{};
+    double chi2 = 0.0;
+  };
+  struct Candidate {
+    TrackedStar motion;                     // the best reading's star, its pose and velocity
+    std::array<int, 4> slot_point{};        // this frame's points per slot
+    std::vector<Reading> readings;          // best first
+    int frames = 0;
+    double confidence = 0.0;
+  };
+  Candidate start_candidate(const IdentifiedStar& found, const StarPoints& points, double time_s) const;
+  void weigh(Candidate& c, const StarPoints& points) const;
+  bool follow(Candidate& c, const StarPoints& points, std::vector<bool>& taken, double time_s) const;
+  // Whether a settled reading may become its star now (not a label swap, not too far).
+  bool may_settle(const Candidate& c, const std::vector<bool>& updated, const std::vector<Rigid3d>& predicted, double time_s) const;
 
   StarLibrary library_;
   StarTrackerSettings settings_;
   std::vector<TrackedStar> stars_;
+  std::vector<Candidate> candidates_;
 };
 
 }  // namespace rhot
