@@ -150,7 +150,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   std::vector<double> ms;
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
-    const std::vector<rhot::MatchedPoint> matched = rhot::match_and_triangulate(*rig, frame);
+    const std::vector<rhot::MatchedPoint> matched = rhot::match_and_triangulate(*rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
     const LabelledPoints labelled = label_points(frame, matched, bodies);
     const std::vector<Eigen::Vector3d>& points = labelled.points;
     const std::vector<int>& point_body = labelled.body;

@@ -135,6 +135,15 @@ std::optional<double> estimate_pixel_sigma(std::span<const MatchedPoint> points)
   return std::sqrt(sum / dof);
 }
 
+MatchSettings match_settings_for(double sigma_px) {
+  MatchSettings s;
+  s.epipolar_tolerance_px = std::max(s.epipolar_tolerance_px, 4.0 * sigma_px);
+  s.reprojection_tolerance_px = std::max(s.reprojection_tolerance_px, 5.0 * sigma_px);
+  s.max_rms_px = std::max(s.max_rms_px, 2.5 * sigma_px);
+  s.max_residual_px = std::max(s.max_residual_px, 3.7 * sigma_px);
+  return s;
+}
+
 double PixelSigmaEstimate::update(std::span<const MatchedPoint> points) {
   if (const auto now = estimate_pixel_sigma(points)) {
     // The first frames average evenly, later ones exponentially.

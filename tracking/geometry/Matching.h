@@ -39,6 +39,11 @@ struct MatchSettings {
   double max_residual_px = 1.5;  // an observation further than this from its point's reprojection is dropped
 };
 
+// Tolerances for detections with sigma_px of noise: the defaults (right up to about 0.4 px), or
+// wider in proportion (a residual's norm exceeds 3.7 sigma once in a thousand), so noisier
+// cameras do not lose their markers' observations to the gates.
+MatchSettings match_settings_for(double sigma_px);
+
 struct MatchedPoint {
   TriangulatedPoint point;
   std::vector<Observation> observations;

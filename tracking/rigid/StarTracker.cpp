@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <numbers>
 
 #include <Eigen/Geometry>
@@ -16,8 +18,29 @@ StarTracker::StarTracker(StarLibrary library, StarTrackerSettings settings) : li
     t.star = static_cast<int>(s);
     t.id = library_.stars()[s].id;
     stars_.push_back(t);
+    const auto& markers = library_.stars()[s].markers_m;
+    const Eigen::Vector3d centre = 0.25 * (markers[0] + markers[1] + markers[2] + markers[3]);
+    double sum = 0.0;
+    for (const Eigen::Vector3d& m : markers) sum += (m - centre).squaredNorm();
+    spread_m_.push_back(std::max(std::sqrt(sum / 4.0), 1e-3));
   }
 }
+
+namespace {
+
+// The fitted points' mean standard deviation.
+double mean_sigma(const IdentifiedStar& fit, const StarPoints& points) {
+  double sum = 0.0;
+  int n = 0;
+  for (const int p : fit.point) {
+    if (p < 0) continue;
+    sum += points.sigma(static_cast<std::size_t>(p));
+    ++n;
+  }
+  return n > 0 ? sum / n : points.fallback_sigma_m;
+}
+
+}  // namespace
 
 Rigid3d StarTracker::predict(const TrackedStar& s, double time_s) const {
   const double dt = time_s - s.last_seen_s;
@@ -28,10 +51,12 @@ Rigid3d StarTracker::predict(const TrackedStar& s, double time_s) const {
   return p;
 }
 
-bool StarTracker::near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s) const {
+bool StarTracker::near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s, double sigma_m) const {
   const double turned = Eigen::AngleAxisd(fitted.rotation * predicted.rotation.conjugate()).angle();
+  // Noisy points turn a small star's fit: by about sigma over the markers' spread from their centre.
+  const double noise_rad = settings_.gate_sigmas * sigma_m / spread_m_[static_cast<std::size_t>(s.star)];
   return (fitted.translation - predicted.translation).norm() < settings_.swap_distance_m &&
-         turned <= settings_.turn_gate_rad + settings_.turn_rate_rad_s * (time_s - s.last_seen_s);
+         turned <= settings_.turn_gate_rad + noise_rad + settings_.turn_rate_rad_s * (time_s - s.last_seen_s);
 }
 
 void StarTracker::accept(TrackedStar& s, const IdentifiedStar& fit, double time_s) {
@@ -228,7 +253,11 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
       if (p >= 0) mine.push_back(p);
     }
     std::optional<IdentifiedStar> fit;
-    if (mine.size() >= 3) fit = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), mine, points), points);
+    // First as predicted (under noise the edges alone may not tell two markers apart), then as the
+    // edges say.
+    if (mine.size() >= 3) fit = fit_star(library_, static_cast<int>(s), assigned[s], points);
+    if (fit && !near_prediction(stars_[s], predicted[s], fit->world_from_star, time_s, mean_sigma(*fit, points))) fit.reset();
+    if (!fit && mine.size() >= 3) fit = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), mine, points), points);
     // One of four points may be wrong (two markers merged into one point): the best three.
     for (std::size_t drop = 0; !fit && mine.size() == 4 && drop < 4; ++drop) {
       std::vector<int> three = mine;
@@ -238,7 +267,7 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
     }
     if (!fit) continue;
     // A fit turned far from the prediction took the wrong markers for the right ones.
-    if (!near_prediction(stars_[s], predicted[s], fit->world_from_star, time_s)) continue;
+    if (!near_prediction(stars_[s], predicted[s], fit->world_from_star, time_s, mean_sigma(*fit, points))) continue;
     accept(stars_[s], *fit, time_s);
     updated[s] = true;
     for (const int p : fit->point) {
@@ -291,7 +320,8 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
     }
     const auto s = static_cast<std::size_t>(found.star);
     // A star seen moments ago found again where it was heading: itself, its identity known.
-    if (!updated[s] && recent_and_confirmed(stars_[s]) && near_prediction(stars_[s], predicted[s], found.world_from_star, time_s)) {
+    if (!updated[s] && recent_and_confirmed(stars_[s]) &&
+        near_prediction(stars_[s], predicted[s], found.world_from_star, time_s, mean_sigma(found, points))) {
       accept(stars_[s], found, time_s);
       updated[s] = true;
       continue;

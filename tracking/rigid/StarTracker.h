@@ -88,7 +88,7 @@ class StarTracker {
   bool recent(const TrackedStar& s) const { return s.frames_since_seen >= 0 && s.frames_since_seen <= settings_.max_coast_frames; }
   bool recent_and_confirmed(const TrackedStar& s) const { return s.confirmed && recent(s); }
   Rigid3d predict(const TrackedStar& s, double time_s) const;
-  bool near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s) const;
+  bool near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s, double sigma_m) const;
   void accept(TrackedStar& s, const IdentifiedStar& fit, double time_s);
   // One reading of a candidate: its slots (markers of the star it was found as) are this star's
   // markers slot_marker[slot]; chi2 adds up the evidence against it.
@@ -114,6 +114,7 @@ class StarTracker {
   StarTrackerSettings settings_;
   std::vector<TrackedStar> stars_;
   std::vector<Candidate> candidates_;
+  std::vector<double> spread_m_;  // per star: RMS distance of its markers from their centre
 };
 
 }  // namespace rhot
