@@ -8,6 +8,7 @@
 #include "engine/scene/SceneLoader.h"
 #include "engine/tracked/ReplaySource.h"
 #include "tracking/camera/RigFile.h"
+#include "tracking/sim/Realism.h"
 #include "tracking/sim/SimulatedRig.h"
 #include "tracking/source/VideoSource.h"
 
@@ -33,6 +34,7 @@ std::expected<void, std::string> DemoSettings::check() const {
   }
   if (!std::isfinite(speed) || !(speed > 0.0)) return std::unexpected(std::string("speed: the replay speed must be a positive number"));
   if (auto detector_ok = rhot::check(detector); !detector_ok) return std::unexpected("detector: " + detector_ok.error());
+  if (auto world_ok = world.check(); !world_ok) return std::unexpected("world: " + world_ok.error());
   if (!video_devices.empty() && perfect_hands) {
     return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
   }
@@ -43,8 +45,9 @@ std::expected<void, std::string> DemoSettings::check() const {
   return {};
 }
 
-DemoWorld::DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects)
-    : script_(script), layouts_(layouts) {
+DemoWorld::DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects,
+                     unsigned independent_hands_seed)
+    : script_(script), layouts_(layouts), hands_seed_(independent_hands_seed) {
   // The stars in the tracker's library order, as the markers have always been numbered.
   const StarLibrary library(objects.stars);
   for (const StarLibrary::Star& star : library.stars()) {
@@ -55,6 +58,11 @@ DemoWorld::DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& 
 
 WorldSnapshot DemoWorld::at(double t_s) {
   truth_ = script_.at(t_s);
+  if (hands_seed_ != 0) {
+    // Users' own hands: each bone of the script's pose scaled (the left hand a different user's
+    // hand than the right: its own seed).
+    for (std::size_t h = 0; h < 2; ++h) truth_->hands[h].pose = independent_hand(truth_->hands[h].pose, hands_seed_ + static_cast<unsigned>(h));
+  }
   WorldSnapshot out;
   add_bones(out.occluders, truth_->hands[0]);
   add_bones(out.occluders, truth_->hands[1]);
@@ -104,16 +112,18 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
       if (!opened) return std::unexpected(rig_file.string() + ": " + opened.error());
       source = std::make_unique<VideoSource>(std::move(*opened));
     } else {
-      SimulatedRigSettings sim;
+      SimulatedRigSettings sim = settings.world.rig_settings(settings.seed, rate_hz);
       sim.sigma_px = settings.sigma_px;
-      sim.seed = settings.seed;
-      sim.rate_hz = rate_hz;
       auto rig_source = std::make_unique<SimulatedRig>(*rig, std::vector<Trajectory>{}, sim);
-      self->world_ = std::make_shared<DemoWorld>(*self->script_, layouts, objects);
+      self->world_ = std::make_shared<DemoWorld>(*self->script_, layouts, objects, settings.world.independent_hands ? settings.seed : 0u);
       rig_source->set_world(self->world_);
       source = std::move(rig_source);
     }
-    auto live = std::make_unique<LiveTracking>(std::move(source), objects, layouts, LiveTrackingSettings{settings.filter_hands});
+    LiveTrackingSettings live_settings;
+    live_settings.filter_hands = settings.filter_hands;
+    // With a calibration error the tracker believes a rig a little off the one that took the frames.
+    if (!video && settings.world.calib_error_px > 0.0) live_settings.tracker_rig = perturbed_rig(*rig, settings.world.calib_error_px, settings.seed);
+    auto live = std::make_unique<LiveTracking>(std::move(source), objects, layouts, live_settings);
     self->live_ = live.get();
     return std::unique_ptr<ResultSource>(std::move(live));
   };

@@ -30,6 +30,7 @@
 #include "tracking/detect/BlobDetector.h"
 #include "tracking/hand/HandLayout.h"
 #include "tracking/rigid/StarIdentification.h"
+#include "tracking/sim/Realism.h"
 #include "tracking/sim/SimulatedWorld.h"
 
 namespace rhot {
@@ -38,7 +39,8 @@ struct DemoSettings {
   std::filesystem::path asset_dir;  // where the defaults below are found
   std::filesystem::path rig_file;   // empty: the scene's rig, else assets/rigs/seated-4.yaml
   std::filesystem::path star_set;   // empty: assets/stars/seed-case.json (the objects' stars)
-  double sigma_px = 0.3;            // the simulated cameras' pixel noise
+  double sigma_px = 0.3;            // the simulated cameras' pixel noise (overrides world.sigma_px)
+  WorldSettings world;              // the rest of the simulated world (tracking/sim/Realism.h)
   unsigned seed = 1;
   bool filter_hands = false;     // LiveTrackingSettings::filter_hands
   bool perfect_hands = false;    // physics gets the true hands, not the tracked ones
@@ -59,7 +61,9 @@ struct DemoSettings {
 // script's hands) and the tracked objects' star markers, with the hands' bones as occluders.
 class DemoWorld final : public SimulatedWorld {
  public:
-  DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects);
+  // independent_hands_seed: 0 for the script's hands as they are, else each hand's bones scaled as
+  // a user's own (tracking/sim/Realism.h, independent_hand) from this seed.
+  DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects, unsigned independent_hands_seed = 0);
   WorldSnapshot at(double t_s) override;
   // The truth at the time last asked for (with unsynchronised cameras, the last camera's moment).
   const std::optional<SceneTruth>& truth() const { return truth_; }
@@ -67,6 +71,7 @@ class DemoWorld final : public SimulatedWorld {
  private:
   const DemoScript& script_;
   std::array<HandLayout, 2> layouts_;
+  unsigned hands_seed_ = 0;
   struct Star {
     int id;
     Rigid3d object_from_star;

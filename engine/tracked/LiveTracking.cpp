@@ -5,7 +5,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include "tracking/geometry/Matching.h"
 
 namespace rhot {
 
@@ -21,11 +20,11 @@ HandInput hand_input(const TrackedHand& tracked) {
 
 LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObjects& objects, const std::array<HandLayout, 2>& layouts,
                            LiveTrackingSettings settings)
-    : source_(std::move(source)), layouts_(layouts) {
+    : source_(std::move(source)), settings_(std::move(settings)), layouts_(layouts) {
   for (const TrackedObject& o : objects.objects) object_from_star_.emplace_back(o.star_id, o.object_from_star);
   star_tracker_ = std::make_unique<StarTracker>(StarLibrary(objects.stars));
   HandTrackerSettings tracker_settings;
-  tracker_settings.filter = settings.filter_hands;
+  tracker_settings.filter = settings_.filter_hands;
   for (std::size_t h = 0; h < 2; ++h) {
     hand_trackers_[h] = std::make_unique<HandTracker>(layouts_[h], reference_open_hand(layouts_[h].side), tracker_settings);
   }
@@ -103,7 +102,10 @@ void LiveTracking::match() {
   results_.points.clear();
   results_.point_cameras.clear();
   double sum_rms = 0.0;
-  for (const MatchedPoint& m : match_and_triangulate(source_->rig(), frame_)) {
+  // Gates as wide as the detection noise estimated so far; each point's uncertainty from it.
+  const std::vector<MatchedPoint> matched = match_and_triangulate(tracker_rig(), frame_, match_settings_for(pixel_sigma_.sigma_px()));
+  point_sigma_m_ = point_sigmas_m(matched, pixel_sigma_.update(matched));
+  for (const MatchedPoint& m : matched) {
     results_.points.push_back(m.point.position_world);
     results_.point_cameras.push_back(m.point.cameras);
     sum_rms += m.point.reprojection_rms_px;
@@ -114,7 +116,7 @@ void LiveTracking::match() {
 
 void LiveTracking::track_stars(double t_s) {
   results_.world_from_object.clear();
-  const auto& stars = star_tracker_->update(t_s, results_.points);
+  const auto& stars = star_tracker_->update(t_s, results_.points, point_sigma_m_);
   for (const auto& [id, object_from_star] : object_from_star_) {
     for (const TrackedStar& s : stars) {
       if (s.id != id || !s.seen_now()) continue;
@@ -129,7 +131,7 @@ void LiveTracking::track_stars(double t_s) {
 
 void LiveTracking::track_hands(double t_s) {
   for (std::size_t h = 0; h < 2; ++h) {
-    const TrackedHand& tracked = hand_trackers_[h]->update(t_s, results_.points);
+    const TrackedHand& tracked = hand_trackers_[h]->update(t_s, results_.points, point_sigma_m_);
     results_.hands[h] = hand_input(tracked);
     results_.counts.hands_seen[h] = tracked.hand_seen;
     results_.pinch[h] = {tracked.state.pinch.activation, tracked.state.pinch.active};

@@ -16,11 +16,13 @@
 #include <cstdint>
 #include <expected>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "engine/tracked/ResultSource.h"
 #include "engine/tracked/TrackedObjects.h"
+#include "tracking/geometry/Matching.h"
 #include "tracking/hand/HandLayout.h"
 #include "tracking/hand/HandTracker.h"
 #include "tracking/rigid/StarTracker.h"
@@ -32,6 +34,9 @@ struct LiveTrackingSettings {
   // 1-euro filtering of each hand's frame and fingertips before the IK (HandTrackerSettings):
   // steadier hands at rest, some lag in fast moves. Off by default (docs/tracking.md).
   bool filter_hands = false;
+  // The rig the tracker believes (empty: the source's own). A simulation with a calibration error
+  // gives the tracker a rig a little off the one that made the detections.
+  std::optional<CameraRig> tracker_rig;
 };
 
 // A tracked hand as the engine takes it.
@@ -45,7 +50,10 @@ class LiveTracking final : public ResultSource {
 
   std::vector<TrackingStage> stages() override;
   TrackingResults& results() override { return results_; }
-  const CameraRig* rig() const override { return &source_->rig(); }
+  const CameraRig* rig() const override { return &tracker_rig(); }
+  const CameraRig& tracker_rig() const { return settings_.tracker_rig ? *settings_.tracker_rig : source_->rig(); }
+  // The detection noise the tracker estimates from the residuals (pixels).
+  double pixel_sigma() const { return pixel_sigma_.sigma_px(); }
   bool ended() const override { return ended_; }
   std::vector<std::string> summary() const override { return source_->summary(); }
 
@@ -64,6 +72,9 @@ class LiveTracking final : public ResultSource {
 
  private:
   std::unique_ptr<FrameSource> source_;
+  LiveTrackingSettings settings_;
+  PixelSigmaEstimate pixel_sigma_;
+  std::vector<double> point_sigma_m_;  // this frame's points' standard deviations
   std::vector<std::pair<int, Rigid3d>> object_from_star_;  // per tracked object: star id, where the star sits on it
   std::array<HandLayout, 2> layouts_;
   std::unique_ptr<StarTracker> star_tracker_;

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,7 @@
 #include "engine/render/Window.h"
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/Demo.h"
+#include "tracking/sim/Realism.h"
 #include "tracking/source/VideoSource.h"
 
 #ifndef RHOT_ASSET_DIR
@@ -70,6 +72,10 @@ struct Options {
   rhot::RendererSettings render;
   std::string stereo = "auto";
   std::string shading = "auto";
+  std::string world = "ideal";
+  std::optional<double> sigma;
+  std::optional<int> strays;
+  std::optional<double> calib_error_px;
   std::string source = "sim";
   rhot::DemoSettings demo;
   std::vector<std::string> debug_views;
@@ -122,9 +128,15 @@ void add_options(CLI::App& cli, Options& o) {
                  "Record every frame's hands and tracked objects to FILE (JSON Lines, docs/recording-format.md)");
   cli.add_option("--rig", o.demo.rig_file, "Camera rig (OpenCV YAML; default: the scene's, else assets/rigs/seated-4.yaml)")
       ->check(CLI::ExistingFile);
-  cli.add_option("--sigma", o.demo.sigma_px, "Simulated pixel noise, standard deviation")
+  cli.add_option("--world", o.world,
+                 "The simulated world: ideal (0.3 px, nothing else) or realistic (0.5 px, dropout, strays, 6 mm markers that merge, "
+                 "unsynchronised cameras, a 0.3 px calibration error, users' own hands; docs/tracking.md)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 50.0));
+      ->check(CLI::IsMember({"ideal", "realistic"}));
+  cli.add_option("--sigma", o.sigma, "Simulated pixel noise, standard deviation (default: the world's)")->check(CLI::Range(0.0, 50.0));
+  cli.add_option("--strays", o.strays, "Simulated false blobs per camera per frame (default: the world's)")->check(CLI::Range(0, 1000));
+  cli.add_option("--calib-error-px", o.calib_error_px, "The tracker's rig off the simulated one by about this reprojection error")
+      ->check(CLI::Range(0.0, 20.0));
   cli.add_option("--seed", o.demo.seed, "Simulation seed")->capture_default_str();
   cli.add_flag("--filter", o.demo.filter_hands, "1-euro filter the tracked hands (steadier at rest, some lag)");
   cli.add_option("--debug-views", o.debug_views, "Debug views on from the start: markers, rays, frusta, colliders (comma-separated)")
@@ -159,6 +171,16 @@ bool resolve_options(Options& o) {
     spdlog::error("--source: expected sim, replay:FILE or video:DEV[,DEV...], got \"{}\"", o.source);
     return false;
   }
+  auto world = rhot::world_named(o.world);
+  if (!world) {
+    spdlog::error("{}", world.error());
+    return false;
+  }
+  if (o.sigma) world->sigma_px = *o.sigma;
+  if (o.strays) world->strays = *o.strays;
+  if (o.calib_error_px) world->calib_error_px = *o.calib_error_px;
+  o.demo.sigma_px = world->sigma_px;
+  o.demo.world = *world;
   if (auto checked = o.demo.check(); !checked) {
     spdlog::error("{}", checked.error());
     return false;

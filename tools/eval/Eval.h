@@ -3,13 +3,21 @@
 // grasp.cpp, frame.cpp), and what they share. Each prints one JSON object on stdout and returns
 // the process's exit code.
 
+#include <expected>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Dense>
+#include <nlohmann/json.hpp>
 
 #include "engine/render/Renderer.h"
 #include "tracking/camera/Camera.h"
+#include "tracking/sim/Realism.h"
+
+namespace CLI {
+class App;
+}
 
 namespace rhot::eval {
 
@@ -30,14 +38,27 @@ Box evaluation_box(const CameraRig& rig, const std::vector<double>& size, const 
 // The q-quantile (0..1) of v, by rank; 0 for none.
 double percentile(std::vector<double> v, double q);
 
+// The simulated world's flags, shared by the modes that simulate one: --world names a preset
+// (tracking/sim/Realism.h), the others override its values.
+struct WorldFlags {
+  std::string world = "ideal";
+  std::optional<double> sigma, dropout, calib_error_px, skew_ms, marker_mm;
+  std::optional<int> strays;
+  std::optional<std::string> truth_hand;
+};
+void add_world_flags(CLI::App& command, WorldFlags& flags, bool hands);
+std::expected<rhot::WorldSettings, std::string> world_settings(const WorldFlags& flags);
+// The world's settings, for a report.
+nlohmann::json world_json(const rhot::WorldSettings& world, const std::string& name);
+
 int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
                   const std::vector<double>& volume, const std::vector<double>& volume_centre);
 int wand(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout,
          const std::vector<double>& volume, const std::vector<double>& volume_centre);
-int stars(const std::string& rig_file, const std::string& set_file, int bodies, double sigma, int frames, unsigned seed, double dropout,
+int stars(const std::string& rig_file, const std::string& set_file, int bodies, const WorldFlags& world, int frames, unsigned seed,
           const std::vector<double>& volume, const std::vector<double>& volume_centre);
-int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, double sigma, int frames, unsigned seed,
-          const std::vector<double>& volume_centre, bool filter);
+int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, const WorldFlags& world, int frames,
+          unsigned seed, const std::vector<double>& volume_centre, bool filter);
 int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);
 int grasp(const std::string& scenario);
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading);

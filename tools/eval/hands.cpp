@@ -35,30 +35,35 @@ namespace rhot::eval {
 // One or every scripted hand motion through the simulated rig with a hand layout: the hand's
 // markers (its own bones hiding them) matched, triangulated, the hand star tracked, the fingers
 // solved, and every joint compared with the truth.
-nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion, double sigma,
-                               int frames, unsigned seed, const Eigen::Vector3d& centre, bool filter) {
+nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion,
+                               const rhot::WorldSettings& world, int frames, unsigned seed, const Eigen::Vector3d& centre, bool filter) {
   const rhot::HandPose skeleton = rhot::reference_open_hand(layout.side);
   const auto chains = rhot::hand_chains(skeleton, layout.side);
   const auto relaxed = rhot::HandSolver(layout.side, skeleton).state().angles;
+  // The user's own hand: the model's, or one with its own bones and angles.
+  const rhot::HandPose user = world.independent_hands ? rhot::independent_hand(skeleton, seed) : skeleton;
+  const auto user_chains = rhot::hand_chains(user, layout.side);
   auto truth_at = [&](double t) {
     const auto frame = *rhot::hand_motion(motion, t, chains, relaxed, centre);
-    return std::make_pair(frame.world_from_hand, rhot::hand_pose_from_angles(skeleton, chains, frame.angles));
+    const auto angles = world.independent_hands ? rhot::independent_angles(frame.angles, seed) : frame.angles;
+    return std::make_pair(frame.world_from_hand, rhot::hand_pose_from_angles(user, user_chains, angles));
   };
   auto markers_at = [&](double t) {
     const auto [world_from_hand, pose] = truth_at(t);
     return rhot::layout_markers(layout, world_from_hand, pose);
   };
-  rhot::SimulatedRigSettings settings;
-  settings.sigma_px = sigma;
-  settings.seed = seed;
+  rhot::SimulatedRigSettings settings = world.rig_settings(seed);
   rhot::SimulatedRig sim(rig, {}, settings);
   sim.set_scripted_markers(markers_at);
+  // The tracker's rig: the truth, or as an imperfect calibration has it.
+  const rhot::CameraRig tracker_rig = rhot::perturbed_rig(rig, world.calib_error_px, seed);
+  rhot::PixelSigmaEstimate pixel_sigma;
   rhot::HandTrackerSettings tracker_settings;
   tracker_settings.filter = filter;
   rhot::HandTracker tracker(layout, skeleton, tracker_settings);
 
   std::vector<double> tip_errors, joint_errors, ik_us, tracker_us;
-  long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0, segment_stars_seen = 0;
+  long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0, segment_stars_seen = 0, reported_wrong = 0;
   for (int f = 0; f < frames; ++f) {
     const double t = static_cast<double>(f) / settings.rate_hz;
     // The hand's own bones hide its markers: capsules a little thinner than the joints' radii.
@@ -73,14 +78,20 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
     sim.set_occluders(bones);
     const rhot::RigFrame frame = sim.next();
     std::vector<Eigen::Vector3d> points;
-    for (const rhot::MatchedPoint& m : rhot::match_and_triangulate(rig, frame)) points.push_back(m.point.position_world);
+    const auto matched = rhot::match_and_triangulate(tracker_rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
+    for (const rhot::MatchedPoint& m : matched) points.push_back(m.point.position_world);
     const auto tracker_start = std::chrono::steady_clock::now();
-    const rhot::TrackedHand& hand = tracker.update(frame.time_s, points);
+    const rhot::TrackedHand& hand = tracker.update(frame.time_s, points, rhot::point_sigmas_m(matched, pixel_sigma.update(matched)));
     tracker_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - tracker_start).count());
     ik_us.push_back(tracker.last_ik_us());
     ++tip_frames;
     if (!hand.hand_seen) continue;
     ++hand_frames;
+    // Reported as seen, but not where the hand is: the wrist 10 mm or the hand 5 degrees off.
+    const double hand_turn = Eigen::AngleAxisd(hand.world_from_hand.rotation * world_from_hand.rotation.conjugate()).angle();
+    const auto wrist = static_cast<std::size_t>(rhot::HandJoint::kWrist);
+    if ((hand.joints_world[wrist] - world_from_hand * pose.position_m[wrist]).norm() > 0.010 || hand_turn > 5.0 * std::numbers::pi / 180.0)
+      ++reported_wrong;
     segment_stars_seen += hand.segment_stars_seen;
     for (int j = 0; j < rhot::kHandJointCount; ++j) {
       const double e =
@@ -104,6 +115,7 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   };
   nlohmann::json j;
   j["frames"] = frames;
+  j["reported_wrong_fraction"] = static_cast<double>(reported_wrong) / static_cast<double>(std::max(1L, hand_frames));
   j["hand_seen_fraction"] = static_cast<double>(hand_frames) / static_cast<double>(std::max(1L, tip_frames));
   j["fingertips_seen_fraction"] = static_cast<double>(tips_seen) / static_cast<double>(std::max(1L, 5 * hand_frames));
   if (!layout.segment_stars.empty()) {
@@ -122,12 +134,11 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   return j;
 }
 
-int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, double sigma, int frames, unsigned seed,
-          const std::vector<double>& volume_centre, bool filter) {
-  rhot::SimulatedRigSettings checked;
-  checked.sigma_px = sigma;
-  if (const auto ok = checked.check(); !ok) {
-    std::cerr << "rhot-eval: " << ok.error() << "\n";
+int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, const WorldFlags& world_flags, int frames,
+          unsigned seed, const std::vector<double>& volume_centre, bool filter) {
+  const auto world = world_settings(world_flags);
+  if (!world) {
+    std::cerr << "rhot-eval: " << world.error() << "\n";
     return 1;
   }
   const auto rig = rhot::load_rig(rig_file);
@@ -154,18 +165,18 @@ int hands(const std::string& rig_file, const std::string& layout_file, const std
   nlohmann::json j;
   j["rig"] = rig_file;
   j["layout"] = layout_file;
-  j["sigma_px"] = sigma;
+  j["world"] = world_json(*world, world_flags.world);
   j["seed"] = seed;
   j["centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
   j["filter"] = filter;
   for (const std::string_view name : motions) {
     std::cerr << "rhot-eval: hand motion " << name << "\n";
-    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, sigma, frames, seed, box.centre, filter);
+    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, *world, frames, seed, box.centre, filter);
   }
   // Over all motions: the mean of the motions' numbers (each motion weighs alike).
   for (const char* key :
        {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",
-        "ik_p99_us", "tracker_median_us", "tracker_p99_us", "hand_seen_fraction", "fingertips_seen_fraction"}) {
+        "ik_p99_us", "tracker_median_us", "tracker_p99_us", "hand_seen_fraction", "fingertips_seen_fraction", "reported_wrong_fraction"}) {
     double sum = 0.0;
     for (const auto& [name, m] : j["motions"].items()) sum += m[key].get<double>();
     j[key] = sum / static_cast<double>(motions.size());

@@ -89,12 +89,10 @@ int main(int argc, char** argv) {
   stars_cmd->add_option("--bodies", bodies, "stars moving at once (the set's first ones)")
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
-  stars_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
+  WorldFlags world;
+  add_world_flags(*stars_cmd, world, false);
   stars_cmd->add_option("--frames", frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
   stars_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  stars_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
   stars_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
   stars_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   stars_cmd->add_flag("--json", json, "print JSON (the only output format)");
@@ -105,7 +103,7 @@ int main(int argc, char** argv) {
   hands_cmd->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
   hands_cmd->add_option("--layout", layout_file, "hand marker layout (JSON)")->capture_default_str();
   hands_cmd->add_option("--motion", motion, "open, fist, pinch, wave, power-grasp, precision-grasp or all")->capture_default_str();
-  hands_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
+  add_world_flags(*hands_cmd, world, true);
   hands_cmd->add_option("--frames", hand_frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));
   hands_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
   hands_cmd->add_option("--volume-centre-m", volume_centre, "where the hand moves, X Y Z metres (default: the rig's volume centre)")
@@ -160,8 +158,8 @@ int main(int argc, char** argv) {
   if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
   if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading));
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
-  if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, sigma, hand_frames, seed, volume_centre, filter);
-  if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, sigma, frames, seed, dropout, volume, volume_centre);
+  if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, world, hand_frames, seed, volume_centre, filter);
+  if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, world, frames, seed, volume, volume_centre);
   if (wand_cmd->parsed()) return wand(rig_file, length_mm, sigma, frames, seed, dropout, volume, volume_centre);
   return 1;
 }

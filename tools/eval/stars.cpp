@@ -25,6 +25,7 @@
 #include "tracking/sim/HandMotions.h"
 #include "tracking/hand/HandTracker.h"
 #include "tracking/rigid/StarTracker.h"
+#include "tracking/sim/Realism.h"
 #include "tracking/sim/SimulatedRig.h"
 
 #include "tools/eval/Eval.h"
@@ -100,8 +101,13 @@ bool at_its_own_markers(const rhot::TrackedStar& t, const rhot::RigFrame& frame,
 
 // Marker stars moving through the volume (25 of a set by default), matched, triangulated and
 // tracked; identities against the truth, poses against the true poses.
-int stars(const std::string& rig_file, const std::string& set_file, int bodies, double sigma, int frames, unsigned seed, double dropout,
+int stars(const std::string& rig_file, const std::string& set_file, int bodies, const WorldFlags& world_flags, int frames, unsigned seed,
           const std::vector<double>& volume, const std::vector<double>& volume_centre) {
+  const auto world = world_settings(world_flags);
+  if (!world) {
+    std::cerr << "rhot-eval: " << world.error() << "\n";
+    return 1;
+  }
   const auto rig = rhot::load_rig(rig_file);
   if (!rig) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
@@ -125,14 +131,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
     for (const Eigen::Vector3d& m : set->stars[static_cast<std::size_t>(b)].markers_mm) body.markers_body_m.push_back(m * 1e-3);
     simulated.push_back(body);
   }
-  rhot::SimulatedRigSettings settings;
-  settings.sigma_px = sigma;
-  settings.dropout = dropout;
-  settings.seed = seed;
-  if (const auto ok = settings.check(); !ok) {
-    std::cerr << "rhot-eval: " << ok.error() << "\n";
-    return 1;
-  }
+  const rhot::SimulatedRigSettings settings = world->rig_settings(seed);
   rhot::SimulatedRig sim(*rig, {}, settings);
   sim.set_bodies(simulated);
   // The tracker knows the stars in the scene, as a scene file tells it.
@@ -140,6 +139,8 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   in_use.stars.resize(static_cast<std::size_t>(bodies));
   rhot::StarTracker tracker{rhot::StarLibrary(in_use)};
   rhot::PixelSigmaEstimate pixel_sigma;
+  // The tracker's rig: the truth, or as an imperfect calibration has it.
+  const rhot::CameraRig tracker_rig = rhot::perturbed_rig(*rig, world->calib_error_px, seed);
 
   long identifiable = 0;  // body-frames with three or more of the body's markers triangulated
   long correct = 0;       // ... among them, the body's star reported at the body's markers
@@ -148,9 +149,22 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   double sum_position2 = 0.0;
   double sum_rotation2 = 0.0;
   std::vector<double> ms;
+  long reported = 0;        // body-frames reported as seen
+  long reported_wrong = 0;  // ... more than 10 mm or 5 degrees from the truth
   for (int f = 0; f < frames; ++f) {
+    if (world->occluding_bodies) {
+      // Each star stands on an object that hides markers: a 6 cm cube under the star's base.
+      std::vector<rhot::Occluder> objects;
+      const double t = static_cast<double>(f) / settings.rate_hz;
+      for (const rhot::SimulatedBody& b : simulated) {
+        const rhot::Rigid3d pose = b.motion.world_from_body(t);
+        objects.push_back(rhot::Occluder::box(pose * Eigen::Vector3d(0, 0, -0.031), pose.rotation, Eigen::Vector3d(0.03, 0.03, 0.03)));
+      }
+      sim.set_occluders(objects);
+    }
     const rhot::RigFrame frame = sim.next();
-    const std::vector<rhot::MatchedPoint> matched = rhot::match_and_triangulate(*rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
+    const std::vector<rhot::MatchedPoint> matched =
+        rhot::match_and_triangulate(tracker_rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
     const LabelledPoints labelled = label_points(frame, matched, bodies);
     const std::vector<Eigen::Vector3d>& points = labelled.points;
     const std::vector<int>& point_body = labelled.body;
@@ -162,14 +176,16 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
     for (int b = 0; b < bodies; ++b) identifiable += clean[static_cast<std::size_t>(b)] >= 3 ? 1 : 0;
     for (const rhot::TrackedStar& t : tracked) {
       if (!t.seen_now()) continue;
+      const rhot::Rigid3d& truth = frame.truth_world_from_body[static_cast<std::size_t>(t.star)];
+      const double angle = Eigen::AngleAxisd(t.world_from_star.rotation * truth.rotation.conjugate()).angle();
+      ++reported;
+      if ((t.world_from_star.translation - truth.translation).norm() > 0.010 || angle > 5.0 * std::numbers::pi / 180.0) ++reported_wrong;
       if (!at_its_own_markers(t, frame, points, point_body)) {
         ++wrong;
         continue;
       }
       if (clean[static_cast<std::size_t>(t.star)] >= 3) ++correct;
-      const rhot::Rigid3d& truth = frame.truth_world_from_body[static_cast<std::size_t>(t.star)];
       sum_position2 += (t.world_from_star.translation - truth.translation).squaredNorm();
-      const double angle = Eigen::AngleAxisd(t.world_from_star.rotation * truth.rotation.conjugate()).angle();
       sum_rotation2 += angle * angle;
       ++posed;
     }
@@ -179,8 +195,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   j["rig"] = rig_file;
   j["set"] = set_file;
   j["bodies"] = bodies;
-  j["sigma_px"] = sigma;
-  j["dropout"] = dropout;
+  j["world"] = world_json(*world, world_flags.world);
   j["frames"] = frames;
   j["seed"] = seed;
   j["volume_centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
@@ -188,6 +203,8 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   j["identifiable_body_frames"] = identifiable;
   j["correct_id_fraction"] = identifiable > 0 ? static_cast<double>(correct) / static_cast<double>(identifiable) : 0.0;
   j["wrong_id_count"] = wrong;
+  j["reported_body_frames"] = reported;
+  j["reported_wrong_fraction"] = reported > 0 ? static_cast<double>(reported_wrong) / static_cast<double>(reported) : 0.0;
   j["posed_body_frames"] = posed;
   j["position_rms_mm"] = posed > 0 ? 1000.0 * std::sqrt(sum_position2 / static_cast<double>(posed)) : 0.0;
   j["rotation_rms_deg"] = posed > 0 ? std::sqrt(sum_rotation2 / static_cast<double>(posed)) * 180.0 / std::numbers::pi : 0.0;

@@ -16,8 +16,8 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   out_.state = solver_.state();
 }
 
-const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vector3d> points) {
-  const TrackedStar& star = star_.update(time_s, points)[0];
+const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m) {
+  const TrackedStar& star = star_.update(time_s, points, sigma_m)[0];
   out_.hand_seen = star.seen_now();
   out_.fingertip_point.fill(-1);
   std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips{};
@@ -71,7 +71,7 @@ const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vec
   std::array<std::optional<FingerAngles>, kFingerCount> measured{};
   out_.segment_stars_seen = 0;
   if (segments_) {
-    const auto& stars = segments_->update(time_s, points);
+    const auto& stars = segments_->update(time_s, points, sigma_m);
     if (out_.hand_seen) {
       const Rigid3d hand_from_world = out_.world_from_hand.inverse();
       const HandPose& skeleton = solver_.state().pose;

@@ -34,7 +34,8 @@ class HandTracker {
  public:
   HandTracker(const HandLayout& layout, const HandPose& skeleton, HandTrackerSettings settings = {});
 
-  const TrackedHand& update(double time_s, std::span<const Eigen::Vector3d> points_world);
+  // points_world with each one's standard deviation per axis (metres; empty: the star library's default).
+  const TrackedHand& update(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m = {});
   const HandSolver& solver() const { return solver_; }
   const TrackedHand& last() const { return out_; }  // the last update's result
   // Time spent in HandSolver::update (the IK) on the last frame.

@@ -48,6 +48,28 @@ double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, co
 
 }  // namespace
 
+bool Occluder::blocks(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {
+  if (!is_box()) return segment_distance(p, q, a_m, b_m) < radius_m;
+  // Slabs: the segment in the box's frame, clipped by each pair of faces.
+  const Eigen::Quaterniond to_box = box_rotation.conjugate();
+  const Eigen::Vector3d a = to_box * (p - a_m);
+  const Eigen::Vector3d d = to_box * (q - a_m) - a;
+  double t0 = 0.0, t1 = 1.0;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d(i)) < 1e-15) {
+      if (std::abs(a(i)) > box_half_m(i)) return false;
+      continue;
+    }
+    double u = (-box_half_m(i) - a(i)) / d(i);
+    double v = (box_half_m(i) - a(i)) / d(i);
+    if (u > v) std::swap(u, v);
+    t0 = std::max(t0, u);
+    t1 = std::min(t1, v);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
 std::expected<void, std::string> SimulatedRigSettings::check() const {
   const auto bad = [](const char* field, const char* expected, double value) {
     return std::unexpected(std::string(field) + ": expected " + expected + ", got " + std::to_string(value));
@@ -57,6 +79,11 @@ std::expected<void, std::string> SimulatedRigSettings::check() const {
   if (!std::isfinite(rate_hz) || !(rate_hz > 0.0)) return bad("rate_hz", "a positive frame rate", rate_hz);
   if (!std::isfinite(camera_skew_s) || std::abs(camera_skew_s) > 1.0) return bad("camera_skew_s", "at most 1 s either way", camera_skew_s);
   if (!std::isfinite(merge_distance_px) || merge_distance_px < 0.0) return bad("merge_distance_px", "0 or more pixels", merge_distance_px);
+  if (!std::isfinite(marker_diameter_m) || marker_diameter_m < 0.0 || marker_diameter_m > 0.1)
+    return bad("marker_diameter_m", "0 to 0.1 m", marker_diameter_m);
+  if (strays < 0 || strays > 1000) return bad("strays", "0 to 1000 stray detections per camera", strays);
+  if (!std::isfinite(stray_fixed_fraction) || stray_fixed_fraction < 0.0 || stray_fixed_fraction > 1.0)
+    return bad("stray_fixed_fraction", "a fraction from 0 to 1", stray_fixed_fraction);
   return {};
 }
 
@@ -70,7 +97,7 @@ Eigen::Vector3d Trajectory::at(double t_s) const {
 }
 
 SimulatedRig::SimulatedRig(CameraRig rig, std::vector<Trajectory> markers, SimulatedRigSettings settings)
-    : rig_(std::move(rig)), markers_(std::move(markers)), settings_(settings), rng_(settings.seed) {
+    : rig_(std::move(rig)), markers_(std::move(markers)), settings_(settings), rng_(settings.seed), stray_lamps_(rig_.cameras.size()) {
   RHOT_PRECONDITION(settings.check().has_value(), "SimulatedRig: " + settings.check().error());
 }
 
@@ -83,7 +110,7 @@ bool SimulatedRig::visible(int camera, const Eigen::Vector3d& p_world) const {
   const Eigen::Vector3d from = c.centre_world();
   const Eigen::Vector3d to = p_world + (from - p_world).normalized() * 1e-3;
   for (const Occluder& o : occluders_) {
-    if (segment_distance(from, to, o.a_m, o.b_m) < o.radius_m) return false;
+    if (o.blocks(from, to)) return false;
   }
   return true;
 }
@@ -117,27 +144,56 @@ Eigen::Vector3d SimulatedRig::marker_at(std::size_t marker, double t_s) const {
 
 void SimulatedRig::merge_blobs(int camera, const std::vector<Eigen::Vector3d>& positions, std::vector<Detection>& detections) const {
   const Rigid3d& cam_from_world = rig_.cameras[static_cast<std::size_t>(camera)].cam_from_world;
-  auto depth = [&](const Detection& d) { return (cam_from_world * positions[static_cast<std::size_t>(d.truth_marker)]).z(); };
+  auto depth = [&](const Detection& d) {
+    return d.truth_marker < 0 ? 1e9 : (cam_from_world * positions[static_cast<std::size_t>(d.truth_marker)]).z();
+  };
   std::sort(detections.begin(), detections.end(), [&](const Detection& a, const Detection& b) { return depth(a) < depth(b); });
+  // A marker's image is a disc of radius f (d / 2) / depth; two discs that overlap are one blob.
+  const Camera& cam = rig_.cameras[static_cast<std::size_t>(camera)];
+  const double focal = 0.5 * (cam.intrinsics.fx + cam.intrinsics.fy);
+  auto radius = [&](const Detection& d) { return d.truth_marker < 0 ? 0.0 : focal * 0.5 * settings_.marker_diameter_m / std::max(depth(d), 1e-3); };
   struct Blob {
     Eigen::Vector2d sum;
-    int count;
+    double weight;
+    double radius;
     int marker;
   };
   std::vector<Blob> blobs;
-  const double merge2 = settings_.merge_distance_px * settings_.merge_distance_px;
   for (const Detection& d : detections) {
-    auto into = std::find_if(blobs.begin(), blobs.end(),
-                             [&](const Blob& b) { return (b.sum / static_cast<double>(b.count) - d.pixel).squaredNorm() < merge2; });
+    const double r = radius(d);
+    auto into = std::find_if(blobs.begin(), blobs.end(), [&](const Blob& b) {
+      const double reach = std::max(settings_.merge_distance_px, b.radius + r);
+      return (b.sum / b.weight - d.pixel).squaredNorm() < reach * reach;
+    });
+    // The merged blob's centroid weighs each disc by its area (equal discs: the mean).
+    const double w = r > 0.0 ? r * r : 1.0;
     if (into == blobs.end()) {
-      blobs.push_back({d.pixel, 1, d.truth_marker});
+      blobs.push_back({w * d.pixel, w, r, d.truth_marker});
     } else {
-      into->sum += d.pixel;
-      ++into->count;
+      into->sum += w * d.pixel;
+      into->weight += w;
+      into->radius = std::max(into->radius, r);
     }
   }
   detections.clear();
-  for (const Blob& b : blobs) detections.push_back({b.sum / static_cast<double>(b.count), b.marker});
+  for (const Blob& b : blobs) detections.push_back({b.sum / b.weight, b.marker});
+}
+
+void SimulatedRig::add_strays(int camera, std::vector<Detection>& detections) {
+  if (settings_.strays == 0) return;
+  const Camera& cam = rig_.cameras[static_cast<std::size_t>(camera)];
+  const auto fixed = static_cast<int>(std::lround(settings_.stray_fixed_fraction * settings_.strays));
+  std::uniform_real_distribution<double> x(0.0, static_cast<double>(cam.intrinsics.width_px));
+  std::uniform_real_distribution<double> y(0.0, static_cast<double>(cam.intrinsics.height_px));
+  std::normal_distribution<double> noise(0.0, settings_.sigma_px);
+  auto& lamps = stray_lamps_[static_cast<std::size_t>(camera)];
+  // Lamps: drawn once per camera from their own generator, so they stay put whatever else happens.
+  if (lamps.empty()) {
+    std::mt19937_64 lamp_rng(settings_.seed * 7919u + static_cast<unsigned>(camera) + 1u);
+    for (int k = 0; k < fixed; ++k) lamps.emplace_back(x(lamp_rng), y(lamp_rng));
+  }
+  for (const Eigen::Vector2d& lamp : lamps) detections.push_back({lamp + Eigen::Vector2d(noise(rng_), noise(rng_)), -1});
+  for (int k = fixed; k < settings_.strays; ++k) detections.push_back({Eigen::Vector2d(x(rng_), y(rng_)), -1});
 }
 
 RigFrame SimulatedRig::next() { return frame_at(static_cast<double>(frame_) / settings_.rate_hz); }
@@ -198,7 +254,8 @@ RigFrame SimulatedRig::frame_at(double t_s) {
       if (!visible(static_cast<int>(c), p) || drop < settings_.dropout) continue;
       cf.detections.push_back({*rig_.cameras[c].project(p) + n, static_cast<int>(m)});
     }
-    if (settings_.merge_distance_px > 0.0) merge_blobs(static_cast<int>(c), frame.truth_position_m, cf.detections);
+    add_strays(static_cast<int>(c), cf.detections);
+    if (settings_.merge_distance_px > 0.0 || settings_.marker_diameter_m > 0.0) merge_blobs(static_cast<int>(c), frame.truth_position_m, cf.detections);
     std::shuffle(cf.detections.begin(), cf.detections.end(), rng_);
     frame.cameras.push_back(std::move(cf));
   }

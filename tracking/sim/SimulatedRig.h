@@ -61,6 +61,14 @@ struct SimulatedRigSettings {
   // Detections of one camera closer than this merge into one blob at their mean pixel, credited to
   // the marker nearest the camera, as a blob detector sees markers whose images overlap. 0: never.
   double merge_distance_px = 0.0;
+  // Markers' diameter: detections merge when the discs they project to overlap (0: only by
+  // merge_distance_px), as real blobs do, more often the nearer the markers are to a camera.
+  double marker_diameter_m = 0.0;
+  // Stray detections per camera per frame (lamps, shiny surfaces): a stray_fixed_fraction of them
+  // stay put like a lamp (with the pixel noise), the rest appear anywhere each frame like
+  // reflections. They carry no marker (truth_marker -1).
+  int strays = 0;
+  double stray_fixed_fraction = 0.5;
   unsigned seed = 1;
 
   // Every value usable: "<field>: <what was expected>, got <value>" for the first that is not.
@@ -105,6 +113,7 @@ class SimulatedRig final : public FrameSource {
   RigFrame frame_at(double t_s);
   Eigen::Vector3d marker_at(std::size_t marker, double t_s) const;
   void merge_blobs(int camera, const std::vector<Eigen::Vector3d>& positions, std::vector<Detection>& detections) const;
+  void add_strays(int camera, std::vector<Detection>& detections);
 
   CameraRig rig_;
   std::vector<Trajectory> markers_;
@@ -116,6 +125,7 @@ class SimulatedRig final : public FrameSource {
   std::vector<Occluder> occluders_;
   std::mt19937_64 rng_;
   std::uint64_t frame_ = 0;
+  std::vector<std::vector<Eigen::Vector2d>> stray_lamps_;  // per camera
 };
 
 // `count` rigid motions whose origins wander through the box as random_trajectories' markers do,

@@ -6,14 +6,30 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace rhot {
 
-// Something that hides markers behind it: a sphere (a == b) or a capsule from a to b.
+// Something that hides markers behind it: a sphere (a == b) or a capsule from a to b; or, with a
+// positive box_half_m, the box of those half extents centred at a_m, turned by box_rotation (a
+// table top, a cube).
 struct Occluder {
   Eigen::Vector3d a_m{0, 0, 0};
   Eigen::Vector3d b_m{0, 0, 0};
   double radius_m = 0.0;
+  Eigen::Vector3d box_half_m{0, 0, 0};
+  Eigen::Quaterniond box_rotation = Eigen::Quaterniond::Identity();
+
+  static Occluder box(const Eigen::Vector3d& centre_m, const Eigen::Quaterniond& rotation, const Eigen::Vector3d& half_m) {
+    Occluder o;
+    o.a_m = o.b_m = centre_m;
+    o.box_half_m = half_m;
+    o.box_rotation = rotation;
+    return o;
+  }
+  bool is_box() const { return box_half_m.x() > 0.0; }
+  // Whether the segment from p to q passes through it.
+  bool blocks(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const;
 };
 
 struct WorldSnapshot {
