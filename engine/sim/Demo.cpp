@@ -61,7 +61,8 @@ WorldSnapshot DemoWorld::at(double t_s) {
   if (hands_seed_ != 0) {
     // Users' own hands: each bone of the script's pose scaled (the left hand a different user's
     // hand than the right: its own seed).
-    for (std::size_t h = 0; h < 2; ++h) truth_->hands[h].pose = independent_hand(truth_->hands[h].pose, hands_seed_ + static_cast<unsigned>(h));
+    for (std::size_t h = 0; h < 2; ++h)
+      truth_->hands[h].pose = independent_hand(truth_->hands[h].pose, hands_seed_ + static_cast<unsigned>(h));
   }
   WorldSnapshot out;
   add_bones(out.occluders, truth_->hands[0]);
@@ -122,7 +123,8 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
     LiveTrackingSettings live_settings;
     live_settings.filter_hands = settings.filter_hands;
     // With a calibration error the tracker believes a rig a little off the one that took the frames.
-    if (!video && settings.world.calib_error_px > 0.0) live_settings.tracker_rig = perturbed_rig(*rig, settings.world.calib_error_px, settings.seed);
+    if (!video && settings.world.calib_error_px > 0.0)
+      live_settings.tracker_rig = perturbed_rig(*rig, settings.world.calib_error_px, settings.seed);
     auto live = std::make_unique<LiveTracking>(std::move(source), objects, layouts, live_settings);
     self->live_ = live.get();
     return std::unique_ptr<ResultSource>(std::move(live));

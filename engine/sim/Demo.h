@@ -63,7 +63,8 @@ class DemoWorld final : public SimulatedWorld {
  public:
   // independent_hands_seed: 0 for the script's hands as they are, else each hand's bones scaled as
   // a user's own (tracking/sim/Realism.h, independent_hand) from this seed.
-  DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects, unsigned independent_hands_seed = 0);
+  DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects,
+            unsigned independent_hands_seed = 0);
   WorldSnapshot at(double t_s) override;
   // The truth at the time last asked for (with unsynchronised cameras, the last camera's moment).
   const std::optional<SceneTruth>& truth() const { return truth_; }

@@ -5,7 +5,6 @@
 
 #include <spdlog/spdlog.h>
 
-
 namespace rhot {
 
 HandInput hand_input(const TrackedHand& tracked) {

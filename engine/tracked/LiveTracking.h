@@ -74,7 +74,7 @@ class LiveTracking final : public ResultSource {
   std::unique_ptr<FrameSource> source_;
   LiveTrackingSettings settings_;
   PixelSigmaEstimate pixel_sigma_;
-  std::vector<double> point_sigma_m_;  // this frame's points' standard deviations
+  std::vector<double> point_sigma_m_;                      // this frame's points' standard deviations
   std::vector<std::pair<int, Rigid3d>> object_from_star_;  // per tracked object: star id, where the star sits on it
   std::array<HandLayout, 2> layouts_;
   std::unique_ptr<StarTracker> star_tracker_;

@@ -68,13 +68,15 @@ void add_world_flags(CLI::App& command, WorldFlags& flags, bool hands) {
   command.add_option("--world", flags.world, "the simulated world: ideal or realistic (docs/tracking.md); the flags below override it")
       ->capture_default_str()
       ->check(CLI::IsMember({"ideal", "realistic"}));
-  command.add_option("--sigma", flags.sigma, "pixel noise, standard deviation per axis (ideal 0.3, realistic 0.5)")->check(CLI::Range(1e-6, 50.0));
+  command.add_option("--sigma", flags.sigma, "pixel noise, standard deviation per axis (ideal 0.3, realistic 0.5)")
+      ->check(CLI::Range(1e-6, 50.0));
   command.add_option("--dropout", flags.dropout, "probability a camera misses a visible marker")->check(CLI::Range(0.0, 1.0));
   command.add_option("--strays", flags.strays, "false blobs per camera per frame, half fixed like lamps, half flickering")
       ->check(CLI::Range(0, 1000));
   command.add_option("--calib-error-px", flags.calib_error_px, "the tracker's rig is off the true one by about this reprojection error")
       ->check(CLI::Range(0.0, 20.0));
-  command.add_option("--skew-ms", flags.skew_ms, "camera i exposes i times this later (unsynchronised cameras)")->check(CLI::Range(-100.0, 100.0));
+  command.add_option("--skew-ms", flags.skew_ms, "camera i exposes i times this later (unsynchronised cameras)")
+      ->check(CLI::Range(-100.0, 100.0));
   command.add_option("--marker-mm", flags.marker_mm, "marker diameter: blobs merge when their discs overlap (0: never)")
       ->check(CLI::Range(0.0, 100.0));
   if (hands) {
@@ -86,8 +88,11 @@ void add_world_flags(CLI::App& command, WorldFlags& flags, bool hands) {
 std::expected<rhot::WorldSettings, std::string> world_settings(const WorldFlags& flags) {
   auto world = rhot::world_named(flags.world);
   if (!world) return world;
-  for (const auto& [name, value] : {std::pair{"--sigma", flags.sigma}, {"--dropout", flags.dropout}, {"--calib-error-px", flags.calib_error_px},
-                                    {"--skew-ms", flags.skew_ms}, {"--marker-mm", flags.marker_mm}}) {
+  for (const auto& [name, value] : {std::pair{"--sigma", flags.sigma},
+                                    {"--dropout", flags.dropout},
+                                    {"--calib-error-px", flags.calib_error_px},
+                                    {"--skew-ms", flags.skew_ms},
+                                    {"--marker-mm", flags.marker_mm}}) {
     // CLI11's range checks let NaN through (every comparison with it is false).
     if (value && !std::isfinite(*value)) return std::unexpected(std::string(name) + ": expected a finite number");
   }

@@ -175,7 +175,8 @@ Neighbours edge_candidates(const StarLibrary& library, const StarPoints& points)
   const std::size_t n = points.size();
   double largest_sigma = 0.0;
   for (std::size_t i = 0; i < n; ++i) largest_sigma = std::max(largest_sigma, points.sigma(i));
-  const double reach = library.longest_edge_m() + std::max(library.edge_tolerance_m(), library.settings().gate_sigmas * std::sqrt(2.0) * largest_sigma);
+  const double reach =
+      library.longest_edge_m() + std::max(library.edge_tolerance_m(), library.settings().gate_sigmas * std::sqrt(2.0) * largest_sigma);
   std::vector<std::size_t> by_x(n);
   for (std::size_t i = 0; i < n; ++i) by_x[i] = i;
   std::sort(by_x.begin(), by_x.end(), [&](std::size_t a, std::size_t b) { return points[a].x() < points[b].x(); });

@@ -85,8 +85,8 @@ class StarLibrary {
  private:
   StarIdentificationSettings settings_;
   std::vector<Star> stars_;
-  std::vector<Face> faces_;           // sorted by their shortest edge
-  std::vector<double> edge_lengths_;  // every star edge, sorted
+  std::vector<Face> faces_;                   // sorted by their shortest edge
+  std::vector<double> edge_lengths_;          // every star edge, sorted
   std::vector<std::array<double, 16>> edge_;  // per star, the 4 x 4 marker distances
   double tolerance_m_ = 0.0;
   double check_m_ = 0.0;
@@ -97,7 +97,7 @@ struct IdentifiedStar {
   int star = 0;  // index into the library's stars()
   Rigid3d world_from_star;
   double rms_m = 0.0;
-  double chi2 = 0.0;  // of the edges between the seen markers against the model's
+  double chi2 = 0.0;                         // of the edges between the seen markers against the model's
   std::array<int, 4> point{-1, -1, -1, -1};  // per marker: index into the points, -1 when not seen
   int markers_seen = 0;
 };

@@ -51,7 +51,8 @@ Rigid3d StarTracker::predict(const TrackedStar& s, double time_s) const {
   return p;
 }
 
-bool StarTracker::near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s, double sigma_m) const {
+bool StarTracker::near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s,
+                                  double sigma_m) const {
   const double turned = Eigen::AngleAxisd(fitted.rotation * predicted.rotation.conjugate()).angle();
   // Noisy points turn a small star's fit: by about sigma over the markers' spread from their centre.
   const double noise_rad = settings_.gate_sigmas * sigma_m / spread_m_[static_cast<std::size_t>(s.star)];
@@ -110,8 +111,8 @@ void StarTracker::weigh(Candidate& c, const StarPoints& points) const {
       const int a = c.slot_point[static_cast<std::size_t>(e[0])], b = c.slot_point[static_cast<std::size_t>(e[1])];
       if (a < 0 || b < 0) continue;
       const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
-      const double d = (points[ua] - points[ub]).norm() -
-                       library_.edge_m(r.star, r.slot_marker[static_cast<std::size_t>(e[0])], r.slot_marker[static_cast<std::size_t>(e[1])]);
+      const double d = (points[ua] - points[ub]).norm() - library_.edge_m(r.star, r.slot_marker[static_cast<std::size_t>(e[0])],
+                                                                          r.slot_marker[static_cast<std::size_t>(e[1])]);
       r.chi2 += d * d / (points.sigma(ua) * points.sigma(ua) + points.sigma(ub) * points.sigma(ub));
     }
   }
@@ -191,7 +192,8 @@ bool StarTracker::follow(Candidate& c, const StarPoints& points, std::vector<boo
   return true;
 }
 
-bool StarTracker::may_settle(const Candidate& c, const std::vector<bool>& updated, const std::vector<Rigid3d>& predicted, double time_s) const {
+bool StarTracker::may_settle(const Candidate& c, const std::vector<bool>& updated, const std::vector<Rigid3d>& predicted,
+                             double time_s) const {
   const auto s = static_cast<std::size_t>(c.motion.star);
   if (updated[s]) return false;  // the star is already somewhere else this frame
   if (c.confidence < settings_.min_confidence) return false;
@@ -209,7 +211,8 @@ bool StarTracker::may_settle(const Candidate& c, const std::vector<bool>& update
                settings_.gate_m + settings_.max_speed_m_s * (time_s - before.last_seen_s));
 }
 
-const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<const Eigen::Vector3d> positions, std::span<const double> sigma_m) {
+const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<const Eigen::Vector3d> positions,
+                                                    std::span<const double> sigma_m) {
   const StarPoints points = star_points(library_, positions, sigma_m);
   const std::size_t n = points.size();
   std::vector<bool> taken(n, false);
@@ -231,7 +234,8 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
       const Eigen::Vector3d at = predicted[s] * library_.stars()[s].markers_m[static_cast<std::size_t>(m)];
       for (std::size_t q = 0; q < n; ++q) {
         const double d = (points[q] - at).norm();
-        if (d <= gate + settings_.gate_sigmas * std::sqrt(3.0) * points.sigma(q)) pairings.push_back({d, static_cast<int>(s), m, static_cast<int>(q)});
+        if (d <= gate + settings_.gate_sigmas * std::sqrt(3.0) * points.sigma(q))
+          pairings.push_back({d, static_cast<int>(s), m, static_cast<int>(q)});
       }
     }
   }
@@ -257,7 +261,8 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
     // edges say.
     if (mine.size() >= 3) fit = fit_star(library_, static_cast<int>(s), assigned[s], points);
     if (fit && !near_prediction(stars_[s], predicted[s], fit->world_from_star, time_s, mean_sigma(*fit, points))) fit.reset();
-    if (!fit && mine.size() >= 3) fit = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), mine, points), points);
+    if (!fit && mine.size() >= 3)
+      fit = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), mine, points), points);
     // One of four points may be wrong (two markers merged into one point): the best three.
     for (std::size_t drop = 0; !fit && mine.size() == 4 && drop < 4; ++drop) {
       std::vector<int> three = mine;

@@ -78,7 +78,8 @@ class StarTracker {
 
   // One frame of triangulated points at time_s (non-decreasing), with each point's standard
   // deviation per axis in metres (empty: the library's point_sigma_m). Returns every star of the set.
-  const std::vector<TrackedStar>& update(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m = {});
+  const std::vector<TrackedStar>& update(double time_s, std::span<const Eigen::Vector3d> points_world,
+                                         std::span<const double> sigma_m = {});
   const std::vector<TrackedStar>& stars() const { return stars_; }
   const StarLibrary& library() const { return library_; }
   // Constellations being weighed (not yet any star).
@@ -98,9 +99,9 @@ class StarTracker {
     double chi2 = 0.0;
   };
   struct Candidate {
-    TrackedStar motion;                     // the best reading's star, its pose and velocity
-    std::array<int, 4> slot_point{};        // this frame's points per slot
-    std::vector<Reading> readings;          // best first
+    TrackedStar motion;               // the best reading's star, its pose and velocity
+    std::array<int, 4> slot_point{};  // this frame's points per slot
+    std::vector<Reading> readings;    // best first
     int frames = 0;
     double confidence = 0.0;
   };

@@ -106,7 +106,9 @@ CameraRig perturbed_rig(const CameraRig& truth, double rms_px, unsigned seed) {
       Camera& cam = out.cameras[c];
       const Nudge& n = nudges[c];
       const Eigen::Vector3d turn = scale * n.turn_rad;
-      if (turn.norm() > 0.0) cam.cam_from_world.rotation = (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) * cam.cam_from_world.rotation).normalized();
+      if (turn.norm() > 0.0)
+        cam.cam_from_world.rotation =
+            (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) * cam.cam_from_world.rotation).normalized();
       cam.cam_from_world.translation += scale * n.shift_m;
       cam.intrinsics.fx *= 1.0 + scale * n.focal;
       cam.intrinsics.fy *= 1.0 + scale * n.focal;

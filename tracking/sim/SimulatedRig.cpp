@@ -151,7 +151,9 @@ void SimulatedRig::merge_blobs(int camera, const std::vector<Eigen::Vector3d>& p
   // A marker's image is a disc of radius f (d / 2) / depth; two discs that overlap are one blob.
   const Camera& cam = rig_.cameras[static_cast<std::size_t>(camera)];
   const double focal = 0.5 * (cam.intrinsics.fx + cam.intrinsics.fy);
-  auto radius = [&](const Detection& d) { return d.truth_marker < 0 ? 0.0 : focal * 0.5 * settings_.marker_diameter_m / std::max(depth(d), 1e-3); };
+  auto radius = [&](const Detection& d) {
+    return d.truth_marker < 0 ? 0.0 : focal * 0.5 * settings_.marker_diameter_m / std::max(depth(d), 1e-3);
+  };
   struct Blob {
     Eigen::Vector2d sum;
     double weight;
@@ -255,7 +257,8 @@ RigFrame SimulatedRig::frame_at(double t_s) {
       cf.detections.push_back({*rig_.cameras[c].project(p) + n, static_cast<int>(m)});
     }
     add_strays(static_cast<int>(c), cf.detections);
-    if (settings_.merge_distance_px > 0.0 || settings_.marker_diameter_m > 0.0) merge_blobs(static_cast<int>(c), frame.truth_position_m, cf.detections);
+    if (settings_.merge_distance_px > 0.0 || settings_.marker_diameter_m > 0.0)
+      merge_blobs(static_cast<int>(c), frame.truth_position_m, cf.detections);
     std::shuffle(cf.detections.begin(), cf.detections.end(), rng_);
     frame.cameras.push_back(std::move(cf));
   }
