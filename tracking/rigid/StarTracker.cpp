@@ -211,15 +211,10 @@ bool StarTracker::may_settle(const Candidate& c, const std::vector<bool>& update
                settings_.gate_m + settings_.max_speed_m_s * (time_s - before.last_seen_s));
 }
 
-const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<const Eigen::Vector3d> positions,
-                                                    std::span<const double> sigma_m) {
-  const StarPoints points = star_points(library_, positions, sigma_m);
+// Recently seen stars: nearest points to their predicted markers, closest pairs first, refitted.
+void StarTracker::follow_stars(double time_s, const StarPoints& points, std::vector<bool>& taken, std::vector<bool>& updated,
+                               std::vector<Rigid3d>& predicted) {
   const std::size_t n = points.size();
-  std::vector<bool> taken(n, false);
-  std::vector<bool> updated(stars_.size(), false);
-  std::vector<Rigid3d> predicted(stars_.size());
-
-  // 1. Recently seen stars: nearest points to their predicted markers, closest pairs first.
   struct Pairing {
     double d;
     int star, marker, point;
@@ -279,6 +274,18 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
       if (p >= 0) taken[static_cast<std::size_t>(p)] = true;
     }
   }
+}
+
+const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<const Eigen::Vector3d> positions,
+                                                    std::span<const double> sigma_m) {
+  const StarPoints points = star_points(library_, positions, sigma_m);
+  const std::size_t n = points.size();
+  std::vector<bool> taken(n, false);
+  std::vector<bool> updated(stars_.size(), false);
+  std::vector<Rigid3d> predicted(stars_.size());
+
+  // 1. Recently seen stars, followed to their predicted markers.
+  follow_stars(time_s, points, taken, updated, predicted);
 
   // 2. Candidates: followed, weighed, and settled as a star once sure.
   const auto settle = [&](const Candidate& c) {

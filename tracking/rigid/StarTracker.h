@@ -91,6 +91,9 @@ class StarTracker {
   Rigid3d predict(const TrackedStar& s, double time_s) const;
   bool near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s, double sigma_m) const;
   void accept(TrackedStar& s, const IdentifiedStar& fit, double time_s);
+  // Step 1 of update: the recently seen stars followed; marks their points taken and them updated.
+  void follow_stars(double time_s, const StarPoints& points, std::vector<bool>& taken, std::vector<bool>& updated,
+                    std::vector<Rigid3d>& predicted);
   // One reading of a candidate: its slots (markers of the star it was found as) are this star's
   // markers slot_marker[slot]; chi2 adds up the evidence against it.
   struct Reading {
