@@ -103,6 +103,11 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
       if (!layout) return std::unexpected(layout.error());
       layouts[h] = std::move(*layout);
     }
+    // Hands that could be taken for each other, or for an object, from three markers are refused.
+    if (const auto clashes = check_hand_stars(layouts, objects.stars); !clashes.empty()) {
+      return std::unexpected("hand layouts: " + clashes.front() +
+                             (clashes.size() > 1 ? " (and " + std::to_string(clashes.size() - 1) + " more)" : ""));
+    }
     const double rate_hz = scene.settings.headset.refresh_hz;
     std::unique_ptr<FrameSource> source;
     if (video) {

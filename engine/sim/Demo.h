@@ -89,6 +89,7 @@ class Demo {
   Demo& operator=(const Demo&) = delete;
 
   // Fails naming what is wrong: bad settings, a rig, star set or hand layout that cannot be read,
+  // hand stars that share a face with each other or with an object's star (check_hand_stars),
   // video devices that cannot be opened or do not fit the rig, a recording that cannot be read or
   // written, a physics error; video with perfect hands or with a replay.
   [[nodiscard]] static std::expected<std::unique_ptr<Demo>, std::string> create(const SceneDesc& scene, Renderer* renderer,

@@ -59,6 +59,7 @@ DemoScript::DemoScript(const SceneDesc& scene) {
     cube_home_ = c;
     cube_place_ = place;
     cube_pickup_ = c;
+    round_start_ = c;
     cube_return_pickup_ = place;
     cube_grip_offset_ = c - pose_of(*cube).translation;
     build_right_keys();
@@ -95,14 +96,15 @@ DemoScript::DemoScript(const SceneDesc& scene) {
 
 void DemoScript::build_right_keys() {
   // Out to `place` and, after the left hand's first turn, back home; then over to where the cube
-  // lies for the next round's pickup. Pickups aim where the cube was last seen lying (reaim()).
+  // lies for the next round's pickup. Pickups aim where the cube was last seen lying (reaim()):
+  // the round starts above where the last round aimed and moves over the cube as it lies now.
   const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
   const Eigen::Vector3d rest(0.25, 0.95, -0.3);
   const Eigen::Vector3d& c = cube_pickup_;
   const Eigen::Vector3d& back = cube_return_pickup_;
   const Eigen::Vector3d& home = cube_home_;
   const Eigen::Vector3d& place = cube_place_;
-  scripts_[1].keys = {{0.0, c + 0.15 * up, 0.0},
+  scripts_[1].keys = {{0.0, round_start_ + 0.15 * up, 0.0},
                       {0.8, c + 0.15 * up, 0.0},
                       {1.6, c, 0.0},
                       {2.2, c, 1.0},
@@ -130,14 +132,19 @@ void DemoScript::reaim(double t_s, const Eigen::Vector3d& cube_position) {
   const double before = last_reaim_t_;
   last_reaim_t_ = t;
   const auto crossed = [&](double mark) { return before < mark && t >= mark; };
-  // While the right hand rests (7.6-11.5 s) and while it waits above home (18.3-25.9 s), it looks
-  // where the cube lies: those keys are still ahead, so the hand's path stays continuous.
-  if (crossed(10.0))
-    cube_return_pickup_ = cube_position + cube_grip_offset_;
-  else if (crossed(20.0))
+  // Before the first descent (0-0.8 s: the cube has settled where the scene dropped it), while
+  // the right hand rests (7.6-11.5 s) and while it waits above home (18.3-25.9 s), it looks where
+  // the cube lies: those keys are still ahead, so the hand's path stays continuous.
+  if (crossed(0.4)) {
     cube_pickup_ = cube_position + cube_grip_offset_;
-  else
+  } else if (crossed(10.0)) {
+    cube_return_pickup_ = cube_position + cube_grip_offset_;
+  } else if (crossed(20.0)) {
+    cube_pickup_ = cube_position + cube_grip_offset_;
+    round_start_ = cube_pickup_;
+  } else {
     return;
+  }
   build_right_keys();
 }
 

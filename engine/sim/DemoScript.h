@@ -37,10 +37,10 @@ class DemoScript {
   explicit DemoScript(const SceneDesc& scene);
   SceneTruth at(double t_s) const;
   // Tells the script where the cube lies (its entity's position, after the physics step at t_s).
-  // Like a user looking before reaching, the right hand's next pickup aims there: the return
-  // pickup is aimed at 10 s into each round (the hand resting), the next round's at 20 s (the hand
-  // waiting above home). Without this each round would start from the last round's small
-  // placement errors.
+  // Like a user looking before reaching, the right hand's next pickup aims there: the first pickup
+  // at 0.4 s (the cube settled where the scene put it), the return pickup at 10 s into each round
+  // (the hand resting), the next round's at 20 s (the hand waiting above home). Without this each round would start from the last round's
+  // small placement errors.
   void reaim(double t_s, const Eigen::Vector3d& cube_position);
   // One round of the script; at() repeats it.
   double duration_s() const { return 26.0; }
@@ -71,6 +71,7 @@ class DemoScript {
   // The right hand's cube: where it starts (and is brought back to), where it is carried, where
   // the next pickups aim, and the grip point's offset from the cube's origin.
   Eigen::Vector3d cube_home_{0, 0, 0}, cube_place_{0, 0, 0}, cube_pickup_{0, 0, 0}, cube_return_pickup_{0, 0, 0};
+  Eigen::Vector3d round_start_{0, 0, 0};  // where a round's first key holds the hand (above the last aim)
   Eigen::Vector3d cube_grip_offset_{0, 0, 0};
   double last_reaim_t_ = 0.0;
   mutable std::map<std::pair<int, long>, GraspPose> grasps_;  // per hand and width (0.01 mm), built once

@@ -21,7 +21,16 @@ LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObj
                            LiveTrackingSettings settings)
     : source_(std::move(source)), settings_(std::move(settings)), layouts_(layouts) {
   for (const TrackedObject& o : objects.objects) object_from_star_.emplace_back(o.star_id, o.object_from_star);
-  star_tracker_ = std::make_unique<StarTracker>(StarLibrary(objects.stars));
+  // One library for the objects' stars and both hand stars (ids -1 and -2, after the objects'), so
+  // that one assignment a frame shares the points between them all.
+  StarSet all = objects.stars;
+  for (std::size_t h = 0; h < 2; ++h) {
+    MarkerStar hand = layouts_[h].hand_star_set().stars[0];
+    hand.id = -1 - static_cast<int>(h);
+    hand_star_[h] = static_cast<int>(all.stars.size());
+    all.stars.push_back(hand);
+  }
+  star_tracker_ = std::make_unique<StarTracker>(StarLibrary(all));
   HandTrackerSettings tracker_settings;
   tracker_settings.filter = settings_.filter_hands;
   for (std::size_t h = 0; h < 2; ++h) {
@@ -129,8 +138,11 @@ void LiveTracking::track_stars(double t_s) {
 }
 
 void LiveTracking::track_hands(double t_s) {
+  // The hand stars were followed with the objects' (track_stars); the points left go to the fingertips.
+  const std::array<HandTracker*, 2> hands{hand_trackers_[0].get(), hand_trackers_[1].get()};
+  rhot::track_hands(hands, hand_star_, star_tracker_->stars(), t_s, results_.points, point_sigma_m_, taken_);
   for (std::size_t h = 0; h < 2; ++h) {
-    const TrackedHand& tracked = hand_trackers_[h]->update(t_s, results_.points, point_sigma_m_);
+    const TrackedHand& tracked = hand_trackers_[h]->last();
     results_.hands[h] = hand_input(tracked);
     results_.counts.hands_seen[h] = tracked.hand_seen;
     results_.pinch[h] = {tracked.state.pinch.activation, tracked.state.pinch.active};

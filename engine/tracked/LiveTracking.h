@@ -4,8 +4,10 @@
 //
 //   source    the next multi-camera frame (the source's warnings are logged)
 //   matching  detections matched across cameras and triangulated
-//   stars     the tracked objects' marker stars identified and followed; each object's pose
-//   hands     each hand's star and fingertip markers -> a 26-joint hand (HandTracker)
+//   stars     the tracked objects' marker stars and both hands' stars identified and followed
+//             by one StarTracker (a point is one star's marker at most); each object's pose
+//   hands     the points left shared out to both hands' fingertips, nearest first; each hand's
+//             star and fingertip markers -> a 26-joint hand (HandTracker.h, track_hands)
 //
 // Once the source has ended, frames have no detections (nothing is seen, hands ease to rest) and
 // ended() is true. A frame from outside never stops the runtime: one whose cameras are not the
@@ -68,6 +70,7 @@ class LiveTracking final : public ResultSource {
   FrameSource& source() { return *source_; }
   const TrackedHand& tracked_hand(HandSide side) const { return hand_trackers_[side == HandSide::kLeft ? 0 : 1]->last(); }
   const std::array<HandLayout, 2>& layouts() const { return layouts_; }
+  // The objects' stars, then the left and right hands' (ids -1 and -2).
   const StarLibrary& star_library() const { return star_tracker_->library(); }
 
  private:
@@ -77,8 +80,10 @@ class LiveTracking final : public ResultSource {
   std::vector<double> point_sigma_m_;                      // this frame's points' standard deviations
   std::vector<std::pair<int, Rigid3d>> object_from_star_;  // per tracked object: star id, where the star sits on it
   std::array<HandLayout, 2> layouts_;
-  std::unique_ptr<StarTracker> star_tracker_;
+  std::unique_ptr<StarTracker> star_tracker_;  // the objects' stars, then the left and right hand stars
+  std::array<int, 2> hand_star_{};             // each hand's star in star_tracker_
   std::array<std::unique_ptr<HandTracker>, 2> hand_trackers_;
+  std::vector<bool> taken_;  // this frame's points used by a star or a fingertip
   RigFrame frame_;
   TrackingResults results_;
   bool ended_ = false;

@@ -1,6 +1,6 @@
 #pragma once
 // rhot-eval's subcommands, one file each (triangulation.cpp, wand.cpp, stars.cpp, hands.cpp,
-// grasp.cpp, frame.cpp), and what they share. Each prints one JSON object on stdout and returns
+// grasp.cpp, frame.cpp, demo.cpp), and what they share. Each prints one JSON object on stdout and returns
 // the process's exit code.
 
 #include <expected>
@@ -61,6 +61,7 @@ int hands(const std::string& rig_file, const std::string& layout_file, const std
           unsigned seed, const std::vector<double>& volume_centre, bool filter);
 int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);
 int grasp(const std::string& scenario);
+int demo(const std::string& scene_file, int placements, unsigned seed, const WorldFlags& world, const std::string& hands, int frames);
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading);
 
 }  // namespace rhot::eval

@@ -2,6 +2,7 @@
 //
 //   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M]
 //                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//   rhot-eval demo [--scene FILE] [--placements N] [--seed S] [--hands tracked|perfect] [world flags] --json
 //   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--sigma PX] [--frames N] --json
 //   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
 //   rhot-eval calibration --rig FILE [--wand-mm 500] [--sigma PX] [--frames 2000] [--seed S] [--dropout P] --json
@@ -131,6 +132,23 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
   frame_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  auto* demo_cmd =
+      app.add_subcommand("demo", "the demo's first pickup with the cube at random spots on the table: grasp success, lift, hand confusion");
+  int placements = 50;
+  int pickup_frames = 330;
+  std::string hands_mode = "tracked";
+  WorldFlags demo_world;
+  demo_cmd->add_option("--scene", scene_file, "scene file (JSON) with a \"cube-red\" on a \"table\"")->capture_default_str();
+  demo_cmd->add_option("--placements", placements, "random spots for the cube")->capture_default_str()->check(CLI::Range(1, 100000));
+  demo_cmd->add_option("--seed", seed, "random seed (spots; each placement's world takes seed + its index)")->capture_default_str();
+  demo_cmd->add_option("--hands", hands_mode, "tracked (through the cameras) or perfect (the script's)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"tracked", "perfect"}));
+  demo_cmd->add_option("--frames", pickup_frames, "frames per placement (the lift ends at 3.2 s)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  add_world_flags(*demo_cmd, demo_world, true);
+  demo_cmd->add_flag("--json", json, "print JSON (the only output format)");
   auto* calib_cmd = app.add_subcommand("calibration", "a simulated wand session calibrated from unknown extrinsics, against the true rig");
   int calib_frames = 2000;
   double calib_wand_mm = 500.0;
@@ -156,6 +174,7 @@ int main(int argc, char** argv) {
   }
   if (grasp_cmd->parsed()) return grasp(scenario);
   if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
+  if (demo_cmd->parsed()) return demo(scene_file, placements, seed, demo_world, hands_mode, pickup_frames);
   if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading));
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
   if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, world, hand_frames, seed, volume_centre, filter);

@@ -31,6 +31,27 @@ StarSet HandLayout::segment_star_set() const {
   return set;
 }
 
+std::vector<std::string> check_hand_stars(const std::array<HandLayout, 2>& layouts, const StarSet& objects) {
+  std::array<MarkerStar, 2> hand;
+  std::array<std::string, 2> name;
+  double variation_mm = 0.0;
+  for (std::size_t h = 0; h < 2; ++h) {
+    const StarSet set = layouts[h].hand_star_set();
+    hand[h] = set.stars[0];
+    variation_mm = std::max(variation_mm, set.rules.variation_mm);
+    name[h] = std::string(layouts[h].side == HandSide::kLeft ? "left" : "right") + " hand star (" + layouts[h].name + ")";
+  }
+  if (!objects.stars.empty()) variation_mm = std::max(variation_mm, objects.rules.variation_mm);
+  std::vector<std::string> problems = clashing_faces(hand[0], name[0], hand[1], name[1], variation_mm);
+  for (std::size_t h = 0; h < 2; ++h) {
+    for (const MarkerStar& star : objects.stars) {
+      for (std::string& p : clashing_faces(hand[h], name[h], star, "object star " + std::to_string(star.id), variation_mm))
+        problems.push_back(std::move(p));
+    }
+  }
+  return problems;
+}
+
 double segment_star_lift_m(const HandPose& pose, HandJoint bone) { return pose.radius_m[static_cast<std::size_t>(bone)] + 0.001; }
 
 Finger finger_of_bone(HandJoint bone) {

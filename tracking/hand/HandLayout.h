@@ -59,6 +59,13 @@ struct HandLayout {
 
 [[nodiscard]] std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::path& file);
 
+// Whether two hands and the objects' stars can be told apart from any three of their markers: every
+// face of either hand star that differs from a face of the other hand's star, or of an object's
+// star, by less than the larger variation (the hand stars' 1.5 mm or the objects' set's) in every
+// edge, under any correspondence; mirror images included (layouts[0] is the left hand). Empty when
+// they all differ.
+std::vector<std::string> check_hand_stars(const std::array<HandLayout, 2>& layouts, const StarSet& objects);
+
 // Where a segment star sits: star frame -> hand frame, for a hand in `pose` whose finger planes
 // point `up` (HandSolver's chains give it).
 Rigid3d hand_from_segment_star(const HandPose& pose, HandJoint bone, const FingerChain& chain);

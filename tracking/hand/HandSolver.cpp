@@ -117,34 +117,80 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
   started_ = true;
   state_.confidence[static_cast<std::size_t>(HandJoint::kPalm)] = 1.0;
   state_.confidence[static_cast<std::size_t>(HandJoint::kWrist)] = 1.0;
-  for (int f = 0; f < kFingerCount; ++f) {
-    const auto fi = static_cast<std::size_t>(f);
+  // The seen fingers first: measured bones win, else IK to the tip; how fast each one bends.
+  const std::array<FingerAngles, kFingerCount> before = state_.angles;
+  std::array<bool, kFingerCount> bones_seen{};
+  double closing_sum = 0.0;  // the seen fingers' flexion rates (sum of the three hinges), rad/s
+  int closing_count = 0;
+  for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
     const FingerChain& chain = chains_[fi];
-    const auto joints = chain_joints(static_cast<Finger>(f));
-    const bool bones_seen = measured[fi].has_value();
-    const bool seen = bones_seen || (tips[fi].has_value() && tips[fi]->allFinite());
+    bones_seen[fi] = measured[fi].has_value();
+    const bool seen = bones_seen[fi] || (tips[fi].has_value() && tips[fi]->allFinite());
     state_.tip_seen[fi] = seen;
+    if (!seen) continue;
     FingerAngles& a = state_.angles[fi];
-    if (bones_seen) {
-      a = clamp_to_limits(chain.limits, *measured[fi]);
-      last_seen_s_[fi] = time_s_;
-    } else if (seen) {
-      a = solve_fabrik(chain, *tips[fi], a).angles;
-      last_seen_s_[fi] = time_s_;
+    a = bones_seen[fi] ? clamp_to_limits(chain.limits, *measured[fi]) : solve_fabrik(chain, *tips[fi], a).angles;
+    last_seen_s_[fi] = time_s_;
+    if (dt <= 0.0) continue;
+    // The finger's own motion, smoothed over a few frames (for when it is hidden next).
+    FingerAngles& r = rate_[fi];
+    r.abduction_rad = 0.5 * r.abduction_rad + 0.5 * (a.abduction_rad - before[fi].abduction_rad) / dt;
+    double closing = 0.0;
+    for (std::size_t k = 0; k < 3; ++k) {
+      r.flexion_rad[k] = 0.5 * r.flexion_rad[k] + 0.5 * (a.flexion_rad[k] - before[fi].flexion_rad[k]) / dt;
+      closing += r.flexion_rad[k];
+    }
+    closing_sum += closing;
+    ++closing_count;
+  }
+  // Hidden fingers: with other fingers seen, each bends as they do (a hand closes and opens as a
+  // whole: a grasp, a release); with none seen, it goes on as it last moved, slowing, holds, and
+  // only after kHold_s eases toward relaxed.
+  for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
+    if (state_.tip_seen[fi]) continue;
+    const FingerChain& chain = chains_[fi];
+    FingerAngles& a = state_.angles[fi];
+    FingerAngles& r = rate_[fi];
+    const double unseen_s = time_s_ - last_seen_s_[fi];
+    if (closing_count > 0) {
+      // The others' mean flexion rate, shared over this finger's hinges by their ranges.
+      const double closing = closing_sum / closing_count;
+      double range = 0.0;
+      for (std::size_t k = 0; k < 3; ++k) range += chain.limits.flexion_max_rad[k] - chain.limits.flexion_min_rad[k];
+      for (std::size_t k = 0; k < 3; ++k) {
+        r.flexion_rad[k] = closing * (chain.limits.flexion_max_rad[k] - chain.limits.flexion_min_rad[k]) / range;
+        a.flexion_rad[k] += dt * r.flexion_rad[k];
+      }
+      r.abduction_rad = 0.0;
+    } else if (unseen_s <= kHold_s) {
+      const double slow = std::exp(-dt / kCoast_s);
+      a.abduction_rad += dt * r.abduction_rad;
+      for (std::size_t k = 0; k < 3; ++k) a.flexion_rad[k] += dt * r.flexion_rad[k];
+      r.abduction_rad *= slow;
+      for (double& v : r.flexion_rad) v *= slow;
     } else {
       // Ease toward relaxed: the remaining difference shrinks by exp(-dt / T) each frame.
       const double keep = std::exp(-dt / kRelaxTime_s);
       a.abduction_rad = relaxed_[fi].abduction_rad + keep * (a.abduction_rad - relaxed_[fi].abduction_rad);
       for (std::size_t k = 0; k < 3; ++k)
         a.flexion_rad[k] = relaxed_[fi].flexion_rad[k] + keep * (a.flexion_rad[k] - relaxed_[fi].flexion_rad[k]);
-      a = clamp_to_limits(chain.limits, a);
+      r = FingerAngles{};
     }
-    const auto p = finger_forward(chain, a);
-    const double confidence = seen ? 0.9 : 0.9 * std::exp(-(time_s_ - last_seen_s_[fi]) / kRelaxTime_s);
+    a = clamp_to_limits(chain.limits, a);
+    estimated_[fi] = closing_count > 0;
+  }
+  for (int f = 0; f < kFingerCount; ++f) {
+    const auto fi = static_cast<std::size_t>(f);
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    const bool seen = state_.tip_seen[fi];
+    const auto p = finger_forward(chains_[fi], state_.angles[fi]);
+    const double unseen_s = time_s_ - last_seen_s_[fi];
+    const double confidence = seen ? 0.9 : estimated_[fi] ? kEstimatedConfidence : 0.9 * std::exp(-unseen_s / kRelaxTime_s);
     for (std::size_t k = 0; k < 4; ++k) {
       // The thumb's metacarpal joint moves with the CMC; the fingers' knuckles are fixed by the hand frame.
       state_.pose.position_m[static_cast<std::size_t>(joints[k])] = p[k];
-      state_.confidence[static_cast<std::size_t>(joints[k])] = (k == 0 && f != 0) || bones_seen ? 1.0 : (k == 3 && seen ? 1.0 : confidence);
+      state_.confidence[static_cast<std::size_t>(joints[k])] =
+          (k == 0 && f != 0) || bones_seen[fi] ? 1.0 : (k == 3 && seen ? 1.0 : confidence);
     }
     if (f != 0) state_.confidence[static_cast<std::size_t>(joints[0]) - 1] = 1.0;  // the metacarpal joint
   }

@@ -1,11 +1,17 @@
 #pragma once
 // A whole hand from its fingertips: the hand frame (from the marker star on the back of the hand)
 // fixes the palm, wrist and metacarpals; each finger's joints come from FABRIK toward its tip
-// marker (FingerIK.h); a finger whose tip is not seen eases from its last angles toward a relaxed
-// pose, its joints' confidence falling; pinch and grip gestures with hysteresis.
+// marker (FingerIK.h); pinch and grip gestures with hysteresis.
+//
+// A finger whose tip is hidden (a curling finger hides its own marker) is estimated, not dropped:
+// while other fingers are seen, it bends as they do, at their mean flexion rate shared over its
+// hinges (a hand closes on an object and opens again as a whole), and holds still while they do;
+// with no finger seen it goes on as it last moved, slowing (kCoast_s), holds, and only after
+// kHold_s eases toward a relaxed pose.
 //
 // Joint confidence: 1 for joints fixed by the hand frame and for a seen fingertip; 0.9 for joints
-// placed by IK from a seen tip; for a finger unseen for t seconds, 0.9 exp(-t / 0.5 s).
+// placed by IK from a seen tip; kEstimatedConfidence for a hidden finger estimated from the seen
+// ones; for a finger unseen for t seconds with no finger seen, 0.9 exp(-t / 0.5 s).
 
 #include <array>
 #include <optional>
@@ -68,13 +74,20 @@ class HandSolver {
   const HandState& state() const { return state_; }
   const std::array<FingerChain, kFingerCount>& chains() const { return chains_; }
 
-  // How long a finger takes to relax when unseen (time constant), and its relaxed pose.
+  // How long a finger takes to relax once it has been unseen for kHold_s with no other finger
+  // seen (time constant); how fast its last motion dies away before that (time constant); the
+  // confidence of a hidden finger estimated from the seen ones.
   static constexpr double kRelaxTime_s = 0.5;
+  static constexpr double kHold_s = 1.0;
+  static constexpr double kCoast_s = 0.15;
+  static constexpr double kEstimatedConfidence = 0.6;
 
  private:
   std::array<FingerChain, kFingerCount> chains_;
   std::array<FingerAngles, kFingerCount> relaxed_;
   std::array<double, kFingerCount> last_seen_s_{};
+  std::array<FingerAngles, kFingerCount> rate_{};  // each finger's angular rates, rad/s (seen: measured; hidden: estimated)
+  std::array<bool, kFingerCount> estimated_{};     // hidden and estimated from the seen fingers
   GestureSettings gestures_;
   HandState state_;
   double time_s_ = 0.0;

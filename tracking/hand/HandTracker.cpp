@@ -8,7 +8,7 @@ namespace rhot {
 HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, HandTrackerSettings settings)
     : layout_(layout),
       settings_(settings),
-      star_(StarLibrary(layout.hand_star_set())),
+      star_(std::make_unique<StarTracker>(StarLibrary(layout.hand_star_set()))),
       hand_filter_(settings.position, settings.rotation),
       solver_(layout.side, skeleton) {
   tip_filters_.fill(OneEuroFilter<3>(settings.position));
@@ -17,45 +17,57 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
 }
 
 const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m) {
-  const TrackedStar& star = star_.update(time_s, points, sigma_m)[0];
+  const std::vector<TrackedStar>& stars = star_->update(time_s, points, sigma_m);
+  std::vector<bool> taken(points.size(), false);
+  HandTracker* const self = this;
+  const int star = 0;
+  track_hands({&self, 1}, {&star, 1}, stars, time_s, points, sigma_m, taken);
+  return out_;
+}
+
+void HandTracker::begin(double time_s, const TrackedStar& star) {
   out_.hand_seen = star.seen_now();
   out_.fingertip_point.fill(-1);
+  if (!out_.hand_seen) return;
+  out_.world_from_hand = settings_.filter ? hand_filter_.filter(star.world_from_star, time_s) : star.world_from_star;
+  // Each marked fingertip's marker where the last solve puts it: beyond the tip along the last bone.
+  const HandState& last = solver_.state();
+  for (int f = 0; f < kFingerCount; ++f) {
+    const auto fi = static_cast<std::size_t>(f);
+    if (!layout_.fingertip_offset_m[fi]) continue;
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    const Eigen::Vector3d tip = last.pose.position_m[static_cast<std::size_t>(joints[3])];
+    along_[fi] = (tip - last.pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
+    predicted_marker_[fi] = tip + *layout_.fingertip_offset_m[fi] * along_[fi];
+  }
+}
+
+std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(std::span<const Eigen::Vector3d> points,
+                                                                               const std::vector<bool>& taken) const {
+  std::vector<FingertipCandidate> out;
+  if (!out_.hand_seen) return out;
+  const Rigid3d hand_from_world = out_.world_from_hand.inverse();
+  for (int f = 0; f < kFingerCount; ++f) {
+    if (!layout_.fingertip_offset_m[static_cast<std::size_t>(f)]) continue;
+    for (std::size_t q = 0; q < points.size(); ++q) {
+      if (taken[q]) continue;
+      const double d = (hand_from_world * points[q] - predicted_marker_[static_cast<std::size_t>(f)]).norm();
+      if (d < kFingertipGate_m) out.push_back({d, f, static_cast<int>(q)});
+    }
+  }
+  return out;
+}
+
+const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
+                                       const std::array<int, kFingerCount>& fingertip_point) {
   std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips{};
   if (out_.hand_seen) {
-    out_.world_from_hand = settings_.filter ? hand_filter_.filter(star.world_from_star, time_s) : star.world_from_star;
     const Rigid3d hand_from_world = out_.world_from_hand.inverse();
-    std::vector<bool> taken(points.size(), false);
-    for (const int p : star.point) {
-      if (p >= 0) taken[static_cast<std::size_t>(p)] = true;
-    }
-    // Each marked fingertip's marker where the last solve puts it; nearest pairs first.
-    struct Pair {
-      double d;
-      int finger, point;
-    };
-    std::vector<Pair> pairs;
-    std::array<Eigen::Vector3d, kFingerCount> along{};
-    const HandState& last = solver_.state();
-    for (int f = 0; f < kFingerCount; ++f) {
-      const auto fi = static_cast<std::size_t>(f);
-      if (!layout_.fingertip_offset_m[fi]) continue;
-      const auto joints = chain_joints(static_cast<Finger>(f));
-      const Eigen::Vector3d tip = last.pose.position_m[static_cast<std::size_t>(joints[3])];
-      along[fi] = (tip - last.pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
-      const Eigen::Vector3d predicted = tip + *layout_.fingertip_offset_m[fi] * along[fi];
-      for (std::size_t q = 0; q < points.size(); ++q) {
-        if (taken[q]) continue;
-        const double d = (hand_from_world * points[q] - predicted).norm();
-        if (d < kFingertipGate_m) pairs.push_back({d, f, static_cast<int>(q)});
-      }
-    }
-    std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.d < b.d; });
-    for (const Pair& pr : pairs) {
-      const auto fi = static_cast<std::size_t>(pr.finger);
-      if (out_.fingertip_point[fi] >= 0 || taken[static_cast<std::size_t>(pr.point)]) continue;
-      out_.fingertip_point[fi] = pr.point;
-      taken[static_cast<std::size_t>(pr.point)] = true;
-      tips[fi] = hand_from_world * points[static_cast<std::size_t>(pr.point)] - *layout_.fingertip_offset_m[fi] * along[fi];
+    for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
+      const int p = fingertip_point[fi];
+      if (p < 0 || !layout_.fingertip_offset_m[fi]) continue;
+      out_.fingertip_point[fi] = p;
+      tips[fi] = hand_from_world * points[static_cast<std::size_t>(p)] - *layout_.fingertip_offset_m[fi] * along_[fi];
     }
     for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
       if (!settings_.filter) break;
@@ -110,6 +122,38 @@ const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vec
   last_ik_us_ = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   for (std::size_t j = 0; j < kHandJointCount; ++j) out_.joints_world[j] = out_.world_from_hand * out_.state.pose.position_m[j];
   return out_;
+}
+
+void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_star, const std::vector<TrackedStar>& stars, double time_s,
+                 std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m, std::vector<bool>& taken) {
+  taken.assign(points.size(), false);
+  for (const TrackedStar& s : stars) {
+    if (s.frames_since_seen != 0) continue;
+    for (const int p : s.point) {
+      if (p >= 0) taken[static_cast<std::size_t>(p)] = true;
+    }
+  }
+  struct Pick {
+    double distance_m;
+    std::size_t hand;
+    int finger, point;
+  };
+  std::vector<Pick> picks;
+  for (std::size_t h = 0; h < hands.size(); ++h) {
+    hands[h]->begin(time_s, stars[static_cast<std::size_t>(hand_star[h])]);
+    for (const auto& c : hands[h]->fingertip_candidates(points, taken)) picks.push_back({c.distance_m, h, c.finger, c.point});
+  }
+  // Nearest first over every hand: a point goes to the fingertip it fits best, whichever hand's.
+  std::sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance_m < b.distance_m; });
+  std::vector<std::array<int, kFingerCount>> tip(hands.size());
+  for (auto& t : tip) t.fill(-1);
+  for (const Pick& p : picks) {
+    int& slot = tip[p.hand][static_cast<std::size_t>(p.finger)];
+    if (slot >= 0 || taken[static_cast<std::size_t>(p.point)]) continue;
+    slot = p.point;
+    taken[static_cast<std::size_t>(p.point)] = true;
+  }
+  for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->finish(time_s, points, sigma_m, tip[h]);
 }
 
 }  // namespace rhot

@@ -2,7 +2,14 @@
 // A hand from triangulated points, with a layout (HandLayout.h): the hand star gives the hand
 // frame (StarTracker), the points left near each fingertip's predicted marker are its marker
 // (nearest first, each point once), and HandSolver fits the fingers.
+//
+// Alone, a HandTracker follows its hand star with a StarTracker of its own. With other hands and
+// objects in view (track_hands below), the hand stars are followed by one StarTracker with every
+// other star, so that a point is one star's marker at most, and the points left are shared out to
+// every hand's fingertips at once, nearest first: two hands passing each other cannot claim the
+// same markers.
 
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -34,8 +41,24 @@ class HandTracker {
  public:
   HandTracker(const HandLayout& layout, const HandPose& skeleton, HandTrackerSettings settings = {});
 
-  // points_world with each one's standard deviation per axis (metres; empty: the star library's default).
+  // points_world with each one's standard deviation per axis (metres; empty: the star library's
+  // default). The hand star is followed by the tracker's own StarTracker.
   const TrackedHand& update(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m = {});
+
+  // A fingertip marker a point could be: how far it is from where the finger's marker is predicted.
+  struct FingertipCandidate {
+    double distance_m = 0.0;
+    int finger = 0;
+    int point = 0;
+  };
+  // The update in three steps, for a hand star followed outside (track_hands):
+  //   begin      the hand frame from this frame's star
+  //   fingertip_candidates  the free points near each marked fingertip's predicted marker
+  //   finish     the fingers solved with the points given to each fingertip (-1: none)
+  void begin(double time_s, const TrackedStar& hand_star);
+  std::vector<FingertipCandidate> fingertip_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken) const;
+  const TrackedHand& finish(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m,
+                            const std::array<int, kFingerCount>& fingertip_point);
   const HandSolver& solver() const { return solver_; }
   const TrackedHand& last() const { return out_; }  // the last update's result
   // Time spent in HandSolver::update (the IK) on the last frame.
@@ -46,13 +69,23 @@ class HandTracker {
  private:
   HandLayout layout_;
   HandTrackerSettings settings_;
-  StarTracker star_;
+  std::unique_ptr<StarTracker> star_;    // for update(): the hand star alone
   std::optional<StarTracker> segments_;  // the layout's segment stars, if any
   PoseFilter hand_filter_;
   std::array<OneEuroFilter<3>, kFingerCount> tip_filters_;
+  // This frame's, from begin(): each marked fingertip's last bone direction and predicted marker (hand frame).
+  std::array<Eigen::Vector3d, kFingerCount> along_{};
+  std::array<Eigen::Vector3d, kFingerCount> predicted_marker_{};
   HandSolver solver_;
   TrackedHand out_;
   double last_ik_us_ = 0.0;
 };
+
+// Every hand of a frame, their stars followed with every other star by one StarTracker (`stars`:
+// that tracker's output; hand_star[h]: the index of hand h's star in it). The points of every star
+// seen this frame are taken; the fingertips get the points left, nearest first over all hands.
+// `taken` comes back marking the points the stars and the fingertips use.
+void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_star, const std::vector<TrackedStar>& stars, double time_s,
+                 std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m, std::vector<bool>& taken);
 
 }  // namespace rhot

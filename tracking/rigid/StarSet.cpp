@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -34,7 +35,35 @@ std::array<double, 3> face_edges(const MarkerStar& s, const std::array<int, 3>& 
   return e;
 }
 
+// How far two faces are apart: under the vertex correspondence that brings them nearest, the
+// largest difference of an edge.
+double face_difference_mm(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  double least = std::numeric_limits<double>::infinity();
+  std::array<std::size_t, 3> perm{0, 1, 2};
+  do {
+    double most = 0.0;
+    for (std::size_t k = 0; k < 3; ++k) most = std::max(most, std::abs(a[k] - b[perm[k]]));
+    least = std::min(least, most);
+  } while (std::next_permutation(perm.begin(), perm.end()));
+  return least;
+}
+
 }  // namespace
+
+std::vector<std::string> clashing_faces(const MarkerStar& a, std::string_view a_name, const MarkerStar& b, std::string_view b_name,
+                                        double variation_mm) {
+  std::vector<std::string> problems;
+  for (std::size_t fa = 0; fa < 4; ++fa) {
+    for (std::size_t fb = 0; fb < 4; ++fb) {
+      const double most = face_difference_mm(face_edges(a, kStarFaces[fa]), face_edges(b, kStarFaces[fb]));
+      if (!(most >= variation_mm)) {
+        problems.push_back(std::string(a_name) + " face " + std::to_string(fa) + " and " + std::string(b_name) + " face " +
+                           std::to_string(fb) + " differ by at most " + format_mm(most) + " mm in every edge");
+      }
+    }
+  }
+  return problems;
+}
 
 std::vector<std::string> check_star_set(const StarSet& set) {
   std::vector<std::string> problems;
@@ -84,18 +113,12 @@ std::vector<std::string> check_star_set(const StarSet& set) {
   }
   for (std::size_t a = 0; a < faces.size(); ++a) {
     for (std::size_t b = a + 1; b < faces.size(); ++b) {
-      std::array<int, 3> perm{0, 1, 2};
-      do {
-        double most = 0.0;
-        for (std::size_t k = 0; k < 3; ++k)
-          most = std::max(most, std::abs(faces[a].edges[k] - faces[b].edges[static_cast<std::size_t>(perm[k])]));
-        if (!(most >= v)) {
-          problems.push_back(star_label(faces[a].star, set.stars[faces[a].star].id) + " face " + std::to_string(faces[a].face) + " and " +
-                             star_label(faces[b].star, set.stars[faces[b].star].id) + " face " + std::to_string(faces[b].face) +
-                             " differ by at most " + format_mm(most) + " mm in every edge");
-          break;
-        }
-      } while (std::next_permutation(perm.begin(), perm.end()));
+      const double most = face_difference_mm(faces[a].edges, faces[b].edges);
+      if (!(most >= v)) {
+        problems.push_back(star_label(faces[a].star, set.stars[faces[a].star].id) + " face " + std::to_string(faces[a].face) + " and " +
+                           star_label(faces[b].star, set.stars[faces[b].star].id) + " face " + std::to_string(faces[b].face) +
+                           " differ by at most " + format_mm(most) + " mm in every edge");
+      }
     }
   }
   return problems;

@@ -18,6 +18,7 @@
 #include <expected>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -55,5 +56,12 @@ inline constexpr std::array<std::array<int, 2>, 6> kStarEdges{{{0, 1}, {0, 2}, {
 //  - every face differs from every other face in the set (other stars' and its own star's) by at
 //    least variation_mm in some edge, under each of the six correspondences of its vertices.
 std::vector<std::string> check_star_set(const StarSet& set);
+
+// Where two stars could be taken for each other from three markers: every face of `a` and face of
+// `b` that differ by less than variation_mm in every edge under some correspondence of their
+// vertices, one message each, naming the stars as given. A face and its mirror image have the same
+// edges, so a star and its mirror image clash in every face.
+std::vector<std::string> clashing_faces(const MarkerStar& a, std::string_view a_name, const MarkerStar& b, std::string_view b_name,
+                                        double variation_mm);
 
 }  // namespace rhot

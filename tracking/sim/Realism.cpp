@@ -154,4 +154,9 @@ std::array<FingerAngles, kFingerCount> independent_angles(const std::array<Finge
   return out;
 }
 
+bool hand_confused(const Eigen::Vector3d& reported_wrist, const Eigen::Vector3d& true_wrist, const Eigen::Vector3d& other_true_wrist) {
+  const double own = (reported_wrist - true_wrist).norm();
+  return own > 0.010 && (reported_wrist - other_true_wrist).norm() < own;
+}
+
 }  // namespace rhot

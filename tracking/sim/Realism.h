@@ -55,4 +55,9 @@ HandPose independent_hand(const HandPose& model, unsigned seed);
 // up to +-5 degrees per finger, past the solver's limits where it is at one (real limits differ).
 std::array<FingerAngles, kFingerCount> independent_angles(const std::array<FingerAngles, kFingerCount>& angles, unsigned seed);
 
+// Whether a hand reported as seen is the other hand: its wrist more than 10 mm from its own true
+// wrist and nearer the other hand's. The evaluations' hand_confusion_frames count the frames with
+// such a hand.
+bool hand_confused(const Eigen::Vector3d& reported_wrist, const Eigen::Vector3d& true_wrist, const Eigen::Vector3d& other_true_wrist);
+
 }  // namespace rhot

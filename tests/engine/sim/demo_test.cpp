@@ -1,6 +1,7 @@
 // The whole frame from simulated cameras to physics, headless and deterministic.
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -10,6 +11,7 @@
 #include "engine/core/World.h"
 #include "engine/math/EigenGlm.h"
 #include "engine/sim/Demo.h"
+#include "engine/sim/DemoPickups.h"
 #include "engine/tracked/Recording.h"
 #include "engine/scene/SceneLoader.h"
 
@@ -90,6 +92,65 @@ TEST(Demo, WithPerfectHandsTooTheBlockIsLifted) {
   const DemoRun r = run_default_scene(330, true);
   EXPECT_EQ(r.right_grasps_of_block, 1);
   EXPECT_GE(r.block_lift_m, 0.10);
+}
+
+// The placements where the first pickup failed: each is lifted, with either seed of the
+// simulated noise, and neither hand is ever reported where the other one is.
+PickupResult pickup_at(const Eigen::Vector2d& spot, unsigned seed) {
+  const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
+  EXPECT_TRUE(scene.has_value());
+  DemoSettings settings;
+  settings.asset_dir = RHOT_ASSET_DIR;
+  settings.seed = seed;
+  const auto r = run_pickup(*scene, spot, settings);
+  EXPECT_TRUE(r.has_value()) << (r ? "" : r.error());
+  return r.value_or(PickupResult{});
+}
+
+TEST(Demo, TheCubeTwentyCentimetresNearerTheUserIsLiftedAndTheHandsAreNeverConfused) {
+  // The right hand reaches past the resting left hand: with one shared assignment and a left hand
+  // star of its own, neither hand takes the other's markers.
+  for (const unsigned seed : {1U, 2U}) {
+    const PickupResult r = pickup_at({-0.35, -0.15}, seed);
+    EXPECT_TRUE(r.grasped) << "seed " << seed;
+    EXPECT_GE(r.lift_m, kPickupLift_m) << "seed " << seed;
+    EXPECT_EQ(r.hand_confusion_frames, 0) << "seed " << seed;
+    EXPECT_EQ(r.reported_wrong_frames, 0) << "seed " << seed << " of " << r.hand_frames_seen;
+  }
+}
+
+TEST(Demo, TheCubeFourteenCentimetresLeftAndBackIsLifted) {
+  for (const unsigned seed : {1U, 2U}) {
+    const PickupResult r = pickup_at({-0.49, -0.49}, seed);
+    EXPECT_TRUE(r.grasped) << "seed " << seed;
+    EXPECT_GE(r.lift_m, kPickupLift_m) << "seed " << seed;
+    EXPECT_EQ(r.hand_confusion_frames, 0) << "seed " << seed;
+  }
+}
+
+TEST(DemoPickups, SpotsLieOnTheTableClearOfTheOtherObjects) {
+  const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
+  ASSERT_TRUE(scene.has_value());
+  const auto spots = pickup_spots(*scene, 200, 7);
+  ASSERT_TRUE(spots.has_value()) << spots.error();
+  ASSERT_EQ(spots->size(), 200U);
+  for (const Eigen::Vector2d& p : *spots) {
+    // The table spans x -0.6..0.6, z -0.9..-0.1; the carry goes 0.15 to +x and 0.1 to -z.
+    EXPECT_GT(p.x(), -0.6 + 0.05);
+    EXPECT_LT(p.x() + 0.15, 0.6 - 0.05);
+    EXPECT_GT(p.y() - 0.10, -0.9 + 0.05);
+    EXPECT_LT(p.y(), -0.1 - 0.05);
+    for (const EntityDesc& e : scene->entities) {
+      if (e.name == "cube-red" || !e.body || !e.grabbable) continue;
+      EXPECT_GE(std::hypot(p.x() - static_cast<double>(e.transform.position.x), p.y() - static_cast<double>(e.transform.position.z)), 0.11)
+          << e.name;
+    }
+  }
+  EXPECT_EQ(pickup_spots(*scene, 200, 7)->front(), spots->front()) << "deterministic for a seed";
+  SceneDesc no_cube = *scene;
+  std::erase_if(no_cube.entities, [](const EntityDesc& e) { return e.name == "cube-red"; });
+  EXPECT_EQ(pickup_spots(no_cube, 1, 1).error(), "the scene has no entity \"cube-red\" to pick up");
+  EXPECT_EQ(run_pickup(no_cube, {0.0, -0.3}, DemoSettings{}).error(), "the scene has no entity \"cube-red\" to pick up");
 }
 
 TEST(Demo, ARecordingReplaysToThePosesItRecorded) {

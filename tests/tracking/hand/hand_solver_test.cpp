@@ -1,5 +1,7 @@
 #include "tracking/hand/HandSolver.h"
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <tuple>
 #include <vector>
@@ -73,33 +75,72 @@ TEST(HandSolver, MeasuredAnglesWinOverTheTipAndAreKeptWithinLimits) {
   EXPECT_TRUE(s.tip_seen[1]);
 }
 
-TEST(HandSolver, AnUnseenFingerEasesTowardRelaxedAndLosesConfidence) {
+TEST(HandSolver, WithNoFingerSeenAHiddenFingerHoldsThenEasesTowardRelaxed) {
   const HandPose reference = reference_open_hand(HandSide::kRight);
   HandSolver solver(HandSide::kRight, reference);
-  // Curl the index finger: its tip under the knuckle.
+  // Curl the index finger: its tip under the knuckle; then no tip is seen at all.
   Tips tips = tips_of(reference);
   const std::size_t index_tip = static_cast<std::size_t>(HandJoint::kIndexTip);
   const Eigen::Vector3d knuckle = reference.position_m[static_cast<std::size_t>(HandJoint::kIndexProximal)];
   tips[1] = knuckle + Eigen::Vector3d(0.0, -0.045, 0.01);
   const double curled = solver.update(0.0, tips).angles[1].flexion_rad[1];
   EXPECT_GT(curled, 0.8);
-  tips[1].reset();
+  const double relaxed = HandSolver(HandSide::kRight, reference).state().angles[1].flexion_rad[1];
   double previous = curled;
-  for (int f = 1; f <= 180; ++f) {
-    const HandState& s = solver.update(f / 90.0, tips);
-    EXPECT_LE(s.angles[1].flexion_rad[1], previous + 1e-12) << "eases monotonically";
+  for (int f = 1; f <= 270; ++f) {
+    const HandState& s = solver.update(f / 90.0, Tips{});
+    EXPECT_LE(s.angles[1].flexion_rad[1], previous + 1e-12) << "never bends further: it was still";
     previous = s.angles[1].flexion_rad[1];
     EXPECT_FALSE(s.tip_seen[1]);
     if (f == 45) {
       EXPECT_NEAR(s.confidence[index_tip], 0.9 * std::exp(-0.5 / HandSolver::kRelaxTime_s), 1e-9);
     }
+    if (f == 90) {
+      EXPECT_NEAR(s.angles[1].flexion_rad[1], curled, 1e-9) << "held for kHold_s";
+    }
   }
+  // Then 2 s (four time constants) of easing: within 2 % of relaxed.
   const HandState& s = solver.state();
-  // After 2 s (four time constants) the finger is within 2 % of relaxed.
-  const double relaxed = HandSolver(HandSide::kRight, reference).state().angles[1].flexion_rad[1];
   EXPECT_NEAR(s.angles[1].flexion_rad[1], relaxed, 0.02 * std::abs(curled - relaxed) + 1e-9);
-  EXPECT_LT(s.confidence[index_tip], 0.02);
-  EXPECT_EQ(s.confidence[static_cast<std::size_t>(HandJoint::kMiddleTip)], 1.0) << "the other fingers stay seen";
+  EXPECT_LT(s.confidence[index_tip], 0.01);
+}
+
+TEST(HandSolver, AHiddenFingerBendsAsTheSeenFingersDoAndHoldsWhileTheyHold) {
+  // A grasp closing: every finger from relaxed to curled over 1 s, the index tip hidden from 0.3 s
+  // (its own bones hide its marker), then the hand holds for 1 s.
+  const HandPose reference = reference_open_hand(HandSide::kRight);
+  HandSolver solver(HandSide::kRight, reference);
+  const auto& chains = solver.chains();
+  const auto relaxed = solver.state().angles;
+  auto curl_at = [&](std::size_t f, double t) {
+    FingerAngles a = relaxed[f];
+    const double w = std::clamp(t, 0.0, 1.0);
+    for (std::size_t k = 0; k < 3; ++k) a.flexion_rad[k] += w * (0.5 * chains[f].limits.flexion_max_rad[k] - relaxed[f].flexion_rad[k]);
+    return clamp_to_limits(chains[f].limits, a);
+  };
+  const std::size_t index_tip = static_cast<std::size_t>(HandJoint::kIndexTip);
+  for (int f = 0; f <= 180; ++f) {
+    const double t = f / 90.0;
+    Tips tips;
+    for (std::size_t k = 0; k < kFingerCount; ++k) tips[k] = finger_forward(chains[k], curl_at(k, t))[3];
+    if (t >= 0.3) tips[1].reset();
+    const HandState& s = solver.update(t, tips);
+    if (t < 0.3) continue;
+    EXPECT_FALSE(s.tip_seen[1]);
+    EXPECT_DOUBLE_EQ(s.confidence[index_tip], HandSolver::kEstimatedConfidence) << "estimated, and says so";
+  }
+  // The truth: curled as the others. Relaxing would have left it at relaxed (bend ~0.2 rad at the PIP).
+  const HandState& s = solver.state();
+  const FingerAngles truth = curl_at(1, 2.0);
+  double bend = 0.0, true_bend = 0.0, relaxed_bend = 0.0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    bend += s.angles[1].flexion_rad[k];
+    true_bend += truth.flexion_rad[k];
+    relaxed_bend += relaxed[1].flexion_rad[k];
+  }
+  EXPECT_NEAR(bend, true_bend, 0.25 * std::abs(true_bend - relaxed_bend)) << "closed with the hand, within a quarter of the motion";
+  const Eigen::Vector3d tip = s.pose.position_m[index_tip];
+  EXPECT_LT((tip - finger_forward(chains[1], truth)[3]).norm(), 0.015) << "its tip within 15 mm of the truth";
 }
 
 TEST(Gestures, PinchAndGripHaveHysteresis) {
