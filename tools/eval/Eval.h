@@ -62,6 +62,7 @@ int hands(const std::string& rig_file, const std::string& layout_file, const std
 int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);
 int grasp(const std::string& scenario);
 int demo(const std::string& scene_file, int placements, unsigned seed, const WorldFlags& world, const std::string& hands, int frames);
-int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading);
+int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading,
+          const WorldFlags& world);
 
 }  // namespace rhot::eval

@@ -35,7 +35,8 @@ namespace rhot::eval {
 
 // The demo's whole frame, headless: simulated cameras, tracking, physics and both eyes rendered
 // offscreen, every stage timed (engine/sim/Demo.h).
-int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, rhot::Shading shading) {
+int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, rhot::Shading shading,
+          const WorldFlags& world_flags) {
   // stdout carries the JSON only: the log goes to stderr.
   spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));
   const auto scene = rhot::load_scene_file(scene_file);
@@ -61,8 +62,15 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
     std::cerr << "rhot-eval: cannot start the renderer: " << renderer.error() << "\n";
     return 1;
   }
+  const auto world = world_settings(world_flags);
+  if (!world) {
+    std::cerr << "rhot-eval: " << world.error() << "\n";
+    return 1;
+  }
   rhot::DemoSettings settings;
   settings.asset_dir = RHOT_ASSET_DIR;
+  settings.world = *world;
+  settings.sigma_px = world->sigma_px;
   auto demo = rhot::Demo::create(*scene, renderer->get(), settings);
   if (!demo) {
     std::cerr << "rhot-eval: " << demo.error() << "\n";
@@ -84,6 +92,7 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   }
   nlohmann::json j = frame_loop.stats().to_json();
   j["scene"] = scene_file;
+  j["world"] = world_json(*world, world_flags.world);
   j["eye_px"] = {(*renderer)->eye_width_px(), (*renderer)->eye_height_px()};
   j["device"] = (*renderer)->info().device_name;
   j["cpu_device"] = (*renderer)->info().cpu_device;

@@ -131,6 +131,8 @@ int main(int argc, char** argv) {
   frame_cmd->add_option("--shading", shading, "light per pixel, per vertex, or auto (per vertex on a CPU driver)")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
+  WorldFlags frame_world;
+  add_world_flags(*frame_cmd, frame_world, true);
   frame_cmd->add_flag("--json", json, "print JSON (the only output format)");
   auto* demo_cmd =
       app.add_subcommand("demo", "the demo's first pickup with the cube at random spots on the table: grasp success, lift, hand confusion");
@@ -175,7 +177,7 @@ int main(int argc, char** argv) {
   if (grasp_cmd->parsed()) return grasp(scenario);
   if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
   if (demo_cmd->parsed()) return demo(scene_file, placements, seed, demo_world, hands_mode, pickup_frames);
-  if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading));
+  if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading), frame_world);
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
   if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, world, hand_frames, seed, volume_centre, filter);
   if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, world, frames, seed, volume, volume_centre);
