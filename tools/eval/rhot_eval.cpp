@@ -45,6 +45,37 @@
 
 using namespace rhot::eval;  // NOLINT: the subcommands
 
+namespace {
+
+// `rhot-eval demo`'s flags.
+struct DemoArgs {
+  std::string scene_file;
+  int placements = 50;
+  unsigned seed = 1;
+  int frames = 330;
+  std::string hands = "tracked";
+  WorldFlags world;
+};
+
+CLI::App* add_demo_command(CLI::App& app, DemoArgs& a, bool& json) {
+  auto* cmd =
+      app.add_subcommand("demo", "the demo's first pickup with the cube at random spots on the table: grasp success, lift, hand confusion");
+  cmd->add_option("--scene", a.scene_file, "scene file (JSON) with a \"cube-red\" on a \"table\"")->capture_default_str();
+  cmd->add_option("--placements", a.placements, "random spots for the cube")->capture_default_str()->check(CLI::Range(1, 100000));
+  cmd->add_option("--seed", a.seed, "random seed (spots; each placement's world takes seed + its index)")->capture_default_str();
+  cmd->add_option("--hands", a.hands, "tracked (through the cameras) or perfect (the script's)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"tracked", "perfect"}));
+  cmd->add_option("--frames", a.frames, "frames per placement (the lift ends at 3.2 s)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  add_world_flags(*cmd, a.world, true);
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"rhot-eval: accuracy and speed of rhot's tracking on simulated data, as JSON"};
   app.require_subcommand(1);
@@ -134,23 +165,9 @@ int main(int argc, char** argv) {
   WorldFlags frame_world;
   add_world_flags(*frame_cmd, frame_world, true);
   frame_cmd->add_flag("--json", json, "print JSON (the only output format)");
-  auto* demo_cmd =
-      app.add_subcommand("demo", "the demo's first pickup with the cube at random spots on the table: grasp success, lift, hand confusion");
-  int placements = 50;
-  int pickup_frames = 330;
-  std::string hands_mode = "tracked";
-  WorldFlags demo_world;
-  demo_cmd->add_option("--scene", scene_file, "scene file (JSON) with a \"cube-red\" on a \"table\"")->capture_default_str();
-  demo_cmd->add_option("--placements", placements, "random spots for the cube")->capture_default_str()->check(CLI::Range(1, 100000));
-  demo_cmd->add_option("--seed", seed, "random seed (spots; each placement's world takes seed + its index)")->capture_default_str();
-  demo_cmd->add_option("--hands", hands_mode, "tracked (through the cameras) or perfect (the script's)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"tracked", "perfect"}));
-  demo_cmd->add_option("--frames", pickup_frames, "frames per placement (the lift ends at 3.2 s)")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 1000000));
-  add_world_flags(*demo_cmd, demo_world, true);
-  demo_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  DemoArgs demo_args;
+  demo_args.scene_file = scene_file;
+  CLI::App* demo_cmd = add_demo_command(app, demo_args, json);
   auto* calib_cmd = app.add_subcommand("calibration", "a simulated wand session calibrated from unknown extrinsics, against the true rig");
   int calib_frames = 2000;
   double calib_wand_mm = 500.0;
@@ -176,7 +193,8 @@ int main(int argc, char** argv) {
   }
   if (grasp_cmd->parsed()) return grasp(scenario);
   if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
-  if (demo_cmd->parsed()) return demo(scene_file, placements, seed, demo_world, hands_mode, pickup_frames);
+  if (demo_cmd->parsed())
+    return demo(demo_args.scene_file, demo_args.placements, demo_args.seed, demo_args.world, demo_args.hands, demo_args.frames);
   if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading), frame_world);
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
   if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, world, hand_frames, seed, volume_centre, filter);
