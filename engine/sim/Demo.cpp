@@ -14,20 +14,6 @@
 
 namespace rhot {
 
-namespace {
-
-void add_bones(std::vector<Occluder>& out, const HandTruth& hand) {
-  for (int j = 0; j < kHandJointCount; ++j) {
-    const auto parent = joint_parent(static_cast<HandJoint>(j));
-    if (!parent) continue;
-    out.push_back({hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(*parent)],
-                   hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(j)],
-                   0.8 * hand.pose.radius_m[static_cast<std::size_t>(j)]});
-  }
-}
-
-}  // namespace
-
 std::expected<void, std::string> DemoSettings::check() const {
   if (!std::isfinite(sigma_px) || sigma_px < 0.0 || sigma_px > 50.0) {
     return std::unexpected("sigma: the simulated pixel noise must be a number from 0 to 50 pixels, got " + std::to_string(sigma_px));
@@ -65,8 +51,9 @@ WorldSnapshot DemoWorld::at(double t_s) {
       truth_->hands[h].pose = independent_hand(truth_->hands[h].pose, hands_seed_ + static_cast<unsigned>(h));
   }
   WorldSnapshot out;
-  add_bones(out.occluders, truth_->hands[0]);
-  add_bones(out.occluders, truth_->hands[1]);
+  for (const HandTruth& hand : truth_->hands) {
+    for (const Occluder& o : hand_bone_occluders(hand.world_from_hand, hand.pose)) out.occluders.push_back(o);
+  }
   for (std::size_t h = 0; h < 2; ++h) {
     const HandTruth& hand = truth_->hands[h];
     for (const Eigen::Vector3d& m : layout_markers(layouts_[h], hand.world_from_hand, hand.pose)) out.markers_m.push_back(m);

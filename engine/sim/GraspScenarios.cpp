@@ -4,13 +4,19 @@
 #include <array>
 #include <chrono>
 #include <functional>
+#include <memory>
+#include <numbers>
 #include <optional>
 
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
+#include "engine/math/EigenGlm.h"
 #include "engine/physics/BulletMath.h"
 #include "engine/physics/HandPhysics.h"
+#include "engine/sim/DemoScript.h"
 #include "engine/sim/ScriptedHands.h"
+#include "engine/tracked/LiveTracking.h"
+#include "tracking/sim/SimulatedRig.h"
 #include "engine/scene/SceneLoader.h"
 
 namespace rhot {
@@ -175,36 +181,46 @@ class ScenarioHands {
 
   const ScenarioScript& script() const { return script_; }
 
-  std::array<HandInput, 2> at(double t) {
-    std::array<HandInput, 2> inputs;
-    const Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX();
+  // The script's true hands at time t (left, right): nothing for a hand the scenario leaves out.
+  std::array<std::optional<HandTruth>, 2> truth(double t) const {
+    std::array<std::optional<HandTruth>, 2> hands;
     if (!script_.right_keys.empty()) {
       const auto [centre, closure] = at_time(script_.right_keys, t);
-      const Rigid3d world_from_hand = right_.place(centre, x_axis);
-      if (name_ == "hidden-markers") {
-        const HandPose truth = right_.pose(closure);
-        std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips;
-        const bool hidden = t >= 2.8 && t < 3.3;
-        for (int k = 0; k < kFingerCount; ++k) {
-          if (!hidden)
-            tips[static_cast<std::size_t>(k)] = truth.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3])];
-        }
-        const HandState& s = solver_.update(t, tips);
-        inputs[1] = hand_input(world_from_hand, s.pose);
-        inputs[1].confidence = s.confidence;
-      } else {
-        inputs[1] = hand_input(world_from_hand, right_.pose(closure));
-      }
+      hands[1] = HandTruth{right_.place(centre, Eigen::Vector3d::UnitX()), right_.pose(closure)};
     }
     if (name_ == "push") {
       Rigid3d r = push_hand_start_;
       const double travel = std::clamp((t - 0.3) / 1.2, 0.0, 1.0) * 0.10;  // 4 cm to the face, then 6 cm of push
       r.translation.z() -= travel;
-      inputs[1] = hand_input(r, pointing_hand(HandSide::kRight));
+      hands[1] = HandTruth{r, pointing_hand(HandSide::kRight)};
     }
     if (!script_.left_keys.empty()) {
       const auto [centre, closure] = at_time(script_.left_keys, t);
-      inputs[0] = hand_input(left_.place(centre, Eigen::Vector3d::UnitZ()), left_.pose(closure));
+      hands[0] = HandTruth{left_.place(centre, Eigen::Vector3d::UnitZ()), left_.pose(closure)};
+    }
+    return hands;
+  }
+
+  // Whether the fingertip markers are hidden at t (hidden-markers, while holding).
+  bool tips_hidden(double t) const { return name_ == "hidden-markers" && t >= 2.8 && t < 3.3; }
+
+  // The hands the physics gets without cameras: the truth, except in hidden-markers, where the
+  // right hand goes through the hand solver with its fingertips hidden.
+  std::array<HandInput, 2> at(double t) {
+    std::array<HandInput, 2> inputs;
+    const auto hands = truth(t);
+    for (std::size_t h = 0; h < 2; ++h) {
+      if (hands[h]) inputs[h] = hand_input(hands[h]->world_from_hand, hands[h]->pose);
+    }
+    if (name_ == "hidden-markers" && hands[1]) {
+      std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips;
+      for (int k = 0; k < kFingerCount; ++k) {
+        if (!tips_hidden(t))
+          tips[static_cast<std::size_t>(k)] = hands[1]->pose.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3])];
+      }
+      const HandState& s = solver_.update(t, tips);
+      inputs[1] = hand_input(hands[1]->world_from_hand, s.pose);
+      inputs[1].confidence = s.confidence;
     }
     return inputs;
   }
@@ -215,6 +231,136 @@ class ScenarioHands {
   GraspPose right_, left_;
   HandSolver solver_;  // for hidden-markers: fingertips in, a hand out
   Rigid3d push_hand_start_;
+};
+
+// The rig moved so that its tracking volume (else where its optical axes meet) is centred at `centre`.
+CameraRig moved_rig(CameraRig rig, const Eigen::Vector3d& centre) {
+  const Eigen::Vector3d from = rig.volume ? rig.volume->centre_m : axes_meeting_point(rig);
+  const Eigen::Vector3d d = centre - from;
+  for (Camera& c : rig.cameras) c.cam_from_world.translation -= c.cam_from_world.rotation * d;
+  if (rig.volume) rig.volume->centre_m = centre;
+  return rig;
+}
+
+// The hands the cameras see at t: the script's, or with independent_seed (not 0) each a user's
+// own hand (independent_hand; the left another user's than the right), as the demo's world has them.
+std::array<std::optional<HandTruth>, 2> users_hands(const ScenarioHands& hands, double t, unsigned independent_seed) {
+  auto truth = hands.truth(t);
+  for (std::size_t h = 0; h < 2; ++h) {
+    if (truth[h] && independent_seed != 0) truth[h]->pose = independent_hand(truth[h]->pose, independent_seed + static_cast<unsigned>(h));
+  }
+  return truth;
+}
+
+// What the moved rig photographs: the scenario's hands' markers, their bones (and, with
+// occluding_bodies, the pedestals and the object) hiding them; in hidden-markers a cover over each
+// fingertip marker while holding.
+class ScenarioWorld final : public SimulatedWorld {
+ public:
+  ScenarioWorld(const ScenarioHands& hands, const std::array<HandLayout, 2>& layouts, std::vector<Occluder> fixed,
+                const btRigidBody* object, const SceneDesc& scene, bool occluding_bodies)
+      : hands_(hands), layouts_(layouts), fixed_(std::move(fixed)), object_(object), occluding_bodies_(occluding_bodies) {
+    for (const EntityDesc& e : scene.entities) {
+      if (e.name != "object" || !e.mesh) continue;
+      if (const auto* box = std::get_if<BoxShape>(&e.mesh->shape)) object_half_ = 0.5 * to_eigen(box->size_m);
+      if (const auto* sphere = std::get_if<SphereShape>(&e.mesh->shape)) object_radius_ = sphere->radius_m;
+    }
+  }
+
+  WorldSnapshot at(double t_s) override {
+    WorldSnapshot out;
+    const auto truth = users_hands(hands_, t_s, independent_seed_);
+    for (std::size_t h = 0; h < 2; ++h) {
+      if (!truth[h]) continue;
+      for (const Occluder& o : hand_bone_occluders(truth[h]->world_from_hand, truth[h]->pose)) out.occluders.push_back(o);
+      const auto markers = layout_markers(layouts_[h], truth[h]->world_from_hand, truth[h]->pose);
+      const std::size_t star = layouts_[h].hand_star_m.size();
+      for (std::size_t m = 0; m < markers.size(); ++m) {
+        const bool tip = m >= star && m < star + marked_tips(layouts_[h]);
+        if (tip && hands_.tips_hidden(t_s)) out.occluders.push_back({markers[m], markers[m], 0.006});
+        out.markers_m.push_back(markers[m]);
+      }
+    }
+    if (occluding_bodies_) {
+      out.occluders.insert(out.occluders.end(), fixed_.begin(), fixed_.end());
+      const btTransform& x = object_->getWorldTransform();
+      const Eigen::Vector3d centre = to_eigen(x.getOrigin());
+      if (object_radius_ > 0.0) out.occluders.push_back({centre, centre, object_radius_});
+      if (object_half_.x() > 0.0) out.occluders.push_back(Occluder::box(centre, to_eigen(x.getRotation()), object_half_));
+    }
+    return out;
+  }
+
+ private:
+  static std::size_t marked_tips(const HandLayout& layout) {
+    return static_cast<std::size_t>(std::count_if(layout.fingertip_offset_m.begin(), layout.fingertip_offset_m.end(),
+                                                  [](const std::optional<double>& o) { return o.has_value(); }));
+  }
+
+  const ScenarioHands& hands_;
+  unsigned independent_seed_;
+  std::array<HandLayout, 2> layouts_;
+  std::vector<Occluder> fixed_;
+  const btRigidBody* object_;
+  bool occluding_bodies_;
+  Eigen::Vector3d object_half_ = Eigen::Vector3d::Zero();
+  double object_radius_ = 0.0;
+};
+
+// The hands through the cameras: the scenario's world photographed by the moved rig and tracked
+// as the demo tracks (LiveTracking), each reported hand compared with the truth.
+class CameraHands {
+ public:
+  CameraHands(const ScenarioCameras& cameras, const ScenarioHands& hands, const SceneDesc& scene, const btRigidBody* object, double rate_hz)
+      : hands_(hands), independent_seed_(cameras.world.independent_hands ? cameras.seed : 0U) {
+    const CameraRig rig = moved_rig(cameras.rig, Eigen::Vector3d(0.0, kPedestalTop + 0.15, 0.0));
+    // The static boxes (pedestals) as occluders.
+    std::vector<Occluder> fixed;
+    for (const EntityDesc& e : scene.entities) {
+      if (!e.mesh || !e.body || e.body->type != BodyType::kStatic) continue;
+      if (const auto* box = std::get_if<BoxShape>(&e.mesh->shape)) {
+        fixed.push_back(Occluder::box(to_eigen(e.transform.position), to_eigen(e.transform.rotation), 0.5 * to_eigen(box->size_m)));
+      }
+    }
+    auto source = std::make_unique<SimulatedRig>(rig, std::vector<Trajectory>{}, cameras.world.rig_settings(cameras.seed, rate_hz));
+    source->set_world(
+        std::make_shared<ScenarioWorld>(hands, cameras.layouts, std::move(fixed), object, scene, cameras.world.occluding_bodies));
+    LiveTrackingSettings settings;
+    if (cameras.world.calib_error_px > 0.0) settings.tracker_rig = perturbed_rig(rig, cameras.world.calib_error_px, cameras.seed);
+    live_ = std::make_unique<LiveTracking>(std::move(source), TrackedObjects{}, cameras.layouts, settings);
+  }
+
+  std::array<HandInput, 2> at(double t, GraspScenarioResult& result) {
+    live_->read_source(t);
+    live_->match();
+    live_->track_stars(t);
+    live_->track_hands(t);
+    const auto truth = users_hands(hands_, t, independent_seed_);
+    std::array<HandInput, 2> inputs;
+    std::array<Eigen::Vector3d, 2> wrist;
+    for (std::size_t h = 0; h < 2; ++h) {
+      if (truth[h]) wrist[h] = truth[h]->world_from_hand * truth[h]->pose.position_m[static_cast<std::size_t>(HandJoint::kWrist)];
+    }
+    bool confused = false;
+    for (std::size_t h = 0; h < 2; ++h) {
+      if (!truth[h]) continue;  // a hand the scenario leaves out is never seen
+      const TrackedHand& tracked = live_->tracked_hand(h == 0 ? HandSide::kLeft : HandSide::kRight);
+      inputs[h] = hand_input(tracked);
+      if (!tracked.hand_seen) continue;
+      ++result.hand_frames_seen;
+      const Eigen::Vector3d reported = tracked.joints_world[static_cast<std::size_t>(HandJoint::kWrist)];
+      const double turn = Eigen::AngleAxisd(tracked.world_from_hand.rotation * truth[h]->world_from_hand.rotation.conjugate()).angle();
+      if ((reported - wrist[h]).norm() > 0.010 || turn > 5.0 * std::numbers::pi / 180.0) ++result.reported_wrong_frames;
+      if (truth[1 - h] && hand_confused(reported, wrist[h], wrist[1 - h])) confused = true;
+    }
+    if (confused) ++result.hand_confusion_frames;
+    return inputs;
+  }
+
+ private:
+  const ScenarioHands& hands_;
+  unsigned independent_seed_;
+  std::unique_ptr<LiveTracking> live_;
 };
 
 // What a scenario measures, step by step.
@@ -292,7 +438,8 @@ class ScenarioMeasure {
 
 std::span<const std::string_view> grasp_scenario_names() { return kNames; }
 
-std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name, const SceneDesc* given) {
+std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name, const SceneDesc* given,
+                                                                   const ScenarioCameras* cameras) {
   if (std::find(kNames.begin(), kNames.end(), name) == kNames.end())
     return std::unexpected("no grasp scenario \"" + std::string(name) + "\"");
   const bool sphere = name == "pinch";
@@ -319,10 +466,15 @@ std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_v
   ScenarioHands hands(name, size);
   ScenarioMeasure measure(name, physics.physics().body(object), object, hands.script().swing_velocity);
   const double dt = physics.physics().step_s();
+  std::optional<CameraHands> camera_hands;
+  if (cameras) {
+    if (auto ok = cameras->world.check(); !ok) return std::unexpected("world: " + ok.error());
+    camera_hands.emplace(*cameras, hands, scene, physics.physics().body(object), 1.0 / dt);
+  }
   const long frames = static_cast<long>(std::lround(hands.script().duration / dt));
   for (long f = 0; f < frames; ++f) {
     const double t = static_cast<double>(f) * dt;
-    const std::array<HandInput, 2> inputs = hands.at(t);
+    const std::array<HandInput, 2> inputs = camera_hands ? camera_hands->at(t, measure.result()) : hands.at(t);
     const auto begin = std::chrono::steady_clock::now();
     physics.step(world, inputs);
     measure.result().step_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count());

@@ -13,7 +13,15 @@
 //                   0.5 s while holding
 //   place           grasp the cube, carry it into a zone on a second pedestal, let go: the scene's
 //                   "place" interaction succeeds
+//
+// With ScenarioCameras the physics gets tracked hands instead: both hands' markers (their layouts
+// on the script's hands) photographed by a simulated rig moved so that its tracking volume is
+// centred above the pedestal, in the world the settings describe (noise, strays, calibration
+// error; the hands' bones always hide markers, the pedestal and the object too with
+// occluding_bodies), then matched, triangulated and tracked (LiveTracking) as in the demo. In
+// hidden-markers every fingertip marker is covered for those 0.5 s instead.
 
+#include <array>
 #include <expected>
 #include <span>
 #include <string>
@@ -22,6 +30,9 @@
 
 #include "engine/physics/GraspSystem.h"
 #include "engine/scene/SceneDesc.h"
+#include "tracking/camera/Camera.h"
+#include "tracking/hand/HandLayout.h"
+#include "tracking/sim/Realism.h"
 
 namespace rhot {
 
@@ -42,12 +53,27 @@ struct GraspScenarioResult {
   std::vector<InteractionEvent> events;
   std::vector<double> step_ms;  // HandPhysics::step per frame
   long frames = 0;
+  // Tracked hands only: hands reported as seen (over both hands in the script and every frame), of
+  // those the ones with the wrist more than 10 mm or the hand 5 degrees off the truth, and frames
+  // with a hand reported where the other is (hand_confused).
+  long hand_frames_seen = 0;
+  long reported_wrong_frames = 0;
+  long hand_confusion_frames = 0;
+};
+
+struct ScenarioCameras {
+  CameraRig rig;                      // moved to the pedestal (its volume centre, else where its axes meet)
+  std::array<HandLayout, 2> layouts;  // left, right
+  WorldSettings world;
+  unsigned seed = 1;
 };
 
 std::span<const std::string_view> grasp_scenario_names();
 // `scene`: the scene to run in instead of the one built in code (its grasped entity must be named
 // "object", where the built scene has it; "place" also needs "zone"); its interactions raise
 // the success events.
-[[nodiscard]] std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name, const SceneDesc* scene = nullptr);
+// `cameras`: track the hands through them (nothing: the script's hands go to the physics as they are).
+[[nodiscard]] std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_view name, const SceneDesc* scene = nullptr,
+                                                                                 const ScenarioCameras* cameras = nullptr);
 
 }  // namespace rhot

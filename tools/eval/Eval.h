@@ -21,9 +21,6 @@ class App;
 
 namespace rhot::eval {
 
-// The point nearest (least squares) to every camera's optical axis.
-Eigen::Vector3d axes_meeting_point(const CameraRig& rig);
-
 // A matched point further than this from every true marker is a ghost.
 inline constexpr double kGhostDistance_m = 0.005;
 
@@ -57,10 +54,29 @@ int wand(const std::string& rig_file, double length_mm, double sigma, int frames
          const std::vector<double>& volume, const std::vector<double>& volume_centre);
 int stars(const std::string& rig_file, const std::string& set_file, int bodies, const WorldFlags& world, int frames, unsigned seed,
           const std::vector<double>& volume, const std::vector<double>& volume_centre);
-int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, const WorldFlags& world, int frames,
-          unsigned seed, const std::vector<double>& volume_centre, bool filter);
+// `rhot-eval hands`'s flags.
+struct HandsArgs {
+  std::string rig_file;
+  std::string layout_file;
+  std::string motion = "all";
+  WorldFlags world;
+  int frames = 450;
+  unsigned seed = 1;
+  std::vector<double> volume_centre;
+  bool filter = false;
+  bool calibrate_hand = false;
+};
+int hands(const HandsArgs& args);
 int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);
-int grasp(const std::string& scenario);
+// `rhot-eval grasp`'s flags.
+struct GraspArgs {
+  std::string scenario = "all";
+  std::string hands = "perfect";
+  std::string rig_file;  // for tracked hands
+  WorldFlags world;
+  unsigned seed = 1;
+};
+int grasp(const GraspArgs& args);
 int demo(const std::string& scene_file, int placements, unsigned seed, const WorldFlags& world, const std::string& hands, int frames);
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading,
           const WorldFlags& world);

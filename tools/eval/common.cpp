@@ -32,21 +32,8 @@
 
 namespace rhot::eval {
 
-Eigen::Vector3d axes_meeting_point(const rhot::CameraRig& rig) {
-  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d b = Eigen::Vector3d::Zero();
-  for (const rhot::Camera& c : rig.cameras) {
-    const Eigen::Vector3d o = c.centre_world();
-    const Eigen::Vector3d d = c.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitZ();
-    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
-    a += p;
-    b += p * o;
-  }
-  return a.ldlt().solve(b);
-}
-
 Box evaluation_box(const rhot::CameraRig& rig, const std::vector<double>& size, const std::vector<double>& centre) {
-  Box box{axes_meeting_point(rig), Eigen::Vector3d::Ones()};
+  Box box{rhot::axes_meeting_point(rig), Eigen::Vector3d::Ones()};
   if (rig.volume) box = {rig.volume->centre_m, rig.volume->size_m};
   if (size.size() == 3) box.size = {size[0], size[1], size[2]};
   if (centre.size() == 3) box.centre = {centre[0], centre[1], centre[2]};

@@ -32,25 +32,50 @@
 namespace rhot::eval {
 
 // Scripted grasp scenarios through the real physics (engine/sim/GraspScenarios.h).
-int grasp(const std::string& scenario) {
+int grasp(const GraspArgs& args) {
   std::vector<std::string_view> names;
   for (const std::string_view n : rhot::grasp_scenario_names()) {
-    if (scenario == "all" || scenario == n) names.push_back(n);
+    if (args.scenario == "all" || args.scenario == n) names.push_back(n);
   }
   if (names.empty()) {
     std::string list;
     for (const std::string_view n : rhot::grasp_scenario_names()) list += std::string(n) + ", ";
-    std::cerr << "rhot-eval: --scenario " << scenario << ": no such scenario (" << list << "all)\n";
+    std::cerr << "rhot-eval: --scenario " << args.scenario << ": no such scenario (" << list << "all)\n";
     return 1;
+  }
+  // Tracked hands: the rig, both hands' shipped layouts and the simulated world.
+  std::optional<rhot::ScenarioCameras> cameras;
+  if (args.hands == "tracked") {
+    const auto world = world_settings(args.world);
+    if (!world) {
+      std::cerr << "rhot-eval: " << world.error() << "\n";
+      return 1;
+    }
+    auto rig = rhot::load_rig(args.rig_file);
+    if (!rig) {
+      std::cerr << "rhot-eval: " << rig.error() << "\n";
+      return 1;
+    }
+    cameras = rhot::ScenarioCameras{std::move(*rig), {}, *world, args.seed};
+    for (std::size_t h = 0; h < 2; ++h) {
+      auto layout =
+          rhot::load_hand_layout(std::string(RHOT_ASSET_DIR) + (h == 0 ? "/hands/low-cost-left.json" : "/hands/low-cost-right.json"));
+      if (!layout) {
+        std::cerr << "rhot-eval: " << layout.error() << "\n";
+        return 1;
+      }
+      cameras->layouts[h] = std::move(*layout);
+    }
   }
   nlohmann::json j;
   std::vector<double> steps;
   int lifts = 0, lifted = 0;
+  long seen = 0, wrong = 0, confusion = 0;
   double max_slip = 0.0;
   std::optional<double> throw_error;
   for (const std::string_view name : names) {
     std::cerr << "rhot-eval: grasp scenario " << name << "\n";
-    const auto r = rhot::run_grasp_scenario(name);
+    const auto r = rhot::run_grasp_scenario(name, nullptr, cameras ? &*cameras : nullptr);
     if (!r) {
       std::cerr << "rhot-eval: " << r.error() << "\n";
       return 1;
@@ -75,6 +100,14 @@ int grasp(const std::string& scenario) {
       events.push_back(ev);
     }
     s["events"] = events;
+    if (cameras) {
+      s["hand_frames_seen"] = r->hand_frames_seen;
+      s["reported_wrong_frames"] = r->reported_wrong_frames;
+      s["hand_confusion_frames"] = r->hand_confusion_frames;
+      seen += r->hand_frames_seen;
+      wrong += r->reported_wrong_frames;
+      confusion += r->hand_confusion_frames;
+    }
     s["step_p50_ms"] = percentile(r->step_ms, 0.5);
     s["step_p99_ms"] = percentile(r->step_ms, 0.99);
     if (name == "throw") {
@@ -95,6 +128,14 @@ int grasp(const std::string& scenario) {
     j["scenarios"][std::string(name)] = s;
   }
   if (lifts > 0) j["lift_success_fraction"] = static_cast<double>(lifted) / lifts;
+  j["hands"] = args.hands;
+  if (cameras) {
+    j["rig"] = args.rig_file;
+    j["world"] = world_json(cameras->world, args.world.world);
+    j["seed"] = args.seed;
+    j["hand_confusion_frames"] = confusion;
+    j["reported_wrong_fraction"] = static_cast<double>(wrong) / static_cast<double>(std::max(1L, seen));
+  }
   j["max_slip_mm"] = max_slip;
   if (throw_error) j["throw_velocity_error_pct"] = *throw_error;
   j["step_p50_ms"] = percentile(steps, 0.5);

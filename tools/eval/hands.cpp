@@ -24,6 +24,7 @@
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
 #include "tracking/sim/HandMotions.h"
+#include "tracking/hand/HandCalibration.h"
 #include "tracking/hand/HandTracker.h"
 #include "tracking/rigid/StarTracker.h"
 #include "tracking/sim/SimulatedRig.h"
@@ -32,11 +33,41 @@
 
 namespace rhot::eval {
 
+namespace {
+
+// The user's calibration (HandCalibration.h): the truth hand held flat (every finger straight) for
+// a second where `motion` starts, through its own simulated rig, tracked with the reference
+// skeleton; the fingertip markers found give each finger's length. The reference skeleton when
+// no fingertip was found.
+rhot::HandPose calibrated_skeleton(const rhot::CameraRig& rig, const rhot::CameraRig& tracker_rig, const rhot::HandLayout& layout,
+                                   const rhot::HandPose& reference, const rhot::HandPose& user, const rhot::Rigid3d& world_from_hand,
+                                   rhot::SimulatedRigSettings settings) {
+  const auto flat = rhot::hand_pose_from_angles(user, rhot::hand_chains(user, layout.side), {});
+  settings.seed += 1000;  // not the motion's noise
+  rhot::SimulatedRig sim(rig, {}, settings);
+  const auto markers = rhot::layout_markers(layout, world_from_hand, flat);
+  sim.set_scripted_markers([&](double) { return markers; });
+  rhot::HandTracker tracker(layout, reference);
+  rhot::PixelSigmaEstimate pixel_sigma;
+  std::vector<rhot::FingertipSample> samples;
+  for (int f = 0; f < static_cast<int>(settings.rate_hz); ++f) {
+    const rhot::RigFrame frame = sim.next();
+    const auto matched = rhot::match_and_triangulate(tracker_rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
+    std::vector<Eigen::Vector3d> points;
+    for (const rhot::MatchedPoint& m : matched) points.push_back(m.point.position_world);
+    const rhot::TrackedHand& hand = tracker.update(frame.time_s, points, rhot::point_sigmas_m(matched, pixel_sigma.update(matched)));
+    samples.push_back(rhot::flat_hand_sample(layout, reference, hand, points));
+  }
+  return rhot::calibrate_flat_hand(reference, layout.side, samples).value_or(reference);
+}
+
 // One or every scripted hand motion through the simulated rig with a hand layout: the hand's
 // markers (its own bones hiding them) matched, triangulated, the hand star tracked, the fingers
 // solved, and every joint compared with the truth.
 nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion,
-                               const rhot::WorldSettings& world, int frames, unsigned seed, const Eigen::Vector3d& centre, bool filter) {
+                               const rhot::WorldSettings& world, const HandsArgs& args, const Eigen::Vector3d& centre) {
+  const unsigned seed = args.seed;
+  const int frames = args.frames;
   const rhot::HandPose skeleton = rhot::reference_open_hand(layout.side);
   const auto chains = rhot::hand_chains(skeleton, layout.side);
   const auto relaxed = rhot::HandSolver(layout.side, skeleton).state().angles;
@@ -59,22 +90,18 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   const rhot::CameraRig tracker_rig = rhot::perturbed_rig(rig, world.calib_error_px, seed);
   rhot::PixelSigmaEstimate pixel_sigma;
   rhot::HandTrackerSettings tracker_settings;
-  tracker_settings.filter = filter;
-  rhot::HandTracker tracker(layout, skeleton, tracker_settings);
+  tracker_settings.filter = args.filter;
+  const rhot::HandPose tracked_skeleton =
+      args.calibrate_hand ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings) : skeleton;
+  rhot::HandTracker tracker(layout, tracked_skeleton, tracker_settings);
 
   std::vector<double> tip_errors, joint_errors, ik_us, tracker_us;
   long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0, segment_stars_seen = 0, reported_wrong = 0;
   for (int f = 0; f < frames; ++f) {
     const double t = static_cast<double>(f) / settings.rate_hz;
-    // The hand's own bones hide its markers: capsules a little thinner than the joints' radii.
+    // The hand's own bones hide its markers.
     const auto [world_from_hand, pose] = truth_at(t);
-    std::vector<rhot::Occluder> bones;
-    for (int j = 0; j < rhot::kHandJointCount; ++j) {
-      const auto parent = rhot::joint_parent(static_cast<rhot::HandJoint>(j));
-      if (!parent) continue;
-      bones.push_back({world_from_hand * pose.position_m[static_cast<std::size_t>(*parent)],
-                       world_from_hand * pose.position_m[static_cast<std::size_t>(j)], 0.8 * pose.radius_m[static_cast<std::size_t>(j)]});
-    }
+    const std::vector<rhot::Occluder> bones = rhot::hand_bone_occluders(world_from_hand, pose);
     sim.set_occluders(bones);
     const rhot::RigFrame frame = sim.next();
     std::vector<Eigen::Vector3d> points;
@@ -134,44 +161,46 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   return j;
 }
 
-int hands(const std::string& rig_file, const std::string& layout_file, const std::string& motion, const WorldFlags& world_flags, int frames,
-          unsigned seed, const std::vector<double>& volume_centre, bool filter) {
-  const auto world = world_settings(world_flags);
+}  // namespace
+
+int hands(const HandsArgs& args) {
+  const auto world = world_settings(args.world);
   if (!world) {
     std::cerr << "rhot-eval: " << world.error() << "\n";
     return 1;
   }
-  const auto rig = rhot::load_rig(rig_file);
+  const auto rig = rhot::load_rig(args.rig_file);
   if (!rig) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
     return 1;
   }
-  const auto layout = rhot::load_hand_layout(layout_file);
+  const auto layout = rhot::load_hand_layout(args.layout_file);
   if (!layout) {
     std::cerr << "rhot-eval: " << layout.error() << "\n";
     return 1;
   }
   std::vector<std::string_view> motions;
   for (const std::string_view name : rhot::hand_motion_names()) {
-    if (motion == "all" || motion == name) motions.push_back(name);
+    if (args.motion == "all" || args.motion == name) motions.push_back(name);
   }
   if (motions.empty()) {
     std::string known;
     for (const std::string_view name : rhot::hand_motion_names()) known += std::string(known.empty() ? "" : ", ") + std::string(name);
-    std::cerr << "rhot-eval: --motion " << motion << ": no such motion (" << known << ", all)\n";
+    std::cerr << "rhot-eval: --motion " << args.motion << ": no such motion (" << known << ", all)\n";
     return 1;
   }
-  const Box box = evaluation_box(*rig, {}, volume_centre);
+  const Box box = evaluation_box(*rig, {}, args.volume_centre);
   nlohmann::json j;
-  j["rig"] = rig_file;
-  j["layout"] = layout_file;
-  j["world"] = world_json(*world, world_flags.world);
-  j["seed"] = seed;
+  j["rig"] = args.rig_file;
+  j["layout"] = args.layout_file;
+  j["world"] = world_json(*world, args.world.world);
+  j["seed"] = args.seed;
   j["centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
-  j["filter"] = filter;
+  j["filter"] = args.filter;
+  j["calibrate_hand"] = args.calibrate_hand;
   for (const std::string_view name : motions) {
     std::cerr << "rhot-eval: hand motion " << name << "\n";
-    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, *world, frames, seed, box.centre, filter);
+    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, *world, args, box.centre);
   }
   // Over all motions: the mean of the motions' numbers (each motion weighs alike).
   for (const char* key :

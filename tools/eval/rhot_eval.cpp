@@ -3,7 +3,7 @@
 //   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M]
 //                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
 //   rhot-eval demo [--scene FILE] [--placements N] [--seed S] [--hands tracked|perfect] [world flags] --json
-//   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--sigma PX] [--frames N] --json
+//   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--calibrate-hand] [world flags] [--frames N] --json
 //   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
 //   rhot-eval calibration --rig FILE [--wand-mm 500] [--sigma PX] [--frames 2000] [--seed S] [--dropout P] --json
 //   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
@@ -129,24 +129,35 @@ int main(int argc, char** argv) {
   stars_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   stars_cmd->add_flag("--json", json, "print JSON (the only output format)");
   auto* hands_cmd = app.add_subcommand("hands", "scripted hand motions with a hand layout: every joint against the truth");
-  std::string layout_file = std::string(RHOT_ASSET_DIR) + "/hands/low-cost-right.json";
-  std::string motion = "all";
-  int hand_frames = 450;
-  hands_cmd->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
-  hands_cmd->add_option("--layout", layout_file, "hand marker layout (JSON)")->capture_default_str();
-  hands_cmd->add_option("--motion", motion, "open, fist, pinch, wave, power-grasp, precision-grasp or all")->capture_default_str();
-  add_world_flags(*hands_cmd, world, true);
-  hands_cmd->add_option("--frames", hand_frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));
-  hands_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  hands_cmd->add_option("--volume-centre-m", volume_centre, "where the hand moves, X Y Z metres (default: the rig's volume centre)")
+  HandsArgs hands_args;
+  hands_args.layout_file = std::string(RHOT_ASSET_DIR) + "/hands/low-cost-right.json";
+  hands_cmd->add_option("--rig", hands_args.rig_file, "camera rig (OpenCV YAML)")->required();
+  hands_cmd->add_option("--layout", hands_args.layout_file, "hand marker layout (JSON)")->capture_default_str();
+  hands_cmd->add_option("--motion", hands_args.motion, "open, fist, pinch, wave, power-grasp, precision-grasp or all")
+      ->capture_default_str();
+  add_world_flags(*hands_cmd, hands_args.world, true);
+  hands_cmd->add_option("--frames", hands_args.frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));
+  hands_cmd->add_option("--seed", hands_args.seed, "random seed")->capture_default_str();
+  hands_cmd
+      ->add_option("--volume-centre-m", hands_args.volume_centre, "where the hand moves, X Y Z metres (default: the rig's volume centre)")
       ->expected(3);
-  bool filter = false;
-  hands_cmd->add_flag("--filter", filter, "1-euro filter the hand frame and the fingertips before the IK");
+  hands_cmd->add_flag("--filter", hands_args.filter, "1-euro filter the hand frame and the fingertips before the IK");
+  hands_cmd->add_flag("--calibrate-hand", hands_args.calibrate_hand,
+                      "first hold the hand flat for a second, through the cameras, and track with the finger lengths it gives");
   hands_cmd->add_flag("--json", json, "print JSON (the only output format)");
   auto* grasp_cmd =
       app.add_subcommand("grasp", "scripted grasps through the physics: lift, pinch, throw, push, hand-over, hidden markers, place");
-  std::string scenario = "all";
-  grasp_cmd->add_option("--scenario", scenario, "a scenario name or all")->capture_default_str();
+  GraspArgs grasp_args;
+  grasp_args.rig_file = std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml";
+  grasp_cmd->add_option("--scenario", grasp_args.scenario, "a scenario name or all")->capture_default_str();
+  grasp_cmd
+      ->add_option("--hands", grasp_args.hands, "perfect (the script's hands) or tracked (through cameras, matching and hand tracking)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"tracked", "perfect"}));
+  grasp_cmd->add_option("--rig", grasp_args.rig_file, "tracked: the camera rig, moved to centre its volume over the pedestal")
+      ->capture_default_str();
+  add_world_flags(*grasp_cmd, grasp_args.world, true);
+  grasp_cmd->add_option("--seed", grasp_args.seed, "tracked: random seed of the simulated world")->capture_default_str();
   grasp_cmd->add_flag("--json", json, "print JSON (the only output format)");
   auto* frame_cmd = app.add_subcommand(
       "frame", "the demo's whole frame headless (cameras, tracking, physics, both eyes): p50, p99, budget misses, per stage");
@@ -182,8 +193,9 @@ int main(int argc, char** argv) {
   calib_cmd->add_flag("--json", json, "print JSON (the only output format)");
   CLI11_PARSE(app, argc, argv);
   // CLI11's range checks let NaN through (every comparison with it is false).
-  for (const auto& [flag, values] :
-       {std::pair<const char*, const std::vector<double>*>{"--volume-m", &volume}, {"--volume-centre-m", &volume_centre}}) {
+  for (const auto& [flag, values] : {std::pair<const char*, const std::vector<double>*>{"--volume-m", &volume},
+                                     {"--volume-centre-m", &volume_centre},
+                                     {"--volume-centre-m", &hands_args.volume_centre}}) {
     for (const double v : *values) {
       if (!std::isfinite(v)) {
         std::cerr << "rhot-eval: " << flag << ": expected finite numbers, got " << v << "\n";
@@ -191,13 +203,13 @@ int main(int argc, char** argv) {
       }
     }
   }
-  if (grasp_cmd->parsed()) return grasp(scenario);
+  if (grasp_cmd->parsed()) return grasp(grasp_args);
   if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
   if (demo_cmd->parsed())
     return demo(demo_args.scene_file, demo_args.placements, demo_args.seed, demo_args.world, demo_args.hands, demo_args.frames);
   if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading), frame_world);
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
-  if (hands_cmd->parsed()) return hands(rig_file, layout_file, motion, world, hand_frames, seed, volume_centre, filter);
+  if (hands_cmd->parsed()) return hands(hands_args);
   if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, world, frames, seed, volume, volume_centre);
   if (wand_cmd->parsed()) return wand(rig_file, length_mm, sigma, frames, seed, dropout, volume, volume_centre);
   return 1;

@@ -82,6 +82,19 @@ Eigen::Vector3d CameraProjection::ray_direction_world(const Eigen::Vector2d& nor
   return rotation_.transpose() * normalised.homogeneous();
 }
 
+Eigen::Vector3d axes_meeting_point(const CameraRig& rig) {
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const Camera& c : rig.cameras) {
+    const Eigen::Vector3d o = c.centre_world();
+    const Eigen::Vector3d d = c.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
+    a += p;
+    b += p * o;
+  }
+  return a.ldlt().solve(b);
+}
+
 std::vector<CameraProjection> camera_projections(const CameraRig& rig) {
   std::vector<CameraProjection> out;
   out.reserve(rig.cameras.size());

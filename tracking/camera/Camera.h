@@ -83,6 +83,9 @@ struct CameraRig {
   std::optional<TrackingVolume> volume;
 };
 
+// The point nearest (least squares) to every camera's optical axis: where the rig looks.
+Eigen::Vector3d axes_meeting_point(const CameraRig& rig);
+
 // One CameraProjection per camera of the rig, in rig order.
 std::vector<CameraProjection> camera_projections(const CameraRig& rig);
 

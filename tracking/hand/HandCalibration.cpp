@@ -38,6 +38,20 @@ std::optional<HandPose> calibrate_flat_hand(const HandPose& reference, HandSide 
   return out;
 }
 
+FingertipSample flat_hand_sample(const HandLayout& layout, const HandPose& reference, const TrackedHand& hand,
+                                 std::span<const Eigen::Vector3d> points_world) {
+  FingertipSample sample;
+  if (!hand.hand_seen) return sample;
+  const auto chains = hand_chains(reference, layout.side);
+  const Rigid3d hand_from_world = hand.world_from_hand.inverse();
+  for (std::size_t f = 0; f < kFingerCount; ++f) {
+    const int p = hand.fingertip_point[f];
+    if (p < 0 || static_cast<std::size_t>(p) >= points_world.size() || !layout.fingertip_offset_m[f]) continue;
+    sample[f] = hand_from_world * points_world[static_cast<std::size_t>(p)] - *layout.fingertip_offset_m[f] * chains[f].rest_direction;
+  }
+  return sample;
+}
+
 std::expected<void, std::string> save_hand_calibration(const HandPose& skeleton, HandSide side, const std::filesystem::path& file) {
   nlohmann::json j;
   j["format"] = "rhot-hand-calibration";

@@ -39,6 +39,8 @@ void HandTracker::begin(double time_s, const TrackedStar& star) {
     const Eigen::Vector3d tip = last.pose.position_m[static_cast<std::size_t>(joints[3])];
     along_[fi] = (tip - last.pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
     predicted_marker_[fi] = tip + *layout_.fingertip_offset_m[fi] * along_[fi];
+    gate_m_[fi] = tip_found_s_[fi] ? std::min(kFingertipGateMax_m, kFingertipGate_m + kGateGrowth_mps * (time_s - *tip_found_s_[fi]))
+                                   : kFingertipGateMax_m;
   }
 }
 
@@ -52,7 +54,7 @@ std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(s
     for (std::size_t q = 0; q < points.size(); ++q) {
       if (taken[q]) continue;
       const double d = (hand_from_world * points[q] - predicted_marker_[static_cast<std::size_t>(f)]).norm();
-      if (d < kFingertipGate_m) out.push_back({d, f, static_cast<int>(q)});
+      if (d < gate_m_[static_cast<std::size_t>(f)]) out.push_back({d, f, static_cast<int>(q)});
     }
   }
   return out;
@@ -67,6 +69,7 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
       const int p = fingertip_point[fi];
       if (p < 0 || !layout_.fingertip_offset_m[fi]) continue;
       out_.fingertip_point[fi] = p;
+      tip_found_s_[fi] = time_s;
       tips[fi] = hand_from_world * points[static_cast<std::size_t>(p)] - *layout_.fingertip_offset_m[fi] * along_[fi];
     }
     for (std::size_t fi = 0; fi < kFingerCount; ++fi) {

@@ -64,7 +64,14 @@ class HandTracker {
   // Time spent in HandSolver::update (the IK) on the last frame.
   double last_ik_us() const { return last_ik_us_; }
 
-  static constexpr double kFingertipGate_m = 0.04;
+  // A fingertip's marker is looked for within a gate of its predicted place: kFingertipGate_m
+  // while the finger is followed frame to frame, widening by kGateGrowth_mps for each second it
+  // has gone without its marker, up to kFingertipGateMax_m. A tight gate keeps a finger from
+  // jumping to a neighbour's marker, or to a ghost, when its own is hidden for a frame; a finger
+  // that has lost its marker widens its search to find it again.
+  static constexpr double kFingertipGate_m = 0.015;
+  static constexpr double kGateGrowth_mps = 0.25;
+  static constexpr double kFingertipGateMax_m = 0.04;
 
  private:
   HandLayout layout_;
@@ -76,6 +83,8 @@ class HandTracker {
   // This frame's, from begin(): each marked fingertip's last bone direction and predicted marker (hand frame).
   std::array<Eigen::Vector3d, kFingerCount> along_{};
   std::array<Eigen::Vector3d, kFingerCount> predicted_marker_{};
+  std::array<double, kFingerCount> gate_m_{};
+  std::array<std::optional<double>, kFingerCount> tip_found_s_{};  // when each fingertip last had its marker
   HandSolver solver_;
   TrackedHand out_;
   double last_ik_us_ = 0.0;

@@ -74,16 +74,7 @@ double wand_length_rms_mm(const CameraRig& rig, const Detections& detections, do
 
 TrackingVolume session_box(const CameraRig& rig) {
   if (rig.volume) return *rig.volume;
-  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d b = Eigen::Vector3d::Zero();
-  for (const Camera& c : rig.cameras) {
-    const Eigen::Vector3d o = c.centre_world();
-    const Eigen::Vector3d d = c.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitZ();
-    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
-    a += p;
-    b += p * o;
-  }
-  return TrackingVolume{a.ldlt().solve(b), Eigen::Vector3d::Ones()};
+  return TrackingVolume{axes_meeting_point(rig), Eigen::Vector3d::Ones()};
 }
 
 Detections simulate_wand_session(const CameraRig& rig, const WandSession& session, const SessionNoise& noise) {

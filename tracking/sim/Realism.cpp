@@ -120,6 +120,17 @@ CameraRig perturbed_rig(const CameraRig& truth, double rms_px, unsigned seed) {
   return apply(rms_px / unit);
 }
 
+std::vector<Occluder> hand_bone_occluders(const Rigid3d& world_from_hand, const HandPose& pose) {
+  std::vector<Occluder> out;
+  for (int j = 0; j < kHandJointCount; ++j) {
+    const auto parent = joint_parent(static_cast<HandJoint>(j));
+    if (!parent) continue;
+    out.push_back({world_from_hand * pose.position_m[static_cast<std::size_t>(*parent)],
+                   world_from_hand * pose.position_m[static_cast<std::size_t>(j)], 0.8 * pose.radius_m[static_cast<std::size_t>(j)]});
+  }
+  return out;
+}
+
 HandPose independent_hand(const HandPose& model, unsigned seed) {
   std::mt19937_64 rng(seed * 7727u + 3u);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

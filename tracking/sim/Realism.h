@@ -45,6 +45,10 @@ CameraRig perturbed_rig(const CameraRig& truth, double rms_px, unsigned seed);
 // the true rig's volume: what perturbed_rig aims at.
 double rig_difference_px(const CameraRig& truth, const CameraRig& other, unsigned seed = 1);
 
+// A hand's own bones as what hides its markers: a capsule along each bone, 0.8 times its joint's
+// radius (a finger is rounder than a capsule at its ends), world frame.
+std::vector<Occluder> hand_bone_occluders(const Rigid3d& world_from_hand, const HandPose& pose);
+
 // A user's hand that is not the solver's model: every bone of `model` (the reference hand)
 // lengthened or shortened by up to +-10 % (per user, from the seed; the palm by one factor, each
 // finger bone by its own), joint radii scaled alike.
