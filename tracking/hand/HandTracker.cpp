@@ -45,16 +45,27 @@ void HandTracker::begin(double time_s, const TrackedStar& star) {
 }
 
 std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(std::span<const Eigen::Vector3d> points,
-                                                                               const std::vector<bool>& taken) const {
+                                                                               const std::vector<bool>& taken) {
   std::vector<FingertipCandidate> out;
+  for (auto& r : reappearing_now_) r.clear();
   if (!out_.hand_seen) return out;
   const Rigid3d hand_from_world = out_.world_from_hand.inverse();
   for (int f = 0; f < kFingerCount; ++f) {
-    if (!layout_.fingertip_offset_m[static_cast<std::size_t>(f)]) continue;
+    const auto fi = static_cast<std::size_t>(f);
+    if (!layout_.fingertip_offset_m[fi]) continue;
     for (std::size_t q = 0; q < points.size(); ++q) {
       if (taken[q]) continue;
-      const double d = (hand_from_world * points[q] - predicted_marker_[static_cast<std::size_t>(f)]).norm();
-      if (d < gate_m_[static_cast<std::size_t>(f)]) out.push_back({d, f, static_cast<int>(q)});
+      const Eigen::Vector3d p = hand_from_world * points[q];
+      const double d = (p - predicted_marker_[fi]).norm();
+      if (d >= gate_m_[fi]) continue;
+      if (d >= kFingertipGate_m) {
+        // Outside the tight gate: a marker found again only if it was there the frame before.
+        reappearing_now_[fi].push_back(p);
+        const bool persists = std::any_of(reappearing_[fi].begin(), reappearing_[fi].end(),
+                                          [&](const Eigen::Vector3d& before) { return (p - before).norm() < kFingertipGate_m; });
+        if (!persists) continue;
+      }
+      out.push_back({d, f, static_cast<int>(q)});
     }
   }
   return out;
@@ -63,6 +74,7 @@ std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(s
 const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
                                        const std::array<int, kFingerCount>& fingertip_point) {
   std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips{};
+  reappearing_ = reappearing_now_;
   if (out_.hand_seen) {
     const Rigid3d hand_from_world = out_.world_from_hand.inverse();
     for (std::size_t fi = 0; fi < kFingerCount; ++fi) {

@@ -56,7 +56,7 @@ class HandTracker {
   //   fingertip_candidates  the free points near each marked fingertip's predicted marker
   //   finish     the fingers solved with the points given to each fingertip (-1: none)
   void begin(double time_s, const TrackedStar& hand_star);
-  std::vector<FingertipCandidate> fingertip_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken) const;
+  std::vector<FingertipCandidate> fingertip_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken);
   const TrackedHand& finish(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m,
                             const std::array<int, kFingerCount>& fingertip_point);
   const HandSolver& solver() const { return solver_; }
@@ -68,7 +68,9 @@ class HandTracker {
   // while the finger is followed frame to frame, widening by kGateGrowth_mps for each second it
   // has gone without its marker, up to kFingertipGateMax_m. A tight gate keeps a finger from
   // jumping to a neighbour's marker, or to a ghost, when its own is hidden for a frame; a finger
-  // that has lost its marker widens its search to find it again.
+  // that has lost its marker widens its search to find it again, but takes a point outside the
+  // tight gate only when a point was there (within kFingertipGate_m, hand frame) the frame before
+  // too: a marker found again persists, a ghost of the matching flickers.
   static constexpr double kFingertipGate_m = 0.015;
   static constexpr double kGateGrowth_mps = 0.25;
   static constexpr double kFingertipGateMax_m = 0.04;
@@ -85,6 +87,9 @@ class HandTracker {
   std::array<Eigen::Vector3d, kFingerCount> predicted_marker_{};
   std::array<double, kFingerCount> gate_m_{};
   std::array<std::optional<double>, kFingerCount> tip_found_s_{};  // when each fingertip last had its marker
+  // Per fingertip, the free points outside its tight gate but inside its widened one, last frame
+  // and this frame (hand frame): where a lost marker may be reappearing.
+  std::array<std::vector<Eigen::Vector3d>, kFingerCount> reappearing_{}, reappearing_now_{};
   HandSolver solver_;
   TrackedHand out_;
   double last_ik_us_ = 0.0;
