@@ -71,7 +71,7 @@ class HandTracker {
   // that has lost its marker widens its search to find it again, but takes a point outside the
   // tight gate only when a point was there (within kFingertipGate_m, hand frame) the frame before
   // too: a marker found again persists, a ghost of the matching flickers.
-  static constexpr double kFingertipGate_m = 0.015;
+  static constexpr double kFingertipGate_m = 0.025;
   static constexpr double kGateGrowth_mps = 0.25;
   static constexpr double kFingertipGateMax_m = 0.04;
 
