@@ -145,7 +145,7 @@ TEST(Grasp, TrackedHandsLiftTheCubeAndNeverConfuseTheHandsInAHandOver) {
     EXPECT_EQ(lift->reported_wrong_frames, 0) << "seed " << seed;
     auto over = run_grasp_scenario("hand-over", nullptr, &cameras);
     ASSERT_TRUE(over.has_value()) << over.error();
-    // (The hand-over itself succeeds in seeds 2 and 4 of 1-4 through tracked hands: the left hand's
+    // (The hand-over itself succeeds in two of seeds 1-4 through tracked hands: the left hand's
     // grasp from the side is fragile; docs/PERFORMANCE.md.)
     EXPECT_TRUE(over->grasped) << "seed " << seed;
     EXPECT_GT(over->hand_frames_seen, over->frames) << "seed " << seed << ": both hands are seen";
