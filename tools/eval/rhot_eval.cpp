@@ -57,6 +57,39 @@ struct DemoArgs {
   WorldFlags world;
 };
 
+CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
+  auto* cmd = app.add_subcommand("hands", "scripted hand motions with a hand layout: every joint against the truth");
+  a.layout_file = std::string(RHOT_ASSET_DIR) + "/hands/low-cost-right.json";
+  cmd->add_option("--rig", a.rig_file, "camera rig (OpenCV YAML)")->required();
+  cmd->add_option("--layout", a.layout_file, "hand marker layout (JSON)")->capture_default_str();
+  cmd->add_option("--motion", a.motion, "open, fist, pinch, wave, power-grasp, precision-grasp or all")->capture_default_str();
+  add_world_flags(*cmd, a.world, true);
+  cmd->add_option("--frames", a.frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cmd->add_option("--seed", a.seed, "random seed")->capture_default_str();
+  cmd->add_option("--volume-centre-m", a.volume_centre, "where the hand moves, X Y Z metres (default: the rig's volume centre)")
+      ->expected(3);
+  cmd->add_flag("--filter", a.filter, "1-euro filter the hand frame and the fingertips before the IK");
+  cmd->add_flag("--calibrate-hand", a.calibrate_hand,
+                "first hold the hand flat for a second, through the cameras, and track with the finger lengths it gives");
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
+CLI::App* add_grasp_command(CLI::App& app, GraspArgs& a, bool& json) {
+  auto* cmd =
+      app.add_subcommand("grasp", "scripted grasps through the physics: lift, pinch, throw, push, hand-over, hidden markers, place");
+  a.rig_file = std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml";
+  cmd->add_option("--scenario", a.scenario, "a scenario name or all")->capture_default_str();
+  cmd->add_option("--hands", a.hands, "perfect (the script's hands) or tracked (through cameras, matching and hand tracking)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"tracked", "perfect"}));
+  cmd->add_option("--rig", a.rig_file, "tracked: the camera rig, moved to centre its volume over the pedestal")->capture_default_str();
+  add_world_flags(*cmd, a.world, true);
+  cmd->add_option("--seed", a.seed, "tracked: random seed of the simulated world")->capture_default_str();
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
 CLI::App* add_demo_command(CLI::App& app, DemoArgs& a, bool& json) {
   auto* cmd =
       app.add_subcommand("demo", "the demo's first pickup with the cube at random spots on the table: grasp success, lift, hand confusion");
@@ -128,37 +161,10 @@ int main(int argc, char** argv) {
   stars_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
   stars_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   stars_cmd->add_flag("--json", json, "print JSON (the only output format)");
-  auto* hands_cmd = app.add_subcommand("hands", "scripted hand motions with a hand layout: every joint against the truth");
   HandsArgs hands_args;
-  hands_args.layout_file = std::string(RHOT_ASSET_DIR) + "/hands/low-cost-right.json";
-  hands_cmd->add_option("--rig", hands_args.rig_file, "camera rig (OpenCV YAML)")->required();
-  hands_cmd->add_option("--layout", hands_args.layout_file, "hand marker layout (JSON)")->capture_default_str();
-  hands_cmd->add_option("--motion", hands_args.motion, "open, fist, pinch, wave, power-grasp, precision-grasp or all")
-      ->capture_default_str();
-  add_world_flags(*hands_cmd, hands_args.world, true);
-  hands_cmd->add_option("--frames", hands_args.frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));
-  hands_cmd->add_option("--seed", hands_args.seed, "random seed")->capture_default_str();
-  hands_cmd
-      ->add_option("--volume-centre-m", hands_args.volume_centre, "where the hand moves, X Y Z metres (default: the rig's volume centre)")
-      ->expected(3);
-  hands_cmd->add_flag("--filter", hands_args.filter, "1-euro filter the hand frame and the fingertips before the IK");
-  hands_cmd->add_flag("--calibrate-hand", hands_args.calibrate_hand,
-                      "first hold the hand flat for a second, through the cameras, and track with the finger lengths it gives");
-  hands_cmd->add_flag("--json", json, "print JSON (the only output format)");
-  auto* grasp_cmd =
-      app.add_subcommand("grasp", "scripted grasps through the physics: lift, pinch, throw, push, hand-over, hidden markers, place");
+  CLI::App* hands_cmd = add_hands_command(app, hands_args, json);
   GraspArgs grasp_args;
-  grasp_args.rig_file = std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml";
-  grasp_cmd->add_option("--scenario", grasp_args.scenario, "a scenario name or all")->capture_default_str();
-  grasp_cmd
-      ->add_option("--hands", grasp_args.hands, "perfect (the script's hands) or tracked (through cameras, matching and hand tracking)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"tracked", "perfect"}));
-  grasp_cmd->add_option("--rig", grasp_args.rig_file, "tracked: the camera rig, moved to centre its volume over the pedestal")
-      ->capture_default_str();
-  add_world_flags(*grasp_cmd, grasp_args.world, true);
-  grasp_cmd->add_option("--seed", grasp_args.seed, "tracked: random seed of the simulated world")->capture_default_str();
-  grasp_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  CLI::App* grasp_cmd = add_grasp_command(app, grasp_args, json);
   auto* frame_cmd = app.add_subcommand(
       "frame", "the demo's whole frame headless (cameras, tracking, physics, both eyes): p50, p99, budget misses, per stage");
   std::string scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
