@@ -22,7 +22,7 @@ packages=(
   # a virtual display for window tests on machines without one
   xvfb xauth
   # camera nodes
-  libzmq3-dev
+  libzmq3-dev cppzmq-dev
 )
 
 if [[ ${EUID} -ne 0 ]]; then

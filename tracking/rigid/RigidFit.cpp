@@ -8,26 +8,30 @@
 
 namespace rhot {
 
-std::optional<RigidFit> fit_rigid(std::span<const Eigen::Vector3d> from, std::span<const Eigen::Vector3d> to) {
+std::optional<RigidFit> fit_rigid(std::span<const Eigen::Vector3d> from, std::span<const Eigen::Vector3d> to,
+                                  std::span<const double> weight) {
   const std::size_t n = from.size();
-  if (to.size() != n || n < 3) return std::nullopt;
+  if (to.size() != n || n < 3 || (!weight.empty() && weight.size() != n)) return std::nullopt;
+  const auto w = [&](std::size_t i) { return weight.empty() ? 1.0 : weight[i]; };
   Eigen::Vector3d mean_a = Eigen::Vector3d::Zero(), mean_b = Eigen::Vector3d::Zero();
+  double sum_w = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
-    if (!from[i].allFinite() || !to[i].allFinite()) return std::nullopt;
-    mean_a += from[i];
-    mean_b += to[i];
+    if (!from[i].allFinite() || !to[i].allFinite() || !(w(i) > 0.0) || !std::isfinite(w(i))) return std::nullopt;
+    mean_a += w(i) * from[i];
+    mean_b += w(i) * to[i];
+    sum_w += w(i);
   }
-  mean_a /= static_cast<double>(n);
-  mean_b /= static_cast<double>(n);
+  mean_a /= sum_w;
+  mean_b /= sum_w;
   Eigen::Matrix3d spread_a = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();  // sum (a - mean_a)(b - mean_b)^T
   double var_a = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d a = from[i] - mean_a;
     const Eigen::Vector3d b = to[i] - mean_b;
-    spread_a += a * a.transpose();
-    cross += a * b.transpose();
-    var_a += a.squaredNorm();
+    spread_a += w(i) * a * a.transpose();
+    cross += w(i) * a * b.transpose();
+    var_a += w(i) * a.squaredNorm();
   }
   // Collinear points leave the rotation about their line free.
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;

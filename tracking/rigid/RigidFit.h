@@ -1,6 +1,6 @@
 #pragma once
 // Least-squares rigid fit between corresponding point sets (Kabsch, by one 3x3 SVD, the reflection
-// case turned into the nearest rotation), with the residual that says whether the sets really are
+// case turned into the nearest rotation; weighted when each pair has a weight), with the residual that says whether the sets really are
 // one rigid shape, and the scale a similarity fit would need (Umeyama's; 1 for the right shape).
 
 #include <optional>
@@ -19,7 +19,10 @@ struct RigidFit {
 };
 
 // Nothing when the sets differ in size, have fewer than three points, are (nearly) collinear, or
-// contain a value that is not finite.
-std::optional<RigidFit> fit_rigid(std::span<const Eigen::Vector3d> from, std::span<const Eigen::Vector3d> to);
+// contain a value that is not finite. weight: empty for equal weights, else one positive finite
+// weight per pair (1/sigma^2 for points of different uncertainty: the maximum-likelihood pose
+// under isotropic noise); anything else is refused like a non-finite point. rms_m is unweighted.
+std::optional<RigidFit> fit_rigid(std::span<const Eigen::Vector3d> from, std::span<const Eigen::Vector3d> to,
+                                  std::span<const double> weight = {});
 
 }  // namespace rhot

@@ -142,7 +142,9 @@ std::optional<IdentifiedStar> fit_star(const StarLibrary& library, int star, con
     sigma[n] = points.sigma(static_cast<std::size_t>(point[m]));
     ++n;
   }
-  const auto fit = fit_rigid(std::span(model.data(), n), std::span(measured.data(), n));
+  std::array<double, 4> weight{};
+  for (std::size_t k = 0; k < n; ++k) weight[k] = 1.0 / (sigma[k] * sigma[k]);
+  const auto fit = fit_rigid(std::span(model.data(), n), std::span(measured.data(), n), std::span(weight.data(), n));
   if (!fit) return std::nullopt;
   // The residual's chi-square: 3n coordinates less the six of the pose.
   double residual_chi2 = 0.0;

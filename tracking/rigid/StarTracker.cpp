@@ -129,13 +129,16 @@ void StarTracker::weigh(Candidate& c, const StarPoints& points) const {
   for (std::size_t slot = 0; slot < 4; ++slot) point[static_cast<std::size_t>(r.slot_marker[slot])] = c.slot_point[slot];
   std::array<Eigen::Vector3d, 4> model;
   std::array<Eigen::Vector3d, 4> measured;
+  std::array<double, 4> weight{};
   std::size_t n = 0;
   for (std::size_t m = 0; m < 4; ++m) {
     if (point[m] < 0) continue;
+    const auto q = static_cast<std::size_t>(point[m]);
     model[n] = library_.stars()[static_cast<std::size_t>(r.star)].markers_m[m];
-    measured[n++] = points[static_cast<std::size_t>(point[m])];
+    weight[n] = 1.0 / (points.sigma(q) * points.sigma(q));
+    measured[n++] = points[q];
   }
-  if (const auto fit = fit_rigid(std::span(model.data(), n), std::span(measured.data(), n))) {
+  if (const auto fit = fit_rigid(std::span(model.data(), n), std::span(measured.data(), n), std::span(weight.data(), n))) {
     c.motion.star = r.star;
     c.motion.id = library_.stars()[static_cast<std::size_t>(r.star)].id;
     c.motion.world_from_star = fit->to_from_from;

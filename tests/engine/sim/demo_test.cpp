@@ -31,12 +31,13 @@ struct DemoRun {
   Eigen::Vector3d block_end = Eigen::Vector3d::Zero();
 };
 
-DemoRun run_default_scene(int frames, bool perfect_hands = false) {
+DemoRun run_default_scene(int frames, bool perfect_hands = false, unsigned seed = 1) {
   const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
   EXPECT_TRUE(scene.has_value());
   DemoSettings settings;
   settings.asset_dir = RHOT_ASSET_DIR;
   settings.perfect_hands = perfect_hands;
+  settings.seed = seed;
   auto created = Demo::create(*scene, nullptr, settings);
   EXPECT_TRUE(created.has_value()) << (created ? "" : created.error());
   Demo& demo = **created;
@@ -85,6 +86,17 @@ TEST(Demo, FromSimulatedCamerasTheRightHandLiftsTheBlockAndTheLeftCarriesTheTrac
   EXPECT_GE(r.mug_lift_m, 0.10) << "the star-tracked mug follows the hand that carries it";
   EXPECT_GT(r.mug_seen_frames, 1080 * 9 / 10) << "its star is seen in most frames, also while carried";
   EXPECT_LT(r.mug_worst_error_m, 0.005) << "where seen, its tracked pose is within 5 mm of the truth";
+}
+
+TEST(Demo, TheTrackedMugStaysWithinFiveMillimetresWithOtherSeedsOfTheNoise) {
+  // Seeds 3 and 6 once put it 5.0 mm off in single frames where only three of its markers were
+  // seen, one by two cameras: the star's pose is now fitted with each point weighted by its
+  // triangulation uncertainty.
+  for (const unsigned seed : {3U, 6U}) {
+    const DemoRun r = run_default_scene(1080, false, seed);
+    EXPECT_GT(r.mug_seen_frames, 1080 * 9 / 10) << "seed " << seed;
+    EXPECT_LT(r.mug_worst_error_m, 0.005) << "seed " << seed;
+  }
 }
 
 TEST(Demo, WithPerfectHandsTooTheBlockIsLifted) {

@@ -1,4 +1,8 @@
+#include <array>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -64,6 +68,44 @@ TEST(RigidFit, RecoversATransformAndReportsShapeAndScale) {
   const std::vector<Eigen::Vector3d> line{{0, 0, 0}, {0.01, 0, 0}, {0.02, 0, 0}};
   EXPECT_FALSE(fit_rigid(line, line).has_value()) << "collinear points leave a rotation free";
   EXPECT_FALSE(fit_rigid(std::span(a.data(), 2), std::span(b.data(), 2)).has_value());
+}
+
+TEST(RigidFit, WeightsByUncertaintyMakeTheFitBetterWhereOnePointIsWorse) {
+  // Three well triangulated markers and one seen by two cameras only (sigma five times larger):
+  // weighted by 1/sigma^2 the star's pose is nearer the truth than with equal weights.
+  const std::vector<Eigen::Vector3d> a{{0, 0, 0}, {0.06, 0, 0}, {0, 0.05, 0}, {0.02, 0.02, 0.07}};
+  const std::array<double, 4> sigma{0.0003, 0.0003, 0.0003, 0.0015};
+  std::array<double, 4> weight{};
+  for (std::size_t i = 0; i < 4; ++i) weight[i] = 1.0 / (sigma[i] * sigma[i]);
+  Rigid3d truth;
+  truth.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -1, 2).normalized()));
+  truth.translation = {-0.3, 0.9, -0.1};
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g(0.0, 1.0);
+  double plain_sq = 0.0, weighted_sq = 0.0;
+  const int trials = 4000;
+  for (int t = 0; t < trials; ++t) {
+    std::vector<Eigen::Vector3d> b;
+    for (std::size_t i = 0; i < 4; ++i) b.push_back(truth * a[i] + sigma[i] * Eigen::Vector3d(g(rng), g(rng), g(rng)));
+    // The error where an object's centre 10 cm from the markers would be.
+    const Eigen::Vector3d centre(0.0, -0.1, 0.0);
+    plain_sq += (fit_rigid(a, b)->to_from_from * centre - truth * centre).squaredNorm();
+    weighted_sq += (fit_rigid(a, b, weight)->to_from_from * centre - truth * centre).squaredNorm();
+  }
+  const double plain = std::sqrt(plain_sq / trials), weighted = std::sqrt(weighted_sq / trials);
+  std::printf("object centre RMS error: equal weights %.3f mm, weighted %.3f mm\n", plain * 1e3, weighted * 1e3);
+  EXPECT_LT(weighted, 0.7 * plain);
+  // Equal weights are the plain fit; a weight that is not positive and finite, or a count that does
+  // not match, is refused.
+  std::vector<Eigen::Vector3d> exact;
+  for (const auto& p : a) exact.push_back(truth * p);
+  const std::array<double, 4> equal{2.0, 2.0, 2.0, 2.0};
+  EXPECT_LT(fit_rigid(a, exact, equal)->to_from_from.rotation.angularDistance(truth.rotation), 1e-12);
+  for (const double bad : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    const std::array<double, 4> w{1.0, 1.0, bad, 1.0};
+    EXPECT_FALSE(fit_rigid(a, exact, w).has_value()) << bad;
+  }
+  EXPECT_FALSE(fit_rigid(a, exact, std::span(equal.data(), 3)).has_value());
 }
 
 TEST(StarIdentification, EveryStarInFullViewAmongLoosePointsIsFoundExactly) {
