@@ -67,6 +67,22 @@ struct HandsArgs {
   bool calibrate_hand = false;
 };
 int hands(const HandsArgs& args);
+// `rhot-eval nodes`'s flags.
+struct NodesArgs {
+  std::string rig_file;
+  int nodes = 4;
+  int markers = 40;
+  double rate_hz = 90.0;
+  double seconds = 5.0;
+  double sigma = 0.3;
+  unsigned seed = 1;
+  double deadline_ms = 10.0;
+  std::optional<double> kill_at, restart_at;  // seconds into the run: the last node killed, then started again
+  double clock_offset_ms = 0.0;               // node 0's clock ahead of the truth
+  double clock_drift_ppm = 0.0;
+  double delay_ms = 0.0;  // node 0's frames held this long
+};
+int nodes(const NodesArgs& args);
 int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);
 // `rhot-eval grasp`'s flags.
 struct GraspArgs {

@@ -6,6 +6,8 @@
 //   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--calibrate-hand] [world flags] [--frames N] --json
 //   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
 //   rhot-eval calibration --rig FILE [--wand-mm 500] [--sigma PX] [--frames 2000] [--seed S] [--dropout P] --json
+//   rhot-eval nodes [--nodes N] [--markers M] [--rate-hz R] [--seconds S] [--kill-node-at T --restart-node-at T2]
+//                   [--clock-offset-ms X --clock-drift-ppm Y] [--delay-ms D] --json
 //   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
 //                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
 //
@@ -107,6 +109,37 @@ CLI::App* add_demo_command(CLI::App& app, DemoArgs& a, bool& json) {
   return cmd;
 }
 
+CLI::App* add_nodes_command(CLI::App& app, NodesArgs& a, bool& json) {
+  auto* cmd = app.add_subcommand(
+      "nodes", "real rhot-node processes on loopback serving a simulated rig: frames lost, assembly, latency, clock sync, node faults");
+  a.rig_file = std::string(RHOT_ASSET_DIR) + "/rigs/room-8.yaml";
+  cmd->add_option("--rig", a.rig_file, "camera rig; node n simulates its cameras c with c % N == n")->capture_default_str();
+  cmd->add_option("--nodes", a.nodes, "node processes")->capture_default_str()->check(CLI::Range(1, 64));
+  cmd->add_option("--markers", a.markers, "markers wandering through the volume")->capture_default_str()->check(CLI::Range(0, 4096));
+  cmd->add_option("--rate-hz", a.rate_hz, "frames per second per camera")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
+  cmd->add_option("--seconds", a.seconds, "length of the run (simulated time, in real time)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 3600.0));
+  cmd->add_option("--sigma", a.sigma, "pixel noise")->capture_default_str()->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--seed", a.seed, "the simulated world's seed")->capture_default_str();
+  cmd->add_option("--deadline-ms", a.deadline_ms, "how long a frame waits for a missing camera")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 1000.0));
+  cmd->add_option("--kill-node-at", a.kill_at, "kill the last node (SIGKILL) this many seconds in")->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--restart-node-at", a.restart_at, "start it again this many seconds in")->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--clock-offset-ms", a.clock_offset_ms, "node 0's clock runs ahead by this much")
+      ->capture_default_str()
+      ->check(CLI::Range(-1e6, 1e6));
+  cmd->add_option("--clock-drift-ppm", a.clock_drift_ppm, "node 0's clock runs fast by this much")
+      ->capture_default_str()
+      ->check(CLI::Range(-1e4, 1e4));
+  cmd->add_option("--delay-ms", a.delay_ms, "node 0 holds each frame this long (a slow link)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 10000.0));
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -165,6 +198,8 @@ int main(int argc, char** argv) {
   CLI::App* hands_cmd = add_hands_command(app, hands_args, json);
   GraspArgs grasp_args;
   CLI::App* grasp_cmd = add_grasp_command(app, grasp_args, json);
+  NodesArgs nodes_args;
+  CLI::App* nodes_cmd = add_nodes_command(app, nodes_args, json);
   auto* frame_cmd = app.add_subcommand(
       "frame", "the demo's whole frame headless (cameras, tracking, physics, both eyes): p50, p99, budget misses, per stage");
   std::string scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
@@ -210,6 +245,7 @@ int main(int argc, char** argv) {
     }
   }
   if (grasp_cmd->parsed()) return grasp(grasp_args);
+  if (nodes_cmd->parsed()) return nodes(nodes_args);
   if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
   if (demo_cmd->parsed())
     return demo(demo_args.scene_file, demo_args.placements, demo_args.seed, demo_args.world, demo_args.hands, demo_args.frames);

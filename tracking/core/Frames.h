@@ -15,6 +15,8 @@ namespace rhot {
 struct Detection {
   Eigen::Vector2d pixel{0, 0};  // distorted pixel coordinates, sub-pixel
   int truth_marker = -1;        // ground truth (simulation only), -1 when unknown
+  float area_px = 0.0f;         // the blob's pixels above threshold (0: not measured)
+  float intensity = 0.0f;       // its peak grey level, 0-255 (0: not measured)
 };
 
 struct CameraFrame {

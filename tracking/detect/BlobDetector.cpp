@@ -15,6 +15,8 @@ namespace {
 struct Blob {
   Eigen::Vector2d pixel;
   double weight = 0.0;  // summed intensity above the level it was cut at
+  int area = 0;
+  int peak = 0;
 };
 
 struct Region {
@@ -99,7 +101,7 @@ void resolve(const cv::Mat& gray, const cv::Mat& mask, const cv::Point& offset, 
   const Region r = measure(gray, mask, offset, level);
   if (r.weight <= 0.0) return;
   if (r.elongation <= s.max_elongation) {
-    out.push_back({r.centroid, r.weight});
+    out.push_back({r.centroid, r.weight, r.area, r.peak});
     return;
   }
   if (depth <= 0 || r.peak - level < 2) return;
@@ -185,7 +187,7 @@ std::expected<std::vector<Detection>, std::string> detect_blobs(const cv::Mat& i
   }
   std::vector<Detection> out;
   out.reserve(blobs.size());
-  for (const Blob& b : blobs) out.push_back({b.pixel, -1});
+  for (const Blob& b : blobs) out.push_back({b.pixel, -1, static_cast<float>(b.area), static_cast<float>(b.peak)});
   return out;
 }
 

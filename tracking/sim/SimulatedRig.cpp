@@ -328,4 +328,13 @@ std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& bo
   return out;
 }
 
+std::vector<Trajectory> wandering_markers(const CameraRig& rig, int count, unsigned seed) {
+  Eigen::Vector3d centre = axes_meeting_point(rig), size = Eigen::Vector3d::Ones();
+  if (rig.volume) {
+    centre = rig.volume->centre_m;
+    size = rig.volume->size_m;
+  }
+  return random_trajectories(count, centre - size / 2, centre + size / 2, seed);
+}
+
 }  // namespace rhot

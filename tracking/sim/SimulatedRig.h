@@ -139,5 +139,8 @@ std::vector<RigidMotion> random_motions(int count, const Eigen::Vector3d& box_mi
 std::array<Trajectory, 2> wand_trajectories(double length_m, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m);
 
 std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed);
+// random_trajectories in a rig's tracking volume: its file's volume, else a 1 m cube centred where
+// the cameras' optical axes meet (what rhot-eval's modes and rhot-node's simulated cameras share).
+std::vector<Trajectory> wandering_markers(const CameraRig& rig, int count, unsigned seed);
 
 }  // namespace rhot

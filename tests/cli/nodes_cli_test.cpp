@@ -1,0 +1,90 @@
+// Camera nodes as real processes on loopback: rhot-eval nodes starts rhot-node processes that
+// simulate the cameras of a rig and assembles their frames; these tests read its JSON. All
+// traffic stays on 127.0.0.1.
+
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/RunCommand.h"
+
+namespace {
+
+nlohmann::json run_nodes(const std::string& args) {
+  const auto r = rhot::test::run_program("rhot-eval", "nodes " + args + " --json", "2>/dev/null");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  try {
+    return nlohmann::json::parse(r.output);
+  } catch (const nlohmann::json::exception& e) {
+    ADD_FAILURE() << e.what() << "\n" << r.output;
+    return {};
+  }
+}
+
+TEST(NodesCli, FourNodesDeliverEveryFrameAndTheMarkersAreFoundAsFromLocalCameras) {
+  const nlohmann::json j = run_nodes("--nodes 4 --markers 40 --seconds 2");
+  ASSERT_TRUE(j.contains("frames_expected")) << j.dump();
+  EXPECT_EQ(j["frames_expected"], 180);
+  // A loaded 2-core machine may lose a frame or two to scheduling, no more.
+  EXPECT_LE(j["frames_lost"].get<int>(), 2) << j.dump(2);
+  EXPECT_GT(j["found_fraction"].get<double>(), 0.98) << j.dump(2);
+  EXPECT_EQ(j["bad_messages"], 0);
+  EXPECT_LT(j["clock_residual_us"].get<double>(), 100.0);
+  for (const auto& n : j["per_node"]) EXPECT_GT(n["frames"].get<int>(), 300) << n.dump();
+}
+
+TEST(NodesCli, AKilledNodeLeavesTrackingToTheOthersAndComesBackWhenRestarted) {
+  // room-8: node 3 of 4 serves cameras 3 and 7; the other six still see nearly every marker.
+  const nlohmann::json j = run_nodes("--nodes 4 --markers 40 --seconds 4 --kill-node-at 1 --restart-node-at 2.2");
+  ASSERT_TRUE(j.contains("rejoined")) << j.dump();
+  EXPECT_GT(j["found_fraction_while_node_down"].get<double>(), 0.95) << j.dump(2);
+  EXPECT_TRUE(j["rejoined"].get<bool>()) << j.dump(2);
+  EXPECT_LE(j["frames_lost"].get<int>(), 4) << "frames go on while the node is down" << j.dump(2);
+  EXPECT_EQ(j["per_node"][3]["lost"], 1);
+  EXPECT_EQ(j["per_node"][3]["rejoined"], 1);
+}
+
+TEST(NodesCli, ANodeClockFiftyMillisecondsAheadAndDriftingIsSynchronised) {
+  const nlohmann::json j = run_nodes("--nodes 2 --markers 20 --seconds 3 --clock-offset-ms 50 --clock-drift-ppm 100");
+  ASSERT_TRUE(j.contains("clock_offset_error_us")) << j.dump();
+  EXPECT_LT(j["clock_offset_error_us"].get<double>(), 100.0) << j.dump(2);
+  EXPECT_NEAR(j["per_node"][0]["clock_offset_ms"].get<double>(), 50.3, 0.1);
+  // Frames are assembled from both nodes (a 50 ms error would split every group in two).
+  EXPECT_GT(j["found_fraction"].get<double>(), 0.95) << j.dump(2);
+  EXPECT_LE(j["frames_lost"].get<int>(), 3);
+}
+
+TEST(NodesCli, ANodeDelayedThirtyMillisecondsIsLeftOutOfFramesThatCannotWaitAndCounted) {
+  const nlohmann::json j = run_nodes("--nodes 2 --markers 20 --seconds 2 --delay-ms 30 --deadline-ms 10");
+  ASSERT_TRUE(j.contains("late")) << j.dump();
+  // Node 0's every frame arrives after its group closed: about one per frame, all counted.
+  EXPECT_GT(j["late"].get<int>(), 150) << j.dump(2);
+  EXPECT_LE(j["frames_lost"].get<int>(), 2) << "no frame waits for it";
+  EXPECT_LT(j["frames_complete"].get<int>(), 5);
+}
+
+TEST(NodesCli, BadFlagsGetOneClearLine) {
+  auto r = rhot::test::run_program(
+      "rhot-node", "--publish tcp://*:5601 --sim-rig " + std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml --sim-camera 0", "2>&1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("--publish: endpoint \"tcp://*:5601\": \"*\" would listen on every network; name the address to use"),
+            std::string::npos)
+      << r.output;
+  r = rhot::test::run_program(
+      "rhot-node", "--publish udp://127.0.0.1:5601 --sim-rig " + std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml --sim-camera 0",
+      "2>&1");
+  EXPECT_NE(r.output.find("expected tcp://HOST:PORT, ipc://PATH or inproc://NAME"), std::string::npos) << r.output;
+  r = rhot::test::run_program(
+      "rhot-node", "--publish tcp://127.0.0.1:5601 --sim-rig " + std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml --sim-camera 9",
+      "2>&1");
+  EXPECT_NE(r.output.find("--sim-camera: camera 9 is not in"), std::string::npos) << r.output;
+  r = rhot::test::run_program("rhot-node", "--help", "2>&1");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--clock-drift-ppm"), std::string::npos);
+  r = rhot::test::run_program("rhot-eval", "nodes --nodes 9 --json", "2>&1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("--nodes 9: "), std::string::npos) << r.output;
+}
+
+}  // namespace

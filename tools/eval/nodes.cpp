@@ -1,0 +1,251 @@
+// rhot-eval nodes: N real rhot-node processes on loopback, each simulating some cameras of a rig
+// (node n serves the cameras c with c % N == n), and the master's node source assembling their
+// frames. Measures frames lost, assembly cost, latency, clock synchronisation, and tracking while
+// a node is killed and restarted.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "tools/eval/Eval.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/geometry/Matching.h"
+#include "tracking/net/ChildProcess.h"
+#include "tracking/net/NodeSource.h"
+#include "tracking/sim/SimulatedRig.h"
+
+namespace rhot::eval {
+
+namespace {
+
+struct NodePlan {
+  std::string endpoint;
+  std::vector<std::string> argv;
+  std::vector<int> cameras;
+};
+
+// The markers of a simulated frame within kGhostDistance_m of a triangulated point.
+int markers_found(const std::vector<Eigen::Vector3d>& truth, const std::vector<MatchedPoint>& points) {
+  int found = 0;
+  for (const Eigen::Vector3d& t : truth) {
+    for (const MatchedPoint& p : points) {
+      if ((p.point.position_world - t).norm() < kGhostDistance_m) {
+        ++found;
+        break;
+      }
+    }
+  }
+  return found;
+}
+
+}  // namespace
+
+int nodes(const NodesArgs& a) {
+  spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));  // stdout is the JSON's
+  auto rig = rhot::load_rig(a.rig_file);
+  if (!rig) {
+    std::cerr << "rhot-eval: " << rig.error() << "\n";
+    return 1;
+  }
+  if (a.nodes > static_cast<int>(rig->cameras.size())) {
+    std::cerr << "rhot-eval: --nodes " << a.nodes << ": " << a.rig_file << " has only " << rig->cameras.size() << " cameras\n";
+    return 1;
+  }
+  if (a.restart_at && (!a.kill_at || *a.restart_at <= *a.kill_at)) {
+    std::cerr << "rhot-eval: --restart-node-at needs --kill-node-at before it\n";
+    return 1;
+  }
+  const std::filesystem::path node_program = this_program_dir() / "rhot-node";
+  if (!std::filesystem::exists(node_program)) {
+    std::cerr << "rhot-eval: " << node_program.string() << " not found (build the rhot-node target)\n";
+    return 1;
+  }
+  auto ports = free_tcp_port_pairs(a.nodes);
+  if (!ports) {
+    std::cerr << "rhot-eval: " << ports.error() << "\n";
+    return 1;
+  }
+  // Time 0 of the simulated world, on the steady clock every process here shares, far enough
+  // ahead for the nodes to start.
+  const std::int64_t start_ns = steady_now_ns() + 1'500'000'000;
+  std::vector<NodePlan> plans(static_cast<std::size_t>(a.nodes));
+  for (int n = 0; n < a.nodes; ++n) {
+    NodePlan& p = plans[static_cast<std::size_t>(n)];
+    for (int c = n; c < static_cast<int>(rig->cameras.size()); c += a.nodes) p.cameras.push_back(c);
+    const int port = (*ports)[static_cast<std::size_t>(n)];
+    p.endpoint = "tcp://127.0.0.1:" + std::to_string(port);
+    std::string list;
+    for (int c : p.cameras) list += (list.empty() ? "" : ",") + std::to_string(c);
+    p.argv = {node_program.string(),
+              "--publish",
+              p.endpoint,
+              "--node-id",
+              std::to_string(n),
+              "--sim-rig",
+              a.rig_file,
+              "--sim-camera",
+              list,
+              "--sim-markers",
+              std::to_string(a.markers),
+              "--seed",
+              std::to_string(a.seed),
+              "--sigma",
+              std::to_string(a.sigma),
+              "--rate-hz",
+              std::to_string(a.rate_hz),
+              "--sim-start-ns",
+              std::to_string(start_ns)};
+    // Node 0 is the odd one: its clock and its link, as the flags say.
+    if (n == 0) {
+      p.argv.insert(p.argv.end(), {"--clock-offset-ms", std::to_string(a.clock_offset_ms), "--clock-drift-ppm",
+                                   std::to_string(a.clock_drift_ppm), "--delay-ms", std::to_string(a.delay_ms)});
+    }
+  }
+  const std::filesystem::path log = std::filesystem::temp_directory_path() / ("rhot-eval-nodes-" + std::to_string(::getpid()) + ".log");
+  std::vector<ChildProcess> children;
+  for (const NodePlan& p : plans) {
+    auto child = ChildProcess::spawn(p.argv, log);
+    if (!child) {
+      std::cerr << "rhot-eval: " << child.error() << "\n";
+      return 1;
+    }
+    children.push_back(std::move(*child));
+  }
+  std::vector<std::string> endpoints;
+  for (const NodePlan& p : plans) endpoints.push_back(p.endpoint);
+  NodeSourceSettings settings;
+  settings.assembly.deadline_ns = static_cast<std::int64_t>(a.deadline_ms * 1e6);
+  settings.assembly.tolerance_ns = std::min<std::int64_t>(settings.assembly.deadline_ns, static_cast<std::int64_t>(0.4e9 / a.rate_hz));
+  auto source = NodeSource::open(*rig, endpoints, settings);
+  if (!source) {
+    std::cerr << "rhot-eval: " << source.error() << "\n";
+    return 1;
+  }
+  const std::vector<Trajectory> markers = wandering_markers(*rig, a.markers, a.seed);
+  const MatchSettings match = match_settings_for(a.sigma);
+  const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / a.rate_hz));
+  const auto frames_expected = static_cast<std::int64_t>(std::floor(a.seconds * a.rate_hz));
+  std::set<std::int64_t> assembled;
+  std::vector<double> assembly_ms, latency_ms;
+  long found = 0, truth_total = 0, found_down = 0, truth_down = 0;
+  bool killed = false, restarted = false, rejoined = false;
+  std::int64_t complete = 0;
+  const int victim = a.nodes - 1;  // the node killed and restarted
+  const double lost_after_s = settings.lost_after_s;
+  const std::int64_t end_ns = start_ns + static_cast<std::int64_t>(a.seconds * 1e9) + settings.assembly.deadline_ns + 50'000'000;
+  double next_progress_s = 1.0;
+  while (steady_now_ns() < end_ns) {
+    const double t_now = static_cast<double>(steady_now_ns() - start_ns) / 1e9;
+    if (a.kill_at && !killed && t_now >= *a.kill_at) {
+      children[static_cast<std::size_t>(victim)].kill();
+      killed = true;
+    }
+    if (a.restart_at && killed && !restarted && t_now >= *a.restart_at) {
+      auto child = ChildProcess::spawn(plans[static_cast<std::size_t>(victim)].argv, log);
+      if (child) children[static_cast<std::size_t>(victim)] = std::move(*child);
+      restarted = true;
+    }
+    if (t_now >= next_progress_s) {
+      spdlog::info("{:.0f} of {:.0f} s", next_progress_s, a.seconds);
+      next_progress_s += 1.0;
+    }
+    for (const std::string& w : (*source)->take_warnings()) spdlog::warn("{}", w);
+    for (const AssembledFrame& f : (*source)->take_frames(0.01)) {
+      const std::int64_t k = (f.capture_ns - start_ns + period_ns / 2) / period_ns;
+      if (f.capture_ns < start_ns - period_ns / 2 || k >= frames_expected) continue;
+      const double t = static_cast<double>(k) / a.rate_hz;
+      assembled.insert(k);
+      double cost_ns = static_cast<double>(f.close_cpu_ns);
+      bool all = true;
+      for (const auto& cam : f.cameras) {
+        if (!cam) {
+          all = false;
+          continue;
+        }
+        cost_ns += static_cast<double>(cam->decode_ns);
+        latency_ms.push_back(static_cast<double>(cam->arrival_ns - cam->capture_ns) / 1e6);
+      }
+      complete += all ? 1 : 0;
+      assembly_ms.push_back(cost_ns / 1e6);
+      if (restarted && t > *a.restart_at) {
+        for (int c : plans[static_cast<std::size_t>(victim)].cameras)
+          if (f.cameras[static_cast<std::size_t>(c)]) rejoined = true;
+      }
+      const RigFrame frame = (*source)->to_rig_frame(f);
+      const std::vector<MatchedPoint> points = match_and_triangulate(*rig, frame, match);
+      std::vector<Eigen::Vector3d> truth;
+      for (const Trajectory& m : markers) truth.push_back(m.at(t));
+      const int got = markers_found(truth, points);
+      found += got;
+      truth_total += static_cast<long>(truth.size());
+      if (a.kill_at && t >= *a.kill_at + lost_after_s && (!a.restart_at || t < *a.restart_at)) {
+        found_down += got;
+        truth_down += static_cast<long>(truth.size());
+      }
+    }
+  }
+  const NodeSourceStats stats = (*source)->stats();
+  for (ChildProcess& c : children) c.stop(2.0);
+
+  nlohmann::json j;
+  j["rig"] = a.rig_file;
+  j["nodes"] = a.nodes;
+  j["markers"] = a.markers;
+  j["rate_hz"] = a.rate_hz;
+  j["seconds"] = a.seconds;
+  j["deadline_ms"] = a.deadline_ms;
+  j["frames_expected"] = frames_expected;
+  j["frames_assembled"] = static_cast<std::int64_t>(assembled.size());
+  j["frames_lost"] = frames_expected - static_cast<std::int64_t>(assembled.size());
+  j["frames_complete"] = complete;
+  j["assembly_p50_ms"] = percentile(assembly_ms, 0.5);
+  j["assembly_p99_ms"] = percentile(assembly_ms, 0.99);
+  j["latency_p50_ms"] = percentile(latency_ms, 0.5);
+  j["latency_p99_ms"] = percentile(latency_ms, 0.99);
+  double residual = 0.0;
+  nlohmann::json per_node = nlohmann::json::array();
+  for (const NodeStats& n : stats.nodes) {
+    residual = std::max(residual, n.clock_residual_us);
+    per_node.push_back({{"endpoint", n.endpoint},
+                        {"frames", n.frames},
+                        {"bytes_per_second", static_cast<double>(n.bytes) / a.seconds},
+                        {"clock_offset_ms", n.clock_offset_ms},
+                        {"clock_drift_ppm", n.clock_drift_ppm},
+                        {"clock_residual_us", n.clock_residual_us},
+                        {"min_rtt_us", n.min_rtt_us},
+                        {"lost", n.lost},
+                        {"rejoined", n.rejoined},
+                        {"node_detect_ms", n.node_detect_ms},
+                        {"node_dropped", n.node_dropped}});
+  }
+  j["clock_residual_us"] = residual;
+  // Node 0's clock is start-relative: true offset = offset + drift * (t - start).
+  const double true_offset_ms = a.clock_offset_ms + a.clock_drift_ppm * 1e-6 * (a.seconds * 1e3);
+  j["clock_offset_error_us"] = stats.nodes.empty() ? 0.0 : std::abs(stats.nodes[0].clock_offset_ms - true_offset_ms) * 1e3;
+  j["found_fraction"] = truth_total > 0 ? static_cast<double>(found) / static_cast<double>(truth_total) : 0.0;
+  if (a.kill_at)
+    j["found_fraction_while_node_down"] = truth_down > 0 ? static_cast<double>(found_down) / static_cast<double>(truth_down) : 0.0;
+  if (a.restart_at) j["rejoined"] = rejoined;
+  j["late"] = stats.assembly.late;
+  j["duplicates"] = stats.assembly.duplicates;
+  j["out_of_order"] = stats.assembly.out_of_order;
+  j["deadline_frames"] = stats.assembly.deadline_frames;
+  j["bad_messages"] = stats.bad_messages;
+  j["per_node"] = per_node;
+  std::cout << j.dump(2) << std::endl;
+  std::error_code ec;
+  std::filesystem::remove(log, ec);
+  return 0;
+}
+
+}  // namespace rhot::eval

@@ -1,0 +1,115 @@
+#include "tracking/net/NodeServer.h"
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include <zmq.hpp>
+
+#include "tracking/net/NodeSource.h"
+
+namespace rhot {
+
+std::int64_t NodeClock::node_ns(std::int64_t true_ns) const {
+  return true_ns + offset_ns + static_cast<std::int64_t>(std::llround(drift_ppm * 1e-6 * static_cast<double>(true_ns - start_ns)));
+}
+
+struct NodeServer::Impl {
+  zmq::context_t context{1};
+  zmq::socket_t frames{context, zmq::socket_type::pub};
+  zmq::socket_t control{context, zmq::socket_type::rep};
+  std::uint16_t node_id = 0;
+  std::uint16_t cameras = 0;
+  NodeClock clock;
+  NodeServerStats stats;
+
+  void answer(const zmq::message_t& request) {
+    ++stats.requests;
+    const auto decoded = decode(std::span(static_cast<const std::uint8_t*>(request.data()), request.size()));
+    std::vector<std::uint8_t> reply;
+    if (decoded && std::holds_alternative<TimeRequest>(*decoded)) {
+      const auto& t = std::get<TimeRequest>(*decoded);
+      reply = encode(TimeReply{t.sequence, t.master_send_ns, clock.node_ns(steady_now_ns())});
+    } else if (decoded && std::holds_alternative<StatusRequest>(*decoded)) {
+      StatusReply s;
+      s.sequence = std::get<StatusRequest>(*decoded).sequence;
+      s.node = node_id;
+      s.cameras = cameras;
+      s.frame_rate_hz = static_cast<float>(stats.frame_rate_hz);
+      s.detect_mean_ms = static_cast<float>(stats.detect_mean_ms);
+      s.frames_published = stats.frames_published;
+      s.frames_dropped = stats.frames_dropped;
+      reply = encode(s);
+    } else {
+      // REP must answer every request: a status reply with sequence 0 and nothing else says "not understood".
+      ++stats.bad_requests;
+      reply = encode(StatusReply{});
+    }
+    (void)control.send(zmq::buffer(reply), zmq::send_flags::dontwait);
+  }
+};
+
+NodeServer::NodeServer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+NodeServer::~NodeServer() = default;
+
+std::expected<std::unique_ptr<NodeServer>, std::string> NodeServer::open(const std::string& publish, const std::string& control,
+                                                                         std::uint16_t node_id, std::uint16_t cameras, NodeClock clock) {
+  for (const std::string* e : {&publish, &control})
+    if (auto ok = check_endpoint(*e); !ok) return std::unexpected(ok.error());
+  auto impl = std::make_unique<Impl>();
+  impl->node_id = node_id;
+  impl->cameras = cameras;
+  impl->clock = clock;
+  try {
+    impl->frames.set(zmq::sockopt::linger, 0);
+    impl->frames.set(zmq::sockopt::sndhwm, 1000);
+    impl->frames.bind(publish);
+  } catch (const zmq::error_t& e) {
+    return std::unexpected("cannot publish on " + publish + ": " + e.what());
+  }
+  try {
+    impl->control.set(zmq::sockopt::linger, 0);
+    impl->control.bind(control);
+  } catch (const zmq::error_t& e) {
+    return std::unexpected("cannot answer requests on " + control + ": " + e.what());
+  }
+  return std::unique_ptr<NodeServer>(new NodeServer(std::move(impl)));
+}
+
+void NodeServer::publish(const NodeFrameMessage& frame) {
+  const std::vector<std::uint8_t> bytes = encode(frame);
+  try {
+    if (impl_->frames.send(zmq::buffer(bytes), zmq::send_flags::dontwait)) ++impl_->stats.frames_published;
+  } catch (const zmq::error_t&) {
+  }
+}
+
+void NodeServer::serve_until(std::int64_t until_ns) {
+  for (;;) {
+    const std::int64_t now = steady_now_ns();
+    if (now >= until_ns) return;
+    zmq::pollitem_t item{impl_->control.handle(), 0, ZMQ_POLLIN, 0};
+    // zmq_poll's timeout is in milliseconds: poll at most 1 ms, then sleep the sub-millisecond rest.
+    const std::int64_t left = until_ns - now;
+    try {
+      if (left >= 1'000'000) {
+        zmq::poll(&item, 1, std::chrono::milliseconds(1));
+      } else {
+        zmq::poll(&item, 1, std::chrono::milliseconds(0));
+        if (!(item.revents & ZMQ_POLLIN)) {
+          std::this_thread::sleep_for(std::chrono::nanoseconds(std::min<std::int64_t>(left, 200'000)));
+          continue;
+        }
+      }
+    } catch (const zmq::error_t&) {
+      return;
+    }
+    zmq::message_t request;
+    while (impl_->control.recv(request, zmq::recv_flags::dontwait)) impl_->answer(request);
+  }
+}
+
+NodeServerStats& NodeServer::stats() { return impl_->stats; }
+const NodeClock& NodeServer::clock() const { return impl_->clock; }
+
+}  // namespace rhot
