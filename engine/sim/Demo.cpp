@@ -10,6 +10,8 @@
 #include "tracking/camera/RigFile.h"
 #include "tracking/sim/Realism.h"
 #include "tracking/sim/SimulatedRig.h"
+#include "tracking/net/NodeSource.h"
+#include "tracking/rigid/StarSet.h"
 #include "tracking/source/VideoSource.h"
 
 namespace rhot {
@@ -25,6 +27,12 @@ std::expected<void, std::string> DemoSettings::check() const {
     return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
   }
   if (!video_devices.empty() && !replay.empty()) return std::unexpected(std::string("choose video devices or a replay, not both"));
+  if (!node_endpoints.empty() && (!video_devices.empty() || !replay.empty()))
+    return std::unexpected(std::string("choose camera nodes, video devices or a replay, one of them"));
+  if (!node_endpoints.empty() && perfect_hands)
+    return std::unexpected(std::string("perfect hands need the simulated rig's truth; camera nodes send none"));
+  for (const std::string& e : node_endpoints)
+    if (auto ok = check_endpoint(e); !ok) return std::unexpected("nodes: " + ok.error());
   if (!replay.empty() && perfect_hands) {
     return std::unexpected(std::string("perfect hands need the simulated rig's truth; a replay has none"));
   }
@@ -67,6 +75,41 @@ WorldSnapshot DemoWorld::at(double t_s) {
   return out;
 }
 
+std::expected<std::array<HandLayout, 2>, std::string> demo_hand_layouts(const std::filesystem::path& asset_dir,
+                                                                        const StarSet& object_stars) {
+  std::array<HandLayout, 2> layouts;
+  for (std::size_t h = 0; h < 2; ++h) {
+    auto layout = load_hand_layout(asset_dir / "hands" / (h == 0 ? "low-cost-left.json" : "low-cost-right.json"));
+    if (!layout) return std::unexpected(layout.error());
+    layouts[h] = std::move(*layout);
+  }
+  // Hands that could be taken for each other, or for an object, from three markers are refused.
+  if (const auto clashes = check_hand_stars(layouts, object_stars); !clashes.empty()) {
+    return std::unexpected("hand layouts: " + clashes.front() +
+                           (clashes.size() > 1 ? " (and " + std::to_string(clashes.size() - 1) + " more)" : ""));
+  }
+  return layouts;
+}
+
+std::expected<DemoSimulation, std::string> make_demo_simulation(const SceneDesc& scene, const std::filesystem::path& asset_dir,
+                                                                const std::filesystem::path& star_set, unsigned independent_hands_seed) {
+  const std::filesystem::path set_file = star_set.empty() ? asset_dir / "stars" / "seed-case.json" : star_set;
+  auto set = load_star_set(set_file);
+  if (!set) return std::unexpected(set.error());
+  World world;
+  instantiate(scene, world);
+  auto objects = find_tracked_objects(world, *set, set_file);
+  if (!objects) return std::unexpected(objects.error());
+  auto layouts = demo_hand_layouts(asset_dir, objects->stars);
+  if (!layouts) return std::unexpected(layouts.error());
+  DemoSimulation out;
+  out.script = std::make_unique<DemoScript>(scene);
+  out.layouts = *layouts;
+  out.objects = std::move(*objects);
+  out.world = std::make_shared<DemoWorld>(*out.script, out.layouts, out.objects, independent_hands_seed);
+  return out;
+}
+
 std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& scene, Renderer* renderer, DemoSettings settings) {
   if (auto checked = settings.check(); !checked) return std::unexpected(checked.error());
   std::unique_ptr<Demo> d(new Demo());
@@ -84,20 +127,16 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
         !settings.rig_file.empty() ? settings.rig_file : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
     auto rig = load_rig(rig_file);
     if (!rig) return std::unexpected(rig.error());
-    std::array<HandLayout, 2> layouts;
-    for (std::size_t h = 0; h < 2; ++h) {
-      auto layout = load_hand_layout(settings.asset_dir / "hands" / (h == 0 ? "low-cost-left.json" : "low-cost-right.json"));
-      if (!layout) return std::unexpected(layout.error());
-      layouts[h] = std::move(*layout);
-    }
-    // Hands that could be taken for each other, or for an object, from three markers are refused.
-    if (const auto clashes = check_hand_stars(layouts, objects.stars); !clashes.empty()) {
-      return std::unexpected("hand layouts: " + clashes.front() +
-                             (clashes.size() > 1 ? " (and " + std::to_string(clashes.size() - 1) + " more)" : ""));
-    }
+    auto loaded_layouts = demo_hand_layouts(settings.asset_dir, objects.stars);
+    if (!loaded_layouts) return std::unexpected(loaded_layouts.error());
+    const std::array<HandLayout, 2>& layouts = *loaded_layouts;
     const double rate_hz = scene.settings.headset.refresh_hz;
     std::unique_ptr<FrameSource> source;
-    if (video) {
+    if (!settings.node_endpoints.empty()) {
+      auto opened = NodeSource::open(*rig, settings.node_endpoints);
+      if (!opened) return std::unexpected(opened.error());
+      source = std::move(*opened);
+    } else if (video) {
       VideoSourceSettings vs;
       vs.detector = settings.detector;
       vs.rate_hz = rate_hz;
@@ -115,7 +154,7 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
     LiveTrackingSettings live_settings;
     live_settings.filter_hands = settings.filter_hands;
     // With a calibration error the tracker believes a rig a little off the one that took the frames.
-    if (!video && settings.world.calib_error_px > 0.0)
+    if (!video && settings.node_endpoints.empty() && settings.world.calib_error_px > 0.0)
       live_settings.tracker_rig = perturbed_rig(*rig, settings.world.calib_error_px, settings.seed);
     auto live = std::make_unique<LiveTracking>(std::move(source), objects, layouts, live_settings);
     self->live_ = live.get();

@@ -9,6 +9,8 @@
 //   video devices        one OpenCV capture per rig camera (tracking/source/VideoSource.h); no
 //                        truth, and the demo ends with the stream
 //   replay               a recording's tracking results (engine/tracked/ReplaySource.h)
+//   camera nodes         rhot-node processes sending detections over ZeroMQ
+//                        (tracking/net/NodeSource.h); no truth on this side
 //
 // Stages the demo adds to the runtime (simulated source only):
 //   perfect-hands  after the tracking stages: the hands are the script's true hands (to tell
@@ -51,6 +53,9 @@ struct DemoSettings {
   // index such as "0", a video file, or an image sequence such as "cams/cam0_%04d.png").
   std::vector<std::string> video_devices;
   BlobDetectorSettings detector;  // for video_devices
+  // Camera nodes instead (rhot-node, docs/camera-nodes.md): their publish endpoints. Each node
+  // says which rig cameras its frames are from.
+  std::vector<std::string> node_endpoints;
   DebugViews debug;
 
   // Every value a user can set checked: "<name>: <what is wrong>" for the first bad one.
@@ -81,6 +86,25 @@ class DemoWorld final : public SimulatedWorld {
   std::vector<Star> stars_;
   std::optional<SceneTruth> truth_;
 };
+
+// The demo's simulated world on its own, without a runtime: what a camera node simulating the
+// demo's cameras photographs, and what an evaluation compares with.
+struct DemoSimulation {
+  std::unique_ptr<DemoScript> script;  // the world reads it: keep both together
+  std::array<HandLayout, 2> layouts;   // left, right
+  TrackedObjects objects;
+  std::shared_ptr<DemoWorld> world;
+};
+// The scene's script, the demo's hand layouts (assets/hands/low-cost-*.json, checked against each
+// other and the objects' stars) and its star-tracked objects (from star_set, empty: the seed-case
+// set). Fails naming the file or the clash.
+[[nodiscard]] std::expected<DemoSimulation, std::string> make_demo_simulation(const SceneDesc& scene,
+                                                                              const std::filesystem::path& asset_dir,
+                                                                              const std::filesystem::path& star_set = {},
+                                                                              unsigned independent_hands_seed = 0);
+// The demo's two hand layouts, checked against each other and the objects' stars.
+[[nodiscard]] std::expected<std::array<HandLayout, 2>, std::string> demo_hand_layouts(const std::filesystem::path& asset_dir,
+                                                                                      const StarSet& object_stars);
 
 class Demo {
  public:

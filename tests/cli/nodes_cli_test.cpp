@@ -64,6 +64,19 @@ TEST(NodesCli, ANodeDelayedThirtyMillisecondsIsLeftOutOfFramesThatCannotWaitAndC
   EXPECT_LT(j["frames_complete"].get<int>(), 5);
 }
 
+TEST(NodesCli, FourNodesServingTheDemoTrackTheHandsAsWellAsTheInProcessSimulatedRig) {
+  // The demo's script photographed by four node processes (one camera each of the seated rig), its
+  // hands tracked from their frames and, at the same moments, from the in-process simulated rig.
+  const nlohmann::json j = run_nodes(std::string("--nodes 4 --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --scene " + RHOT_ASSET_DIR +
+                                     "/scenes/default.json --seconds 4");
+  ASSERT_TRUE(j.contains("hand_joint_mean_mm")) << j.dump();
+  const double nodes = j["hand_joint_mean_mm"].get<double>(), local = j["in_process_hand_joint_mean_mm"].get<double>();
+  EXPECT_GT(local, 1.0) << "a real error to compare with";
+  EXPECT_LE(nodes, 1.10 * local) << j.dump(2);
+  EXPECT_GT(j["hands_seen_fraction"].get<double>(), 0.99) << j.dump(2);
+  EXPECT_GT(j["in_process_hands_seen_fraction"].get<double>(), 0.99);
+}
+
 TEST(NodesCli, BadFlagsGetOneClearLine) {
   auto r = rhot::test::run_program(
       "rhot-node", "--publish tcp://*:5601 --sim-rig " + std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml --sim-camera 0", "2>&1");

@@ -32,6 +32,7 @@
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/Demo.h"
 #include "tracking/sim/Realism.h"
+#include "tracking/net/NodeSource.h"
 #include "tracking/source/VideoSource.h"
 
 #ifndef RHOT_ASSET_DIR
@@ -115,7 +116,8 @@ void add_options(CLI::App& cli, Options& o) {
   cli.add_option("--source", o.source,
                  "sim (the built-in simulated camera rig), replay:FILE (a recording made with --record), or video:DEV[,DEV...] "
                  "(real cameras, one per camera of --rig in rig order: a capture device index such as 0, a video file, or an image "
-                 "sequence such as cams/cam0_%04d.png; docs/demo.md)")
+                 "sequence such as cams/cam0_%04d.png; docs/demo.md), or nodes:ENDPOINT[,ENDPOINT...] (camera nodes, rhot-node, "
+                 "publishing at each ENDPOINT such as tcp://127.0.0.1:5601; docs/camera-nodes.md)")
       ->capture_default_str();
   cli.add_option("--blob-threshold", o.demo.detector.threshold,
                  "With --source video: grey level above which pixels are marker (-1: automatic, background + 5 sigma, at least 40)")
@@ -167,8 +169,15 @@ bool resolve_options(Options& o) {
       return false;
     }
     o.demo.video_devices = std::move(*devices);
+  } else if (o.source.rfind("nodes:", 0) == 0) {
+    auto endpoints = rhot::parse_node_endpoints(o.source.substr(6));
+    if (!endpoints) {
+      spdlog::error("--source: {}", endpoints.error());
+      return false;
+    }
+    o.demo.node_endpoints = std::move(*endpoints);
   } else if (o.source != "sim") {
-    spdlog::error("--source: expected sim, replay:FILE or video:DEV[,DEV...], got \"{}\"", o.source);
+    spdlog::error("--source: expected sim, replay:FILE, video:DEV[,DEV...] or nodes:ENDPOINT[,ENDPOINT...], got \"{}\"", o.source);
     return false;
   }
   auto world = rhot::world_named(o.world);

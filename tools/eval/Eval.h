@@ -81,6 +81,10 @@ struct NodesArgs {
   double clock_offset_ms = 0.0;               // node 0's clock ahead of the truth
   double clock_drift_ppm = 0.0;
   double delay_ms = 0.0;  // node 0's frames held this long
+  // The demo's world of this scene instead of loose markers: the nodes simulate its script's hands
+  // and objects, and the master tracks the hands from the nodes and, side by side, from an
+  // in-process simulated rig of the same world at the same moments.
+  std::string scene_file;
 };
 int nodes(const NodesArgs& args);
 int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);

@@ -17,6 +17,9 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "engine/scene/SceneLoader.h"
+#include "engine/sim/Demo.h"
+#include "engine/tracked/LiveTracking.h"
 #include "tools/eval/Eval.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
@@ -48,6 +51,47 @@ int markers_found(const std::vector<Eigen::Vector3d>& truth, const std::vector<M
   return found;
 }
 
+// A frame source that hands over the frame it was given (the node source's frames, one by one,
+// to a LiveTracking).
+class HeldFrames final : public FrameSource {
+ public:
+  explicit HeldFrames(CameraRig rig) : rig_(std::move(rig)) {}
+  void hold(RigFrame frame) { frame_ = std::move(frame); }
+  const CameraRig& rig() const override { return rig_; }
+  std::optional<RigFrame> next(double) override { return frame_; }
+
+ private:
+  CameraRig rig_;
+  RigFrame frame_;
+};
+
+// Both hands tracked from one source, against the script's truth.
+struct HandComparison {
+  LiveTracking* live = nullptr;
+  double error_sum_m = 0.0;
+  long joints = 0;
+  long hand_frames = 0;
+  long seen = 0;
+  void step(double t, const SceneTruth& truth) {
+    live->read_source(t);
+    live->match();
+    live->track_stars(t);
+    live->track_hands(t);
+    for (std::size_t h = 0; h < 2; ++h) {
+      ++hand_frames;
+      const TrackedHand& hand = live->tracked_hand(h == 0 ? HandSide::kLeft : HandSide::kRight);
+      if (!hand.hand_seen) continue;
+      ++seen;
+      for (std::size_t j = 0; j < kHandJointCount; ++j) {
+        error_sum_m += (hand.joints_world[j] - truth.hands[h].world_from_hand * truth.hands[h].pose.position_m[j]).norm();
+        ++joints;
+      }
+    }
+  }
+  double mean_mm() const { return joints > 0 ? 1000.0 * error_sum_m / static_cast<double>(joints) : 0.0; }
+  double seen_fraction() const { return hand_frames > 0 ? static_cast<double>(seen) / static_cast<double>(hand_frames) : 0.0; }
+};
+
 }  // namespace
 
 int nodes(const NodesArgs& a) {
@@ -64,6 +108,20 @@ int nodes(const NodesArgs& a) {
   if (a.restart_at && (!a.kill_at || *a.restart_at <= *a.kill_at)) {
     std::cerr << "rhot-eval: --restart-node-at needs --kill-node-at before it\n";
     return 1;
+  }
+  std::optional<DemoSimulation> demo;
+  if (!a.scene_file.empty()) {
+    const auto scene = load_scene_file(a.scene_file);
+    if (!scene) {
+      std::cerr << "rhot-eval: " << scene.error().to_string() << "\n";
+      return 1;
+    }
+    auto made = make_demo_simulation(*scene, RHOT_ASSET_DIR);
+    if (!made) {
+      std::cerr << "rhot-eval: " << a.scene_file << ": " << made.error() << "\n";
+      return 1;
+    }
+    demo = std::move(*made);
   }
   const std::filesystem::path node_program = this_program_dir() / "rhot-node";
   if (!std::filesystem::exists(node_program)) {
@@ -105,6 +163,7 @@ int nodes(const NodesArgs& a) {
               std::to_string(a.rate_hz),
               "--sim-start-ns",
               std::to_string(start_ns)};
+    if (!a.scene_file.empty()) p.argv.insert(p.argv.end(), {"--sim-scene", a.scene_file});
     // Node 0 is the odd one: its clock and its link, as the flags say.
     if (n == 0) {
       p.argv.insert(p.argv.end(), {"--clock-offset-ms", std::to_string(a.clock_offset_ms), "--clock-drift-ppm",
@@ -125,13 +184,34 @@ int nodes(const NodesArgs& a) {
   for (const NodePlan& p : plans) endpoints.push_back(p.endpoint);
   NodeSourceSettings settings;
   settings.assembly.deadline_ns = static_cast<std::int64_t>(a.deadline_ms * 1e6);
+  settings.time_origin_ns = start_ns;
   settings.assembly.tolerance_ns = std::min<std::int64_t>(settings.assembly.deadline_ns, static_cast<std::int64_t>(0.4e9 / a.rate_hz));
   auto source = NodeSource::open(*rig, endpoints, settings);
   if (!source) {
     std::cerr << "rhot-eval: " << source.error() << "\n";
     return 1;
   }
-  const std::vector<Trajectory> markers = wandering_markers(*rig, a.markers, a.seed);
+  const std::vector<Trajectory> markers = demo ? std::vector<Trajectory>{} : wandering_markers(*rig, a.markers, a.seed);
+  // With the demo's world: the hands tracked from the nodes' frames and, at the same moments, from
+  // an in-process simulated rig of the same world (its own noise: the same seed gives other
+  // draws than the nodes', which each seed their own cameras).
+  std::unique_ptr<LiveTracking> from_nodes, in_process;
+  HeldFrames* held = nullptr;
+  HandComparison nodes_hands, local_hands;
+  if (demo) {
+    auto frames = std::make_unique<HeldFrames>(*rig);
+    held = frames.get();
+    from_nodes = std::make_unique<LiveTracking>(std::move(frames), demo->objects, demo->layouts);
+    SimulatedRigSettings local;
+    local.sigma_px = a.sigma;
+    local.rate_hz = a.rate_hz;
+    local.seed = a.seed;
+    auto local_rig = std::make_unique<SimulatedRig>(*rig, std::vector<Trajectory>{}, local);
+    local_rig->set_world(demo->world);
+    in_process = std::make_unique<LiveTracking>(std::move(local_rig), demo->objects, demo->layouts);
+    nodes_hands.live = from_nodes.get();
+    local_hands.live = in_process.get();
+  }
   const MatchSettings match = match_settings_for(a.sigma);
   const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / a.rate_hz));
   const auto frames_expected = static_cast<std::int64_t>(std::floor(a.seconds * a.rate_hz));
@@ -144,7 +224,10 @@ int nodes(const NodesArgs& a) {
   const double lost_after_s = settings.lost_after_s;
   const std::int64_t end_ns = start_ns + static_cast<std::int64_t>(a.seconds * 1e9) + settings.assembly.deadline_ns + 50'000'000;
   double next_progress_s = 1.0;
-  while (steady_now_ns() < end_ns) {
+  // Until the run's end, and then until every frame closed by then is read (a slow master, such
+  // as a sanitizer build, reads behind real time).
+  bool more = true;
+  while (steady_now_ns() < end_ns || more) {
     const double t_now = static_cast<double>(steady_now_ns() - start_ns) / 1e9;
     if (a.kill_at && !killed && t_now >= *a.kill_at) {
       children[static_cast<std::size_t>(victim)].kill();
@@ -160,7 +243,9 @@ int nodes(const NodesArgs& a) {
       next_progress_s += 1.0;
     }
     for (const std::string& w : (*source)->take_warnings()) spdlog::warn("{}", w);
-    for (const AssembledFrame& f : (*source)->take_frames(0.01)) {
+    const std::vector<AssembledFrame> closed = (*source)->take_frames(0.01);
+    more = !closed.empty();
+    for (const AssembledFrame& f : closed) {
       const std::int64_t k = (f.capture_ns - start_ns + period_ns / 2) / period_ns;
       if (f.capture_ns < start_ns - period_ns / 2 || k >= frames_expected) continue;
       const double t = static_cast<double>(k) / a.rate_hz;
@@ -181,7 +266,14 @@ int nodes(const NodesArgs& a) {
         for (int c : plans[static_cast<std::size_t>(victim)].cameras)
           if (f.cameras[static_cast<std::size_t>(c)]) rejoined = true;
       }
-      const RigFrame frame = (*source)->to_rig_frame(f);
+      RigFrame frame = (*source)->to_rig_frame(f);
+      if (demo) {
+        const SceneTruth truth = demo->script->at(t);
+        held->hold(frame);
+        nodes_hands.step(t, truth);
+        local_hands.step(t, truth);
+        continue;
+      }
       const std::vector<MatchedPoint> points = match_and_triangulate(*rig, frame, match);
       std::vector<Eigen::Vector3d> truth;
       for (const Trajectory& m : markers) truth.push_back(m.at(t));
@@ -236,6 +328,13 @@ int nodes(const NodesArgs& a) {
   if (a.kill_at)
     j["found_fraction_while_node_down"] = truth_down > 0 ? static_cast<double>(found_down) / static_cast<double>(truth_down) : 0.0;
   if (a.restart_at) j["rejoined"] = rejoined;
+  if (demo) {
+    j["scene"] = a.scene_file;
+    j["hand_joint_mean_mm"] = nodes_hands.mean_mm();
+    j["hands_seen_fraction"] = nodes_hands.seen_fraction();
+    j["in_process_hand_joint_mean_mm"] = local_hands.mean_mm();
+    j["in_process_hands_seen_fraction"] = local_hands.seen_fraction();
+  }
   j["late"] = stats.assembly.late;
   j["duplicates"] = stats.assembly.duplicates;
   j["out_of_order"] = stats.assembly.out_of_order;

@@ -133,6 +133,10 @@ CLI::App* add_nodes_command(CLI::App& app, NodesArgs& a, bool& json) {
   cmd->add_option("--clock-drift-ppm", a.clock_drift_ppm, "node 0's clock runs fast by this much")
       ->capture_default_str()
       ->check(CLI::Range(-1e4, 1e4));
+  cmd->add_option("--scene", a.scene_file,
+                  "simulate the demo's world of this scene (hands tracked through the nodes and, side by side, in process; use --rig "
+                  "with the scene's rig)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--delay-ms", a.delay_ms, "node 0 holds each frame this long (a slow link)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 10000.0));

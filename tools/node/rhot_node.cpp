@@ -17,6 +17,8 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "engine/scene/SceneLoader.h"
+#include "engine/sim/Demo.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/net/NodeServer.h"
 #include "tracking/net/NodeSource.h"
@@ -36,6 +38,7 @@ struct Options {
   std::string sim_rig;
   std::vector<int> sim_cameras;
   int sim_markers = 40;
+  std::string sim_scene;  // the demo's world instead of loose markers
   unsigned seed = 1;
   double sigma = 0.3;
   std::optional<std::int64_t> sim_start_ns;
@@ -108,8 +111,24 @@ int run_simulated(const Options& o, rhot::NodeServer& server) {
     spdlog::error("{}", ok.error());
     return 1;
   }
-  // The world is the rig's: every node of one rig and seed simulates the same markers.
-  rhot::SimulatedRig sim(mine, rhot::wandering_markers(*rig, o.sim_markers, o.seed), settings);
+  // The world is the rig's: every node of one rig and seed simulates the same markers, or the
+  // same demo script.
+  std::optional<rhot::DemoSimulation> demo;
+  if (!o.sim_scene.empty()) {
+    const auto scene = rhot::load_scene_file(o.sim_scene);
+    if (!scene) {
+      spdlog::error("{}", scene.error().to_string());
+      return 1;
+    }
+    auto made = rhot::make_demo_simulation(*scene, RHOT_ASSET_DIR);
+    if (!made) {
+      spdlog::error("{}: {}", o.sim_scene, made.error());
+      return 1;
+    }
+    demo = std::move(*made);
+  }
+  rhot::SimulatedRig sim(mine, demo ? std::vector<rhot::Trajectory>{} : rhot::wandering_markers(*rig, o.sim_markers, o.seed), settings);
+  if (demo) sim.set_world(demo->world);
   const std::int64_t start = o.sim_start_ns.value_or(rhot::steady_now_ns());
   const auto period = static_cast<std::int64_t>(std::llround(1e9 / o.rate_hz));
   const std::int64_t now0 = rhot::steady_now_ns();
@@ -242,6 +261,9 @@ int main(int argc, char** argv) {
   cli.add_option("--sim-markers", o.sim_markers, "With --sim-rig: markers wandering through the rig's volume")
       ->capture_default_str()
       ->check(CLI::Range(0, 4096));
+  cli.add_option("--sim-scene", o.sim_scene,
+                 "With --sim-rig: the demo's world of this scene (its script's hands and objects) instead of loose markers")
+      ->check(CLI::ExistingFile);
   cli.add_option("--seed", o.seed, "With --sim-rig: the simulated world's seed (the same on every node of one rig)")->capture_default_str();
   cli.add_option("--sigma", o.sigma, "With --sim-rig: pixel noise")->capture_default_str()->check(CLI::Range(0.0, 10.0));
   cli.add_option("--sim-start-ns", o.sim_start_ns,

@@ -132,6 +132,7 @@ struct NodeSource::Impl {
   CameraRig rig;
   NodeSourceSettings settings;
   std::int64_t opened_ns = steady_now_ns();
+  std::int64_t origin_ns;
   zmq::context_t context{1};
   std::vector<Node> nodes;
 
@@ -149,7 +150,11 @@ struct NodeSource::Impl {
   std::thread receiver;
 
   Impl(const CameraRig& r, NodeSourceSettings s)
-      : rig(r), settings(s), assembler(static_cast<int>(r.cameras.size()), s.assembly), camera_last_ns(r.cameras.size(), 0) {}
+      : rig(r),
+        settings(s),
+        origin_ns(s.time_origin_ns.value_or(opened_ns)),
+        assembler(static_cast<int>(r.cameras.size()), s.assembly),
+        camera_last_ns(r.cameras.size(), 0) {}
 
   void warn(std::string line) {
     if (warnings.size() < 1000) warnings.push_back(std::move(line));
@@ -365,19 +370,19 @@ std::expected<std::unique_ptr<NodeSource>, std::string> NodeSource::open(const C
 }
 
 const CameraRig& NodeSource::rig() const { return impl_->rig; }
-std::int64_t NodeSource::opened_ns() const { return impl_->opened_ns; }
+std::int64_t NodeSource::origin_ns() const { return impl_->origin_ns; }
 
 std::vector<AssembledFrame> NodeSource::take_frames(double wait_s) { return impl_->take(wait_s); }
 
 RigFrame NodeSource::to_rig_frame(const AssembledFrame& f) const {
   RigFrame out;
-  out.time_s = static_cast<double>(f.capture_ns - impl_->opened_ns) / 1e9;
+  out.time_s = static_cast<double>(f.capture_ns - impl_->origin_ns) / 1e9;
   out.cameras.resize(impl_->rig.cameras.size());
   for (std::size_t c = 0; c < out.cameras.size(); ++c) {
     out.cameras[c].camera = static_cast<int>(c);
     out.cameras[c].timestamp_s = out.time_s;
     if (c < f.cameras.size() && f.cameras[c]) {
-      out.cameras[c].timestamp_s = static_cast<double>(f.cameras[c]->capture_ns - impl_->opened_ns) / 1e9;
+      out.cameras[c].timestamp_s = static_cast<double>(f.cameras[c]->capture_ns - impl_->origin_ns) / 1e9;
       out.cameras[c].detections = f.cameras[c]->detections;
     }
   }
@@ -388,7 +393,7 @@ std::optional<RigFrame> NodeSource::next(double) {
   std::vector<AssembledFrame> frames = impl_->take(impl_->settings.max_wait_s);
   RigFrame out;
   if (frames.empty()) {
-    out.time_s = static_cast<double>(steady_now_ns() - impl_->opened_ns) / 1e9;
+    out.time_s = static_cast<double>(steady_now_ns() - impl_->origin_ns) / 1e9;
     out.cameras.resize(impl_->rig.cameras.size());
     for (std::size_t c = 0; c < out.cameras.size(); ++c) out.cameras[c].camera = static_cast<int>(c);
   } else {

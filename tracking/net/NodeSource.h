@@ -48,6 +48,9 @@ struct NodeSourceSettings {
   double max_wait_s = 0.02;        // next() waits at most this long for a frame
   double sync_interval_s = 0.05;   // time requests per node (every 10 ms for the first 0.3 s)
   double status_interval_s = 1.0;  // status requests per node
+  // RigFrame::time_s counts from this moment of the master's clock (empty: open()). A simulation
+  // shared by nodes and master sets it to the simulated world's time 0.
+  std::optional<std::int64_t> time_origin_ns;
 };
 
 struct NodeStats {
@@ -97,10 +100,10 @@ class NodeSource final : public FrameSource {
   // Every frame closed by now, oldest first, waiting up to wait_s for the first (for evaluations
   // that must see each frame).
   std::vector<AssembledFrame> take_frames(double wait_s);
-  // An assembled frame as the tracker takes it (time_s from open()).
+  // An assembled frame as the tracker takes it (time_s from the settings' time origin).
   RigFrame to_rig_frame(const AssembledFrame& frame) const;
-  // The master's clock at open().
-  std::int64_t opened_ns() const;
+  // The master's clock at the time origin (open(), unless the settings name one).
+  std::int64_t origin_ns() const;
   NodeSourceStats stats() const;
 
  private:
