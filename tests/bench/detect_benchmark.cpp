@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "tracking/detect/BlobDetector.h"
+#include "tracking/net/NodeProtocol.h"
 #include "tracking/sim/SyntheticImages.h"
 
 namespace rhot {
@@ -40,6 +41,25 @@ void BM_DetectBlobs(benchmark::State& state) {
   state.counters["found"] = static_cast<double>(found);
 }
 BENCHMARK(BM_DetectBlobs)->Arg(10)->Arg(40)->Arg(100)->Unit(benchmark::kMillisecond);
+
+// A camera node's work per image (rhot-node --device): detection, then the frame message encoded
+// for the wire, beside detection alone above.
+void BM_NodeDetectAndEncode(benchmark::State& state) {
+  const cv::Mat image = image_with_spots(static_cast<int>(state.range(0)));
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    auto blobs = detect_blobs(image);
+    NodeFrameMessage m;
+    m.width = 1280;
+    m.height = 720;
+    if (blobs) m.detections = std::move(*blobs);
+    const auto wire = encode(m);
+    bytes = wire.size();
+    benchmark::DoNotOptimize(wire.data());
+  }
+  state.counters["bytes"] = static_cast<double>(bytes);
+}
+BENCHMARK(BM_NodeDetectAndEncode)->Arg(40)->Unit(benchmark::kMillisecond);
 
 // Baseline: threshold at a fixed level and label; OpenCV's centroids of the binary components.
 void BM_ThresholdAndComponentsBaseline(benchmark::State& state) {

@@ -1,5 +1,6 @@
 // rhot-calib record: detections of a waved marker recorded live from cameras, video files or image
-// sequences (one per rig camera, as rhot-demo --source video:...), written as rhot's CSV for
+// sequences (one per rig camera, as rhot-demo --source video:...) or from camera nodes
+// (--source nodes:..., as rhot-demo), written as rhot's CSV for
 // `wand`. The blob detector finds the marker in every image; nothing is labelled.
 
 #include <atomic>
@@ -12,6 +13,7 @@
 #include "tools/calib/Calib.h"
 #include "tracking/calib/Detections.h"
 #include "tracking/camera/RigFile.h"
+#include "tracking/net/NodeSource.h"
 #include "tracking/source/VideoSource.h"
 
 namespace rhot::calib_tool {
@@ -36,20 +38,35 @@ int run(const RecordOptions& o) {
     spdlog::error("{}", rig.error());
     return 1;
   }
-  if (o.source.rfind("video:", 0) != 0) {
-    spdlog::error("--source: expected video:DEV[,DEV...], got \"{}\"", o.source);
-    return 1;
-  }
-  const auto devices = parse_video_devices(o.source.substr(6));
-  if (!devices) {
-    spdlog::error("--source: {}", devices.error());
-    return 1;
-  }
-  VideoSourceSettings settings;
-  settings.detector.threshold = o.blob_threshold;
-  auto source = VideoSource::open(*rig, *devices, settings);
-  if (!source) {
-    spdlog::error("{}", source.error());
+  std::unique_ptr<FrameSource> source;
+  if (o.source.rfind("nodes:", 0) == 0) {
+    const auto endpoints = parse_node_endpoints(o.source.substr(6));
+    if (!endpoints) {
+      spdlog::error("--source: {}", endpoints.error());
+      return 1;
+    }
+    auto nodes = NodeSource::open(*rig, *endpoints);
+    if (!nodes) {
+      spdlog::error("{}", nodes.error());
+      return 1;
+    }
+    source = std::move(*nodes);
+  } else if (o.source.rfind("video:", 0) == 0) {
+    const auto devices = parse_video_devices(o.source.substr(6));
+    if (!devices) {
+      spdlog::error("--source: {}", devices.error());
+      return 1;
+    }
+    VideoSourceSettings settings;
+    settings.detector.threshold = o.blob_threshold;
+    auto video = VideoSource::open(*rig, *devices, settings);
+    if (!video) {
+      spdlog::error("{}", video.error());
+      return 1;
+    }
+    source = std::make_unique<VideoSource>(std::move(*video));
+  } else {
+    spdlog::error("--source: expected video:DEV[,DEV...] or nodes:ENDPOINT[,ENDPOINT...], got \"{}\"", o.source);
     return 1;
   }
   Detections d;
@@ -60,7 +77,7 @@ int run(const RecordOptions& o) {
   spdlog::info("recording{}; Ctrl-C stops and writes what was recorded",
                o.frames > 0 ? fmt::format(" {} frames", o.frames) : std::string());
   while ((o.frames <= 0 || frame < o.frames) && !g_stop.load()) {
-    const auto f = source->next();
+    const auto f = source->next(0.0);
     if (!f) break;
     DetectionFrame df;
     df.frame = frame;
@@ -93,7 +110,8 @@ void add_record(CLI::App& app, int& exit_code) {
   cmd->add_option("--rig", o->rig, "the cameras' intrinsics (OpenCV YAML): one file per camera or one with them all, in device order")
       ->required();
   cmd->add_option("--source", o->source,
-                  "video:DEV[,DEV...]: a capture device index, video file or image sequence (cam0_%04d.png) per camera")
+                  "video:DEV[,DEV...]: a capture device index, video file or image sequence (cam0_%04d.png) per camera; or "
+                  "nodes:ENDPOINT[,ENDPOINT...]: camera nodes (rhot-node, docs/camera-nodes.md) serving the rig's cameras")
       ->required();
   cmd->add_option("--out", o->out, "detections CSV to write")->required();
   cmd->add_option("--frames", o->frames, "frames to record (default: until the files end or Ctrl-C)")->check(CLI::Range(0, 10000000));

@@ -249,7 +249,9 @@ int main(int argc, char** argv) {
       "rhot-node: a camera node. Finds the markers of its cameras and publishes their detections to the master over "
       "ZeroMQ (docs/camera-nodes.md); answers time and status requests on the control endpoint beside it."};
   Options o;
-  cli.add_option("--publish", o.publish, "Where to publish frames, e.g. tcp://127.0.0.1:5601 (bound here, and nowhere else)")->required();
+  cli.add_option("--publish", o.publish, "Where to publish frames, e.g. tcp://127.0.0.1:5601 (bound here, and nowhere else)");
+  bool print_clock = false;
+  cli.add_flag("--print-clock", print_clock, "Print this machine's steady clock (ns, as --sim-start-ns takes it) and exit");
   cli.add_option("--control", o.control, "Where to answer time and status requests (default: the publish port + 1)");
   cli.add_option("--node-id", o.node_id, "This node's number, in its messages")->capture_default_str()->check(CLI::Range(0, 65535));
   auto* sim_rig =
@@ -289,6 +291,14 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 10000.0));
   cli.add_option("--seconds", o.seconds, "Stop after this long (0: until stopped)")->capture_default_str()->check(CLI::Range(0.0, 1e7));
   CLI11_PARSE(cli, argc, argv);
+  if (print_clock) {
+    std::printf("%lld\n", static_cast<long long>(rhot::steady_now_ns()));
+    return 0;
+  }
+  if (o.publish.empty()) {
+    spdlog::error("--publish is required: where to publish frames, e.g. tcp://127.0.0.1:5601");
+    return 1;
+  }
 
   if (o.sim_rig.empty() == o.device.empty()) {
     spdlog::error("give either --sim-rig FILE --sim-camera I or --device DEV --rig FILE --camera I");
