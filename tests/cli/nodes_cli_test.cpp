@@ -2,12 +2,16 @@
 // simulate the cameras of a rig and assembles their frames; these tests read its JSON. All
 // traffic stays on 127.0.0.1.
 
+#include <regex>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "tests/support/RunCommand.h"
+#include "tracking/net/ChildProcess.h"
+#include "tracking/net/NodeSource.h"
 
 namespace {
 
@@ -75,6 +79,40 @@ TEST(NodesCli, FourNodesServingTheDemoTrackTheHandsAsWellAsTheInProcessSimulated
   EXPECT_LE(nodes, 1.10 * local) << j.dump(2);
   EXPECT_GT(j["hands_seen_fraction"].get<double>(), 0.99) << j.dump(2);
   EXPECT_GT(j["in_process_hands_seen_fraction"].get<double>(), 0.99);
+}
+
+TEST(NodesCli, TheDemoRunsOnFourNodeProcesses) {
+  // rhot-demo --source nodes:... on four rhot-node processes photographing its world: every frame
+  // is assembled from all four cameras, and the demo's own run is unchanged (exit 0, stats).
+  const auto ports = rhot::free_tcp_port_pairs(4);
+  ASSERT_TRUE(ports.has_value()) << ports.error();
+  const std::string bin = RHOT_BINARY_DIR;
+  const std::string start = std::to_string(rhot::steady_now_ns() + 1'000'000'000);
+  std::vector<rhot::ChildProcess> nodes;
+  std::string endpoints;
+  for (int i = 0; i < 4; ++i) {
+    const std::string endpoint = "tcp://127.0.0.1:" + std::to_string((*ports)[static_cast<std::size_t>(i)]);
+    auto child = rhot::ChildProcess::spawn({bin + "/rhot-node", "--publish", endpoint, "--node-id", std::to_string(i), "--sim-rig",
+                                            std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml", "--sim-camera", std::to_string(i),
+                                            "--sim-scene", std::string(RHOT_ASSET_DIR) + "/scenes/default.json", "--sim-start-ns", start},
+                                           "/dev/null");
+    ASSERT_TRUE(child.has_value()) << child.error();
+    nodes.push_back(std::move(*child));
+    endpoints += (i ? "," : "") + endpoint;
+  }
+  const auto r = rhot::test::run_program("rhot-demo", "--headless --frames 150 --eye 64x64 --source nodes:" + endpoints, "2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(assembly: (\d+) frames \((\d+) complete)"))) << r.output;
+  EXPECT_GT(std::stoi(m[1]), 100) << r.output;
+  EXPECT_GE(std::stoi(m[2]), std::stoi(m[1]) - 2) << "all four cameras in (nearly) every frame\n" << r.output;
+  for (auto& n : nodes) EXPECT_TRUE(n.running()) << "the nodes outlive the master";
+  // A bad endpoint is one line and exit 1.
+  const auto bad = rhot::test::run_program("rhot-demo", "--headless --frames 1 --source nodes:tcp://127.0.0.1:99999", "2>&1");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("--source: endpoint \"tcp://127.0.0.1:99999\": port \"99999\" is not a number from 1 to 65534"),
+            std::string::npos)
+      << bad.output;
 }
 
 TEST(NodesCli, BadFlagsGetOneClearLine) {
