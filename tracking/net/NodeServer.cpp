@@ -63,12 +63,15 @@ std::expected<std::unique_ptr<NodeServer>, std::string> NodeServer::open(const s
   try {
     impl->frames.set(zmq::sockopt::linger, 0);
     impl->frames.set(zmq::sockopt::sndhwm, 1000);
+    impl->frames.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxNodeMessageBytes));
     impl->frames.bind(publish);
   } catch (const zmq::error_t& e) {
     return std::unexpected("cannot publish on " + publish + ": " + e.what());
   }
   try {
     impl->control.set(zmq::sockopt::linger, 0);
+    // A peer sending more than any request can be is disconnected by ZeroMQ before it is read.
+    impl->control.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxNodeMessageBytes));
     impl->control.bind(control);
   } catch (const zmq::error_t& e) {
     return std::unexpected("cannot answer requests on " + control + ": " + e.what());
@@ -105,7 +108,21 @@ void NodeServer::serve_until(std::int64_t until_ns) {
       return;
     }
     zmq::message_t request;
-    while (impl_->control.recv(request, zmq::recv_flags::dontwait)) impl_->answer(request);
+    try {
+      while (impl_->control.recv(request, zmq::recv_flags::dontwait)) {
+        // A request is one frame; the rest of a multi-part one is read and it is answered as not understood.
+        bool multipart = false;
+        zmq::message_t rest;
+        while (request.more() && impl_->control.recv(rest, zmq::recv_flags::dontwait)) {
+          multipart = true;
+          if (!rest.more()) break;
+        }
+        if (multipart) request.rebuild(std::size_t{0});
+        impl_->answer(request);
+      }
+    } catch (const zmq::error_t&) {
+      // A peer that broke the request-reply rhythm: nothing to answer; the socket goes on.
+    }
   }
 }
 

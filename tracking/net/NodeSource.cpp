@@ -349,11 +349,14 @@ std::expected<std::unique_ptr<NodeSource>, std::string> NodeSource::open(const C
       node.frames.set(zmq::sockopt::linger, 0);
       node.frames.set(zmq::sockopt::rcvhwm, 1000);
       node.frames.set(zmq::sockopt::subscribe, "");
+      // A peer sending more than any message can be is disconnected by ZeroMQ before it is read.
+      node.frames.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxNodeMessageBytes));
       node.frames.set(zmq::sockopt::reconnect_ivl, 100);
       node.frames.set(zmq::sockopt::reconnect_ivl_max, 500);
       node.frames.connect(endpoint);
       node.control.set(zmq::sockopt::linger, 0);
       node.control.set(zmq::sockopt::immediate, 1);
+      node.control.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxNodeMessageBytes));
       node.control.set(zmq::sockopt::sndhwm, 16);
       node.control.set(zmq::sockopt::reconnect_ivl, 100);
       node.control.set(zmq::sockopt::reconnect_ivl_max, 500);
