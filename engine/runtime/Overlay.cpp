@@ -112,6 +112,11 @@ void Overlay::tracking_panel() {
     std::string per_camera;
     for (const std::size_t n : c.detections_per_camera) per_camera += (per_camera.empty() ? "" : " ") + std::to_string(n);
     ImGui::Text("%zu cameras, detections: %s", rig->cameras.size(), per_camera.c_str());
+    if (!c.cameras_without_frame.empty()) {
+      std::string missing;
+      for (const int cam : c.cameras_without_frame) missing += (missing.empty() ? "" : ", ") + std::to_string(cam);
+      ImGui::TextColored(ImVec4(1.0f, 0.55f, 0.2f, 1.0f), "no frame from camera %s (node lost or late)", missing.c_str());
+    }
     ImGui::Text("%zu points, reprojection RMS %.2f px", c.points, c.mean_reprojection_rms_px);
   } else {
     ImGui::TextUnformatted(tracking.playback() ? "playing back a recording: no cameras" : "no cameras");

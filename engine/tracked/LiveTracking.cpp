@@ -103,6 +103,7 @@ void LiveTracking::read_source(double t_s) {
   for (const auto& camera : frame_.cameras) {
     results_.counts.detections += camera.detections.size();
     results_.counts.detections_per_camera.push_back(camera.detections.size());
+    if (!camera.delivered) results_.counts.cameras_without_frame.push_back(camera.camera);
   }
 }
 

@@ -19,6 +19,7 @@ namespace rhot {
 struct TrackingCounts {
   std::size_t detections = 0;                      // over all cameras
   std::vector<std::size_t> detections_per_camera;  // in rig order (empty without cameras)
+  std::vector<int> cameras_without_frame;          // cameras whose frame never came (lost or late camera nodes)
   std::size_t points = 0;                          // triangulated
   double mean_reprojection_rms_px = 0.0;           // over the triangulated points
   int stars_seen = 0;                              // objects' stars measured this frame

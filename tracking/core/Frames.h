@@ -23,6 +23,7 @@ struct CameraFrame {
   int camera = 0;                     // index into the rig
   double timestamp_s = 0.0;           // mid-exposure, on the source's clock
   std::vector<Detection> detections;  // in no particular order
+  bool delivered = true;              // false: no frame came from this camera (a lost or late camera node)
 };
 
 struct RigFrame {

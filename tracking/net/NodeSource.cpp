@@ -384,7 +384,8 @@ RigFrame NodeSource::to_rig_frame(const AssembledFrame& f) const {
   for (std::size_t c = 0; c < out.cameras.size(); ++c) {
     out.cameras[c].camera = static_cast<int>(c);
     out.cameras[c].timestamp_s = out.time_s;
-    if (c < f.cameras.size() && f.cameras[c]) {
+    out.cameras[c].delivered = c < f.cameras.size() && f.cameras[c].has_value();
+    if (out.cameras[c].delivered) {
       out.cameras[c].timestamp_s = static_cast<double>(f.cameras[c]->capture_ns - impl_->origin_ns) / 1e9;
       out.cameras[c].detections = f.cameras[c]->detections;
     }
@@ -398,7 +399,10 @@ std::optional<RigFrame> NodeSource::next(double) {
   if (frames.empty()) {
     out.time_s = static_cast<double>(steady_now_ns() - impl_->origin_ns) / 1e9;
     out.cameras.resize(impl_->rig.cameras.size());
-    for (std::size_t c = 0; c < out.cameras.size(); ++c) out.cameras[c].camera = static_cast<int>(c);
+    for (std::size_t c = 0; c < out.cameras.size(); ++c) {
+      out.cameras[c].camera = static_cast<int>(c);
+      out.cameras[c].delivered = false;
+    }
   } else {
     out = to_rig_frame(frames.back());
   }

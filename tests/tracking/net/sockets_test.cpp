@@ -115,6 +115,10 @@ TEST(NodeSource, APublisherSendingJunkIsCountedAndItsGoodFramesStillTracked) {
     for (const AssembledFrame& a : (*source)->take_frames(0.01)) {
       if (a.cameras[0]) ++frames;
       EXPECT_EQ(a.cameras_present(), 1);
+      // The tracker is told which cameras sent nothing (the overlay shows them).
+      const RigFrame r = (*source)->to_rig_frame(a);
+      EXPECT_TRUE(r.cameras[0].delivered);
+      EXPECT_FALSE(r.cameras[1].delivered);
     }
     for (auto& w : (*source)->take_warnings()) warnings.push_back(w);
   }
