@@ -17,6 +17,8 @@ struct Detection {
   int truth_marker = -1;        // ground truth (simulation only), -1 when unknown
   float area_px = 0.0f;         // the blob's pixels above threshold (0: not measured)
   float intensity = 0.0f;       // its peak grey level, 0-255 (0: not measured)
+  std::int8_t colour = -1;      // its marker colour (MarkerColour.h), -1 for none (an infrared blob)
+  float confidence = 0.0f;      // how surely it is that colour, 0-1 (0: not measured)
 };
 
 struct CameraFrame {

@@ -1,0 +1,252 @@
+// Colour models and the colour marker detector on images drawn from known sub-pixel positions
+// (tracking/sim/SyntheticImages.h: draw_colour_markers), with clutter, other white balances and
+// exposures. Rendered images are tested in tests/engine/colour_cameras_test.cpp.
+
+#include "tracking/detect/ColourDetector.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "tracking/core/MarkerColour.h"
+#include "tracking/detect/ColourModel.h"
+#include "tracking/sim/SyntheticImages.h"
+
+namespace rhot {
+namespace {
+
+const std::vector<int> kSix{0, 2, 3, 4, 5, 7};  // red, yellow, green, cyan, blue, magenta
+
+// `per_colour` markers of each of the six colours in 640 x 480, at least 30 px apart, `margin` from the edges.
+std::vector<ColourMarkerDrawing> scattered_markers(int per_colour, unsigned seed, double margin = 20.0) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> ux(margin, 640.0 - margin), uy(margin, 480.0 - margin), ur(3.0, 7.0);
+  std::vector<ColourMarkerDrawing> out;
+  for (const int colour : kSix) {
+    for (int i = 0; i < per_colour; ++i) {
+      for (;;) {
+        const Eigen::Vector2d p(ux(rng), uy(rng));
+        if (std::all_of(out.begin(), out.end(), [&](const ColourMarkerDrawing& m) { return (m.pixel - p).norm() > 30.0; })) {
+          out.push_back({p, ur(rng), colour});
+          break;
+        }
+      }
+    }
+  }
+  return out;
+}
+
+struct Score {
+  int found = 0, wrong_colour = 0, false_detections = 0;
+  double rms_px = 0.0;
+};
+
+// Each detection matched to the nearest true marker within 2 px.
+Score score(const std::vector<ColourMarkerDrawing>& truth, const std::vector<Detection>& detections) {
+  Score s;
+  std::vector<bool> used(truth.size(), false);
+  double sum2 = 0.0;
+  for (const Detection& d : detections) {
+    int best = -1;
+    double best_d = 2.0;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      const double dist = (truth[i].pixel - d.pixel).norm();
+      if (dist < best_d && !used[i]) best_d = dist, best = static_cast<int>(i);
+    }
+    if (best < 0) {
+      ++s.false_detections;
+      continue;
+    }
+    used[static_cast<std::size_t>(best)] = true;
+    ++s.found;
+    if (d.colour != truth[static_cast<std::size_t>(best)].colour) ++s.wrong_colour;
+    sum2 += best_d * best_d;
+  }
+  s.rms_px = s.found ? std::sqrt(sum2 / s.found) : 0.0;
+  return s;
+}
+
+TEST(ColourModel, TheDefaultModelTakesEachMarkerColourAsItselfAndSkinWoodAndGreyAsNothing) {
+  const ColourModel model = default_colour_model();
+  ASSERT_TRUE(model.check());
+  for (const int c : kSix) {
+    const auto& d = kMarkerColours[static_cast<std::size_t>(c)].display_srgb;
+    const PixelClass p = classify(model, hsv_from_rgb(255.0 * d[0], 255.0 * d[1], 255.0 * d[2]));
+    ASSERT_GE(p.klass, 0) << marker_colour_name(c);
+    EXPECT_EQ(model.classes[static_cast<std::size_t>(p.klass)].colour, c);
+    EXPECT_GT(p.membership, 0.9);
+  }
+  for (const auto& rgb : {std::array<double, 3>{224, 172, 140}, {200, 140, 110}, {160, 105, 60}, {128, 128, 128}, {240, 240, 235}}) {
+    EXPECT_EQ(classify(model, hsv_from_rgb(rgb[0], rgb[1], rgb[2])).klass, -1) << rgb[0] << "," << rgb[1] << "," << rgb[2];
+  }
+}
+
+TEST(ColourModel, AFileReadsBackAsWritten) {
+  const ColourModel model = default_colour_model();
+  const auto back = parse_colour_model(colour_model_json(model), "colours.json");
+  ASSERT_TRUE(back) << back.error().to_string();
+  ASSERT_EQ(back->classes.size(), model.classes.size());
+  for (std::size_t i = 0; i < model.classes.size(); ++i) {
+    EXPECT_EQ(back->classes[i].colour, model.classes[i].colour);
+    EXPECT_DOUBLE_EQ(back->classes[i].hue_deg, model.classes[i].hue_deg);
+    EXPECT_DOUBLE_EQ(back->classes[i].hue_tolerance_deg, model.classes[i].hue_tolerance_deg);
+    EXPECT_DOUBLE_EQ(back->classes[i].min_saturation, model.classes[i].min_saturation);
+  }
+}
+
+TEST(ColourModel, BadFilesAreRefusedNamingWhereAndWhat) {
+  const auto error = [](const std::string& colours) {
+    const auto m = parse_colour_model(R"({"format": "rhot-marker-colours", "version": 1, "colours": [)" + colours + "]}", "c.json");
+    return m ? std::string("loaded") : m.error().to_string();
+  };
+  const std::string red = R"({"name": "red", "hue_deg": 0, "hue_tolerance_deg": 20, "min_saturation": 0.5, "min_value": 0.2})";
+  EXPECT_EQ(error(R"({"name": "teal", "hue_deg": 0, "hue_tolerance_deg": 20, "min_saturation": 0.5, "min_value": 0.2})"),
+            "c.json: /colours/0/name: expected a marker colour (red, orange, yellow, green, cyan, blue, purple, magenta), got \"teal\"");
+  EXPECT_EQ(error(R"({"name": "red", "hue_deg": 400, "hue_tolerance_deg": 20, "min_saturation": 0.5, "min_value": 0.2})"),
+            "c.json: /colours/0/hue_deg: expected a hue from 0 to 360 (not 360), got 400");
+  EXPECT_EQ(error(R"({"name": "red", "hue_deg": 0, "hue_tolerance_deg": 20, "min_saturation": 0.5})"),
+            "c.json: /colours/0: missing required key \"min_value\"");
+  EXPECT_EQ(error(red + R"(, {"name": "orange", "hue_deg": 30, "hue_tolerance_deg": 15, "min_saturation": 0.5, "min_value": 0.2})"),
+            "c.json: /colours: colours/1 (orange): hue window 30 +- 15 overlaps colours/0 (red) 0 +- 20");
+  EXPECT_EQ(error(red + "," + red), "c.json: /colours: colours/1 (red): name: the colour is listed twice (also colours/0)");
+  EXPECT_EQ(error(""), "c.json: /colours: colours: expected at least one colour, got none");
+  const auto wrong = parse_colour_model(R"({"format": "rhot-hand-layout", "version": 1, "colours": []})", "c.json");
+  ASSERT_FALSE(wrong);
+  EXPECT_EQ(wrong.error().to_string(), "c.json: /format: expected \"rhot-marker-colours\", got \"rhot-hand-layout\"");
+  const auto missing = load_colour_model("/nonexistent/colours.json");
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error().to_string(), "/nonexistent/colours.json: colour file not found");
+}
+
+TEST(ColourDetector, FindsEveryMarkerAtItsCentreOnAClutteredTableAndNothingElse) {
+  ColourDetector detector(default_colour_model());
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    const auto truth = scattered_markers(4, seed);
+    ColourImageSettings settings;
+    settings.seed = seed;
+    settings.noise_sigma = 3.0;
+    const auto detections = detector.detect(draw_colour_markers(640, 480, truth, settings));
+    ASSERT_TRUE(detections) << detections.error();
+    const Score s = score(truth, *detections);
+    EXPECT_EQ(s.found, 24) << "seed " << seed;
+    EXPECT_EQ(s.wrong_colour, 0) << "seed " << seed;
+    EXPECT_EQ(s.false_detections, 0) << "seed " << seed;
+    EXPECT_LT(s.rms_px, 0.15) << "seed " << seed;
+  }
+}
+
+TEST(ColourDetector, KeepsEveryColourUnderWarmAndCoolLightAndOtherExposures) {
+  ColourDetector detector(default_colour_model());
+  const auto truth = scattered_markers(3, 7);
+  for (const auto& [kelvin, exposure] : {std::pair{3000.0, 1.0}, {4000.0, 0.6}, {9000.0, 1.0}, {6500.0, 1.3}}) {
+    ColourImageSettings settings;
+    settings.kelvin = kelvin;
+    settings.exposure = exposure;
+    const auto detections = detector.detect(draw_colour_markers(640, 480, truth, settings));
+    ASSERT_TRUE(detections);
+    const Score s = score(truth, *detections);
+    EXPECT_EQ(s.found, 18) << kelvin << " K, exposure " << exposure;
+    EXPECT_EQ(s.wrong_colour, 0) << kelvin << " K, exposure " << exposure;
+    EXPECT_EQ(s.false_detections, 0) << kelvin << " K, exposure " << exposure;
+    EXPECT_LT(s.rms_px, 0.2) << kelvin << " K, exposure " << exposure;
+  }
+}
+
+TEST(ColourDetector, TwoTouchingMarkersOfDifferentColoursStayTwo) {
+  ColourDetector detector(default_colour_model());
+  const std::vector<ColourMarkerDrawing> truth{{{100.3, 100.6}, 5.0, 0}, {{110.1, 100.2}, 5.0, 3}};
+  ColourImageSettings settings;
+  settings.clutter = false;
+  const auto detections = detector.detect(draw_colour_markers(200, 200, truth, settings));
+  ASSERT_TRUE(detections);
+  const Score s = score(truth, *detections);
+  EXPECT_EQ(s.found, 2);
+  EXPECT_EQ(s.false_detections, 0);
+  EXPECT_LT(s.rms_px, 0.5);  // each loses its edge pixels mixed with the other's colour
+}
+
+TEST(ColourDetector, TracksInRegionsAndSearchesEverythingWhenAMarkerIsLost) {
+  ColourDetectorSettings settings;
+  settings.full_scan_every = 1000;
+  ColourDetector detector(default_colour_model(), settings);
+  auto truth = scattered_markers(2, 3, 50.0);
+  ColourImageSettings draw;
+  ASSERT_TRUE(detector.track(draw_colour_markers(640, 480, truth, draw)));
+  EXPECT_TRUE(detector.last_full_scan());
+  for (int frame = 1; frame <= 10; ++frame) {
+    for (auto& m : truth) m.pixel += Eigen::Vector2d(2.5, -1.5);  // every marker moves 3 px a frame
+    draw.seed = static_cast<std::uint64_t>(frame);
+    const auto detections = detector.track(draw_colour_markers(640, 480, truth, draw));
+    ASSERT_TRUE(detections);
+    EXPECT_FALSE(detector.last_full_scan()) << "frame " << frame;
+    EXPECT_LT(detector.last_pixels_read(), 640 * 480 / 10);
+    const Score s = score(truth, *detections);
+    EXPECT_EQ(s.found, 12);
+    EXPECT_EQ(s.false_detections, 0);
+  }
+  truth.erase(truth.begin() + 4);  // one marker hidden
+  const auto detections = detector.track(draw_colour_markers(640, 480, truth, draw));
+  ASSERT_TRUE(detections);
+  EXPECT_TRUE(detector.last_full_scan());
+  EXPECT_EQ(detector.last_pixels_read(), 640 * 480);
+  EXPECT_EQ(score(truth, *detections).found, 11);
+}
+
+TEST(ColourDetector, RefusesImagesThatAreNotColour) {
+  ColourDetector detector(default_colour_model());
+  const auto empty = detector.detect(cv::Mat());
+  ASSERT_FALSE(empty);
+  EXPECT_EQ(empty.error(), "empty image");
+  const auto grey = detector.detect(cv::Mat(10, 10, CV_8UC1, cv::Scalar(0)));
+  ASSERT_FALSE(grey);
+  EXPECT_EQ(grey.error(), "expected an 8-bit BGR image (CV_8UC3), got type 0 with 1 channel(s)");
+  ColourDetectorSettings bad;
+  bad.max_elongation = 0.5;
+  ASSERT_FALSE(bad.check());
+  EXPECT_EQ(bad.check().error(), "max_elongation: expected at least 1, got 0.500000");
+}
+
+TEST(ColourModel, IsLearnedFromImagesOfTheMarkersHeldUp) {
+  std::vector<cv::Mat> images;
+  std::vector<ColourMarkerDrawing> truth;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    truth = scattered_markers(2, seed);
+    for (auto& m : truth) m.radius_px = 8.0;  // held up near the camera
+    ColourImageSettings settings;
+    settings.seed = seed;
+    settings.kelvin = 4500.0;  // a camera left at daylight under a warmer lamp: the model learns the shift
+    images.push_back(draw_colour_markers(640, 480, truth, settings));
+  }
+  ColourLearnSettings learn;
+  learn.expected = kSix;
+  const auto report = learn_colour_model(images, {}, learn);
+  ASSERT_TRUE(report) << report.error();
+  ASSERT_EQ(report->model.classes.size(), 6u);
+  for (const int c : kSix) EXPECT_NE(report->model.find(c), nullptr) << marker_colour_name(c);
+  // The learned model finds the markers of another image under the same light.
+  ColourDetector detector(report->model);
+  const auto test_markers = scattered_markers(3, 11);
+  ColourImageSettings settings;
+  settings.seed = 11;
+  settings.kelvin = 4500.0;
+  const auto detections = detector.detect(draw_colour_markers(640, 480, test_markers, settings));
+  ASSERT_TRUE(detections);
+  const Score s = score(test_markers, *detections);
+  EXPECT_EQ(s.found, 18);
+  EXPECT_EQ(s.wrong_colour, 0);
+  EXPECT_EQ(s.false_detections, 0);
+
+  // An image with nothing saturated and compact: a clear refusal.
+  ColourImageSettings plain;
+  plain.clutter = false;
+  const auto none = learn_colour_model({draw_colour_markers(320, 240, {}, plain)}, {}, learn);
+  ASSERT_FALSE(none);
+  EXPECT_EQ(none.error(), "no compact saturated blobs in the images: hold the markers up to the camera, nearer or in better light");
+  const auto grey = learn_colour_model({cv::Mat(10, 10, CV_8UC1)}, {}, learn);
+  ASSERT_FALSE(grey);
+  EXPECT_EQ(grey.error(), "image 0: expected an 8-bit BGR image");
+}
+
+}  // namespace
+}  // namespace rhot

@@ -1,0 +1,254 @@
+#include "tracking/detect/ColourDetector.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Eigenvalues>
+
+#include "tracking/core/MarkerColour.h"
+
+namespace rhot {
+
+std::expected<void, std::string> ColourDetectorSettings::check() const {
+  const auto bad = [](const std::string& field, const std::string& expected, double v) {
+    return std::unexpected(field + ": expected " + expected + ", got " + std::to_string(v));
+  };
+  if (min_area_px < 1) return bad("min_area_px", "at least 1", min_area_px);
+  if (max_area_px < min_area_px) return bad("max_area_px", "at least min_area_px", max_area_px);
+  if (!(max_elongation >= 1.0)) return bad("max_elongation", "at least 1", max_elongation);
+  if (!(min_fill >= 0.0 && min_fill <= 1.0)) return bad("min_fill", "0 to 1", min_fill);
+  if (!(min_confidence >= 0.0 && min_confidence <= 1.0)) return bad("min_confidence", "0 to 1", min_confidence);
+  if (roi_margin_px < 1) return bad("roi_margin_px", "at least 1", roi_margin_px);
+  if (full_scan_every < 1) return bad("full_scan_every", "at least 1", full_scan_every);
+  if (max_blobs < 1) return bad("max_blobs", "at least 1", max_blobs);
+  return {};
+}
+
+ColourDetector::ColourDetector(const ColourModel& model, ColourDetectorSettings settings) : table_(model), settings_(settings) {}
+
+namespace {
+
+int find_root(std::vector<int>& parent, int i) {
+  while (parent[static_cast<std::size_t>(i)] != i) {
+    parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+    i = parent[static_cast<std::size_t>(i)];
+  }
+  return i;
+}
+
+std::expected<void, std::string> check_image(const cv::Mat& bgr) {
+  if (bgr.empty()) return std::unexpected("empty image");
+  if (bgr.type() != CV_8UC3) {
+    return std::unexpected("expected an 8-bit BGR image (CV_8UC3), got type " + std::to_string(bgr.type()) + " with " +
+                           std::to_string(bgr.channels()) + " channel(s)");
+  }
+  return {};
+}
+
+}  // namespace
+
+void ColourDetector::scan(const cv::Mat& bgr, const cv::Rect& rect) {
+  const std::uint8_t* lut = table_.classes();
+  std::size_t prev_begin = runs_.size(), prev_end = runs_.size();
+  for (int y = rect.y; y < rect.y + rect.height; ++y) {
+    const std::size_t row_begin = runs_.size();
+    const std::uint8_t* p = bgr.ptr<std::uint8_t>(y) + 3 * rect.x;
+    int current = 0, start = 0;
+    const int x_end = rect.x + rect.width;
+    for (int x = rect.x; x < x_end; ++x, p += 3) {
+      const int k = lut[ColourTable::cell(p[0], p[1], p[2])];
+      if (k == current) continue;
+      if (current != 0) runs_.push_back({y, start, x, current, static_cast<int>(runs_.size())});
+      current = k;
+      start = x;
+    }
+    if (current != 0) runs_.push_back({y, start, x_end, current, static_cast<int>(runs_.size())});
+    // Join with the previous row's runs of the same colour that touch (8-connected).
+    std::size_t j = prev_begin;
+    for (std::size_t i = row_begin; i < runs_.size(); ++i) {
+      Run& r = runs_[i];
+      while (j < prev_end && runs_[j].x1 < r.x0) ++j;  // ends more than one pixel left of r
+      for (std::size_t k = j; k < prev_end && runs_[k].x0 <= r.x1; ++k) {
+        if (runs_[k].klass != r.klass) continue;
+        // Union: the later root points at the earlier one.
+        int a = static_cast<int>(i), b = static_cast<int>(k);
+        while (runs_[static_cast<std::size_t>(a)].parent != a) a = runs_[static_cast<std::size_t>(a)].parent;
+        while (runs_[static_cast<std::size_t>(b)].parent != b) b = runs_[static_cast<std::size_t>(b)].parent;
+        if (a != b) runs_[static_cast<std::size_t>(std::max(a, b))].parent = std::min(a, b);
+      }
+    }
+    prev_begin = row_begin;
+    prev_end = runs_.size();
+  }
+}
+
+std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::vector<cv::Rect>& rects) {
+  runs_.clear();
+  last_pixels_ = 0;
+  std::vector<std::size_t> rect_of_run_begin;
+  for (const cv::Rect& r : rects) {
+    rect_of_run_begin.push_back(runs_.size());
+    scan(bgr, r);
+    last_pixels_ += static_cast<std::int64_t>(r.area());
+  }
+  std::vector<int> parent(runs_.size());
+  for (std::size_t i = 0; i < runs_.size(); ++i) parent[i] = runs_[i].parent;
+
+  struct Moments {
+    double n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+    double w = 0, wx = 0, wy = 0, value = 0;
+    int klass = 0;
+    bool clipped = false;  // touches a region's edge inside the image: part of it may lie outside
+  };
+  std::vector<int> slot(runs_.size(), -1);
+  std::vector<Moments> blobs;
+  const std::uint8_t* membership = table_.memberships();
+  std::size_t rect_index = 0;
+  for (std::size_t i = 0; i < runs_.size(); ++i) {
+    while (rect_index + 1 < rects.size() && i >= rect_of_run_begin[rect_index + 1]) ++rect_index;
+    const cv::Rect& rect = rects[rect_index];
+    const Run& run = runs_[i];
+    const int root = find_root(parent, static_cast<int>(i));
+    int& s = slot[static_cast<std::size_t>(root)];
+    if (s < 0) {
+      s = static_cast<int>(blobs.size());
+      blobs.push_back({});
+      blobs.back().klass = run.klass;
+    }
+    Moments& m = blobs[static_cast<std::size_t>(s)];
+    if ((run.x0 == rect.x && rect.x > 0) || (run.x1 == rect.x + rect.width && run.x1 < bgr.cols) || (run.y == rect.y && rect.y > 0) ||
+        (run.y == rect.y + rect.height - 1 && run.y < bgr.rows - 1)) {
+      m.clipped = true;
+    }
+    if (m.n > settings_.max_area_px) continue;  // refused anyway: stop measuring a wall
+    const std::uint8_t* p = bgr.ptr<std::uint8_t>(run.y) + 3 * run.x0;
+    const double y = run.y;
+    for (int x = run.x0; x < run.x1; ++x, p += 3) {
+      const double w = membership[ColourTable::cell(p[0], p[1], p[2])] / 255.0;
+      m.n += 1.0;
+      m.sx += x;
+      m.sy += y;
+      m.sxx += static_cast<double>(x) * x;
+      m.syy += y * y;
+      m.sxy += x * y;
+      m.w += w;
+      m.wx += w * x;
+      m.wy += w * y;
+      m.value += std::max({p[0], p[1], p[2]});
+    }
+  }
+  std::vector<Detection> out;
+  for (const Moments& m : blobs) {
+    if (m.clipped || m.n < settings_.min_area_px || m.n > settings_.max_area_px || m.w <= 0.0) continue;
+    const double confidence = m.w / m.n;
+    if (confidence < settings_.min_confidence) continue;
+    const double mx = m.sx / m.n, my = m.sy / m.n;
+    // Pixel squares: each adds 1/12 to its own variance.
+    const double cxx = m.sxx / m.n - mx * mx + 1.0 / 12.0, cyy = m.syy / m.n - my * my + 1.0 / 12.0, cxy = m.sxy / m.n - mx * my;
+    const double half_trace = 0.5 * (cxx + cyy);
+    const double root = std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
+    const double major = half_trace + root, minor = half_trace - root;
+    if (!(minor > 0.0)) continue;
+    if (std::sqrt(major / minor) > settings_.max_elongation) continue;
+    const double fill = m.n / (4.0 * std::numbers::pi * std::sqrt(major * minor));
+    if (fill < settings_.min_fill) continue;
+    Detection d;
+    d.pixel = Eigen::Vector2d(m.wx / m.w, m.wy / m.w);
+    d.area_px = static_cast<float>(m.n);
+    d.intensity = static_cast<float>(m.value / m.n);
+    d.colour = static_cast<std::int8_t>(table_.model().classes[static_cast<std::size_t>(m.klass - 1)].colour);
+    d.confidence = static_cast<float>(confidence);
+    out.push_back(d);
+  }
+  if (static_cast<int>(out.size()) > settings_.max_blobs) {
+    std::nth_element(out.begin(), out.begin() + settings_.max_blobs, out.end(),
+                     [](const Detection& a, const Detection& b) { return a.area_px > b.area_px; });
+    out.resize(static_cast<std::size_t>(settings_.max_blobs));
+  }
+  return out;
+}
+
+std::expected<std::vector<Detection>, std::string> ColourDetector::detect(const cv::Mat& bgr) {
+  if (auto ok = check_image(bgr); !ok) return std::unexpected(ok.error());
+  reset();
+  size_ = bgr.size();
+  last_full_ = true;
+  if (settings_.white_balance) balance(bgr);
+  auto out = measure(bgr, {cv::Rect(0, 0, bgr.cols, bgr.rows)});
+  remember(out);
+  return out;
+}
+
+void ColourDetector::balance(const cv::Mat& bgr) {
+  const auto c = median_chromaticity(bgr);
+  const auto& ref = table_.model().white_reference;
+  const std::array<double, 2> gains{std::clamp(ref[0] / c[0], 0.3, 3.0), std::clamp(ref[1] / c[1], 0.3, 3.0)};
+  const auto& now = table_.gains();
+  if (std::abs(gains[0] / now[0] - 1.0) > 0.02 || std::abs(gains[1] / now[1] - 1.0) > 0.02) table_ = ColourTable(table_.model(), gains);
+}
+
+void ColourDetector::reset() {
+  tracked_.clear();
+  frames_since_full_ = 0;
+}
+
+void ColourDetector::remember(const std::vector<Detection>& detections) {
+  std::vector<Tracked> next;
+  for (const Detection& d : detections) {
+    Tracked t{d.pixel, {0, 0}, std::sqrt(static_cast<double>(d.area_px) / std::numbers::pi), d.colour};
+    // Its motion: from the nearest marker of its colour last frame, if one was near.
+    double best = 4.0 * t.radius_px + 2.0 * settings_.roi_margin_px;
+    for (const Tracked& o : tracked_) {
+      if (o.colour != d.colour) continue;
+      const double dist = (o.pixel + o.velocity - d.pixel).norm();
+      if (dist < best) best = dist, t.velocity = d.pixel - o.pixel;
+    }
+    next.push_back(t);
+  }
+  tracked_ = std::move(next);
+}
+
+std::expected<std::vector<Detection>, std::string> ColourDetector::track(const cv::Mat& bgr) {
+  if (auto ok = check_image(bgr); !ok) return std::unexpected(ok.error());
+  if (bgr.size() != size_ || tracked_.empty() || ++frames_since_full_ >= settings_.full_scan_every) return detect(bgr);
+  // Regions around each marker's predicted place, merged where they overlap or touch.
+  const cv::Rect image(0, 0, bgr.cols, bgr.rows);
+  std::vector<cv::Rect> rects;
+  for (const Tracked& t : tracked_) {
+    const Eigen::Vector2d c = t.pixel + t.velocity;
+    const double half = t.radius_px + settings_.roi_margin_px + t.velocity.norm();
+    rects.push_back(cv::Rect(static_cast<int>(std::floor(c.x() - half)), static_cast<int>(std::floor(c.y() - half)),
+                             static_cast<int>(std::ceil(2.0 * half)) + 1, static_cast<int>(std::ceil(2.0 * half)) + 1) &
+                    image);
+  }
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (std::size_t i = 0; i < rects.size() && !merged; ++i) {
+      for (std::size_t j = i + 1; j < rects.size() && !merged; ++j) {
+        const cv::Rect grown(rects[i].x - 1, rects[i].y - 1, rects[i].width + 2, rects[i].height + 2);
+        if ((grown & rects[j]).area() > 0) {
+          rects[i] |= rects[j];
+          rects.erase(rects.begin() + static_cast<std::ptrdiff_t>(j));
+          merged = true;
+        }
+      }
+    }
+  }
+  rects.erase(std::remove_if(rects.begin(), rects.end(), [](const cv::Rect& r) { return r.area() <= 0; }), rects.end());
+  std::sort(rects.begin(), rects.end(), [](const cv::Rect& a, const cv::Rect& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; });
+  auto out = measure(bgr, rects);
+  // A marker lost (hidden, left its region, merged with another): search everything.
+  std::array<int, kMarkerColourCount> had{}, found{};
+  for (const Tracked& t : tracked_) ++had[static_cast<std::size_t>(t.colour)];
+  for (const Detection& d : out) ++found[static_cast<std::size_t>(d.colour)];
+  if (had != found) {
+    return detect(bgr);
+  }
+  last_full_ = false;
+  remember(out);
+  return out;
+}
+
+}  // namespace rhot
