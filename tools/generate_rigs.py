@@ -69,6 +69,12 @@ def main():
     stereo = [dict(wiimote, name="left", position=[-0.1, 1.6, 0.3], target=[-0.1, 1.0, -0.45]),
               dict(wiimote, name="right", position=[0.1, 1.6, 0.3], target=[0.1, 1.0, -0.45])]
     write_rig("assets/rigs/stereo-2.yaml", "stereo-2", stereo, [0.0, 1.0, -0.45], [0.6, 0.6, 0.6])
+    # Seed 002's RHOT set-up: two Raspberry Pi cameras (640 x 480, about 54 degrees across, a
+    # little barrel distortion) 30 cm apart, above and behind the user's hands, about 1 m from them.
+    pi = dict(width=640, height=480, f=630.0, dist=[0.02, -0.04, 0.0, 0.0, 0.0])
+    pair = [dict(pi, name="left", position=[-0.15, 1.65, 0.2], target=[0.0, 0.95, -0.45]),
+            dict(pi, name="right", position=[0.15, 1.65, 0.2], target=[0.0, 0.95, -0.45])]
+    write_rig("assets/rigs/stereo-640.yaml", "stereo-640", pair, [0.0, 0.95, -0.45], [0.6, 0.4, 0.5])
 
 
 if __name__ == "__main__":

@@ -110,6 +110,7 @@ void LiveTracking::read_source(double t_s) {
 void LiveTracking::match() {
   results_.points.clear();
   results_.point_cameras.clear();
+  results_.point_colours.clear();
   double sum_rms = 0.0;
   // Gates as wide as the detection noise estimated so far; each point's uncertainty from it.
   const std::vector<MatchedPoint> matched = match_and_triangulate(tracker_rig(), frame_, match_settings_for(pixel_sigma_.sigma_px()));
@@ -117,6 +118,7 @@ void LiveTracking::match() {
   for (const MatchedPoint& m : matched) {
     results_.points.push_back(m.point.position_world);
     results_.point_cameras.push_back(m.point.cameras);
+    results_.point_colours.push_back(m.colour);
     sum_rms += m.point.reprojection_rms_px;
   }
   results_.counts.points = results_.points.size();
@@ -141,7 +143,7 @@ void LiveTracking::track_stars(double t_s) {
 void LiveTracking::track_hands(double t_s) {
   // The hand stars were followed with the objects' (track_stars); the points left go to the fingertips.
   const std::array<HandTracker*, 2> hands{hand_trackers_[0].get(), hand_trackers_[1].get()};
-  rhot::track_hands(hands, hand_star_, star_tracker_->stars(), t_s, results_.points, point_sigma_m_, taken_);
+  rhot::track_hands(hands, hand_star_, star_tracker_->stars(), t_s, results_.points, point_sigma_m_, taken_, results_.point_colours);
   for (std::size_t h = 0; h < 2; ++h) {
     const TrackedHand& tracked = hand_trackers_[h]->last();
     results_.hands[h] = hand_input(tracked);

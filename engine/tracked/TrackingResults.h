@@ -38,6 +38,7 @@ struct TrackingResults {
   std::map<int, Rigid3d> world_from_object;
   std::vector<Eigen::Vector3d> points;          // triangulated markers, world
   std::vector<std::vector<int>> point_cameras;  // per point: the cameras that saw it
+  std::vector<int> point_colours;               // per point: its marker colour (tracking/core/MarkerColour.h), -1 for none
   TrackingCounts counts;
 };
 

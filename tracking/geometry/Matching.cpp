@@ -17,6 +17,7 @@ namespace {
 // the image for nearest-detection lookups.
 struct CameraDetections {
   std::vector<Eigen::Vector2d> pixel;
+  std::vector<int> colour;  // per detection: its marker colour, -1 for none
   std::vector<Eigen::Vector2d> normalised;
   double cell_px = 16.0;
   int cols = 0;
@@ -30,7 +31,10 @@ struct CameraDetections {
   std::vector<int> first_link;
 
   void build(const Camera& camera, const CameraFrame& frame) {
-    for (const Detection& d : frame.detections) pixel.push_back(d.pixel);
+    for (const Detection& d : frame.detections) {
+      pixel.push_back(d.pixel);
+      colour.push_back(d.colour);
+    }
     normalised.resize(pixel.size());
     if (!pixel.empty()) {
       std::vector<cv::Point2d> in;
@@ -64,8 +68,9 @@ struct CameraDetections {
     const int y = static_cast<int>(std::floor((p.y() + 0.5) / cell_px));
     return (x < 0 || y < 0 || x >= cols || y >= rows) ? -1 : y * cols + x;
   }
-  // Nearest detection within `radius` of p, or -1. Visits only the cells the disc overlaps.
-  int nearest(const Eigen::Vector2d& p, double radius) const {
+  // Nearest detection of a colour (-1: uncoloured) within `radius` of p, or -1. Visits only the
+  // cells the disc overlaps.
+  int nearest(const Eigen::Vector2d& p, double radius, int of_colour) const {
     // Far outside the grid (or NaN): nothing to find, and the cell arithmetic below would overflow.
     if (!(p.x() > -radius - 1.0 && p.y() > -radius - 1.0 && p.x() < cols * cell_px && p.y() < rows * cell_px)) return -1;
     const int x0 = std::max(0, static_cast<int>(std::floor((p.x() + 0.5 - radius) / cell_px)));
@@ -79,6 +84,7 @@ struct CameraDetections {
         const auto c = static_cast<std::size_t>(y * cols + x);
         for (int s = cell_start[c]; s < cell_start[c + 1]; ++s) {
           const int i = sorted[static_cast<std::size_t>(s)];
+          if (colour[static_cast<std::size_t>(i)] != of_colour) continue;
           const double d2 = (pixel[static_cast<std::size_t>(i)] - p).squaredNorm();
           if (d2 <= best_d2) {
             best_d2 = d2;
@@ -93,6 +99,7 @@ struct CameraDetections {
 
 struct Cluster {
   std::vector<int> detection;  // per camera, -1 where none
+  int colour = -1;             // its detections' colour (all share it)
   Eigen::Vector3d seed_point{0, 0, 0};
   int support = 0;
   int missing = 0;
@@ -212,7 +219,7 @@ class Matcher {
       const double tolerance = settings_.epipolar_tolerance_px * line.head<2>().norm() / fj;
       const Eigen::Vector3d ray_a = poses_[i].ray_direction_world(cams_[i].normalised[a]);
       for (std::size_t b = 0; b < cams_[j].pixel.size(); ++b) {
-        if (cams_[j].explained[b] != 0) continue;
+        if (cams_[j].explained[b] != 0 || cams_[j].colour[b] != cams_[i].colour[a]) continue;
         if (std::abs(line.dot(cams_[j].normalised[b].homogeneous())) > tolerance) continue;
         if (explained_by_a_cluster(i, a, j, b)) continue;
         const auto x =
@@ -237,6 +244,7 @@ class Matcher {
   bool grow_seed(std::size_t i, std::size_t a, std::size_t j, std::size_t b, const Eigen::Vector3d& x) {
     Cluster cl;
     cl.seed_point = x;
+    cl.colour = cams_[i].colour[a];
     cl.detection.assign(n_, -1);
     cl.detection[i] = static_cast<int>(a);
     cl.detection[j] = static_cast<int>(b);
@@ -245,7 +253,7 @@ class Matcher {
       if (k == i || k == j) continue;
       const auto p = poses_[k].project(x);
       if (!p || !poses_[k].in_image(*p)) continue;
-      cl.detection[k] = cams_[k].nearest(*p, settings_.reprojection_tolerance_px);
+      cl.detection[k] = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
       if (cl.detection[k] < 0) ++unseen;
     }
     grown_.clear();
@@ -267,7 +275,7 @@ class Matcher {
         for (std::size_t k = 0; k < n_; ++k) {
           if (k == i || k == j || cl.detection[k] < 0) continue;
           if (const auto p = poses_[k].project(cl.seed_point)) {
-            const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px);
+            const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
             if (d >= 0) cl.detection[k] = d;
           }
         }
@@ -304,7 +312,7 @@ class Matcher {
       if (cl.detection[k] >= 0) continue;
       const auto p = poses_[k].project(cl.point.position_world);
       if (!p || !poses_[k].in_image(*p)) continue;
-      const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px);
+      const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
       if (d < 0) continue;
       cl.detection[k] = d;
       cl.observations.push_back({static_cast<int>(k), cams_[k].pixel[static_cast<std::size_t>(d)]});
@@ -384,6 +392,7 @@ class Matcher {
       MatchedPoint m;
       m.point = cl.point;
       m.observations = cl.observations;
+      m.colour = cl.colour;
       for (std::size_t c = 0; c < n_; ++c) {
         if (cl.detection[c] < 0) continue;
         used[c][static_cast<std::size_t>(cl.detection[c])] = true;

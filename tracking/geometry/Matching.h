@@ -18,6 +18,10 @@
 //    cameras that should see its point (in front, inside the image) have no detection there than
 //    cameras that do, or when its reprojection RMS exceeds `max_rms_px`.
 //
+// Colour (Detection::colour): only detections of one colour are matched with each other, at every
+// step, so coloured markers make ghosts between markers of different colours impossible; infrared
+// detections (colour -1) match only each other.
+//
 // Markers seen by only two of many cameras are still found when the others cannot see them (out
 // of view). A marker hidden by occlusion from most cameras that could see it is refused like a
 // ghost: the rule cannot tell the two apart.
@@ -48,6 +52,7 @@ struct MatchedPoint {
   TriangulatedPoint point;
   std::vector<Observation> observations;
   std::vector<int> detection;  // per observation: its index in that camera's detections
+  int colour = -1;             // its detections' marker colour (tracking/core/MarkerColour.h), -1 for none
 };
 
 // The ground-truth marker a matched point belongs to (simulated frames only): -1 when its

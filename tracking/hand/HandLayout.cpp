@@ -1,5 +1,7 @@
 #include "tracking/hand/HandLayout.h"
 
+#include "tracking/core/MarkerColour.h"
+
 #include "tracking/hand/HandSolver.h"
 
 #include <algorithm>
@@ -96,6 +98,15 @@ std::vector<Eigen::Vector3d> layout_markers(const HandLayout& layout, const Rigi
   return out;
 }
 
+std::vector<int> layout_marker_colours(const HandLayout& layout) {
+  std::vector<int> out(4, layout.hand_star_colour);
+  for (int f = 0; f < kFingerCount; ++f) {
+    if (layout.fingertip_offset_m[static_cast<std::size_t>(f)]) out.push_back(layout.fingertip_colour[static_cast<std::size_t>(f)]);
+  }
+  for (const SegmentStar& s : layout.segment_stars) out.insert(out.end(), s.star.markers_mm.size(), -1);
+  return out;
+}
+
 Rigid3d hand_from_segment_star(const HandPose& pose, HandJoint bone, const FingerChain& chain) {
   const auto at = [&](HandJoint j) { return pose.position_m[static_cast<std::size_t>(j)]; };
   const auto next = [](HandJoint j) { return static_cast<HandJoint>(static_cast<int>(j) + 1); };
@@ -124,7 +135,7 @@ Eigen::Vector3d point_mm(const JsonNode& n) {
 
 HandLayout read_layout(const JsonNode& j, const std::filesystem::path& folder) {
   j.expect_object({"format", "version", "name", "side", "marker_diameter_mm", "hand_star_mm", "fingertip_markers", "star_set",
-                   "segment_stars", "description"});
+                   "segment_stars", "description", "marker_colours"});
   const JsonNode format = j["format"];
   if (format.string() != "rhot-hand-layout") format.fail("expected \"rhot-hand-layout\", got " + describe_json(format.raw()));
   j["version"].integer_in(1, 1);
@@ -153,6 +164,25 @@ HandLayout read_layout(const JsonNode& j, const std::filesystem::path& folder) {
       }
       if (finger == 5) tip.fail("not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
       layout.fingertip_offset_m[finger] = 1e-3 * tip.number();
+    }
+  }
+  if (auto colours = j.optional("marker_colours")) {
+    if (!colours->raw().is_object()) colours->fail("expected an object of marker names and colours, got " + describe_json(colours->raw()));
+    for (const auto& [name, value] : colours->raw().items()) {
+      const JsonNode node = (*colours)[name.c_str()];
+      const auto colour = marker_colour_from_name(node.string());
+      if (!colour) node.fail("expected a marker colour (" + marker_colour_list() + "), got " + describe_json(node.raw()));
+      if (name == "hand_star") {
+        layout.hand_star_colour = *colour;
+        continue;
+      }
+      std::size_t finger = 5;
+      for (std::size_t f = 0; f < 5; ++f) {
+        if (joint_name(chain_joints(static_cast<Finger>(f))[3]) == name) finger = f;
+      }
+      if (finger == 5) node.fail("not \"hand_star\" or a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
+      if (!layout.fingertip_offset_m[finger]) node.fail("a colour for a fingertip without a marker (add it to \"fingertip_markers\")");
+      layout.fingertip_colour[finger] = *colour;
     }
   }
   if (auto list = j.optional("segment_stars")) {

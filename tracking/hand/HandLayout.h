@@ -8,6 +8,8 @@
 //     "fingertip_markers": { "index_tip": 3.0, ... }  a marker per fingertip joint named here, its
 //                                                    centre this many mm beyond the tip along the
 //                                                    distal bone
+//     "marker_colours": { "hand_star": "blue",     optional: coloured markers (tracking/core/MarkerColour.h):
+//                         "index_tip": "yellow" }  the hand star's and fingertips' colours
 //     "star_set": "../stars/seed-case.json",        stars on finger bones (seed 003): the set they
 //     "segment_stars": [                             come from (relative to this file), and per bone
 //       { "bone": "index_proximal", "star_id": 3 }   (named by its first joint) the star's id
@@ -48,6 +50,8 @@ struct HandLayout {
   double marker_diameter_mm = 6.0;
   std::array<Eigen::Vector3d, 4> hand_star_m;                 // hand frame, metres
   std::array<std::optional<double>, 5> fingertip_offset_m{};  // per finger (thumb..little): nothing when unmarked
+  int hand_star_colour = -1;                                  // the hand star's markers' colour, -1 for none
+  std::array<int, 5> fingertip_colour{-1, -1, -1, -1, -1};    // per finger, -1 for none
   std::vector<SegmentStar> segment_stars;
   StarSetRules segment_star_rules;  // of the set the segment stars come from
 
@@ -74,6 +78,9 @@ Rigid3d hand_from_segment_star(const HandPose& pose, HandJoint bone, const Finge
 Eigen::Vector3d bone_back_normal(const FingerChain& chain, const Eigen::Vector3d& first_bone, const Eigen::Vector3d& bone);
 // Every marker of a layout on a hand in `pose` (hand star, fingertip markers, segment stars), world.
 std::vector<Eigen::Vector3d> layout_markers(const HandLayout& layout, const Rigid3d& world_from_hand, const HandPose& pose);
+
+// Each marker's colour (-1 for none), in layout_markers' order.
+std::vector<int> layout_marker_colours(const HandLayout& layout);
 
 // The finger a bone (named by its first joint) belongs to.
 Finger finger_of_bone(HandJoint bone);

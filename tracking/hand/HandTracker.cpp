@@ -16,12 +16,13 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   out_.state = solver_.state();
 }
 
-const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m) {
+const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
+                                       std::span<const int> colour) {
   const std::vector<TrackedStar>& stars = star_->update(time_s, points, sigma_m);
   std::vector<bool> taken(points.size(), false);
   HandTracker* const self = this;
   const int star = 0;
-  track_hands({&self, 1}, {&star, 1}, stars, time_s, points, sigma_m, taken);
+  track_hands({&self, 1}, {&star, 1}, stars, time_s, points, sigma_m, taken, colour);
   return out_;
 }
 
@@ -45,7 +46,7 @@ void HandTracker::begin(double time_s, const TrackedStar& star) {
 }
 
 std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(std::span<const Eigen::Vector3d> points,
-                                                                               const std::vector<bool>& taken) {
+                                                                               const std::vector<bool>& taken, std::span<const int> colour) {
   std::vector<FingertipCandidate> out;
   for (auto& r : reappearing_now_) r.clear();
   if (!out_.hand_seen) return out;
@@ -57,6 +58,13 @@ std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(s
       if (taken[q]) continue;
       const Eigen::Vector3d p = hand_from_world * points[q];
       const double d = (p - predicted_marker_[fi]).norm();
+      const int want = layout_.fingertip_colour[fi];
+      if (want >= 0 && q < colour.size()) {
+        // A coloured fingertip's marker is known by its colour: any point of it near the finger.
+        if (colour[q] != want || d >= kColourGate_m) continue;
+        out.push_back({d, f, static_cast<int>(q)});
+        continue;
+      }
       if (d >= gate_m_[fi]) continue;
       if (d >= kFingertipGate_m) {
         // Outside the tight gate: a marker found again only if it was there the frame before.
@@ -140,7 +148,8 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
 }
 
 void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_star, const std::vector<TrackedStar>& stars, double time_s,
-                 std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m, std::vector<bool>& taken) {
+                 std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m, std::vector<bool>& taken,
+                 std::span<const int> colour) {
   taken.assign(points.size(), false);
   for (const TrackedStar& s : stars) {
     if (s.frames_since_seen != 0) continue;
@@ -156,7 +165,7 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
   std::vector<Pick> picks;
   for (std::size_t h = 0; h < hands.size(); ++h) {
     hands[h]->begin(time_s, stars[static_cast<std::size_t>(hand_star[h])]);
-    for (const auto& c : hands[h]->fingertip_candidates(points, taken)) picks.push_back({c.distance_m, h, c.finger, c.point});
+    for (const auto& c : hands[h]->fingertip_candidates(points, taken, colour)) picks.push_back({c.distance_m, h, c.finger, c.point});
   }
   // Nearest first over every hand: a point goes to the fingertip it fits best, whichever hand's.
   std::sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance_m < b.distance_m; });

@@ -42,8 +42,10 @@ class HandTracker {
   HandTracker(const HandLayout& layout, const HandPose& skeleton, HandTrackerSettings settings = {});
 
   // points_world with each one's standard deviation per axis (metres; empty: the star library's
-  // default). The hand star is followed by the tracker's own StarTracker.
-  const TrackedHand& update(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m = {});
+  // default) and marker colour (MatchedPoint::colour; empty: none known). The hand star is
+  // followed by the tracker's own StarTracker.
+  const TrackedHand& update(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m = {},
+                            std::span<const int> colour = {});
 
   // A fingertip marker a point could be: how far it is from where the finger's marker is predicted.
   struct FingertipCandidate {
@@ -56,7 +58,11 @@ class HandTracker {
   //   fingertip_candidates  the free points near each marked fingertip's predicted marker
   //   finish     the fingers solved with the points given to each fingertip (-1: none)
   void begin(double time_s, const TrackedStar& hand_star);
-  std::vector<FingertipCandidate> fingertip_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken);
+  // A fingertip the layout gives a colour takes only points of that colour (when `colour` is given),
+  // within kColourGate_m of its predicted marker and without the reappearance rule: the colour
+  // names the marker, so a finger lost for a while is found again at once.
+  std::vector<FingertipCandidate> fingertip_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken,
+                                                       std::span<const int> colour = {});
   const TrackedHand& finish(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m,
                             const std::array<int, kFingerCount>& fingertip_point);
   const HandSolver& solver() const { return solver_; }
@@ -74,6 +80,7 @@ class HandTracker {
   static constexpr double kFingertipGate_m = 0.025;
   static constexpr double kGateGrowth_mps = 0.25;
   static constexpr double kFingertipGateMax_m = 0.04;
+  static constexpr double kColourGate_m = 0.08;
 
  private:
   HandLayout layout_;
@@ -100,6 +107,7 @@ class HandTracker {
 // seen this frame are taken; the fingertips get the points left, nearest first over all hands.
 // `taken` comes back marking the points the stars and the fingertips use.
 void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_star, const std::vector<TrackedStar>& stars, double time_s,
-                 std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m, std::vector<bool>& taken);
+                 std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m, std::vector<bool>& taken,
+                 std::span<const int> colour = {});
 
 }  // namespace rhot

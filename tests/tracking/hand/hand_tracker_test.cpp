@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "tracking/camera/RigFile.h"
+#include "tracking/core/MarkerColour.h"
 #include "tracking/geometry/Matching.h"
 #include "tracking/hand/HandCalibration.h"
 #include "tracking/sim/HandMotions.h"
@@ -83,7 +84,7 @@ TEST(HandLayout, BadFilesAreRefusedWithWhatIsWrong) {
             "/marker_diameter_mm: expected a number greater than 0 (and within float range), got -6");
   EXPECT_EQ(layout_error("{" + head + ", " + star + R"(, "colour": "red"})"),
             "/colour: unknown key \"colour\"; expected one of: format, version, name, side, marker_diameter_mm, hand_star_mm, "
-            "fingertip_markers, star_set, segment_stars, description");
+            "fingertip_markers, star_set, segment_stars, description, marker_colours");
   EXPECT_EQ(layout_error("{" + head + ", " + star + ", " + star + "}"), "/hand_star_mm: duplicate key \"hand_star_mm\"");
   EXPECT_EQ(layout_error("{" + head),  // The text ends after 85 characters: the parser stops at column 86.
             "1:86: invalid JSON: syntax error while parsing object - unexpected end of input; expected '}'");
@@ -401,6 +402,67 @@ TEST(HandCalibration, AFlatHandGivesEachFingersLengthAndTheFileKeepsIt) {
       << R"({"format": "rhot-hand-calibration", "version": 1, "side": "right", "joints_mm": {"palm": [0, 1]}, "radii_mm": {}})";
   EXPECT_EQ(load_hand_calibration(file).error(), file.string() + ": /joints_mm/palm: expected an array of 3 numbers, got an array of 2");
   EXPECT_FALSE(calibrate_flat_hand(reference, HandSide::kRight, {}).has_value());
+}
+
+}  // namespace
+}  // namespace rhot
+
+namespace rhot {
+namespace {
+
+TEST(HandLayout, TheColourLayoutsNameEveryFingertipByItsColour) {
+  for (const char* name : {"colour-right", "colour-left"}) {
+    const HandLayout layout = shipped_layout(name);
+    EXPECT_EQ(marker_colour_name(layout.hand_star_colour), "blue") << name;
+    const std::array<std::string_view, 5> tips{"red", "yellow", "green", "cyan", "magenta"};
+    for (std::size_t f = 0; f < 5; ++f) EXPECT_EQ(marker_colour_name(layout.fingertip_colour[f]), tips[f]) << name;
+    EXPECT_EQ(layout_marker_colours(layout), (std::vector<int>{5, 5, 5, 5, 0, 2, 3, 4, 7})) << name;
+  }
+  EXPECT_EQ(layout_error(R"({"format": "rhot-hand-layout", "version": 1, "side": "right", "marker_diameter_mm": 14,
+      "hand_star_mm": [[0,0,0],[10,0,0],[0,20,0],[0,0,30]], "fingertip_markers": {"index_tip": 8},
+      "marker_colours": {"index_tip": "teal"}})"),
+            "/marker_colours/index_tip: expected a marker colour (red, orange, yellow, green, cyan, blue, purple, magenta), got "
+            "\"teal\"");
+  EXPECT_EQ(layout_error(R"({"format": "rhot-hand-layout", "version": 1, "side": "right", "marker_diameter_mm": 14,
+      "hand_star_mm": [[0,0,0],[10,0,0],[0,20,0],[0,0,30]], "fingertip_markers": {"index_tip": 8},
+      "marker_colours": {"thumb_tip": "red"}})"),
+            "/marker_colours/thumb_tip: a colour for a fingertip without a marker (add it to \"fingertip_markers\")");
+}
+
+// A fingertip whose layout gives it a colour takes only a point of that colour, and takes it at
+// once wherever near the finger it reappears; without colours, the nearest point in the gate.
+TEST(HandTracker, AColouredFingertipIsKnownByItsColourAlone) {
+  const HandLayout layout = shipped_layout("colour-right");
+  const HandPose skeleton = reference_open_hand(HandSide::kRight);
+  const auto chains = hand_chains(skeleton, HandSide::kRight);
+  const auto relaxed = HandSolver(HandSide::kRight, skeleton).state().angles;
+  const HandMotionFrame truth = *hand_motion("pinch", 0.0, chains, relaxed, {0.0, 1.1, -0.45});
+  const HandPose pose = hand_pose_from_angles(skeleton, chains, truth.angles);
+  const std::vector<Eigen::Vector3d> points = markers(layout, truth.world_from_hand, pose);
+  const std::vector<int> colours = layout_marker_colours(layout);
+  constexpr std::size_t kIndex = 5;  // the index fingertip's marker (after the hand star and the thumb's)
+  const int orange = *marker_colour_from_name("orange");
+  for (const bool coloured : {true, false}) {
+    HandTracker tracker(layout, skeleton);
+    const auto update = [&](double t, const std::vector<Eigen::Vector3d>& p, const std::vector<int>& c) -> const TrackedHand& {
+      return coloured ? tracker.update(t, p, {}, c) : tracker.update(t, p);
+    };
+    for (int f = 0; f < 30; ++f) ASSERT_EQ(update(f / 90.0, points, colours).fingertip_point[1], static_cast<int>(kIndex));
+    // The index marker hidden; an orange point (no marker of this hand) 1 mm from where it was.
+    std::vector<Eigen::Vector3d> decoy = points;
+    std::vector<int> decoy_colours = colours;
+    decoy.push_back(points[kIndex] + Eigen::Vector3d(0.001, 0.0, 0.0));
+    decoy_colours.push_back(orange);
+    decoy.erase(decoy.begin() + static_cast<std::ptrdiff_t>(kIndex));
+    decoy_colours.erase(decoy_colours.begin() + static_cast<std::ptrdiff_t>(kIndex));
+    const int taken = update(30 / 90.0, decoy, decoy_colours).fingertip_point[1];
+    EXPECT_EQ(taken, coloured ? -1 : static_cast<int>(decoy.size()) - 1) << (coloured ? "coloured" : "uncoloured");
+    // The index marker back, 3 cm from where it was: a coloured finger takes it in its first frame.
+    std::vector<Eigen::Vector3d> moved = points;
+    moved[kIndex] += Eigen::Vector3d(0.03, 0.0, 0.0);
+    const int back = update(31 / 90.0, moved, colours).fingertip_point[1];
+    EXPECT_EQ(back, coloured ? static_cast<int>(kIndex) : -1) << (coloured ? "coloured" : "uncoloured");
+  }
 }
 
 }  // namespace
