@@ -23,6 +23,10 @@ std::expected<void, std::string> DemoSettings::check() const {
   if (!std::isfinite(speed) || !(speed > 0.0)) return std::unexpected(std::string("speed: the replay speed must be a positive number"));
   if (auto detector_ok = rhot::check(detector); !detector_ok) return std::unexpected("detector: " + detector_ok.error());
   if (auto world_ok = world.check(); !world_ok) return std::unexpected("world: " + world_ok.error());
+  if (auto cameras_ok = colour_cameras.check(); !cameras_ok) return std::unexpected("colour cameras: " + cameras_ok.error());
+  if (colour_markers && !node_endpoints.empty()) {
+    return std::unexpected(std::string("colour markers through camera nodes: the node protocol (version 1) carries no colour"));
+  }
   if (!video_devices.empty() && perfect_hands) {
     return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
   }
@@ -75,11 +79,27 @@ WorldSnapshot DemoWorld::at(double t_s) {
   return out;
 }
 
+ColourShot DemoWorld::colour_shot(const WorldSnapshot& snapshot) const {
+  ColourShot shot;
+  if (!truth_) return shot;
+  for (const HandTruth& hand : truth_->hands) shot.hands.push_back({hand.world_from_hand, hand.pose});
+  std::size_t m = 0;
+  for (const HandLayout& layout : layouts_) {
+    const std::vector<int> colours = layout_marker_colours(layout);
+    for (std::size_t i = 0; i < colours.size() && m < snapshot.markers_m.size(); ++i, ++m) {
+      shot.markers.push_back({snapshot.markers_m[m], 0.0005 * layout.marker_diameter_mm, colours[i] >= 0 ? colours[i] : kStarColour});
+    }
+  }
+  for (; m < snapshot.markers_m.size(); ++m) shot.markers.push_back({snapshot.markers_m[m], 0.007, kStarColour});
+  return shot;
+}
+
 std::expected<std::array<HandLayout, 2>, std::string> demo_hand_layouts(const std::filesystem::path& asset_dir,
-                                                                        const StarSet& object_stars) {
+                                                                        const StarSet& object_stars, bool colour_markers) {
   std::array<HandLayout, 2> layouts;
+  const std::string kind = colour_markers ? "colour" : "low-cost";
   for (std::size_t h = 0; h < 2; ++h) {
-    auto layout = load_hand_layout(asset_dir / "hands" / (h == 0 ? "low-cost-left.json" : "low-cost-right.json"));
+    auto layout = load_hand_layout(asset_dir / "hands" / (kind + (h == 0 ? "-left.json" : "-right.json")));
     if (!layout) return std::unexpected(layout.error());
     layouts[h] = std::move(*layout);
   }
@@ -92,7 +112,8 @@ std::expected<std::array<HandLayout, 2>, std::string> demo_hand_layouts(const st
 }
 
 std::expected<DemoSimulation, std::string> make_demo_simulation(const SceneDesc& scene, const std::filesystem::path& asset_dir,
-                                                                const std::filesystem::path& star_set, unsigned independent_hands_seed) {
+                                                                const std::filesystem::path& star_set, unsigned independent_hands_seed,
+                                                                bool colour_markers) {
   const std::filesystem::path set_file = star_set.empty() ? asset_dir / "stars" / "seed-case.json" : star_set;
   auto set = load_star_set(set_file);
   if (!set) return std::unexpected(set.error());
@@ -100,7 +121,7 @@ std::expected<DemoSimulation, std::string> make_demo_simulation(const SceneDesc&
   instantiate(scene, world);
   auto objects = find_tracked_objects(world, *set, set_file);
   if (!objects) return std::unexpected(objects.error());
-  auto layouts = demo_hand_layouts(asset_dir, objects->stars);
+  auto layouts = demo_hand_layouts(asset_dir, objects->stars, colour_markers);
   if (!layouts) return std::unexpected(layouts.error());
   DemoSimulation out;
   out.script = std::make_unique<DemoScript>(scene);
@@ -124,13 +145,21 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
       return std::unique_ptr<ResultSource>(std::move(*source));
     }
     const std::filesystem::path rig_file =
-        !settings.rig_file.empty() ? settings.rig_file : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
+        !settings.rig_file.empty()  ? settings.rig_file
+        : settings.colour_markers ? settings.asset_dir / "rigs" / "stereo-640.yaml"
+                                  : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
     auto rig = load_rig(rig_file);
     if (!rig) return std::unexpected(rig.error());
-    auto loaded_layouts = demo_hand_layouts(settings.asset_dir, objects.stars);
+    auto loaded_layouts = demo_hand_layouts(settings.asset_dir, objects.stars, settings.colour_markers);
     if (!loaded_layouts) return std::unexpected(loaded_layouts.error());
     const std::array<HandLayout, 2>& layouts = *loaded_layouts;
     const double rate_hz = scene.settings.headset.refresh_hz;
+    ColourModel colour_model = default_colour_model();
+    if (settings.colour_markers && !settings.colours.empty()) {
+      auto loaded = load_colour_model(settings.colours);
+      if (!loaded) return std::unexpected(loaded.error().to_string());
+      colour_model = std::move(*loaded);
+    }
     std::unique_ptr<FrameSource> source;
     if (!settings.node_endpoints.empty()) {
       auto opened = NodeSource::open(*rig, settings.node_endpoints);
@@ -139,10 +168,20 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
     } else if (video) {
       VideoSourceSettings vs;
       vs.detector = settings.detector;
+      if (settings.colour_markers) vs.colours = colour_model;
       vs.rate_hz = rate_hz;
       auto opened = VideoSource::open(*rig, settings.video_devices, vs);
       if (!opened) return std::unexpected(rig_file.string() + ": " + opened.error());
       source = std::make_unique<VideoSource>(std::move(*opened));
+    } else if (settings.colour_markers) {
+      self->world_ = std::make_shared<DemoWorld>(*self->script_, layouts, objects, settings.world.independent_hands ? settings.seed : 0u);
+      ColourCameraSettings cs = settings.colour_cameras;
+      cs.seed = settings.seed;
+      auto cameras = ColourCameras::create(*rig, scene, cs);
+      if (!cameras) return std::unexpected(cameras.error());
+      std::shared_ptr<DemoWorld> world = self->world_;
+      source = std::make_unique<ColourCameraSource>(
+          std::move(*cameras), [world](double t) { return world->colour_shot(world->at(t)); }, colour_model);
     } else {
       SimulatedRigSettings sim = settings.world.rig_settings(settings.seed, rate_hz);
       sim.sigma_px = settings.sigma_px;

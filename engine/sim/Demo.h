@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "engine/runtime/Runtime.h"
+#include "engine/sim/ColourCameras.h"
 #include "engine/sim/DemoScript.h"
 #include "engine/tracked/LiveTracking.h"
 #include "tracking/detect/BlobDetector.h"
@@ -53,6 +54,13 @@ struct DemoSettings {
   // index such as "0", a video file, or an image sequence such as "cams/cam0_%04d.png").
   std::vector<std::string> video_devices;
   BlobDetectorSettings detector;  // for video_devices
+  // Coloured markers (seed 002's set-up, tracking/detect/ColourDetector.h): the colour hand layouts
+  // (assets/hands/colour-*.json), the objects' stars in blue, and, simulated, colour cameras drawn
+  // by the renderer (ColourCameras) on the rig (default assets/rigs/stereo-640.yaml); with video
+  // devices, colour images detected with the colour model.
+  bool colour_markers = false;
+  std::filesystem::path colours;  // the colour model (empty: default_colour_model())
+  ColourCameraSettings colour_cameras;
   // Camera nodes instead (rhot-node, docs/camera-nodes.md): their publish endpoints. Each node
   // says which rig cameras its frames are from.
   std::vector<std::string> node_endpoints;
@@ -71,6 +79,11 @@ class DemoWorld final : public SimulatedWorld {
   DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects,
             unsigned independent_hands_seed = 0);
   WorldSnapshot at(double t_s) override;
+  // What colour cameras photograph of a snapshot at() gave (its markers in its order): the hands
+  // of the truth at that moment, each marker with its layout's colour and size, the objects'
+  // star markers blue (kStarColour) and 14 mm across.
+  ColourShot colour_shot(const WorldSnapshot& snapshot) const;
+  static constexpr int kStarColour = 5;  // blue (tracking/core/MarkerColour.h)
   // The truth at the time last asked for (with unsynchronised cameras, the last camera's moment).
   const std::optional<SceneTruth>& truth() const { return truth_; }
 
@@ -101,10 +114,13 @@ struct DemoSimulation {
 [[nodiscard]] std::expected<DemoSimulation, std::string> make_demo_simulation(const SceneDesc& scene,
                                                                               const std::filesystem::path& asset_dir,
                                                                               const std::filesystem::path& star_set = {},
-                                                                              unsigned independent_hands_seed = 0);
-// The demo's two hand layouts, checked against each other and the objects' stars.
+                                                                              unsigned independent_hands_seed = 0,
+                                                                              bool colour_markers = false);
+// The demo's two hand layouts (assets/hands/low-cost-*.json, or colour-*.json for coloured
+// markers), checked against each other and the objects' stars.
 [[nodiscard]] std::expected<std::array<HandLayout, 2>, std::string> demo_hand_layouts(const std::filesystem::path& asset_dir,
-                                                                                      const StarSet& object_stars);
+                                                                                      const StarSet& object_stars,
+                                                                                      bool colour_markers = false);
 
 class Demo {
  public:

@@ -87,6 +87,21 @@ struct NodesArgs {
   std::string scene_file;
 };
 int nodes(const NodesArgs& args);
+// `rhot-eval colour`'s flags.
+struct ColourArgs {
+  std::string rig_file;
+  std::string scene_file;
+  std::string colours_file;  // empty: the default model
+  int frames = 90;
+  double start_s = 0.5;  // into the script: the hands in view and moving
+  unsigned seed = 1;
+  double noise = 2.0;
+  double kelvin = 6500.0;
+  bool clutter = true;
+  std::string device = "auto";
+  std::string pictures_dir;  // non-empty: the first frame's images and what the model classifies in them
+};
+int colour(const ColourArgs& args);
 int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);
 // `rhot-eval grasp`'s flags.
 struct GraspArgs {

@@ -8,6 +8,8 @@
 //   rhot-eval calibration --rig FILE [--wand-mm 500] [--sigma PX] [--frames 2000] [--seed S] [--dropout P] --json
 //   rhot-eval nodes [--nodes N] [--markers M] [--rate-hz R] [--seconds S] [--kill-node-at T --restart-node-at T2]
 //                   [--clock-offset-ms X --clock-drift-ppm Y] [--delay-ms D] --json
+//   rhot-eval colour [--rig FILE] [--frames N] [--seed S] [--noise SIGMA] [--white-balance-k KELVIN]
+//                    [--clutter on|off] [--colours FILE] [--device D] --json
 //   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
 //                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
 //
@@ -204,6 +206,29 @@ int main(int argc, char** argv) {
   CLI::App* grasp_cmd = add_grasp_command(app, grasp_args, json);
   NodesArgs nodes_args;
   CLI::App* nodes_cmd = add_nodes_command(app, nodes_args, json);
+  ColourArgs colour_args;
+  CLI::App* colour_cmd = app.add_subcommand(
+      "colour", "coloured markers on simulated colour cameras drawn by the renderer: detection against the truth, fingertips end to end");
+  colour_args.rig_file = std::string(RHOT_ASSET_DIR) + "/rigs/stereo-640.yaml";
+  colour_args.scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
+  std::string clutter = "on";
+  colour_cmd->add_option("--rig", colour_args.rig_file, "camera rig (every camera one image size)")->capture_default_str()->check(CLI::ExistingFile);
+  colour_cmd->add_option("--scene", colour_args.scene_file, "scene: its script's hands, its objects as clutter")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
+  colour_cmd->add_option("--colours", colour_args.colours_file, "colour model (default: rhot's six colours)")->check(CLI::ExistingFile);
+  colour_cmd->add_option("--frames", colour_args.frames, "frames (90 per second of the script)")->capture_default_str()->check(CLI::Range(1, 100000));
+  colour_cmd->add_option("--start-s", colour_args.start_s, "where in the script to start")->capture_default_str()->check(CLI::Range(0.0, 1e6));
+  colour_cmd->add_option("--seed", colour_args.seed, "seed of the image noise")->capture_default_str();
+  colour_cmd->add_option("--noise", colour_args.noise, "image noise, levels per channel")->capture_default_str()->check(CLI::Range(0.0, 50.0));
+  colour_cmd->add_option("--white-balance-k", colour_args.kelvin, "the light's colour temperature; the cameras stay balanced for 6500 K")
+      ->capture_default_str()
+      ->check(CLI::Range(1500.0, 15000.0));
+  colour_cmd->add_option("--clutter", clutter, "the scene's objects in view")->capture_default_str()->check(CLI::IsMember({"on", "off"}));
+  colour_cmd->add_option("--device", colour_args.device, "Vulkan device: auto, gpu, cpu, an index or part of its name")->capture_default_str();
+  colour_cmd->add_option("--pictures", colour_args.pictures_dir,
+                         "write the first frame's images (cam<i>.png) and what the colour model takes in them (cam<i>_colours.png) here");
+  colour_cmd->add_flag("--json", json, "print JSON (the only output format)");
   auto* frame_cmd = app.add_subcommand(
       "frame", "the demo's whole frame headless (cameras, tracking, physics, both eyes): p50, p99, budget misses, per stage");
   std::string scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
@@ -250,6 +275,10 @@ int main(int argc, char** argv) {
   }
   if (grasp_cmd->parsed()) return grasp(grasp_args);
   if (nodes_cmd->parsed()) return nodes(nodes_args);
+  if (colour_cmd->parsed()) {
+    colour_args.clutter = clutter == "on";
+    return colour(colour_args);
+  }
   if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
   if (demo_cmd->parsed())
     return demo(demo_args.scene_file, demo_args.placements, demo_args.seed, demo_args.world, demo_args.hands, demo_args.frames);

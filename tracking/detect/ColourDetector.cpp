@@ -30,6 +30,14 @@ ColourDetector::ColourDetector(const ColourModel& model, ColourDetectorSettings 
 
 namespace {
 
+// Two touching discs: elongation about 2 (just touching) down to 1 (one over the other). A blob
+// more elongated than max_elongation but at most kPairElongation is tried as two, each half round
+// (elongation at most kHalfElongation) and full (fill at least kHalfFill), with a waist between.
+constexpr double kPairElongation = 3.2;
+constexpr double kHalfElongation = 1.45;
+constexpr double kHalfFill = 0.8;
+constexpr double kWaist = 0.75;  // the cut's width over the halves' at most
+
 int find_root(std::vector<int>& parent, int i) {
   while (parent[static_cast<std::size_t>(i)] != i) {
     parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
@@ -103,29 +111,15 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
     bool clipped = false;  // touches a region's edge inside the image: part of it may lie outside
   };
   std::vector<int> slot(runs_.size(), -1);
+  std::vector<int> blob_of_run(runs_.size(), -1);
   std::vector<Moments> blobs;
   const std::uint8_t* membership = table_.memberships();
-  std::size_t rect_index = 0;
-  for (std::size_t i = 0; i < runs_.size(); ++i) {
-    while (rect_index + 1 < rects.size() && i >= rect_of_run_begin[rect_index + 1]) ++rect_index;
-    const cv::Rect& rect = rects[rect_index];
-    const Run& run = runs_[i];
-    const int root = find_root(parent, static_cast<int>(i));
-    int& s = slot[static_cast<std::size_t>(root)];
-    if (s < 0) {
-      s = static_cast<int>(blobs.size());
-      blobs.push_back({});
-      blobs.back().klass = run.klass;
-    }
-    Moments& m = blobs[static_cast<std::size_t>(s)];
-    if ((run.x0 == rect.x && rect.x > 0) || (run.x1 == rect.x + rect.width && run.x1 < bgr.cols) || (run.y == rect.y && rect.y > 0) ||
-        (run.y == rect.y + rect.height - 1 && run.y < bgr.rows - 1)) {
-      m.clipped = true;
-    }
-    if (m.n > settings_.max_area_px) continue;  // refused anyway: stop measuring a wall
+  // A run's pixels (those `keep` accepts) into a blob's moments.
+  const auto add_run = [&](Moments& m, const Run& run, const auto& keep) {
     const std::uint8_t* p = bgr.ptr<std::uint8_t>(run.y) + 3 * run.x0;
     const double y = run.y;
     for (int x = run.x0; x < run.x1; ++x, p += 3) {
+      if (!keep(x, run.y)) continue;
       const double w = membership[ColourTable::cell(p[0], p[1], p[2])] / 255.0;
       m.n += 1.0;
       m.sx += x;
@@ -138,29 +132,100 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
       m.wy += w * y;
       m.value += std::max({p[0], p[1], p[2]});
     }
+  };
+  std::size_t rect_index = 0;
+  for (std::size_t i = 0; i < runs_.size(); ++i) {
+    while (rect_index + 1 < rects.size() && i >= rect_of_run_begin[rect_index + 1]) ++rect_index;
+    const cv::Rect& rect = rects[rect_index];
+    const Run& run = runs_[i];
+    const int root = find_root(parent, static_cast<int>(i));
+    int& s = slot[static_cast<std::size_t>(root)];
+    if (s < 0) {
+      s = static_cast<int>(blobs.size());
+      blobs.push_back({});
+      blobs.back().klass = run.klass;
+    }
+    blob_of_run[i] = s;
+    Moments& m = blobs[static_cast<std::size_t>(s)];
+    if ((run.x0 == rect.x && rect.x > 0) || (run.x1 == rect.x + rect.width && run.x1 < bgr.cols) || (run.y == rect.y && rect.y > 0) ||
+        (run.y == rect.y + rect.height - 1 && run.y < bgr.rows - 1)) {
+      m.clipped = true;
+    }
+    if (m.n > settings_.max_area_px) continue;  // refused anyway: stop measuring a wall
+    add_run(m, run, [](int, int) { return true; });
   }
-  std::vector<Detection> out;
-  for (const Moments& m : blobs) {
-    if (m.clipped || m.n < settings_.min_area_px || m.n > settings_.max_area_px || m.w <= 0.0) continue;
-    const double confidence = m.w / m.n;
-    if (confidence < settings_.min_confidence) continue;
+  // A blob's shape from its unweighted second moments.
+  struct Shape {
+    double elongation = 1e9, fill = 0.0, angle = 0.0;
+  };
+  const auto shape_of = [](const Moments& m) {
+    Shape sh;
     const double mx = m.sx / m.n, my = m.sy / m.n;
     // Pixel squares: each adds 1/12 to its own variance.
     const double cxx = m.sxx / m.n - mx * mx + 1.0 / 12.0, cyy = m.syy / m.n - my * my + 1.0 / 12.0, cxy = m.sxy / m.n - mx * my;
     const double half_trace = 0.5 * (cxx + cyy);
     const double root = std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
     const double major = half_trace + root, minor = half_trace - root;
-    if (!(minor > 0.0)) continue;
-    if (std::sqrt(major / minor) > settings_.max_elongation) continue;
-    const double fill = m.n / (4.0 * std::numbers::pi * std::sqrt(major * minor));
-    if (fill < settings_.min_fill) continue;
+    if (!(minor > 0.0)) return sh;
+    sh.elongation = std::sqrt(major / minor);
+    sh.fill = m.n / (4.0 * std::numbers::pi * std::sqrt(major * minor));
+    sh.angle = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
+    return sh;
+  };
+  std::vector<Detection> out;
+  const auto emit = [&](const Moments& m) {
     Detection d;
     d.pixel = Eigen::Vector2d(m.wx / m.w, m.wy / m.w);
     d.area_px = static_cast<float>(m.n);
     d.intensity = static_cast<float>(m.value / m.n);
     d.colour = static_cast<std::int8_t>(table_.model().classes[static_cast<std::size_t>(m.klass - 1)].colour);
-    d.confidence = static_cast<float>(confidence);
+    d.confidence = static_cast<float>(m.w / m.n);
     out.push_back(d);
+  };
+  for (std::size_t b = 0; b < blobs.size(); ++b) {
+    const Moments& m = blobs[b];
+    if (m.clipped || m.n < settings_.min_area_px || m.n > settings_.max_area_px || m.w <= 0.0) continue;
+    if (m.w / m.n < settings_.min_confidence) continue;
+    const Shape sh = shape_of(m);
+    if (sh.elongation <= settings_.max_elongation) {
+      if (sh.fill >= settings_.min_fill) emit(m);
+      continue;
+    }
+    // Two markers of one colour whose images touch: split across the major axis at the centroid;
+    // both halves must come out round, full and of similar size.
+    if (sh.elongation > kPairElongation || sh.fill < settings_.min_fill) continue;
+    const double mx = m.sx / m.n, my = m.sy / m.n, ux = std::cos(sh.angle), uy = std::sin(sh.angle);
+    Moments half[2];
+    half[0].klass = half[1].klass = m.klass;
+    for (std::size_t i = 0; i < runs_.size(); ++i) {
+      if (blob_of_run[i] != static_cast<int>(b)) continue;
+      for (int side = 0; side < 2; ++side) {
+        add_run(half[side], runs_[i], [&](int x, int y) { return ((x - mx) * ux + (y - my) * uy > 0.0) == (side == 1); });
+      }
+    }
+    if (half[0].n < settings_.min_area_px || half[1].n < settings_.min_area_px) continue;
+    if (std::min(half[0].n, half[1].n) < 0.6 * std::max(half[0].n, half[1].n)) continue;
+    const Shape a = shape_of(half[0]), c = shape_of(half[1]);
+    if (a.elongation > kHalfElongation || c.elongation > kHalfElongation || a.fill < kHalfFill || c.fill < kHalfFill) continue;
+    if (half[0].w <= 0.0 || half[1].w <= 0.0) continue;
+    // And a waist: two discs are narrow where they touch; a stub of cable or the corner of a box
+    // cut in two is not. Pixels in a one-pixel strip across the cut against strips through each
+    // half's centroid.
+    const auto along = [&](const Moments& h) { return (h.sx / h.n - mx) * ux + (h.sy / h.n - my) * uy; };
+    const double at0 = along(half[0]), at1 = along(half[1]);
+    int waist = 0, body0 = 0, body1 = 0;
+    for (std::size_t i = 0; i < runs_.size(); ++i) {
+      if (blob_of_run[i] != static_cast<int>(b)) continue;
+      for (int x = runs_[i].x0; x < runs_[i].x1; ++x) {
+        const double t = (x - mx) * ux + (runs_[i].y - my) * uy;
+        waist += std::abs(t) < 0.5 ? 1 : 0;
+        body0 += std::abs(t - at0) < 0.5 ? 1 : 0;
+        body1 += std::abs(t - at1) < 0.5 ? 1 : 0;
+      }
+    }
+    if (waist > kWaist * std::min(body0, body1)) continue;
+    emit(half[0]);
+    emit(half[1]);
   }
   if (static_cast<int>(out.size()) > settings_.max_blobs) {
     std::nth_element(out.begin(), out.begin() + settings_.max_blobs, out.end(),
@@ -182,11 +247,15 @@ std::expected<std::vector<Detection>, std::string> ColourDetector::detect(const 
 }
 
 void ColourDetector::balance(const cv::Mat& bgr) {
-  const auto c = median_chromaticity(bgr);
-  const auto& ref = table_.model().white_reference;
-  const std::array<double, 2> gains{std::clamp(ref[0] / c[0], 0.3, 3.0), std::clamp(ref[1] / c[1], 0.3, 3.0)};
+  if (!table_.model().white_reference) return;
+  const auto& ref = *table_.model().white_reference;
+  const auto c = median_colour(bgr);
+  std::array<double, 3> gains{};
+  for (std::size_t ch = 0; ch < 3; ++ch) gains[ch] = std::clamp(ref[ch] / c[ch], 0.3, 3.0);
   const auto& now = table_.gains();
-  if (std::abs(gains[0] / now[0] - 1.0) > 0.02 || std::abs(gains[1] / now[1] - 1.0) > 0.02) table_ = ColourTable(table_.model(), gains);
+  bool changed = false;
+  for (std::size_t ch = 0; ch < 3; ++ch) changed = changed || std::abs(gains[ch] / now[ch] - 1.0) > 0.02;
+  if (changed) table_ = ColourTable(table_.model(), gains);
 }
 
 void ColourDetector::reset() {

@@ -12,6 +12,9 @@
 //    fill (its pixels over the ellipse of its moments) at least min_fill, and its confidence (the
 //    mean membership) at least min_confidence: skin, wood and painted objects that reach a colour
 //    window do so in large, ragged or pale regions, and a partly hidden marker is not round.
+//    A blob too elongated for one marker but no more than two discs side by side (two markers of
+//    one colour whose images touch) is cut across its major axis at its centroid: when both
+//    halves are round, full and of similar size, with a waist between them, each is a marker.
 // 4. At most max_blobs detections, the largest kept.
 //
 // Tracking (track()): each frame searches first in a region around each marker of the last frame,
@@ -41,8 +44,9 @@ struct ColourDetectorSettings {
   int roi_margin_px = 12;    // a region of interest: the marker's last box grown by this, plus its motion
   int full_scan_every = 30;  // frames; 1: every frame searches the whole image
   int max_blobs = 128;
-  // Follow the light: on every whole-image search, compare the image's median chromaticity with
-  // the model's white reference and, where they differ by more than 2 %, rebuild the table with
+  // Follow the light (for a model with a white reference): on every whole-image search, compare
+  // the image's median R, G and B with the model's white reference and, where they differ by
+  // more than 2 %, rebuild the table with
   // the gains that balance one to the other (about 2 ms, on the first image and after the light
   // changes).
   bool white_balance = true;

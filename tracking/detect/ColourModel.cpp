@@ -114,13 +114,14 @@ const ColourClass* ColourModel::find(int colour) const {
   return nullptr;
 }
 
-ColourTable::ColourTable(const ColourModel& model, std::array<double, 2> gains)
+ColourTable::ColourTable(const ColourModel& model, std::array<double, 3> gains)
     : model_(model), gains_(gains), klass_(32768, 0), membership_(32768, 0) {
   for (int r = 0; r < 32; ++r) {
     for (int g = 0; g < 32; ++g) {
       for (int b = 0; b < 32; ++b) {
         const PixelClass p =
-            classify(model_, hsv_from_rgb(std::min(255.0, (r * 8 + 4) * gains[0]), g * 8 + 4, std::min(255.0, (b * 8 + 4) * gains[1])));
+            classify(model_, hsv_from_rgb(std::min(255.0, (r * 8 + 4) * gains[0]), std::min(255.0, (g * 8 + 4) * gains[1]),
+                                          std::min(255.0, (b * 8 + 4) * gains[2])));
         if (p.klass < 0) continue;
         const std::size_t i = (static_cast<std::size_t>(r) << 10) | (static_cast<std::size_t>(g) << 5) | static_cast<std::size_t>(b);
         klass_[i] = static_cast<std::uint8_t>(p.klass + 1);
@@ -155,9 +156,9 @@ ColourModel read_model(const JsonNode& root) {
   }
   if (const auto ok = model.check(); !ok) list.fail(ok.error());
   if (auto w = root.optional("white_reference")) {
-    const auto v = w->numbers(2);
-    if (!(v[0] >= 0.2 && v[0] <= 5.0 && v[1] >= 0.2 && v[1] <= 5.0)) w->fail("expected R/G and B/G from 0.2 to 5");
-    model.white_reference = {v[0], v[1]};
+    const auto v = w->numbers(3);
+    if (!std::all_of(v.begin(), v.end(), [](double x) { return x >= 0.01 && x <= 1.0; })) w->fail("expected R, G and B from 0.01 to 1");
+    model.white_reference = std::array<double, 3>{v[0], v[1], v[2]};
   }
   return model;
 }
@@ -188,7 +189,10 @@ std::string colour_model_json(const ColourModel& model) {
     e["min_value"] = round3(c.min_value);
     j["colours"].push_back(e);
   }
-  j["white_reference"] = {round3(model.white_reference[0]), round3(model.white_reference[1])};
+  if (model.white_reference) {
+    const auto& w = *model.white_reference;
+    j["white_reference"] = {round3(w[0]), round3(w[1]), round3(w[2])};
+  }
   return j.dump(2) + "\n";
 }
 
@@ -409,32 +413,29 @@ std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vect
     report.pixels_per_class.push_back(static_cast<int>(p.samples.size()));
   }
   {
-    std::vector<double> rg, bg;
+    std::array<std::vector<double>, 3> medians;
     for (const cv::Mat& image : images) {
-      const auto c = median_chromaticity(image);
-      rg.push_back(c[0]);
-      bg.push_back(c[1]);
+      const auto c = median_colour(image);
+      for (std::size_t ch = 0; ch < 3; ++ch) medians[ch].push_back(c[ch]);
     }
-    report.model.white_reference = {percentile(rg, 0.5), percentile(bg, 0.5)};
+    report.model.white_reference = std::array<double, 3>{percentile(medians[0], 0.5), percentile(medians[1], 0.5), percentile(medians[2], 0.5)};
   }
   report.model.description = "learned from " + std::to_string(images.size()) + " image(s), " + std::to_string(report.blobs) + " blobs";
   if (const auto ok = report.model.check(); !ok) return std::unexpected("the learned model is not usable: " + ok.error());
   return report;
 }
 
-std::array<double, 2> median_chromaticity(const cv::Mat& bgr) {
-  std::vector<double> rg, bg;
+std::array<double, 3> median_colour(const cv::Mat& bgr) {
+  std::array<std::vector<double>, 3> channels;
   for (int y = 4; y < bgr.rows; y += 8) {
     const auto* p = bgr.ptr<cv::Vec3b>(y);
     for (int x = 4; x < bgr.cols; x += 8) {
-      const int b = p[x][0], g = p[x][1], r = p[x][2];
-      if (std::max({r, g, b}) < 26 || std::max({r, g, b}) >= 255 || std::min({r, g, b}) == 0) continue;
-      rg.push_back(static_cast<double>(r) / g);
-      bg.push_back(static_cast<double>(b) / g);
+      if (std::max({p[x][0], p[x][1], p[x][2]}) >= 255) continue;
+      for (std::size_t ch = 0; ch < 3; ++ch) channels[ch].push_back(p[x][static_cast<int>(2 - ch)] / 255.0);
     }
   }
-  if (rg.empty()) return {1.0, 1.0};
-  return {percentile(rg, 0.5), percentile(bg, 0.5)};
+  if (channels[0].empty()) return {0.5, 0.5, 0.5};
+  return {std::max(0.01, percentile(channels[0], 0.5)), std::max(0.01, percentile(channels[1], 0.5)), std::max(0.01, percentile(channels[2], 0.5))};
 }
 
 cv::Mat classification_picture(const ColourTable& table, const cv::Mat& bgr) {

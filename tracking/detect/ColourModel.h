@@ -13,14 +13,15 @@
 //         "min_value": 0.2 },                      and at least this bright (HSV value, 0-1)
 //       ...
 //     ],
-//     "white_reference": [1.03, 0.92]              optional: the scene's median R/G and B/G where the
-//   }                                              colours were learned (absent: a neutral grey world)
+//     "white_reference": [0.52, 0.50, 0.45]        optional: the scene's median R, G and B (0-1) where
+//   }                                              the colours were learned (absent: no balancing)
 //
 // Hue and saturation do not change when exposure scales a pixel, and white balance turns hues by
 // a few degrees only for saturated colours: a model of hue windows stays valid under both, where
 // an RGB box would not. A light much warmer or cooler than the one the colours were learned under
-// turns hues further; the detector follows it by comparing the image's median R/G and B/G with the
-// model's white reference and balancing pixels before they are classified. Skin, wood and paper are less saturated than marker paint, which
+// turns hues further, and a darker exposure drops the shaded side of a marker under min_value; the
+// detector follows both by comparing the image's median R, G and B with the model's white
+// reference and scaling pixels by the ratio before they are classified. Skin, wood and paper are less saturated than marker paint, which
 // is what min_saturation keeps out. Colours' hue windows may not overlap, so a pixel has one colour at most.
 //
 // A ColourTable turns the model into a lookup table of 32 x 32 x 32 RGB cells (the top five bits of
@@ -31,6 +32,7 @@
 #include <cstdint>
 #include <expected>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,9 +53,10 @@ struct ColourClass {
 struct ColourModel {
   std::string description;
   std::vector<ColourClass> classes;  // one per colour, at most one each
-  // The median R/G and B/G of the images the model was learned from: what the detector balances
-  // a new image's median toward. (1, 1): a neutral grey world.
-  std::array<double, 2> white_reference{1.0, 1.0};
+  // The median R, G and B (0-1) of the images the model was learned from: what the detector
+  // balances a new image's medians toward. None: the detector takes pixels as they come (a model written by
+  // hand, or the default one, knows nothing of the scene's colours: a wooden table is not grey).
+  std::optional<std::array<double, 3>> white_reference;
 
   // Every value usable: "colours/<i> (<name>): <field>: <what was expected>, got <value>", or the
   // two colours whose hue windows overlap.
@@ -80,10 +83,10 @@ PixelClass classify(const ColourModel& model, const Hsv& hsv);
 
 class ColourTable {
  public:
-  // Precondition: model.check() passes. Each cell's pixel is multiplied by gains (R, B; G stays)
-  // before it is classified: a white balance folded into the table.
-  explicit ColourTable(const ColourModel& model, std::array<double, 2> gains = {1.0, 1.0});
-  const std::array<double, 2>& gains() const { return gains_; }
+  // Precondition: model.check() passes. Each cell's pixel is multiplied by gains (R, G, B) before
+  // it is classified: a white balance and exposure folded into the table.
+  explicit ColourTable(const ColourModel& model, std::array<double, 3> gains = {1.0, 1.0, 1.0});
+  const std::array<double, 3>& gains() const { return gains_; }
   // Per cell: 0 for no colour, else 1 + the class's index in the model.
   std::uint8_t klass(std::uint8_t b, std::uint8_t g, std::uint8_t r) const { return klass_[cell(b, g, r)]; }
   // Per cell: the membership times 255 (0 where klass is 0).
@@ -97,7 +100,7 @@ class ColourTable {
 
  private:
   ColourModel model_;
-  std::array<double, 2> gains_;
+  std::array<double, 3> gains_;
   std::vector<std::uint8_t> klass_, membership_;
 };
 
@@ -139,10 +142,10 @@ struct ColourLearnReport {
                                                                                const std::vector<cv::Mat>& masks,
                                                                                const ColourLearnSettings& settings = {});
 
-// An image's median R/G and B/G over a sparse grid (every 8th pixel of every 8th row), leaving out
-// dark (value under 0.1) and clipped pixels: its white balance, as ColourModel::white_reference.
-// (1, 1) when no pixel counts.
-std::array<double, 2> median_chromaticity(const cv::Mat& bgr);
+// An image's median R, G and B (0-1) over a sparse grid (every 8th pixel of every 8th row),
+// leaving out clipped pixels: its white balance and exposure, as ColourModel::white_reference.
+// (0.5, 0.5, 0.5) when no pixel counts.
+std::array<double, 3> median_colour(const cv::Mat& bgr);
 
 // A picture of what a model classifies: every pixel of a colour painted that colour's display
 // colour at full strength (dimmed by its membership), everything else a dark grey copy of the

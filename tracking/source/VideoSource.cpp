@@ -34,6 +34,7 @@ struct VideoSource::Impl {
   std::vector<bool> live;
   std::vector<cv::Mat> pending;  // the first frames, read by open() to check their size
   std::vector<VideoCameraStats> stats;
+  std::vector<ColourDetector> colour_detectors;  // per camera, with coloured markers
   std::vector<VideoCameraStats> told;  // the counts last told by take_warnings()
   Clock::time_point opened = Clock::now();
   std::uint64_t index = 0;
@@ -69,6 +70,10 @@ std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, 
                            " (one per camera, in rig order)");
   }
   if (auto ok = check(settings.detector); !ok) return std::unexpected("video source: " + ok.error());
+  if (settings.colours) {
+    if (auto ok = settings.colours->check(); !ok) return std::unexpected("video source: colours: " + ok.error());
+    if (auto ok = settings.colour_detector.check(); !ok) return std::unexpected("video source: colour detector: " + ok.error());
+  }
   if (!(settings.rate_hz > 0.0) || !std::isfinite(settings.rate_hz))
     return std::unexpected(std::string("video source: rate_hz must be a positive number"));
   auto impl = std::make_unique<Impl>();
@@ -76,6 +81,7 @@ std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, 
   impl->devices = devices;
   impl->settings = settings;
   impl->stats.resize(devices.size());
+  if (settings.colours) impl->colour_detectors.assign(devices.size(), ColourDetector(*settings.colours, settings.colour_detector));
   for (std::size_t c = 0; c < devices.size(); ++c) {
     const std::string& device = devices[c];
     cv::VideoCapture capture;
@@ -160,7 +166,7 @@ std::optional<RigFrame> VideoSource::next() {
                         " image, the rig calibrates it at " + size_text(k.width_px, k.height_px);
       continue;
     }
-    auto detections = detect_blobs(image, s.settings.detector);
+    auto detections = s.colour_detectors.empty() ? detect_blobs(image, s.settings.detector) : s.colour_detectors[c].track(image);
     if (!detections) {
       ++st.bad_images;
       st.last_problem = "frame " + std::to_string(frame.index) + ": \"" + s.devices[c] + "\": " + detections.error();

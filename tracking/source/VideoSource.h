@@ -1,6 +1,8 @@
 #pragma once
 // Frames from real cameras: one OpenCV capture per camera of a rig, in rig order, each image
-// turned into detections by the blob detector (tracking/detect/BlobDetector.h).
+// turned into detections by the blob detector (tracking/detect/BlobDetector.h), or, for coloured
+// markers on colour cameras, by a colour detector per camera following its markers from image to
+// image (tracking/detect/ColourDetector.h).
 //
 // A device is a capture device's index ("0") or a file: a video file (FFmpeg, else GStreamer), or an image sequence
 // whose name holds a printf pattern ("cams/cam0_%04d.png", OpenCV's CAP_IMAGES, numbered from 0
@@ -23,14 +25,17 @@
 #include <vector>
 
 #include "tracking/camera/Camera.h"
-#include "tracking/detect/BlobDetector.h"
 #include "tracking/core/Frames.h"
+#include "tracking/detect/BlobDetector.h"
+#include "tracking/detect/ColourDetector.h"
 #include "tracking/source/FrameSource.h"
 
 namespace rhot {
 
 struct VideoSourceSettings {
   BlobDetectorSettings detector;
+  std::optional<ColourModel> colours;  // coloured markers: detect these colours instead of bright blobs
+  ColourDetectorSettings colour_detector;
   double rate_hz = 90.0;  // files' frame rate, for their timestamps
 };
 

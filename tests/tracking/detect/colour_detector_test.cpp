@@ -136,10 +136,25 @@ TEST(ColourDetector, FindsEveryMarkerAtItsCentreOnAClutteredTableAndNothingElse)
   }
 }
 
+// A model learned under daylight (its white reference taken then) keeps every colour when the
+// light turns warm or cool and the exposure changes: the detector balances each image back.
 TEST(ColourDetector, KeepsEveryColourUnderWarmAndCoolLightAndOtherExposures) {
-  ColourDetector detector(default_colour_model());
+  std::vector<cv::Mat> examples;
+  for (unsigned seed = 21; seed <= 23; ++seed) {
+    auto held_up = scattered_markers(2, seed);
+    for (auto& m : held_up) m.radius_px = 8.0;
+    ColourImageSettings daylight;
+    daylight.seed = seed;
+    examples.push_back(draw_colour_markers(640, 480, held_up, daylight));
+  }
+  ColourLearnSettings learn;
+  learn.expected = kSix;
+  const auto learned = learn_colour_model(examples, {}, learn);
+  ASSERT_TRUE(learned) << learned.error();
+  ASSERT_TRUE(learned->model.white_reference.has_value());
+  ColourDetector detector(learned->model);
   const auto truth = scattered_markers(3, 7);
-  for (const auto& [kelvin, exposure] : {std::pair{3000.0, 1.0}, {4000.0, 0.6}, {9000.0, 1.0}, {6500.0, 1.3}}) {
+  for (const auto& [kelvin, exposure] : {std::pair{6500.0, 1.0}, {3000.0, 0.7}, {4000.0, 0.6}, {9000.0, 0.8}, {6500.0, 1.3}}) {
     ColourImageSettings settings;
     settings.kelvin = kelvin;
     settings.exposure = exposure;
@@ -150,6 +165,29 @@ TEST(ColourDetector, KeepsEveryColourUnderWarmAndCoolLightAndOtherExposures) {
     EXPECT_EQ(s.wrong_colour, 0) << kelvin << " K, exposure " << exposure;
     EXPECT_EQ(s.false_detections, 0) << kelvin << " K, exposure " << exposure;
     EXPECT_LT(s.rms_px, 0.2) << kelvin << " K, exposure " << exposure;
+  }
+  // Without balancing, the warm light's orange cast costs colours.
+  ColourDetectorSettings plain;
+  plain.white_balance = false;
+  ColourDetector unbalanced(learned->model, plain);
+  ColourImageSettings warm;
+  warm.kelvin = 3000.0;
+  const Score s = score(truth, *unbalanced.detect(draw_colour_markers(640, 480, truth, warm)));
+  EXPECT_LT(s.found - s.wrong_colour, 18);
+}
+
+TEST(ColourDetector, TwoTouchingMarkersOfOneColourAreCutInTwo) {
+  ColourDetector detector(default_colour_model());
+  ColourImageSettings settings;
+  settings.clutter = false;
+  for (const double gap : {9.0, 10.0, 11.0}) {  // centres closer than, at and beyond two radii
+    const std::vector<ColourMarkerDrawing> truth{{{100.3, 100.6}, 5.0, 5}, {{100.3 + gap * 0.8, 100.6 + gap * 0.6}, 5.0, 5}};
+    const auto detections = detector.detect(draw_colour_markers(200, 200, truth, settings));
+    ASSERT_TRUE(detections);
+    const Score s = score(truth, *detections);
+    EXPECT_EQ(s.found, 2) << "gap " << gap;
+    EXPECT_EQ(s.false_detections, 0) << "gap " << gap;
+    EXPECT_LT(s.rms_px, 0.6) << "gap " << gap;  // each half's centroid leans toward the cut
   }
 }
 

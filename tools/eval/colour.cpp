@@ -1,0 +1,230 @@
+// rhot-eval colour: coloured markers end to end on simulated colour cameras. The demo's script
+// (its hands with the colour layouts, its star-tracked objects with blue stars) is drawn by the
+// renderer for each camera of the rig (engine/sim/ColourCameras.h) with the scene's objects as
+// clutter, noise, blur and a white balance; each image goes through a colour detector per camera
+// (regions of interest from the frame before), then matching, stars and hands as in the demo.
+//
+// Against the truth: per camera and frame, an identity render tells each marker's visible pixels.
+//   detection_rate            markers visible by 20 pixels or more that have a detection of their
+//                             colour within their projected radius + 1 px of their centre
+//   false_detections_per_image  detections near no visible marker of their colour
+//   centroid_rms_px           detection to the marker centre's projection, for markers at least
+//                             90 % visible (a partly hidden sphere's centroid moves, rightly)
+//   fingertip_mean_mm         tracked fingertip joints to the true ones, frames with the hand seen
+//   detect_median_ms          one image through the detector as the demo runs it (tracked), and
+//                             detect_full_median_ms for a whole-image search of the same images
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <map>
+
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "engine/scene/SceneLoader.h"
+#include "engine/sim/ColourCameras.h"
+#include "engine/sim/Demo.h"
+#include "engine/tracked/LiveTracking.h"
+#include "tools/eval/Eval.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/core/MarkerColour.h"
+#include "tracking/hand/HandJoints.h"
+
+namespace rhot::eval {
+
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+struct Counts {
+  long visible = 0, found = 0, false_detections = 0, centroid_n = 0;
+  double centroid_sum2 = 0.0;
+  nlohmann::ordered_json json(long images) const {
+    nlohmann::ordered_json j;
+    j["visible_markers"] = visible;
+    j["detection_rate"] = visible > 0 ? static_cast<double>(found) / static_cast<double>(visible) : 0.0;
+    j["false_detections_per_image"] = images > 0 ? static_cast<double>(false_detections) / static_cast<double>(images) : 0.0;
+    j["centroid_rms_px"] = centroid_n > 0 ? std::sqrt(centroid_sum2 / static_cast<double>(centroid_n)) : 0.0;
+    j["centroid_samples"] = centroid_n;
+    return j;
+  }
+};
+
+}  // namespace
+
+int colour(const ColourArgs& a) {
+  const auto scene = load_scene_file(a.scene_file);
+  if (!scene) {
+    std::cerr << "rhot-eval: " << scene.error().to_string() << "\n";
+    return 1;
+  }
+  const auto rig = load_rig(a.rig_file);
+  if (!rig) {
+    std::cerr << "rhot-eval: " << rig.error() << "\n";
+    return 1;
+  }
+  ColourModel model = default_colour_model();
+  if (!a.colours_file.empty()) {
+    auto loaded = load_colour_model(a.colours_file);
+    if (!loaded) {
+      std::cerr << "rhot-eval: " << loaded.error().to_string() << "\n";
+      return 1;
+    }
+    model = std::move(*loaded);
+  }
+  auto sim = make_demo_simulation(*scene, RHOT_ASSET_DIR, {}, 0, true);
+  if (!sim) {
+    std::cerr << "rhot-eval: " << sim.error() << "\n";
+    return 1;
+  }
+  ColourCameraSettings cs;
+  cs.noise_sigma = a.noise;
+  cs.kelvin = a.kelvin;
+  cs.clutter = a.clutter;
+  cs.device = a.device;
+  cs.seed = a.seed;
+  auto cameras = ColourCameras::create(*rig, *scene, cs);
+  if (!cameras) {
+    std::cerr << "rhot-eval: " << cameras.error() << "\n";
+    return 1;
+  }
+  ColourCameras* cams = cameras->get();
+  std::shared_ptr<DemoWorld> world = sim->world;
+  auto source = std::make_unique<ColourCameraSource>(
+      std::move(*cameras), [world](double t) { return world->colour_shot(world->at(t)); }, model);
+  ColourCameraSource* src = source.get();
+  LiveTracking live(std::move(source), sim->objects, sim->layouts);
+  ColourDetector full_detector(model);
+
+  Counts all;
+  std::map<int, Counts> per_colour;
+  std::vector<double> detect_ms, detect_full_ms;
+  double tip_sum_m = 0.0;
+  long tips = 0, hand_frames = 0, hands_seen = 0;
+  long images = 0;
+  const double rate_hz = scene->settings.headset.refresh_hz;
+  for (int f = 0; f < a.frames; ++f) {
+    const double t = a.start_s + f / rate_hz;
+    live.read_source(t);
+    live.match();
+    live.track_stars(t);
+    live.track_hands(t);
+    const ColourShot& shot = src->last_shot();
+    const auto views = cams->marker_visibility(shot);
+    const RigFrame& frame = live.frame();
+    if (f == 0 && !a.pictures_dir.empty()) {
+      std::filesystem::create_directories(a.pictures_dir);
+      for (std::size_t c = 0; c < frame.cameras.size(); ++c) {
+        const std::string base = a.pictures_dir + "/cam" + std::to_string(c);
+        cv::Mat annotated = src->last_images()[c].clone();
+        for (const Detection& d : frame.cameras[c].detections) {
+          cv::circle(annotated, cv::Point(static_cast<int>(std::lround(d.pixel.x())), static_cast<int>(std::lround(d.pixel.y()))), 9,
+                     cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+        }
+        if (!cv::imwrite(base + ".png", annotated) || !cv::imwrite(base + "_colours.png", classification_picture(ColourTable(model), src->last_images()[c]))) {
+          std::cerr << "rhot-eval: cannot write " << base << ".png\n";
+          return 1;
+        }
+      }
+    }
+    detect_ms.push_back(src->last_detect_ms() / static_cast<double>(frame.cameras.size()));
+    for (std::size_t c = 0; c < frame.cameras.size(); ++c) {
+      ++images;
+      const auto start = std::chrono::steady_clock::now();
+      (void)full_detector.detect(src->last_images()[c]);
+      detect_full_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      const auto& dets = frame.cameras[c].detections;
+      const auto& v = views[c];
+      std::vector<bool> used(dets.size(), false);
+      for (std::size_t m = 0; m < shot.markers.size(); ++m) {
+        if (!v[m].in_front || v[m].visible_px < 20) continue;
+        const int colour_index = shot.markers[m].colour;
+        Counts& pc = per_colour[colour_index];
+        ++all.visible;
+        ++pc.visible;
+        const double reach = std::sqrt(v[m].disc_px / 3.14159265358979) + 1.0;
+        int best = -1;
+        double best_d = reach;
+        for (std::size_t d = 0; d < dets.size(); ++d) {
+          const double dist = (dets[d].pixel - v[m].pixel).norm();
+          if (dets[d].colour == colour_index && dist < best_d) best_d = dist, best = static_cast<int>(d);
+        }
+        if (best < 0) {
+          if (std::getenv("RHOT_EVAL_DEBUG")) {
+            double nearest = 1e9;
+            for (const Detection& d : dets) nearest = std::min(nearest, (d.pixel - v[m].pixel).norm());
+            std::cerr << "miss f" << f << " cam" << c << " marker " << m << " " << marker_colour_name(colour_index) << " at " << v[m].pixel.x() << "," << v[m].pixel.y()
+                      << " visible " << v[m].visible_px << " disc " << v[m].disc_px << " nearest det " << nearest << "\n";
+          }
+          continue;
+        }
+        used[static_cast<std::size_t>(best)] = true;
+        ++all.found;
+        ++pc.found;
+        if (v[m].visible_px >= 0.9 * v[m].disc_px) {
+          all.centroid_sum2 += best_d * best_d;
+          pc.centroid_sum2 += best_d * best_d;
+          ++all.centroid_n;
+          ++pc.centroid_n;
+        }
+      }
+      // A detection near no visible marker of its colour (any visible pixel at all) is false.
+      for (std::size_t d = 0; d < dets.size(); ++d) {
+        if (used[d]) continue;
+        bool near = false;
+        for (std::size_t m = 0; m < shot.markers.size() && !near; ++m) {
+          if (!v[m].in_front || v[m].visible_px == 0 || shot.markers[m].colour != dets[d].colour) continue;
+          near = (dets[d].pixel - v[m].pixel).norm() < std::sqrt(v[m].disc_px / 3.14159265358979) + 2.0;
+        }
+        if (!near) {
+          ++all.false_detections;
+          ++per_colour[dets[d].colour].false_detections;
+        }
+      }
+    }
+    const auto truth = world->truth();
+    for (std::size_t h = 0; h < 2 && truth; ++h) {
+      ++hand_frames;
+      const TrackedHand& hand = live.tracked_hand(h == 0 ? HandSide::kLeft : HandSide::kRight);
+      if (!hand.hand_seen) continue;
+      ++hands_seen;
+      for (int k = 0; k < kFingerCount; ++k) {
+        const auto tip = static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3]);
+        tip_sum_m += (hand.joints_world[tip] - truth->hands[h].world_from_hand * truth->hands[h].pose.position_m[tip]).norm();
+        ++tips;
+      }
+    }
+    if ((f + 1) % 30 == 0 || f + 1 == a.frames) std::cerr << "rhot-eval colour: " << (f + 1) << "/" << a.frames << " frames\n";
+  }
+  nlohmann::ordered_json j;
+  j["rig"] = a.rig_file;
+  j["frames"] = a.frames;
+  j["images"] = images;
+  j["device"] = cams->renderer_info().device_name;
+  j["noise"] = a.noise;
+  j["white_balance_k"] = a.kelvin;
+  j["clutter"] = a.clutter;
+  const nlohmann::ordered_json overall = all.json(images);
+  for (auto it = overall.begin(); it != overall.end(); ++it) j[it.key()] = it.value();
+  j["fingertip_mean_mm"] = tips > 0 ? 1000.0 * tip_sum_m / static_cast<double>(tips) : 0.0;
+  j["hand_seen_fraction"] = hand_frames > 0 ? static_cast<double>(hands_seen) / static_cast<double>(hand_frames) : 0.0;
+  j["detect_median_ms"] = median(detect_ms);
+  j["detect_full_median_ms"] = median(detect_full_ms);
+  nlohmann::ordered_json colours;
+  for (const auto& [c, counts] : per_colour) colours[std::string(marker_colour_name(c))] = counts.json(images);
+  j["per_colour"] = colours;
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
+}  // namespace rhot::eval
