@@ -171,7 +171,12 @@ std::vector<Image> ColourCameras::draw(const ColourShot& shot, bool ids) {
       fov.down = std::atan((height - 0.5 - cy) / fy) * kDeg;
       views.clip_from_eye[static_cast<std::size_t>(eye)] = projection_from_fov(fov, 0.02, 20.0);
     }
-    FrameInput frame = scene_renderer_->build(ids ? empty_ : world_, views, hands);
+    FrameInput frame = scene_renderer_->build(world_, views, hands);
+    if (ids) {  // everything that can hide a marker, black
+      for (MeshBatch& batch : frame.batches) {
+        for (MeshInstance& instance : batch.instances) instance.color = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+      }
+    }
     if (!palms.empty()) frame.batches.push_back({box_, palms});
     if (!markers.empty()) frame.batches.push_back({sphere_, markers});
     if (ids) {

@@ -99,8 +99,7 @@ class ColourCameras {
   ColourCameraSettings settings_;
   std::unique_ptr<Renderer> renderer_;
   std::unique_ptr<SceneRenderer> scene_renderer_;
-  World world_;     // the scene's table, floor and (with clutter) objects, where the scene puts them
-  World empty_;     // nothing: for the identity images
+  World world_;  // the scene's table, floor and (with clutter) objects, where the scene puts them
   MeshHandle sphere_, box_;
   double render_f_scale_ = 0.9;       // the pinhole image's focal length over the camera's, for a margin to distort into
   std::vector<cv::Mat> map_x_, map_y_;  // per camera: distorted pixel -> pinhole image pixel

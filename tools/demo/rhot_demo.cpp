@@ -78,6 +78,7 @@ struct Options {
   std::optional<int> strays;
   std::optional<double> calib_error_px;
   std::string source = "sim";
+  std::string markers = "infrared";
   rhot::DemoSettings demo;
   std::vector<std::string> debug_views;
   std::string window_capture;
@@ -119,6 +120,18 @@ void add_options(CLI::App& cli, Options& o) {
                  "sequence such as cams/cam0_%04d.png; docs/demo.md), or nodes:ENDPOINT[,ENDPOINT...] (camera nodes, rhot-node, "
                  "publishing at each ENDPOINT such as tcp://127.0.0.1:5601; docs/camera-nodes.md)")
       ->capture_default_str();
+  cli.add_option("--markers", o.markers,
+                 "infrared (bright blobs, the low-cost hand layouts) or colour (seed 002's coloured markers: the colour hand layouts; "
+                 "with --source sim, colour cameras drawn by the renderer on assets/rigs/stereo-640.yaml unless --rig; "
+                 "docs/colour-markers.md)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"infrared", "colour"}));
+  cli.add_option("--colours", o.demo.colours, "With --markers colour: the colour model (rhot-calib colours writes one; default: rhot's six)")
+      ->check(CLI::ExistingFile);
+  cli.add_option("--white-balance-k", o.demo.colour_cameras.kelvin,
+                 "With --markers colour and --source sim: the simulated light's colour temperature (cameras balanced for 6500 K)")
+      ->capture_default_str()
+      ->check(CLI::Range(1500.0, 15000.0));
   cli.add_option("--blob-threshold", o.demo.detector.threshold,
                  "With --source video: grey level above which pixels are marker (-1: automatic, background + 5 sigma, at least 40)")
       ->capture_default_str()
@@ -160,6 +173,11 @@ bool resolve_options(Options& o) {
     if (v == "colliders") o.demo.debug.colliders = true;
   }
   spdlog::set_level(spdlog::level::from_str(o.log_level));
+  o.demo.colour_markers = o.markers == "colour";
+  if (!o.demo.colours.empty() && !o.demo.colour_markers) {
+    spdlog::error("--colours: a colour model needs --markers colour");
+    return false;
+  }
   if (o.source.rfind("replay:", 0) == 0 && o.source.size() > 7) {
     o.demo.replay = o.source.substr(7);
   } else if (o.source.rfind("video:", 0) == 0) {

@@ -17,13 +17,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <iostream>
 #include <map>
 
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -63,6 +64,7 @@ struct Counts {
 }  // namespace
 
 int colour(const ColourArgs& a) {
+  spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));  // stdout is the JSON
   const auto scene = load_scene_file(a.scene_file);
   if (!scene) {
     std::cerr << "rhot-eval: " << scene.error().to_string() << "\n";
@@ -159,15 +161,7 @@ int colour(const ColourArgs& a) {
           const double dist = (dets[d].pixel - v[m].pixel).norm();
           if (dets[d].colour == colour_index && dist < best_d) best_d = dist, best = static_cast<int>(d);
         }
-        if (best < 0) {
-          if (std::getenv("RHOT_EVAL_DEBUG")) {
-            double nearest = 1e9;
-            for (const Detection& d : dets) nearest = std::min(nearest, (d.pixel - v[m].pixel).norm());
-            std::cerr << "miss f" << f << " cam" << c << " marker " << m << " " << marker_colour_name(colour_index) << " at " << v[m].pixel.x() << "," << v[m].pixel.y()
-                      << " visible " << v[m].visible_px << " disc " << v[m].disc_px << " nearest det " << nearest << "\n";
-          }
-          continue;
-        }
+        if (best < 0) continue;
         used[static_cast<std::size_t>(best)] = true;
         ++all.found;
         ++pc.found;

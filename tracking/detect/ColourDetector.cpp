@@ -31,11 +31,12 @@ ColourDetector::ColourDetector(const ColourModel& model, ColourDetectorSettings 
 namespace {
 
 // Two touching discs: elongation about 2 (just touching) down to 1 (one over the other). A blob
-// more elongated than max_elongation but at most kPairElongation is tried as two, each half round
+// more elongated than kPairFrom and at most kPairElongation is tried as two, each half round
 // (elongation at most kHalfElongation) and full (fill at least kHalfFill), with a waist between.
+constexpr double kPairFrom = 1.4;  // two discs overlapping by up to half a radius and more
 constexpr double kPairElongation = 3.2;
-constexpr double kHalfElongation = 1.45;
-constexpr double kHalfFill = 0.8;
+constexpr double kHalfElongation = 2.0;
+constexpr double kHalfFill = 0.7;
 constexpr double kWaist = 0.75;  // the cut's width over the halves' at most
 
 int find_root(std::vector<int>& parent, int i) {
@@ -182,18 +183,9 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
     d.confidence = static_cast<float>(m.w / m.n);
     out.push_back(d);
   };
-  for (std::size_t b = 0; b < blobs.size(); ++b) {
-    const Moments& m = blobs[b];
-    if (m.clipped || m.n < settings_.min_area_px || m.n > settings_.max_area_px || m.w <= 0.0) continue;
-    if (m.w / m.n < settings_.min_confidence) continue;
-    const Shape sh = shape_of(m);
-    if (sh.elongation <= settings_.max_elongation) {
-      if (sh.fill >= settings_.min_fill) emit(m);
-      continue;
-    }
-    // Two markers of one colour whose images touch: split across the major axis at the centroid;
-    // both halves must come out round, full and of similar size.
-    if (sh.elongation > kPairElongation || sh.fill < settings_.min_fill) continue;
+  // Two markers of one colour whose images touch: cut across the major axis at the centroid; both
+  // halves must come out round, full and of similar size, with a waist between them.
+  const auto split = [&](std::size_t b, const Moments& m, const Shape& sh) -> bool {
     const double mx = m.sx / m.n, my = m.sy / m.n, ux = std::cos(sh.angle), uy = std::sin(sh.angle);
     Moments half[2];
     half[0].klass = half[1].klass = m.klass;
@@ -203,11 +195,11 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
         add_run(half[side], runs_[i], [&](int x, int y) { return ((x - mx) * ux + (y - my) * uy > 0.0) == (side == 1); });
       }
     }
-    if (half[0].n < settings_.min_area_px || half[1].n < settings_.min_area_px) continue;
-    if (std::min(half[0].n, half[1].n) < 0.6 * std::max(half[0].n, half[1].n)) continue;
+    if (half[0].n < settings_.min_area_px || half[1].n < settings_.min_area_px) return false;
+    if (std::min(half[0].n, half[1].n) < 0.6 * std::max(half[0].n, half[1].n)) return false;
     const Shape a = shape_of(half[0]), c = shape_of(half[1]);
-    if (a.elongation > kHalfElongation || c.elongation > kHalfElongation || a.fill < kHalfFill || c.fill < kHalfFill) continue;
-    if (half[0].w <= 0.0 || half[1].w <= 0.0) continue;
+    if (a.elongation > kHalfElongation || c.elongation > kHalfElongation || a.fill < kHalfFill || c.fill < kHalfFill) return false;
+    if (half[0].w <= 0.0 || half[1].w <= 0.0) return false;
     // And a waist: two discs are narrow where they touch; a stub of cable or the corner of a box
     // cut in two is not. Pixels in a one-pixel strip across the cut against strips through each
     // half's centroid.
@@ -223,9 +215,19 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
         body1 += std::abs(t - at1) < 0.5 ? 1 : 0;
       }
     }
-    if (waist > kWaist * std::min(body0, body1)) continue;
+    if (waist > kWaist * std::min(body0, body1)) return false;
     emit(half[0]);
     emit(half[1]);
+    return true;
+  };
+  for (std::size_t b = 0; b < blobs.size(); ++b) {
+    const Moments& m = blobs[b];
+    if (m.clipped || m.n < settings_.min_area_px || m.n > settings_.max_area_px || m.w <= 0.0) continue;
+    if (m.w / m.n < settings_.min_confidence) continue;
+    const Shape sh = shape_of(m);
+    if (sh.fill < settings_.min_fill) continue;
+    if (sh.elongation > kPairFrom && sh.elongation <= kPairElongation && split(b, m, sh)) continue;
+    if (sh.elongation <= settings_.max_elongation) emit(m);
   }
   if (static_cast<int>(out.size()) > settings_.max_blobs) {
     std::nth_element(out.begin(), out.begin() + settings_.max_blobs, out.end(),

@@ -38,8 +38,8 @@ namespace rhot {
 struct ColourDetectorSettings {
   int min_area_px = 6;
   int max_area_px = 1500;  // a 14 mm marker 0.3 m from a 640 x 480 camera covers about 700
-  double max_elongation = 2.0;
-  double min_fill = 0.6;
+  double max_elongation = 2.1;
+  double min_fill = 0.55;
   double min_confidence = 0.5;
   int roi_margin_px = 12;    // a region of interest: the marker's last box grown by this, plus its motion
   int full_scan_every = 30;  // frames; 1: every frame searches the whole image
