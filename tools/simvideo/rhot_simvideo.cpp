@@ -1,6 +1,10 @@
 // rhot-simvideo: the demo's simulated cameras written as image sequences, one per camera
-// (DIR/cam<i>_%04d.png, 8-bit grey), each marker a Gaussian spot. rhot-demo reads them back as
-// real cameras would be read: --rig FILE --source video:DIR/cam0_%04d.png,DIR/cam1_%04d.png,...
+// (DIR/cam<i>_%04d.png), rhot-demo reads them back as real cameras would be read:
+// --rig FILE --source video:DIR/cam0_%04d.png,DIR/cam1_%04d.png,...
+//   infrared (default)  8-bit grey, each marker a Gaussian spot
+//   --colour            colour images drawn by the renderer (engine/sim/ColourCameras.h): the
+//                       hands with the colour layouts, the scene's objects, coloured markers;
+//                       read back with --markers colour (rig default assets/rigs/stereo-640.yaml)
 
 #include <cstdio>
 #include <cstdlib>
@@ -55,7 +59,18 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 50.0));
   cli.add_option("--seed", settings.seed, "Seed for both noises")->capture_default_str();
+  bool colour = false;
+  cli.add_flag("--colour", colour,
+               "Colour cameras drawn by the renderer, coloured markers (read back with rhot-demo --markers colour); --noise is then per "
+               "colour channel");
+  cli.add_option("--white-balance-k", settings.colour_cameras.kelvin, "With --colour: the light's colour temperature (cameras balanced for 6500 K)")
+      ->capture_default_str()
+      ->check(CLI::Range(1500.0, 15000.0));
+  cli.add_option("--device", settings.colour_cameras.device, "With --colour: the Vulkan device (auto, gpu, cpu, an index or part of a name)")
+      ->capture_default_str();
   CLI11_PARSE(cli, argc, argv);
+  settings.colour_markers = colour;
+  settings.colour_cameras.noise_sigma = draw.noise_sigma;
   for (const auto& checked : {draw.check(), settings.check()}) {
     if (!checked) {
       std::fprintf(stderr, "rhot-simvideo: %s\n", checked.error().c_str());
@@ -81,6 +96,7 @@ int main(int argc, char** argv) {
   }
   rhot::LiveTracking& p = *(*demo)->live();  // the simulated rig behind live tracking
   const std::size_t cameras = p.source().rig().cameras.size();
+  auto* colour_source = dynamic_cast<rhot::ColourCameraSource*>(&p.source());
   const double rate_hz = scene->settings.headset.refresh_hz;
   const std::filesystem::path dir(out_dir);
   for (int f = 0; f < frames; ++f) {
@@ -90,8 +106,9 @@ int main(int argc, char** argv) {
       char name[64];
       std::snprintf(name, sizeof(name), "cam%zu_%04d.png", c, f);
       const std::string file = (dir / name).string();
-      if (!cv::imwrite(file, rhot::draw_blobs(p.source().rig().cameras[c].intrinsics, p.frame().cameras[c], draw),
-                       {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+      const cv::Mat image = colour_source != nullptr ? colour_source->last_images()[c]
+                                                     : rhot::draw_blobs(p.source().rig().cameras[c].intrinsics, p.frame().cameras[c], draw);
+      if (!cv::imwrite(file, image, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
         std::fprintf(stderr, "rhot-simvideo: cannot write %s\n", file.c_str());
         return EXIT_FAILURE;
       }
@@ -100,7 +117,8 @@ int main(int argc, char** argv) {
   }
   std::string source = "video:";
   for (std::size_t c = 0; c < cameras; ++c) source += (c ? "," : "") + (dir / ("cam" + std::to_string(c) + "_%04d.png")).string();
-  std::fprintf(stderr, "rhot-simvideo: %zu cameras x %d frames in %s; play them with\n", cameras, frames, out_dir.c_str());
+  std::fprintf(stderr, "rhot-simvideo: %zu cameras x %d frames in %s; play them with%s\n", cameras, frames, out_dir.c_str(),
+               colour ? " --markers colour" : "");
   std::printf("--source %s\n", source.c_str());
   return EXIT_SUCCESS;
 }
