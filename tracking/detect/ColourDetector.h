@@ -37,7 +37,7 @@ namespace rhot {
 
 struct ColourDetectorSettings {
   int min_area_px = 6;
-  int max_area_px = 1500;  // a 14 mm marker 0.3 m from a 640 x 480 camera covers about 700
+  int max_area_px = 700;  // a 14 mm marker 0.3 m from a 640 x 480 camera (f 630 px) covers about 680
   double max_elongation = 2.1;
   double min_fill = 0.55;
   double min_confidence = 0.5;

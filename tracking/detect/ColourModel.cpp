@@ -243,6 +243,10 @@ struct Sample {
   double hue, saturation, value;
 };
 
+// A learned colour's saturation threshold never goes below this: small markers' samples are
+// mostly edge pixels mixed with the background, and skin and wood reach 0.5 under daylight.
+constexpr double kLearnedSaturationFloor = 0.55;
+
 }  // namespace
 
 std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vector<cv::Mat>& images, const std::vector<cv::Mat>& masks,
@@ -407,7 +411,7 @@ std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vect
     c.colour = p.colour;
     c.hue_deg = p.hue >= 359.9995 ? 0.0 : p.hue;
     c.hue_tolerance_deg = std::clamp(3.0 * sd + 6.0, 1.0, std::max(1.0, half_gap));
-    c.min_saturation = std::clamp(0.7 * percentile(sat, 0.05), 0.05, 1.0);
+    c.min_saturation = std::clamp(0.8 * percentile(sat, 0.1), kLearnedSaturationFloor, 1.0);
     c.min_value = std::clamp(0.5 * percentile(val, 0.05), 0.0, 1.0);
     report.model.classes.push_back(c);
     report.pixels_per_class.push_back(static_cast<int>(p.samples.size()));

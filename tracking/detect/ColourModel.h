@@ -136,7 +136,7 @@ struct ColourLearnReport {
 // CV_8UC1 per image or none), clusters their pixels' hues into peaks, names each peak by the
 // nearest colour of the vocabulary and fits its window: hue at the peak's circular mean, tolerance
 // 3 standard deviations plus 6 degrees (at most halfway to the next peak, at most 30), minimum
-// saturation and value 70 % and 50 % of their 5th percentiles. Fails naming an image that is not
+// saturation 80 % of its 10th percentile (at least 0.55), value half its 5th. Fails naming an image that is not
 // BGR, a mask of another size, no blobs, an expected colour not found, or two peaks with one name.
 [[nodiscard]] std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vector<cv::Mat>& images,
                                                                                const std::vector<cv::Mat>& masks,
