@@ -58,7 +58,8 @@ std::expected<void, std::string> ColourCameraSettings::check() const {
   if (!std::isfinite(noise_sigma) || noise_sigma < 0.0 || noise_sigma > 50.0) return bad("noise_sigma", "0 to 50 levels", noise_sigma);
   if (!std::isfinite(kelvin) || kelvin < 1500.0 || kelvin > 15000.0) return bad("kelvin", "1500 to 15000 K", kelvin);
   if (!std::isfinite(exposure) || exposure < 0.05 || exposure > 4.0) return bad("exposure", "0.05 to 4", exposure);
-  if (!std::isfinite(blur_sigma_px) || blur_sigma_px < 0.0 || blur_sigma_px > 5.0) return bad("blur_sigma_px", "0 to 5 pixels", blur_sigma_px);
+  if (!std::isfinite(blur_sigma_px) || blur_sigma_px < 0.0 || blur_sigma_px > 5.0)
+    return bad("blur_sigma_px", "0 to 5 pixels", blur_sigma_px);
   return {};
 }
 
@@ -67,7 +68,7 @@ ColourCameras::~ColourCameras() = default;
 const RendererInfo& ColourCameras::renderer_info() const { return renderer_->info(); }
 
 std::expected<std::unique_ptr<ColourCameras>, std::string> ColourCameras::create(const CameraRig& rig, const SceneDesc& scene,
-                                                                                  ColourCameraSettings settings) {
+                                                                                 ColourCameraSettings settings) {
   if (auto ok = settings.check(); !ok) return std::unexpected("colour cameras: " + ok.error());
   if (rig.cameras.empty()) return std::unexpected(std::string("colour cameras: the rig has no cameras"));
   const int width = rig.cameras[0].intrinsics.width_px, height = rig.cameras[0].intrinsics.height_px;
@@ -148,7 +149,9 @@ std::vector<Image> ColourCameras::draw(const ColourShot& shot, bool ids) {
     const ColourMarker& mk = shot.markers[i];
     const auto r = static_cast<float>(mk.radius_m);
     const glm::mat4 t = glm::scale(glm::translate(glm::mat4(1.0f), to_glm(mk.centre_m)), glm::vec3(r));
-    markers.push_back({t, ids ? id_colour(i) : linear_colour(kMarkerColours[static_cast<std::size_t>(std::clamp(mk.colour, 0, kMarkerColourCount - 1))].display_srgb)});
+    markers.push_back(
+        {t, ids ? id_colour(i)
+                : linear_colour(kMarkerColours[static_cast<std::size_t>(std::clamp(mk.colour, 0, kMarkerColourCount - 1))].display_srgb)});
   }
   // The cameras' pinhole views, two per pass.
   const double s = render_f_scale_;
@@ -201,7 +204,8 @@ std::vector<cv::Mat> ColourCameras::render(const ColourShot& shot, std::uint64_t
     std::pair<std::array<float, 256>, std::vector<float>> t;
     for (int i = 0; i < 256; ++i) t.first[static_cast<std::size_t>(i)] = static_cast<float>(linear_from_srgb(i / 255.0));
     t.second.resize(kEncodeSteps + 1);  // linear 0-1 in kEncodeSteps steps -> sRGB 0-255
-    for (int i = 0; i <= kEncodeSteps; ++i) t.second[static_cast<std::size_t>(i)] = static_cast<float>(255.0 * srgb_from_linear(i / static_cast<double>(kEncodeSteps)));
+    for (int i = 0; i <= kEncodeSteps; ++i)
+      t.second[static_cast<std::size_t>(i)] = static_cast<float>(255.0 * srgb_from_linear(i / static_cast<double>(kEncodeSteps)));
     return t;
   }();
   const auto& to_linear = tables.first;

@@ -78,7 +78,7 @@ class ColourCameras {
  public:
   // Fails naming the problem: bad settings, cameras of different sizes, no Vulkan device.
   [[nodiscard]] static std::expected<std::unique_ptr<ColourCameras>, std::string> create(const CameraRig& rig, const SceneDesc& scene,
-                                                                                           ColourCameraSettings settings = {});
+                                                                                         ColourCameraSettings settings = {});
   ~ColourCameras();
 
   // One 8-bit BGR image (CV_8UC3) per camera, in rig order; `frame` picks the noise.
@@ -101,7 +101,7 @@ class ColourCameras {
   std::unique_ptr<SceneRenderer> scene_renderer_;
   World world_;  // the scene's table, floor and (with clutter) objects, where the scene puts them
   MeshHandle sphere_, box_;
-  double render_f_scale_ = 0.9;       // the pinhole image's focal length over the camera's, for a margin to distort into
+  double render_f_scale_ = 0.9;         // the pinhole image's focal length over the camera's, for a margin to distort into
   std::vector<cv::Mat> map_x_, map_y_;  // per camera: distorted pixel -> pinhole image pixel
 };
 

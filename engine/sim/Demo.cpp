@@ -94,8 +94,8 @@ ColourShot DemoWorld::colour_shot(const WorldSnapshot& snapshot) const {
   return shot;
 }
 
-std::expected<std::array<HandLayout, 2>, std::string> demo_hand_layouts(const std::filesystem::path& asset_dir,
-                                                                        const StarSet& object_stars, bool colour_markers) {
+std::expected<std::array<HandLayout, 2>, std::string> demo_hand_layouts(const std::filesystem::path& asset_dir, const StarSet& object_stars,
+                                                                        bool colour_markers) {
   std::array<HandLayout, 2> layouts;
   const std::string kind = colour_markers ? "colour" : "low-cost";
   for (std::size_t h = 0; h < 2; ++h) {
@@ -144,10 +144,10 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
       if (!source) return std::unexpected(source.error());
       return std::unique_ptr<ResultSource>(std::move(*source));
     }
-    const std::filesystem::path rig_file =
-        !settings.rig_file.empty()  ? settings.rig_file
-        : settings.colour_markers ? settings.asset_dir / "rigs" / "stereo-640.yaml"
-                                  : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
+    const std::filesystem::path rig_file = !settings.rig_file.empty() ? settings.rig_file
+                                           : settings.colour_markers
+                                               ? settings.asset_dir / "rigs" / "stereo-640.yaml"
+                                               : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
     auto rig = load_rig(rig_file);
     if (!rig) return std::unexpected(rig.error());
     auto loaded_layouts = demo_hand_layouts(settings.asset_dir, objects.stars, settings.colour_markers);

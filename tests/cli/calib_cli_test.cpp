@@ -14,6 +14,10 @@
 
 #include "tests/support/RunCommand.h"
 #include "tracking/camera/RigFile.h"
+#include "tracking/detect/ColourModel.h"
+#include "tracking/sim/SyntheticImages.h"
+
+#include <opencv2/imgcodecs.hpp>
 
 namespace {
 
@@ -35,7 +39,7 @@ std::string asset(const std::string& path) { return std::string(RHOT_ASSET_DIR) 
 TEST(CalibCli, HelpListsTheSubcommands) {
   const auto r = calib("--help");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* sub : {"intrinsics", "wand", "world", "merge", "simulate"}) {
+  for (const char* sub : {"intrinsics", "wand", "world", "merge", "colours", "simulate"}) {
     EXPECT_NE(r.output.find(sub), std::string::npos) << sub << " missing from:\n" << r.output;
   }
   const auto wand = calib("wand --help");
@@ -180,6 +184,55 @@ TEST(CalibCli, MergesTwoRigsThroughASharedCamera) {
   const auto ab = rhot::load_rig(dir / "ab.yaml");
   ASSERT_TRUE(ab) << ab.error();
   EXPECT_EQ(ab->cameras.size(), 8u);
+}
+
+}  // namespace
+
+namespace {
+
+// Colours learned from drawn images of the six markers held up on a cluttered table: a colour file
+// that loads with every colour, and its picture; and the errors a user sees.
+TEST(CalibCli, LearnsTheMarkerColoursFromImagesAndDrawsWhatItClassifies) {
+  const fs::path dir = temp_dir();
+  std::string images;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    std::vector<rhot::ColourMarkerDrawing> held_up;
+    int i = 0;
+    for (const int colour : {0, 2, 3, 4, 5, 7}) {
+      held_up.push_back({{80.0 + 90.0 * i, 120.0 + 40.0 * seed}, 8.0, colour});
+      held_up.push_back({{80.0 + 90.0 * i, 330.0 - 30.0 * seed}, 7.0, colour});
+      ++i;
+    }
+    rhot::ColourImageSettings settings;
+    settings.seed = seed;
+    const fs::path file = dir / ("held_up_" + std::to_string(seed) + ".png");
+    ASSERT_TRUE(cv::imwrite(file.string(), rhot::draw_colour_markers(640, 480, held_up, settings)));
+    images += " " + file.string();
+  }
+  const fs::path out = dir / "colours.json";
+  const auto r = calib_json("colours" + images + " --out " + out.string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << calib("colours" + images + " --out " + out.string()).output;
+  const auto report = nlohmann::json::parse(r.output);
+  EXPECT_EQ(report["colours"].size(), 6u) << r.output;
+  EXPECT_EQ(report["markers_in_test_image"], 12) << r.output;
+  const auto model = rhot::load_colour_model(out);
+  ASSERT_TRUE(model.has_value()) << model.error().to_string();
+  EXPECT_EQ(model->classes.size(), 6u);
+  EXPECT_TRUE(model->white_reference.has_value());
+  EXPECT_TRUE(fs::exists(dir / "colours_classes.png"));
+
+  const auto unknown = calib("colours" + images + " --out " + out.string() + " --expect red,teal");
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_NE(
+      unknown.output.find("--expect: \"teal\" is not a marker colour (red, orange, yellow, green, cyan, blue, purple, magenta, or any)"),
+      std::string::npos)
+      << unknown.output;
+  const auto missing = calib("colours" + images + " --out " + out.string() + " --expect red,orange");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.output.find("no blobs of orange found: is the marker in view and lit?"), std::string::npos) << missing.output;
+  const auto none = calib("colours --out " + out.string());
+  EXPECT_EQ(none.exit_code, 1);
+  EXPECT_NE(none.output.find("give images, or --source video:DEV to take frames from cameras"), std::string::npos) << none.output;
 }
 
 }  // namespace

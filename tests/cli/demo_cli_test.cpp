@@ -138,3 +138,34 @@ TEST(DemoCli, MissingSceneAndBadFlagsAreReported) {
 }
 
 }  // namespace
+
+namespace {
+
+// The demo on coloured markers: colour cameras drawn by the renderer on the stereo pair, the
+// colour detector, matching by colour, the colour hand layouts; and a bad colour file refused.
+TEST(DemoCli, RunsWithColourMarkersOnSimulatedColourCameras) {
+  const fs::path stats = temp_dir() / "stats.json";
+  const DemoRun r = run_demo("--headless --markers colour --frames 45 --eye 160x176 --stats " + stats.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("colour cameras ("), std::string::npos) << "the source's summary:\n" << r.output;
+  std::ifstream in(stats);
+  ASSERT_TRUE(in.good()) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["frames"], 45);
+
+  const fs::path bad = temp_dir() / "bad_colours.json";
+  std::ofstream(bad) << R"({"format": "rhot-marker-colours", "version": 1, "colours": [{"name": "teal", "hue_deg": 180,
+      "hue_tolerance_deg": 20, "min_saturation": 0.5, "min_value": 0.2}]})";
+  const DemoRun refused = run_demo("--headless --markers colour --frames 5 --colours " + bad.string());
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.output.find(
+                bad.string() +
+                ": /colours/0/name: expected a marker colour (red, orange, yellow, green, cyan, blue, purple, magenta), got \"teal\""),
+            std::string::npos)
+      << refused.output;
+  const DemoRun without = run_demo("--headless --frames 5 --colours " + bad.string());
+  EXPECT_NE(without.exit_code, 0);
+  EXPECT_NE(without.output.find("--colours: a colour model needs --markers colour"), std::string::npos) << without.output;
+}
+
+}  // namespace

@@ -50,7 +50,8 @@ std::expected<std::vector<cv::Mat>, std::string> read_images(const ColoursOption
   for (const std::string& device : *devices) {
     cv::VideoCapture capture;
     const bool index = !device.empty() && device.find_first_not_of("0123456789") == std::string::npos;
-    if (index ? !capture.open(std::stoi(device)) : !capture.open(device)) return std::unexpected("--source: cannot open \"" + device + "\"");
+    if (index ? !capture.open(std::stoi(device)) : !capture.open(device))
+      return std::unexpected("--source: cannot open \"" + device + "\"");
     int taken = 0;
     for (int read = 0; taken < o.frames; ++read) {
       cv::Mat frame;
@@ -105,7 +106,8 @@ int run(const ColoursOptions& o) {
   }
   for (std::size_t i = 0; i < masks.size(); ++i) {
     if (masks[i].size() != (*images)[i].size()) {
-      spdlog::error("{}: the mask is {}x{}, its image {}x{}", o.masks[i], masks[i].cols, masks[i].rows, (*images)[i].cols, (*images)[i].rows);
+      spdlog::error("{}: the mask is {}x{}, its image {}x{}", o.masks[i], masks[i].cols, masks[i].rows, (*images)[i].cols,
+                    (*images)[i].rows);
       return 1;
     }
   }
@@ -141,7 +143,8 @@ int run(const ColoursOptions& o) {
   cv::Mat shown = classification_picture(detector.table(), test);
   for (const Detection& d : detections.value_or(std::vector<Detection>{})) {
     cv::circle(shown, cv::Point(static_cast<int>(std::lround(d.pixel.x())), static_cast<int>(std::lround(d.pixel.y()))),
-               static_cast<int>(std::lround(std::sqrt(static_cast<double>(d.area_px) / 3.14159) + 4.0)), cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+               static_cast<int>(std::lround(std::sqrt(static_cast<double>(d.area_px) / 3.14159) + 4.0)), cv::Scalar(255, 255, 255), 1,
+               cv::LINE_AA);
   }
   if (!cv::imwrite(picture.string(), shown)) {
     spdlog::error("{}: cannot write the picture", picture.string());
@@ -158,9 +161,8 @@ int run(const ColoursOptions& o) {
     j["markers_in_test_image"] = detections ? detections->size() : 0u;
     for (std::size_t k = 0; k < report->model.classes.size(); ++k) {
       const ColourClass& c = report->model.classes[k];
-      j["colours"][std::string(marker_colour_name(c.colour))] = {{"hue_deg", c.hue_deg},
-                                                                 {"hue_tolerance_deg", c.hue_tolerance_deg},
-                                                                 {"pixels", report->pixels_per_class[k]}};
+      j["colours"][std::string(marker_colour_name(c.colour))] = {
+          {"hue_deg", c.hue_deg}, {"hue_tolerance_deg", c.hue_tolerance_deg}, {"pixels", report->pixels_per_class[k]}};
     }
     print_json(j);
   }
@@ -175,8 +177,11 @@ void add_colours(CLI::App& app, int& exit_code) {
                                      "learn the marker colours from images where the markers are held up to the camera; writes a colour "
                                      "file and a picture of what it classifies (docs/colour-markers.md)");
   cmd->add_option("images", o->images, "colour images (PNG, JPEG)")->check(CLI::ExistingFile);
-  cmd->add_option("--source", o->source, "take the images from cameras instead: video:DEV[,DEV...] (an index, a video file or an image sequence)");
-  cmd->add_option("--frames", o->frames, "with --source: frames to take from each device")->capture_default_str()->check(CLI::Range(1, 10000));
+  cmd->add_option("--source", o->source,
+                  "take the images from cameras instead: video:DEV[,DEV...] (an index, a video file or an image sequence)");
+  cmd->add_option("--frames", o->frames, "with --source: frames to take from each device")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000));
   cmd->add_option("--every", o->every, "with --source: take every K-th frame")->capture_default_str()->check(CLI::Range(1, 10000));
   cmd->add_option("--expect", o->expect, "the colours to find, comma-separated, or any")->capture_default_str();
   cmd->add_option("--mask", o->masks, "per image, a grey mask: only its non-zero pixels are looked at (for a stubborn colour)")

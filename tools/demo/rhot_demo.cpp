@@ -126,7 +126,8 @@ void add_options(CLI::App& cli, Options& o) {
                  "docs/colour-markers.md)")
       ->capture_default_str()
       ->check(CLI::IsMember({"infrared", "colour"}));
-  cli.add_option("--colours", o.demo.colours, "With --markers colour: the colour model (rhot-calib colours writes one; default: rhot's six)")
+  cli.add_option("--colours", o.demo.colours,
+                 "With --markers colour: the colour model (rhot-calib colours writes one; default: rhot's six)")
       ->check(CLI::ExistingFile);
   cli.add_option("--white-balance-k", o.demo.colour_cameras.kelvin,
                  "With --markers colour and --source sim: the simulated light's colour temperature (cameras balanced for 6500 K)")

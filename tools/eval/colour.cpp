@@ -13,8 +13,12 @@
 //   fingertip_mean_mm         tracked fingertip joints to the true ones, frames with the hand seen
 //   detect_median_ms          one image through the detector as the demo runs it (tracked), and
 //                             detect_full_median_ms for a whole-image search of the same images
+//
+// Without --colours the default model is used with its white reference taken from the scene under
+// daylight (6500 K), as rhot-calib colours would take it; --white-balance-k then changes the light.
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -91,10 +95,26 @@ int colour(const ColourArgs& a) {
   }
   ColourCameraSettings cs;
   cs.noise_sigma = a.noise;
-  cs.kelvin = a.kelvin;
   cs.clutter = a.clutter;
   cs.device = a.device;
   cs.seed = a.seed;
+  if (a.colours_file.empty()) {
+    // The default model's white reference as a user's rhot-calib colours would take it: the scene
+    // under daylight (6500 K), its first frame's images.
+    auto daylight = ColourCameras::create(*rig, *scene, cs);
+    if (!daylight) {
+      std::cerr << "rhot-eval: " << daylight.error() << "\n";
+      return 1;
+    }
+    const auto images = (*daylight)->render(sim->world->colour_shot(sim->world->at(a.start_s)), 0);
+    std::array<double, 3> sum{};
+    for (const cv::Mat& image : images) {
+      const auto m = median_colour(image);
+      for (std::size_t ch = 0; ch < 3; ++ch) sum[ch] += m[ch] / static_cast<double>(images.size());
+    }
+    model.white_reference = sum;
+  }
+  cs.kelvin = a.kelvin;
   auto cameras = ColourCameras::create(*rig, *scene, cs);
   if (!cameras) {
     std::cerr << "rhot-eval: " << cameras.error() << "\n";
@@ -133,7 +153,8 @@ int colour(const ColourArgs& a) {
           cv::circle(annotated, cv::Point(static_cast<int>(std::lround(d.pixel.x())), static_cast<int>(std::lround(d.pixel.y()))), 9,
                      cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
         }
-        if (!cv::imwrite(base + ".png", annotated) || !cv::imwrite(base + "_colours.png", classification_picture(ColourTable(model), src->last_images()[c]))) {
+        if (!cv::imwrite(base + ".png", annotated) ||
+            !cv::imwrite(base + "_colours.png", classification_picture(ColourTable(model), src->last_images()[c]))) {
           std::cerr << "rhot-eval: cannot write " << base << ".png\n";
           return 1;
         }

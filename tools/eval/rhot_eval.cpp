@@ -212,20 +212,29 @@ int main(int argc, char** argv) {
   colour_args.rig_file = std::string(RHOT_ASSET_DIR) + "/rigs/stereo-640.yaml";
   colour_args.scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
   std::string clutter = "on";
-  colour_cmd->add_option("--rig", colour_args.rig_file, "camera rig (every camera one image size)")->capture_default_str()->check(CLI::ExistingFile);
+  colour_cmd->add_option("--rig", colour_args.rig_file, "camera rig (every camera one image size)")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
   colour_cmd->add_option("--scene", colour_args.scene_file, "scene: its script's hands, its objects as clutter")
       ->capture_default_str()
       ->check(CLI::ExistingFile);
   colour_cmd->add_option("--colours", colour_args.colours_file, "colour model (default: rhot's six colours)")->check(CLI::ExistingFile);
-  colour_cmd->add_option("--frames", colour_args.frames, "frames (90 per second of the script)")->capture_default_str()->check(CLI::Range(1, 100000));
-  colour_cmd->add_option("--start-s", colour_args.start_s, "where in the script to start")->capture_default_str()->check(CLI::Range(0.0, 1e6));
+  colour_cmd->add_option("--frames", colour_args.frames, "frames (90 per second of the script)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  colour_cmd->add_option("--start-s", colour_args.start_s, "where in the script to start")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
   colour_cmd->add_option("--seed", colour_args.seed, "seed of the image noise")->capture_default_str();
-  colour_cmd->add_option("--noise", colour_args.noise, "image noise, levels per channel")->capture_default_str()->check(CLI::Range(0.0, 50.0));
+  colour_cmd->add_option("--noise", colour_args.noise, "image noise, levels per channel")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 50.0));
   colour_cmd->add_option("--white-balance-k", colour_args.kelvin, "the light's colour temperature; the cameras stay balanced for 6500 K")
       ->capture_default_str()
       ->check(CLI::Range(1500.0, 15000.0));
   colour_cmd->add_option("--clutter", clutter, "the scene's objects in view")->capture_default_str()->check(CLI::IsMember({"on", "off"}));
-  colour_cmd->add_option("--device", colour_args.device, "Vulkan device: auto, gpu, cpu, an index or part of its name")->capture_default_str();
+  colour_cmd->add_option("--device", colour_args.device, "Vulkan device: auto, gpu, cpu, an index or part of its name")
+      ->capture_default_str();
   colour_cmd->add_option("--pictures", colour_args.pictures_dir,
                          "write the first frame's images (cam<i>.png) and what the colour model takes in them (cam<i>_colours.png) here");
   colour_cmd->add_flag("--json", json, "print JSON (the only output format)");

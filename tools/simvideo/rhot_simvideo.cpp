@@ -63,10 +63,12 @@ int main(int argc, char** argv) {
   cli.add_flag("--colour", colour,
                "Colour cameras drawn by the renderer, coloured markers (read back with rhot-demo --markers colour); --noise is then per "
                "colour channel");
-  cli.add_option("--white-balance-k", settings.colour_cameras.kelvin, "With --colour: the light's colour temperature (cameras balanced for 6500 K)")
+  cli.add_option("--white-balance-k", settings.colour_cameras.kelvin,
+                 "With --colour: the light's colour temperature (cameras balanced for 6500 K)")
       ->capture_default_str()
       ->check(CLI::Range(1500.0, 15000.0));
-  cli.add_option("--device", settings.colour_cameras.device, "With --colour: the Vulkan device (auto, gpu, cpu, an index or part of a name)")
+  cli.add_option("--device", settings.colour_cameras.device,
+                 "With --colour: the Vulkan device (auto, gpu, cpu, an index or part of a name)")
       ->capture_default_str();
   CLI11_PARSE(cli, argc, argv);
   settings.colour_markers = colour;

@@ -119,9 +119,8 @@ ColourTable::ColourTable(const ColourModel& model, std::array<double, 3> gains)
   for (int r = 0; r < 32; ++r) {
     for (int g = 0; g < 32; ++g) {
       for (int b = 0; b < 32; ++b) {
-        const PixelClass p =
-            classify(model_, hsv_from_rgb(std::min(255.0, (r * 8 + 4) * gains[0]), std::min(255.0, (g * 8 + 4) * gains[1]),
-                                          std::min(255.0, (b * 8 + 4) * gains[2])));
+        const PixelClass p = classify(model_, hsv_from_rgb(std::min(255.0, (r * 8 + 4) * gains[0]), std::min(255.0, (g * 8 + 4) * gains[1]),
+                                                           std::min(255.0, (b * 8 + 4) * gains[2])));
         if (p.klass < 0) continue;
         const std::size_t i = (static_cast<std::size_t>(r) << 10) | (static_cast<std::size_t>(g) << 5) | static_cast<std::size_t>(b);
         klass_[i] = static_cast<std::uint8_t>(p.klass + 1);
@@ -365,16 +364,17 @@ std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vect
       sy += std::sin(s.hue * std::numbers::pi / 180.0);
     }
     peak.hue = std::fmod(std::atan2(sy, sx) * 180.0 / std::numbers::pi + 360.0, 360.0);
-    // Named by the nearest colour of the vocabulary (of the expected ones, when given).
+    // Named by the nearest colour of the vocabulary; a peak whose nearest colour is not one of
+    // those expected (skin, a table, a colour not asked for) is left out.
     double best = 1e9;
     for (int c = 0; c < kMarkerColourCount; ++c) {
-      if (!settings.expected.empty() && std::find(settings.expected.begin(), settings.expected.end(), c) == settings.expected.end())
-        continue;
       const double d = hue_distance_deg(peak.hue, kMarkerColours[static_cast<std::size_t>(c)].hue_deg);
       if (d < best) best = d, peak.colour = c;
     }
-    // A peak far from every expected colour (skin, a table) is not one of them.
-    if (!settings.expected.empty() && best > 35.0) continue;
+    if (!settings.expected.empty() &&
+        std::find(settings.expected.begin(), settings.expected.end(), peak.colour) == settings.expected.end()) {
+      continue;
+    }
     found.push_back(std::move(peak));
   }
   std::sort(found.begin(), found.end(), [](const Peak& a, const Peak& b) { return a.samples.size() > b.samples.size(); });
@@ -422,7 +422,8 @@ std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vect
       const auto c = median_colour(image);
       for (std::size_t ch = 0; ch < 3; ++ch) medians[ch].push_back(c[ch]);
     }
-    report.model.white_reference = std::array<double, 3>{percentile(medians[0], 0.5), percentile(medians[1], 0.5), percentile(medians[2], 0.5)};
+    report.model.white_reference =
+        std::array<double, 3>{percentile(medians[0], 0.5), percentile(medians[1], 0.5), percentile(medians[2], 0.5)};
   }
   report.model.description = "learned from " + std::to_string(images.size()) + " image(s), " + std::to_string(report.blobs) + " blobs";
   if (const auto ok = report.model.check(); !ok) return std::unexpected("the learned model is not usable: " + ok.error());
@@ -439,7 +440,8 @@ std::array<double, 3> median_colour(const cv::Mat& bgr) {
     }
   }
   if (channels[0].empty()) return {0.5, 0.5, 0.5};
-  return {std::max(0.01, percentile(channels[0], 0.5)), std::max(0.01, percentile(channels[1], 0.5)), std::max(0.01, percentile(channels[2], 0.5))};
+  return {std::max(0.01, percentile(channels[0], 0.5)), std::max(0.01, percentile(channels[1], 0.5)),
+          std::max(0.01, percentile(channels[2], 0.5))};
 }
 
 cv::Mat classification_picture(const ColourTable& table, const cv::Mat& bgr) {

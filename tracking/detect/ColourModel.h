@@ -134,7 +134,8 @@ struct ColourLearnReport {
 };
 // Finds compact, strongly saturated blobs in the images (optionally only where `masks` are non-zero: one
 // CV_8UC1 per image or none), clusters their pixels' hues into peaks, names each peak by the
-// nearest colour of the vocabulary and fits its window: hue at the peak's circular mean, tolerance
+// nearest colour of the vocabulary (leaving out peaks nearest a colour not expected, such as skin's
+// nearest orange) and fits its window: hue at the peak's circular mean, tolerance
 // 3 standard deviations plus 6 degrees (at most halfway to the next peak, at most 30), minimum
 // saturation 80 % of its 10th percentile (at least 0.55), value half its 5th. Fails naming an image that is not
 // BGR, a mask of another size, no blobs, an expected colour not found, or two peaks with one name.

@@ -46,7 +46,8 @@ void HandTracker::begin(double time_s, const TrackedStar& star) {
 }
 
 std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(std::span<const Eigen::Vector3d> points,
-                                                                               const std::vector<bool>& taken, std::span<const int> colour) {
+                                                                               const std::vector<bool>& taken,
+                                                                               std::span<const int> colour) {
   std::vector<FingertipCandidate> out;
   for (auto& r : reappearing_now_) r.clear();
   if (!out_.hand_seen) return out;

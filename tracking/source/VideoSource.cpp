@@ -35,7 +35,7 @@ struct VideoSource::Impl {
   std::vector<cv::Mat> pending;  // the first frames, read by open() to check their size
   std::vector<VideoCameraStats> stats;
   std::vector<ColourDetector> colour_detectors;  // per camera, with coloured markers
-  std::vector<VideoCameraStats> told;  // the counts last told by take_warnings()
+  std::vector<VideoCameraStats> told;            // the counts last told by take_warnings()
   Clock::time_point opened = Clock::now();
   std::uint64_t index = 0;
   bool ended = false;

@@ -69,7 +69,8 @@ void score(const std::vector<Detection>& dets, const std::vector<MarkerView>& vi
     if (used[d]) continue;
     bool near = false;
     for (std::size_t m = 0; m < shot.markers.size() && !near; ++m) {
-      near = views[m].in_front && views[m].visible_px > 0 && (dets[d].pixel - views[m].pixel).norm() < std::sqrt(views[m].disc_px / 3.14159265) + 2.0;
+      near = views[m].in_front && views[m].visible_px > 0 &&
+             (dets[d].pixel - views[m].pixel).norm() < std::sqrt(views[m].disc_px / 3.14159265) + 2.0;
     }
     if (!near) ++s.false_detections;
   }
@@ -179,7 +180,8 @@ TEST(ColourDemo, RenderedColourImagesWrittenAndReadBackTrackTheHandsAsInProcess)
   constexpr int kFrames = 45;
   const fs::path dir = fs::path(::testing::TempDir()) / "rhot_colour_video";
   fs::remove_all(dir);
-  const auto written = test::run_program("rhot-simvideo", "--colour --out " + dir.string() + " --frames " + std::to_string(kFrames), "2>&1");
+  const auto written =
+      test::run_program("rhot-simvideo", "--colour --out " + dir.string() + " --frames " + std::to_string(kFrames), "2>&1");
   ASSERT_EQ(written.exit_code, 0) << written.output;
   EXPECT_NE(written.output.find("--source video:"), std::string::npos) << written.output;
 
