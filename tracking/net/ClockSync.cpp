@@ -27,11 +27,27 @@ void ClockSync::refit() {
     fit_.reset();
     return;
   }
-  std::int64_t fastest = std::numeric_limits<std::int64_t>::max();
-  for (const Sample& s : samples_) fastest = std::min(fastest, s.rtt_ns);
+  // The fastest round trips of each stretch of the window, not of the whole window: one lucky
+  // sample far faster than the rest would otherwise leave it alone in the fit, and a fit of one
+  // moment has no drift. A stretch whose fastest round trip is itself slow (everything held up)
+  // is left out.
+  const std::int64_t start_ns = samples_.front().master_ns;
+  const auto stretch = [&](const Sample& s) { return (s.master_ns - start_ns) / std::max<std::int64_t>(1, settings_.stretch_ns); };
+  std::vector<std::int64_t> fastest(static_cast<std::size_t>(stretch(samples_.back()) + 1), std::numeric_limits<std::int64_t>::max());
+  for (const Sample& s : samples_) {
+    std::int64_t& f = fastest[static_cast<std::size_t>(stretch(s))];
+    f = std::min(f, s.rtt_ns);
+  }
+  std::vector<std::int64_t> present;
+  for (const std::int64_t f : fastest)
+    if (f != std::numeric_limits<std::int64_t>::max()) present.push_back(f);
+  std::nth_element(present.begin(), present.begin() + static_cast<std::ptrdiff_t>(present.size() / 2), present.end());
+  const std::int64_t typical = present[present.size() / 2];
   std::vector<const Sample*> chosen;
-  for (const Sample& s : samples_)
-    if (s.rtt_ns <= fastest + settings_.rtt_margin_ns) chosen.push_back(&s);
+  for (const Sample& s : samples_) {
+    const std::int64_t f = fastest[static_cast<std::size_t>(stretch(s))];
+    if (f <= typical + settings_.rtt_margin_ns && s.rtt_ns <= f + settings_.rtt_margin_ns) chosen.push_back(&s);
+  }
   Fit fit;
   fit.master_ref_ns = samples_.back().master_ns;
   // Least squares of (node - master) against master time, relative to the reference; the drift

@@ -4,8 +4,9 @@
 // Each round trip gives the master's send and receive times and the node's time in between. The
 // node's time is assumed to be at the midpoint, so a sample's error is at most half its round
 // trip; a delayed sample (a busy scheduler, a queue) has a long round trip and is given no say.
-// The fit is node_ns = offset + (1 + drift) * master_ns over the window's fastest samples (those
-// within min_rtt + rtt_margin of the fastest), so a node whose crystal runs 100 ppm fast is
+// The fit is node_ns = offset + (1 + drift) * master_ns over the window's fastest samples (per
+// quarter second, those within rtt_margin of that stretch's fastest, in stretches whose fastest is
+// itself within rtt_margin of the typical stretch's), so a node whose crystal runs 100 ppm fast is
 // followed over minutes, not just shifted. residual_us is the RMS of the chosen samples about
 // the fit: what the estimate is worth.
 
@@ -18,6 +19,7 @@ namespace rhot {
 struct ClockSyncSettings {
   std::int64_t window_ns = 10'000'000'000;  // samples older than this are forgotten
   std::int64_t rtt_margin_ns = 50'000;      // samples this much slower than the fastest still count
+  std::int64_t stretch_ns = 250'000'000;    // the fastest are chosen per stretch of this length
   std::size_t max_samples = 512;
 };
 

@@ -38,6 +38,23 @@ TEST(ClockSync, ANodeFiftyMillisecondsAheadAndDriftingIsFollowedWithinMicrosecon
   EXPECT_EQ(sync.samples(), n);
 }
 
+TEST(ClockSync, OneLuckyFastRoundTripDoesNotHideTheDrift) {
+  // Round trips of 150-250 us, one of 30 us early on: the fit must still span the whole window.
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<std::int64_t> leg(75'000, 125'000);
+  const auto node_at = [](std::int64_t master) { return master + 50 * kMs + master / 10'000; };  // 100 ppm
+  ClockSync sync;
+  std::int64_t master = 1'000'000'000;
+  for (int i = 0; i < 60; ++i, master += 50 * kMs) {  // 3 s of samples every 50 ms
+    const std::int64_t out = i == 4 ? 15'000 : leg(rng);
+    const std::int64_t back = i == 4 ? 15'000 : leg(rng);
+    sync.add(master, node_at(master + out), master + out + back);
+  }
+  EXPECT_NEAR(sync.drift_ppm(), 100.0, 20.0);
+  const double truth_ns = 50e6 + static_cast<double>(master) / 10'000.0;
+  EXPECT_NEAR(sync.offset_ns_at(master), truth_ns, 30'000.0);
+}
+
 CameraMessage message(int camera, std::uint64_t counter, std::int64_t capture_ms, int detections = 1) {
   CameraMessage m;
   m.camera = camera;
