@@ -15,6 +15,12 @@
 //    A blob too elongated for one marker but no more than two discs side by side (two markers of
 //    one colour whose images touch) is cut across its major axis at its centroid: when both
 //    halves are round, full and of similar size, with a waist between them, each is a marker.
+//    A partly hidden marker (behind its own finger, an edge) is a disc with a bite: a blob that
+//    is not quite round (elongation above 1.15) or fails the shape tests is tried as one. A
+//    circle fitted to its edge pixels on the far side from the bite must hold the whole blob,
+//    carry edge pixels along one arc of at least 120 degrees and be covered at least 30 % by the
+//    blob; the marker is then at the circle's centre, not at the visible part's centroid (which
+//    leans away from the bite by a pixel or two). Thinner slivers are not markers.
 // 4. At most max_blobs detections, the largest kept.
 //
 // Tracking (track()): each frame searches first in a region around each marker of the last frame,

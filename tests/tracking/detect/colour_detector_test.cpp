@@ -4,10 +4,13 @@
 
 #include "tracking/detect/ColourDetector.h"
 
+#include <cmath>
+#include <numbers>
 #include <random>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "tracking/core/MarkerColour.h"
 #include "tracking/detect/ColourModel.h"
@@ -189,6 +192,52 @@ TEST(ColourDetector, TwoTouchingMarkersOfOneColourAreCutInTwo) {
     EXPECT_EQ(s.false_detections, 0) << "gap " << gap;
     EXPECT_LT(s.rms_px, 0.6) << "gap " << gap;  // each half's centroid leans toward the cut
   }
+}
+
+TEST(ColourDetector, AMarkerHalfHiddenByAFingerIsFoundAtItsCircleNotItsVisibleCentroid) {
+  // Markers of radius 5.5 px, each with a skin-coloured finger over 25-37 % of it from a random
+  // side: what the cameras see of a fingertip marker behind its own finger. (Hidden further, the
+  // sliver left of a shaded sphere this small is too thin to hold its circle.)
+  ColourDetector detector(default_colour_model());
+  ColourImageSettings settings;
+  settings.clutter = false;
+  settings.noise_sigma = 0.0;
+  std::vector<ColourMarkerDrawing> truth = scattered_markers(4, 11, 30.0);
+  for (ColourMarkerDrawing& m : truth) m.radius_px = 5.5;
+  cv::Mat image = draw_colour_markers(640, 480, truth, settings);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi), depth(0.2, 0.4);
+  double centroid_shift2 = 0.0;
+  for (const ColourMarkerDrawing& m : truth) {
+    // The finger: a band 16 px wide whose edge crosses the marker `depth` radii from its centre
+    // (a circular segment of 25-37 % of its area beyond the edge).
+    const double a = angle(rng), edge = depth(rng) * m.radius_px;
+    const Eigen::Vector2d u(std::cos(a), std::sin(a)), v(-u.y(), u.x());
+    const Eigen::Vector2d base = m.pixel + u * edge;
+    const auto pt = [&](double along_u, double along_v) {
+      const Eigen::Vector2d p = (base + u * along_u + v * along_v) * 16.0;  // 4 fractional bits
+      return cv::Point(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));
+    };
+    const std::vector<cv::Point> finger{pt(0, -8), pt(12, -8), pt(12, 8), pt(0, 8)};
+    cv::fillConvexPoly(image, finger, cv::Scalar(120, 150, 205), cv::LINE_AA, 4);
+    // The visible part's own centroid lies this far from the centre (a disc less a segment).
+    const double r = m.radius_px;
+    const double segment = r * r * std::acos(edge / r) - edge * std::sqrt(r * r - edge * edge);
+    const double segment_centroid = 4.0 * std::pow(r * r - edge * edge, 1.5) / (3.0 * 2.0 * segment);
+    centroid_shift2 += std::pow(segment * segment_centroid / (std::numbers::pi * r * r - segment), 2.0) / static_cast<double>(truth.size());
+  }
+  cv::Mat noise(image.size(), CV_16SC3);
+  cv::randn(noise, cv::Scalar::all(0.0), cv::Scalar::all(2.0));
+  cv::Mat noisy;
+  cv::add(image, noise, noisy, cv::noArray(), CV_8UC3);
+  const auto detections = detector.detect(noisy);
+  ASSERT_TRUE(detections);
+  const Score s = score(truth, *detections);
+  EXPECT_EQ(s.found, static_cast<int>(truth.size()));
+  EXPECT_EQ(s.wrong_colour, 0);
+  EXPECT_EQ(s.false_detections, 0);
+  EXPECT_LT(s.rms_px, 0.6);
+  EXPECT_GT(std::sqrt(centroid_shift2), 1.2) << "the visible parts' centroids would be off by more than a pixel";
 }
 
 TEST(ColourDetector, TwoTouchingMarkersOfDifferentColoursStayTwo) {
