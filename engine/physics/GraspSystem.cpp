@@ -39,6 +39,18 @@ const char* event_name(InteractionEventType type) {
       return "release";
     case InteractionEventType::kSuccess:
       return "success";
+    case InteractionEventType::kPress:
+      return "press";
+    case InteractionEventType::kUnpress:
+      return "unpress";
+    case InteractionEventType::kSnap:
+      return "snap";
+    case InteractionEventType::kUnsnap:
+      return "unsnap";
+    case InteractionEventType::kValueAbove:
+      return "value_above";
+    case InteractionEventType::kValueBelow:
+      return "value_below";
   }
   return "?";
 }
@@ -71,7 +83,7 @@ std::optional<btTransform> GraspSystem::grip_target(Entity object) const {
 }
 
 void GraspSystem::emit(InteractionEventType type, Entity object, std::optional<int> hand) {
-  InteractionEvent e{type, physics_.time_s(), object, std::nullopt, {}, false, Eigen::Vector3d::Zero()};
+  InteractionEvent e{type, physics_.time_s(), object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), Entity{}, 0.0};
   if (hand) e.hand = side_of(*hand);
   events_.push_back(std::move(e));
 }
@@ -162,7 +174,7 @@ void GraspSystem::release(Entity object, bool handed_over) {
   Held& held = it->second;
   btRigidBody* body = physics_.body(object);
   InteractionEvent e{InteractionEventType::kRelease, physics_.time_s(), object, side_of(held.hand), {}, handed_over,
-                     Eigen::Vector3d::Zero()};
+                     Eigen::Vector3d::Zero(),        Entity{},          0.0};
   if (body && !handed_over) {
     // The hand's velocity: a least-squares line through the grip's recent positions.
     const double end = physics_.time_s() - settings_.throw_window_end_s;
@@ -213,7 +225,8 @@ void GraspSystem::release(Entity object, bool handed_over) {
 
 void GraspSystem::post_step(World& world) {
   events_.clear();
-  const HandContacts contacts = read_contacts();
+  contacts_ = read_contacts();
+  const HandContacts& contacts = contacts_;
   update_hover_and_contact(contacts);
   release_opened();
   begin_new_grasps(world, contacts);

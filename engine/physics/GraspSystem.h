@@ -38,7 +38,21 @@ namespace rhot {
 
 class World;
 
-enum class InteractionEventType { kHoverBegin, kHoverEnd, kContactBegin, kContactEnd, kGrasp, kRelease, kSuccess };
+enum class InteractionEventType {
+  kHoverBegin,
+  kHoverEnd,
+  kContactBegin,
+  kContactEnd,
+  kGrasp,
+  kRelease,
+  kSuccess,
+  kPress,       // a button pushed past its press depth by a fingertip (subject: the button)
+  kUnpress,     // ... and back above its release depth
+  kSnap,        // a socket took an object (subject: the socket, object: what it took)
+  kUnsnap,      // a hand took it out
+  kValueAbove,  // a joint's value rose past a rule's threshold (subject: the joint's entity, value)
+  kValueBelow,  // ... fell below it
+};
 const char* event_name(InteractionEventType type);
 
 struct InteractionEvent {
@@ -49,6 +63,8 @@ struct InteractionEvent {
   std::string interaction;                                 // kSuccess: the interaction's name
   bool handed_over = false;                                // kRelease: the other hand took the object
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  // kRelease: what the object was given
+  Entity subject;                                          // kPress.., kSnap.., kValue..: the button, socket or joint's entity
+  double value = 0.0;                                      // kValueAbove, kValueBelow: the threshold crossed
 };
 
 class GraspSystem {
@@ -68,6 +84,15 @@ class GraspSystem {
   // Where the hand holds `object` now (world), if held.
   std::optional<btTransform> grip_target(Entity object) const;
 
+  struct Contact {
+    int bone;
+    btVector3 point;   // world, on the object
+    btVector3 normal;  // world, out of the object toward the bone
+  };
+  using HandContacts = std::array<std::unordered_map<Entity, std::vector<Contact>>, 2>;  // per hand, per object
+  // The hand bones touching each object in the last post_step.
+  const HandContacts& contacts() const { return contacts_; }
+
  private:
   struct GripPoint {
     int bone = 0;
@@ -83,17 +108,10 @@ class GraspSystem {
     std::deque<std::pair<double, btTransform>> history;  // (time, target)
     double stuck_since_s = -1.0;
   };
-  struct Contact {
-    int bone;
-    btVector3 point;   // world, on the object
-    btVector3 normal;  // world, out of the object toward the bone
-  };
   struct PairState {
     bool hovering = false;
     bool touching = false;
   };
-
-  using HandContacts = std::array<std::unordered_map<Entity, std::vector<Contact>>, 2>;  // per hand, per object
 
   // post_step's phases, in order.
   HandContacts read_contacts() const;
@@ -117,6 +135,7 @@ class GraspSystem {
   std::vector<std::pair<Entity, int>> reenable_;  // (object, hand) whose collisions resume once clear
   std::unordered_map<Entity, std::array<PairState, 2>> pairs_;
   std::vector<InteractionEvent> events_;
+  HandContacts contacts_;
 };
 
 }  // namespace rhot

@@ -17,6 +17,12 @@ std::expected<std::unique_ptr<HandPhysics>, std::string> HandPhysics::create(Wor
   auto interactions = Interactions::create(world, scene.interactions);
   if (!interactions) return std::unexpected(interactions.error());
   p->interactions_ = std::move(*interactions);
+  auto mechanisms = Mechanisms::create(world, *p->physics_);
+  if (!mechanisms) return std::unexpected(mechanisms.error());
+  p->mechanisms_ = std::move(*mechanisms);
+  auto rules = SceneRules::create(world, scene.rules, *p->mechanisms_);
+  if (!rules) return std::unexpected(rules.error());
+  p->rules_ = std::move(*rules);
   p->hands_[0] = std::make_unique<HandColliders>(*p->physics_, HandSide::kLeft, hand_settings);
   p->hands_[1] = std::make_unique<HandColliders>(*p->physics_, HandSide::kRight, hand_settings);
   p->grasp_ = std::make_unique<GraspSystem>(*p->physics_, std::array<HandColliders*, 2>{p->hands_[0].get(), p->hands_[1].get()},
@@ -31,7 +37,9 @@ void HandPhysics::step(World& world, const std::array<HandInput, 2>& hands) {
   physics_->step(world);
   grasp_->post_step(world);
   events_ = grasp_->events();
+  mechanisms_->update(world, *grasp_, events_);
   interactions_.update(world, *physics_, *grasp_, events_);
+  rules_.update(world, *physics_, *mechanisms_, events_);
 }
 
 void HandPhysics::step(World& world) {

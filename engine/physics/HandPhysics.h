@@ -3,7 +3,8 @@
 // scene's bodies, a collider per tracked hand, the grasp system and the scene's interactions.
 // One step():
 //   hand colliders aimed at the tracked hands -> held objects aimed at their grips -> Bullet
-//   steps (with substeps) -> contacts read, grasps begun and ended -> interactions checked.
+//   steps (with substeps) -> contacts read, grasps begun and ended -> buttons, sockets
+//   (Mechanisms.h) -> interactions checked -> the scene's rules (SceneRules.h).
 
 #include <array>
 #include <expected>
@@ -14,7 +15,9 @@
 #include "engine/physics/GraspSystem.h"
 #include "engine/physics/HandColliders.h"
 #include "engine/physics/Interactions.h"
+#include "engine/physics/Mechanisms.h"
 #include "engine/physics/PhysicsWorld.h"
+#include "engine/physics/SceneRules.h"
 #include "engine/scene/SceneDesc.h"
 
 namespace rhot {
@@ -24,7 +27,7 @@ class World;
 class HandPhysics {
  public:
   // `world` holds the scene's instantiated entities. Fails, building nothing, on a bad glTF mesh
-  // or an interaction whose entities are missing.
+  // or an interaction, joint or rule whose entities are missing.
   [[nodiscard]] static std::expected<std::unique_ptr<HandPhysics>, std::string> create(World& world, const SceneDesc& scene,
                                                                                        HandColliderSettings hand_settings = {});
 
@@ -35,7 +38,8 @@ class HandPhysics {
   // it holds (engine/hand/HandComponents.h).
   void step(World& world);
 
-  // Events of the last step (grasp system's, then interactions' successes).
+  // Events of the last step (grasp system's, the mechanisms', interactions' successes, then what
+  // the rules raised).
   const std::vector<InteractionEvent>& events() const { return events_; }
   PhysicsWorld& physics() { return *physics_; }
   const PhysicsWorld& physics() const { return *physics_; }
@@ -43,6 +47,9 @@ class HandPhysics {
   const GraspSystem& grasp() const { return *grasp_; }
   HandColliders& hand(HandSide side) { return *hands_[side == HandSide::kLeft ? 0 : 1]; }
   const Interactions& interactions() const { return interactions_; }
+  Mechanisms& mechanisms() { return *mechanisms_; }
+  const Mechanisms& mechanisms() const { return *mechanisms_; }
+  const SceneRules& rules() const { return rules_; }
 
  private:
   HandPhysics() = default;
@@ -50,6 +57,8 @@ class HandPhysics {
   std::array<std::unique_ptr<HandColliders>, 2> hands_;
   std::unique_ptr<GraspSystem> grasp_;
   Interactions interactions_;
+  std::unique_ptr<Mechanisms> mechanisms_;
+  SceneRules rules_;
   std::vector<InteractionEvent> events_;
 };
 

@@ -63,8 +63,8 @@ void Interactions::update(World& world, const PhysicsWorld& physics, const Grasp
     }
     if (happened) {
       item.done = true;
-      events.push_back(
-          {InteractionEventType::kSuccess, physics.time_s(), item.object, std::nullopt, item.desc.name, false, Eigen::Vector3d::Zero()});
+      events.push_back({InteractionEventType::kSuccess, physics.time_s(), item.object, std::nullopt, item.desc.name, false,
+                        Eigen::Vector3d::Zero(), Entity{}, 0.0});
     }
   }
 }

@@ -184,6 +184,18 @@ std::optional<Entity> PhysicsWorld::entity_of(const btCollisionObject* object) c
   return it->second;
 }
 
+void PhysicsWorld::set_enabled(Entity e, bool enabled) {
+  btRigidBody* b = body(e);
+  if (!b) return;
+  const bool in_world = b->getBroadphaseHandle() != nullptr;
+  if (enabled && !in_world) {
+    world_->addRigidBody(b, kSceneGroup, kSceneGroup | kHandGroup);
+    b->activate(true);
+  } else if (!enabled && in_world) {
+    world_->removeRigidBody(b);
+  }
+}
+
 void PhysicsWorld::add_external(btRigidBody* body, int group, int mask) { world_->addRigidBody(body, group, mask); }
 void PhysicsWorld::remove_external(btRigidBody* body) { world_->removeRigidBody(body); }
 

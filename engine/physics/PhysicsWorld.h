@@ -61,6 +61,10 @@ class PhysicsWorld {
   std::optional<Entity> entity_of(const btCollisionObject* object) const;
   const std::vector<Entity>& entities() const { return entities_; }
 
+  // Takes an entity's body out of the simulation (false: nothing meets it, it does not move) or
+  // puts it back where it was (true). Nothing for an entity without a body.
+  void set_enabled(Entity e, bool enabled);
+
   // A body owned by someone else (hand bones): added with its group and mask, removed by them.
   void add_external(btRigidBody* body, int group, int mask);
   void remove_external(btRigidBody* body);

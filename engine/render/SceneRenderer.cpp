@@ -95,6 +95,7 @@ FrameInput SceneRenderer::build(World& world, const StereoViews& views, std::spa
   frame.views = views;
   batch_of_mesh_.clear();
   world.view<Mesh, WorldTransform>().each([&](Entity e, Mesh& mesh, WorldTransform& t) {
+    if (world.has<Disabled>(e)) return;
     const Material* material = world.find<Material>(e);
     const auto [handle, local_from_mesh] = mesh_for(mesh.shape);
     add(frame, handle, t.world_from_local * local_from_mesh, material != nullptr ? material->color : Material{}.color);

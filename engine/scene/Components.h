@@ -2,12 +2,15 @@
 // Components a scene file puts on entities (besides Transform and Parent from engine/core).
 // Plain data: the physics and render systems of later layers read them.
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 namespace rhot {
 
@@ -68,5 +71,59 @@ struct Grabbable {};
 struct TrackedBy {
   int star_id = 0;
 };
+
+// Labels a socket's `accepts` may name (besides the entity's own name).
+struct Tags {
+  std::vector<std::string> values;
+};
+
+// A joint between this entity's dynamic body and another body (or the world), built on Bullet's
+// constraints (engine/physics/Mechanisms.h). Its frame: the anchor and axis in this entity's
+// local frame, where the joint is when the scene starts (its value there is 0).
+enum class JointType { kHinge, kSlider, kFixed, kBall };
+
+struct JointSpring {
+  double stiffness = 0.0;  // N/m (slider) or N m/rad (hinge)
+  double damping = 0.0;    // N s/m or N m s/rad
+  double rest = 0.0;       // where it pulls to: m (slider) or degrees (hinge)
+};
+
+struct JointMotor {
+  double velocity = 0.0;   // m/s (slider) or degrees/s (hinge)
+  double max_force = 0.0;  // N or N m
+};
+
+struct Joint {
+  JointType type = JointType::kHinge;
+  std::string connected_to;                     // an entity with a body, or empty: the world
+  glm::vec3 anchor_m{0.0f};                     // local
+  glm::vec3 axis{0.0f, 1.0f, 0.0f};             // local, unit; hinge: turns about it, slider: moves along it
+  std::optional<std::array<double, 2>> limits;  // hinge: degrees, slider: metres; lo <= hi
+  double friction = 0.0;                        // N (slider) or N m (hinge): resists motion
+  std::optional<JointSpring> spring;
+  std::optional<JointMotor> motor;
+};
+
+// A physical push button: the entity's dynamic body slides along `axis` (local, the way it is
+// pushed) up to `travel_m`, sprung back; a press when pushed past press_at * travel by a
+// fingertip, released (and ready again) below release_at * travel.
+struct Button {
+  glm::vec3 axis{0.0f, -1.0f, 0.0f};
+  double travel_m = 0.01;
+  double press_at = 0.6;
+  double release_at = 0.3;
+  double stiffness = 150.0;  // N/m of the spring that pushes it back out
+};
+
+// Snaps a matching object released near its attach pose, holds it until a hand takes it out.
+struct Socket {
+  std::vector<std::string> accepts;  // entity names or tags; empty: any grabbable object
+  double snap_distance_m = 0.05;
+  glm::vec3 attach_position{0.0f};  // in the socket's frame
+  glm::quat attach_rotation{1.0f, 0.0f, 0.0f, 0.0f};
+};
+
+// Neither drawn nor in the physics world (a scene's "disable" action; "enable" removes it).
+struct Disabled {};
 
 }  // namespace rhot

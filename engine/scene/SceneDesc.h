@@ -85,13 +85,60 @@ struct EntityDesc {
   std::optional<PhysicsBody> body;
   bool grabbable = false;
   std::optional<int> tracked_by;  // marker-star id
+  std::vector<std::string> tags;
+  std::optional<Joint> joint;
+  std::optional<Button> button;
+  std::optional<Socket> socket;
 };
+
+// What a rule listens for (docs/scene-format.md "rules"): an event of this kind about `entity`
+// (the object grasped or released, the button, the socket, the joint's entity; empty: any), for
+// snap and unsnap optionally only of `object`; value_above and value_below fire when the
+// joint's value crosses `value` (degrees or metres).
+struct RuleTrigger {
+  std::string event;  // one of rule_event_names()
+  std::string entity;
+  std::string object;
+  double value = 0.0;
+  std::string interaction;  // "success": the interaction's name (empty: any)
+};
+
+// What a rule does. "set_color": entity, color; "enable", "disable": entity; "motor": entity
+// (with a hinge or slider joint), velocity, max_force; "spawn": entity (copied), position (world,
+// optional: where the original is); "succeed": name.
+struct RuleAction {
+  std::string action;  // one of rule_action_names()
+  std::string entity;
+  glm::vec4 color{1.0f};
+  double velocity = 0.0;
+  double max_force = 0.0;
+  std::optional<glm::vec3> position;
+  std::string name;
+};
+
+struct RuleDesc {
+  RuleTrigger when;
+  std::vector<RuleAction> actions;
+  bool once = false;  // fires at most once
+};
+
+// The vocabulary a scene's rules may use.
+inline const std::vector<std::string>& rule_event_names() {
+  static const std::vector<std::string> names{"grasp",  "release",     "press",       "unpress", "snap",
+                                              "unsnap", "value_above", "value_below", "success"};
+  return names;
+}
+inline const std::vector<std::string>& rule_action_names() {
+  static const std::vector<std::string> names{"set_color", "enable", "disable", "motor", "spawn", "succeed"};
+  return names;
+}
 
 struct SceneDesc {
   std::filesystem::path file;  // where it was read from (empty when parsed from text)
   SceneSettings settings;
   std::vector<EntityDesc> entities;
   std::vector<InteractionDesc> interactions;
+  std::vector<RuleDesc> rules;
 };
 
 }  // namespace rhot

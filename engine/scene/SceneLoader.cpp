@@ -121,18 +121,21 @@ Mesh read_mesh(const Node& n, const std::filesystem::path& base_dir) {
   shape_node.fail("expected one of \"box\", \"sphere\", \"capsule\", \"plane\", \"gltf\", got " + describe(shape_node.raw()));
 }
 
-Material read_material(const Node& n) {
-  n.expect_object({"color"});
-  const Node c = n["color"];
+glm::vec4 read_color(const Node& c) {
   if (!c.raw().is_array() || (c.raw().size() != 3 && c.raw().size() != 4)) {
     c.fail("expected [r, g, b] or [r, g, b, a] with each in [0, 1], got " + describe(c.raw()));
   }
-  Material m;
+  glm::vec4 color(1.0f);
   const auto e = c.elements();
   for (std::size_t i = 0; i < e.size(); ++i) {
-    m.color[static_cast<glm::length_t>(i)] = static_cast<float>(e[i].number_in(0.0, 1.0, "a number from 0 to 1"));
+    color[static_cast<glm::length_t>(i)] = static_cast<float>(e[i].number_in(0.0, 1.0, "a number from 0 to 1"));
   }
-  return m;
+  return color;
+}
+
+Material read_material(const Node& n) {
+  n.expect_object({"color"});
+  return Material{read_color(n["color"])};
 }
 
 PhysicsBody read_body(const Node& n) {
@@ -293,8 +296,106 @@ void check_interactions(const std::vector<InteractionDesc>& interactions, const 
   }
 }
 
+// A unit vector from three numbers, not all zero.
+glm::vec3 unit_axis(const Node& n) {
+  const glm::vec3 v = vec3(n);
+  const float len = glm::length(v);
+  if (!(len > 1e-6f)) n.fail("expected a direction [x, y, z] that is not zero, got " + describe(n.raw()));
+  return v / len;
+}
+
+// [lo, hi] with lo <= hi, each within [min, max].
+std::array<double, 2> read_limits(const Node& n, double min, double max, const char* what) {
+  n.numbers(2);
+  const auto e = n.elements();
+  const double lo = e[0].number_in(min, max, what), hi = e[1].number_in(min, max, what);
+  if (lo > hi) n.fail("expected [lower, upper] with lower <= upper, got " + describe(n.raw()));
+  return {lo, hi};
+}
+
+Joint read_joint(const Node& n) {
+  if (!n.raw().is_object()) n.fail("expected an object, got " + describe(n.raw()));
+  const Node type = n["type"];
+  const std::string t = type.string();
+  Joint j;
+  if (t == "hinge") {
+    j.type = JointType::kHinge;
+  } else if (t == "slider") {
+    j.type = JointType::kSlider;
+  } else if (t == "fixed") {
+    j.type = JointType::kFixed;
+  } else if (t == "ball") {
+    j.type = JointType::kBall;
+  } else {
+    type.fail("expected \"hinge\", \"slider\", \"fixed\" or \"ball\", got " + describe(type.raw()));
+  }
+  const bool hinge = j.type == JointType::kHinge, slider = j.type == JointType::kSlider;
+  if (hinge) {
+    n.expect_object({"type", "connected_to", "anchor_m", "axis", "limits_deg", "friction", "spring", "motor"});
+  } else if (slider) {
+    n.expect_object({"type", "connected_to", "anchor_m", "axis", "limits_m", "friction", "spring", "motor"});
+  } else {
+    n.expect_object({"type", "connected_to", "anchor_m"});
+  }
+  if (auto c = n.optional("connected_to")) j.connected_to = c->non_empty_string();
+  if (auto a = n.optional("anchor_m")) j.anchor_m = vec3(*a);
+  if (hinge || slider) j.axis = unit_axis(n["axis"]);
+  if (auto l = n.optional("limits_deg")) j.limits = read_limits(*l, -180.0, 180.0, "an angle from -180 to 180 degrees");
+  if (auto l = n.optional("limits_m")) j.limits = read_limits(*l, -100.0, 100.0, "a position from -100 to 100 m");
+  if (auto f = n.optional("friction")) j.friction = f->number_in(0.0, 1e4, "a friction from 0 to 10000 (N or N m)");
+  if (auto sp = n.optional("spring")) {
+    sp->expect_object({"stiffness", "damping", "rest"});
+    JointSpring spring;
+    spring.stiffness = (*sp)["stiffness"].positive();
+    if (auto d = sp->optional("damping")) spring.damping = d->number_in(0.0, 1e6, "a damping from 0 to 1e6");
+    if (auto r = sp->optional("rest")) spring.rest = r->number_in(-1e3, 1e3, "a rest position from -1000 to 1000 (m or degrees)");
+    j.spring = spring;
+  }
+  if (auto m = n.optional("motor")) {
+    m->expect_object({"velocity", "max_force"});
+    JointMotor motor;
+    motor.velocity = (*m)["velocity"].number_in(-1e4, 1e4, "a velocity from -10000 to 10000 (m/s or degrees/s)");
+    motor.max_force = (*m)["max_force"].positive();
+    j.motor = motor;
+  }
+  return j;
+}
+
+Button read_button(const Node& n) {
+  n.expect_object({"axis", "travel_m", "press_at", "release_at", "stiffness"});
+  Button b;
+  if (auto a = n.optional("axis")) b.axis = unit_axis(*a);
+  if (auto t = n.optional("travel_m")) b.travel_m = t->number_in(0.001, 0.1, "a travel from 0.001 to 0.1 m");
+  if (auto p = n.optional("press_at")) b.press_at = p->number_in(0.05, 1.0, "a fraction of the travel from 0.05 to 1");
+  if (auto r = n.optional("release_at")) {
+    b.release_at = r->number_in(0.0, 1.0, "a fraction of the travel from 0 to 1");
+    if (b.release_at >= b.press_at) r->fail("expected release_at below press_at (" + std::to_string(b.press_at) + ")");
+  } else if (b.release_at >= b.press_at) {
+    b.release_at = 0.5 * b.press_at;
+  }
+  if (auto k = n.optional("stiffness")) b.stiffness = k->number_in(1.0, 1e5, "a stiffness from 1 to 100000 N/m");
+  return b;
+}
+
+Socket read_socket(const Node& n) {
+  n.expect_object({"accepts", "snap_distance_m", "attach"});
+  Socket s;
+  if (auto a = n.optional("accepts")) {
+    for (const Node& e : a->elements()) s.accepts.push_back(e.non_empty_string());
+  }
+  if (auto d = n.optional("snap_distance_m")) s.snap_distance_m = d->number_in(0.001, 1.0, "a distance from 0.001 to 1 m");
+  if (auto a = n.optional("attach")) {
+    const Transform t = read_transform(*a);
+    if (t.scale != glm::vec3(1.0f)) (*a)["scale"].fail("an attach pose has no scale");
+    s.attach_position = t.position;
+    s.attach_rotation = t.rotation;
+  }
+  return s;
+}
+
 EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir) {
-  n.expect_object({"name", "parent", "transform", "mesh", "material", "body", "grabbable", "tracked_by"});
+  n.expect_object(
+      {"name", "parent", "transform", "mesh", "material", "body", "grabbable", "tracked_by", "tags", "joint", "button", "socket"});
   EntityDesc e;
   e.name = n["name"].non_empty_string();
   if (auto p = n.optional("parent")) e.parent = p->non_empty_string();
@@ -320,7 +421,150 @@ EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir) {
       t->fail("a tracked entity follows its marker star, so its body must be kinematic");
     }
   }
+  if (auto t = n.optional("tags")) {
+    for (const Node& tag : t->elements()) e.tags.push_back(tag.non_empty_string());
+  }
+  const bool dynamic = e.body && e.body->type == BodyType::kDynamic;
+  if (auto j = n.optional("joint")) {
+    e.joint = read_joint(*j);
+    if (!dynamic) j->fail("a joint moves a dynamic body; give the entity a \"body\" of type \"dynamic\"");
+    if (e.joint->connected_to == e.name) (*j)["connected_to"].fail("a joint cannot connect an entity to itself");
+  }
+  if (auto b = n.optional("button")) {
+    e.button = read_button(*b);
+    if (!dynamic) b->fail("a button is pushed physically; give the entity a \"body\" of type \"dynamic\"");
+    if (e.joint) b->fail("a button slides on a joint of its own; the entity cannot have another \"joint\"");
+    if (e.grabbable) b->fail("a button cannot be grabbable");
+  }
+  if (auto s = n.optional("socket")) e.socket = read_socket(*s);
   return e;
+}
+
+std::string one_of(const Node& n, const std::vector<std::string>& allowed) {
+  const std::string v = n.string();
+  for (const std::string& a : allowed) {
+    if (a == v) return v;
+  }
+  std::string list;
+  for (const std::string& a : allowed) list += (list.empty() ? "\"" : ", \"") + a + "\"";
+  n.fail("unknown " + std::string(n.path().ends_with("/event") ? "event" : "action") + " " + describe(n.raw()) +
+         "; expected one of: " + list);
+}
+
+RuleAction read_action(const Node& n) {
+  if (!n.raw().is_object()) n.fail("expected an object, got " + describe(n.raw()));
+  RuleAction a;
+  a.action = one_of(n["action"], rule_action_names());
+  if (a.action == "set_color") {
+    n.expect_object({"action", "entity", "color"});
+    a.entity = n["entity"].non_empty_string();
+    a.color = read_color(n["color"]);
+  } else if (a.action == "enable" || a.action == "disable") {
+    n.expect_object({"action", "entity"});
+    a.entity = n["entity"].non_empty_string();
+  } else if (a.action == "motor") {
+    n.expect_object({"action", "entity", "velocity", "max_force"});
+    a.entity = n["entity"].non_empty_string();
+    a.velocity = n["velocity"].number_in(-1e4, 1e4, "a velocity from -10000 to 10000 (m/s or degrees/s)");
+    a.max_force = n["max_force"].number_in(0.0, 1e6, "a force from 0 to 1e6 (N or N m); 0 lets the joint go");
+  } else if (a.action == "spawn") {
+    n.expect_object({"action", "entity", "position"});
+    a.entity = n["entity"].non_empty_string();
+    if (auto p = n.optional("position")) a.position = vec3(*p);
+  } else {
+    n.expect_object({"action", "name"});
+    a.name = n["name"].non_empty_string();
+  }
+  return a;
+}
+
+RuleDesc read_rule(const Node& n) {
+  n.expect_object({"when", "do", "once"});
+  RuleDesc r;
+  const Node when = n["when"];
+  if (!when.raw().is_object()) when.fail("expected an object, got " + describe(when.raw()));
+  r.when.event = one_of(when["event"], rule_event_names());
+  const std::string& ev = r.when.event;
+  if (ev == "value_above" || ev == "value_below") {
+    when.expect_object({"event", "entity", "value"});
+    r.when.entity = when["entity"].non_empty_string();
+    r.when.value = when["value"].number_in(-1e3, 1e3, "a value from -1000 to 1000 (degrees or metres)");
+  } else if (ev == "snap" || ev == "unsnap") {
+    when.expect_object({"event", "entity", "object"});
+    if (auto e = when.optional("entity")) r.when.entity = e->non_empty_string();
+    if (auto o = when.optional("object")) r.when.object = o->non_empty_string();
+  } else if (ev == "success") {
+    when.expect_object({"event", "interaction"});
+    if (auto i = when.optional("interaction")) r.when.interaction = i->non_empty_string();
+  } else {
+    when.expect_object({"event", "entity"});
+    if (auto e = when.optional("entity")) r.when.entity = e->non_empty_string();
+  }
+  const Node actions = n["do"];
+  for (const Node& a : actions.elements()) r.actions.push_back(read_action(a));
+  if (r.actions.empty()) actions.fail("expected at least one action");
+  if (auto o = n.optional("once")) r.once = o->boolean();
+  return r;
+}
+
+// Every name a rule uses refers to what it must: the entity of a value event has a hinge or
+// slider joint, of a press a button, of a snap a socket; a motor's entity has a hinge or slider;
+// the success event's interaction exists.
+void check_rules(const SceneDesc& scene) {
+  const auto find = [&](const std::string& name) -> const EntityDesc* {
+    for (const EntityDesc& e : scene.entities) {
+      if (e.name == name) return &e;
+    }
+    return nullptr;
+  };
+  const auto moving_joint = [](const EntityDesc* e) {
+    return e && e->joint && (e->joint->type == JointType::kHinge || e->joint->type == JointType::kSlider);
+  };
+  for (std::size_t i = 0; i < scene.rules.size(); ++i) {
+    const RuleDesc& r = scene.rules[i];
+    const std::string path = "/rules/" + std::to_string(i);
+    const std::string& ev = r.when.event;
+    if (!r.when.entity.empty()) {
+      const EntityDesc* e = find(r.when.entity);
+      const std::string where = path + "/when/entity";
+      if (!e) throw JsonFailure{where, "no entity is named \"" + r.when.entity + "\""};
+      if ((ev == "value_above" || ev == "value_below") && !moving_joint(e)) {
+        throw JsonFailure{where, "\"" + r.when.entity + "\" has no hinge or slider joint to take a value from"};
+      }
+      if ((ev == "press" || ev == "unpress") && !e->button) throw JsonFailure{where, "\"" + r.when.entity + "\" is not a button"};
+      if ((ev == "snap" || ev == "unsnap") && !e->socket) throw JsonFailure{where, "\"" + r.when.entity + "\" is not a socket"};
+      if ((ev == "grasp" || ev == "release") && !e->grabbable) {
+        throw JsonFailure{where, "\"" + r.when.entity + "\" is not grabbable"};
+      }
+    }
+    if (!r.when.object.empty() && !find(r.when.object)) {
+      throw JsonFailure{path + "/when/object", "no entity is named \"" + r.when.object + "\""};
+    }
+    if (!r.when.interaction.empty()) {
+      bool known = false;
+      for (const InteractionDesc& d : scene.interactions) known = known || d.name == r.when.interaction;
+      for (const RuleDesc& other : scene.rules) {
+        for (const RuleAction& a : other.actions) known = known || (a.action == "succeed" && a.name == r.when.interaction);
+      }
+      if (!known) {
+        throw JsonFailure{path + "/when/interaction", "no interaction or \"succeed\" action is named \"" + r.when.interaction + "\""};
+      }
+    }
+    for (std::size_t k = 0; k < r.actions.size(); ++k) {
+      const RuleAction& a = r.actions[k];
+      const std::string where = path + "/do/" + std::to_string(k) + "/entity";
+      if (a.action == "succeed") continue;
+      const EntityDesc* e = find(a.entity);
+      if (!e) throw JsonFailure{where, "no entity is named \"" + a.entity + "\""};
+      if (a.action == "set_color" && !e->mesh) throw JsonFailure{where, "\"" + a.entity + "\" has no mesh to colour"};
+      if (a.action == "motor" && !moving_joint(e)) throw JsonFailure{where, "\"" + a.entity + "\" has no hinge or slider joint to drive"};
+      if (a.action == "spawn" && (e->joint || e->button || e->socket || e->tracked_by)) {
+        throw JsonFailure{
+            where, "\"" + a.entity +
+                       "\" cannot be copied: a copy takes its mesh, material, body and tags, not a joint, button, socket or marker star"};
+      }
+    }
+  }
 }
 
 // Checks that cut across entities: unique names, parents that exist, no parent cycles, one
@@ -344,6 +588,15 @@ void check_references(const std::vector<EntityDesc>& entities) {
     }
   }
   for (std::size_t i = 0; i < entities.size(); ++i) {
+    if (!entities[i].joint || entities[i].joint->connected_to.empty()) continue;
+    const std::string& other = entities[i].joint->connected_to;
+    const auto it = by_name.find(other);
+    if (it == by_name.end()) throw JsonFailure{entity_path(i) + "/joint/connected_to", "no entity is named \"" + other + "\""};
+    if (!entities[it->second].body) {
+      throw JsonFailure{entity_path(i) + "/joint/connected_to", "\"" + other + "\" has no body to connect to"};
+    }
+  }
+  for (std::size_t i = 0; i < entities.size(); ++i) {
     if (entities[i].parent.empty()) continue;
     if (!by_name.contains(entities[i].parent)) {
       throw JsonFailure{entity_path(i) + "/parent", "no entity is named \"" + entities[i].parent + "\""};
@@ -361,7 +614,7 @@ void check_references(const std::vector<EntityDesc>& entities) {
 
 SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
   const Node n(root, "");
-  n.expect_object({"format", "version", "settings", "entities", "interactions"});
+  n.expect_object({"format", "version", "settings", "entities", "interactions", "rules"});
   if (auto f = n.optional("format"); f && f->string() != "rhot-scene") {
     f->fail("expected \"rhot-scene\", got " + describe(f->raw()));
   }
@@ -376,6 +629,10 @@ SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
     for (const Node& i : list->elements()) scene.interactions.push_back(read_interaction(i));
   }
   check_interactions(scene.interactions, scene.entities);
+  if (auto list = n.optional("rules")) {
+    for (const Node& r : list->elements()) scene.rules.push_back(read_rule(r));
+  }
+  check_rules(scene);
   return scene;
 }
 
@@ -410,6 +667,10 @@ std::vector<Entity> instantiate(const SceneDesc& scene, World& world) {
     if (d.body) world.add<PhysicsBody>(e, *d.body);
     if (d.grabbable) world.add<Grabbable>(e);
     if (d.tracked_by) world.add<TrackedBy>(e, TrackedBy{*d.tracked_by});
+    if (!d.tags.empty()) world.add<Tags>(e, Tags{d.tags});
+    if (d.joint) world.add<Joint>(e, *d.joint);
+    if (d.button) world.add<Button>(e, *d.button);
+    if (d.socket) world.add<Socket>(e, *d.socket);
   }
   for (std::size_t i = 0; i < scene.entities.size(); ++i) {
     const std::string& parent = scene.entities[i].parent;
