@@ -134,8 +134,9 @@ int nodes(const NodesArgs& a) {
     return 1;
   }
   // Time 0 of the simulated world, on the steady clock every process here shares, far enough
-  // ahead for the nodes to start.
-  const std::int64_t start_ns = steady_now_ns() + 1'500'000'000;
+  // ahead for the nodes to start and subscribe (a sanitizer build on a busy 2-core machine takes
+  // over a second to start four processes).
+  const std::int64_t start_ns = steady_now_ns() + 3'000'000'000;
   std::vector<NodePlan> plans(static_cast<std::size_t>(a.nodes));
   for (int n = 0; n < a.nodes; ++n) {
     NodePlan& p = plans[static_cast<std::size_t>(n)];

@@ -33,7 +33,8 @@ struct Stage {
   std::unique_ptr<HandPhysics> physics;
   std::vector<InteractionEvent> events;
 
-  explicit Stage(const std::string& text) { physics = test::physics_for(world, test::parse(text)); }
+  explicit Stage(const std::string& text) : Stage(test::parse(text)) {}
+  explicit Stage(const SceneDesc& scene) { physics = test::physics_for(world, scene); }
   Entity named(const char* name) { return find_named(world, name); }
   btRigidBody* body(const char* name) { return physics->physics().body(named(name)); }
   double value(const char* name) { return physics->mechanisms().value(named(name)).value_or(NAN); }
@@ -338,6 +339,54 @@ TEST(SceneRulesFile, UnknownEventsActionsAndWrongEntitiesAreRefusedNamingWhere) 
   EXPECT_EQ(error(d, R"(, "rules": [{"when": {"event": "grasp"}, "do": [{"action": "spawn", "entity": "door"}]}])"),
             "s.json: /rules/0/do/0/entity: \"door\" cannot be copied: a copy takes its mesh, material, body and tags, not a joint, button, "
             "socket or marker star");
+}
+
+// The showcase scene: untouched, nothing fires; the door pushed, the drawer pulled and the button
+// pressed by a fingertip, each raises its success.
+TEST(Workbench, UntouchedNothingFiresAndEachMechanismSucceedsWhenWorked) {
+  const auto scene = load_scene_file(RHOT_ASSET_DIR "/scenes/workbench.json");
+  ASSERT_TRUE(scene.has_value()) << scene.error().to_string();
+  Stage r(*scene);
+  ASSERT_NE(r.physics, nullptr);
+  const auto successes = [&] {
+    std::vector<std::string> names;
+    for (const InteractionEvent& e : r.events) {
+      if (e.type == InteractionEventType::kSuccess) names.push_back(e.interaction);
+    }
+    return names;
+  };
+  r.seconds(2.0);
+  EXPECT_TRUE(r.events.empty()) << r.events.size() << " events, the first " << event_name(r.events.front().type);
+  EXPECT_NEAR(r.value("door"), 0.0, 0.5);
+  EXPECT_NEAR(r.value("drawer"), 0.0, 0.002);
+  // The door swung open toward the user (+z) by a push on its free edge.
+  for (int i = 0; i < 90; ++i) {
+    r.body("door")->applyForce(btVector3(0, 0, 1.0f), r.body("door")->getWorldTransform().getBasis() * btVector3(0.12f, 0, 0));
+    r.step();
+  }
+  EXPECT_GT(r.value("door"), 60.0);
+  EXPECT_LE(r.value("door"), 112.0);
+  EXPECT_GT(r.body("door")->getWorldTransform().getOrigin().z(), -0.69f) << "it opened outward";
+  // The drawer pulled out.
+  for (int i = 0; i < 45; ++i) {
+    r.body("drawer")->applyCentralForce(btVector3(0, 0, 8.0f));
+    r.step();
+  }
+  EXPECT_NEAR(r.value("drawer"), 0.2, 0.01);
+  // The button pressed by a fingertip.
+  const btVector3 cap = r.body("button")->getWorldTransform().getOrigin();
+  const double top = static_cast<double>(cap.y()) + 0.0075;
+  for (int i = 0; i <= 40; ++i) {
+    r.step({HandInput{}, pointing_at(Eigen::Vector3d(static_cast<double>(cap.x()), top + 0.04 - 0.055 * i / 40.0 + 0.008,
+                                                     static_cast<double>(cap.z())))});
+  }
+  for (int i = 0; i <= 40; ++i) r.step({HandInput{}, pointing_at(Eigen::Vector3d(0.0, top + 0.2, 0.0))});
+  EXPECT_EQ(r.world.get<Material>(r.named("lamp")).color, glm::vec4(1.0f, 0.9f, 0.55f, 1.0f));
+  std::vector<std::string> got = successes();
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, (std::vector<std::string>{"door-open", "drawer-open", "lamp-on"}));
+  // (The socket's snap through a scripted hand is tested on its own above; carrying this tall peg
+  // there belongs with the scripted tracked-hand run of the showcase, still to come.)
 }
 
 }  // namespace
