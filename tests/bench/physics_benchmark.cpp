@@ -82,19 +82,16 @@ void report(benchmark::State& state, std::vector<double>& ms) {
   state.counters["p99_ms"] = at(0.99);
 }
 
-// rhot's frame: hand colliders driven, grasp logic, Bullet step (2 substeps by default, 1 for
-// comparison), interactions.
-void BM_HandPhysicsFrame(benchmark::State& state) {
-  SceneDesc scene = bench_scene();
-  scene.settings.physics_substeps = static_cast<int>(state.range(0));
-  const std::array<GraspPose, 2> grasps{make_grasp(HandSide::kLeft, 0.05), make_grasp(HandSide::kRight, 0.05)};
+// Frames of `scene` with both hands sweeping (hands_at), timed one by one; every 10 s a fresh
+// scene, so objects pushed off the table come back.
+void run_frames(benchmark::State& state, const SceneDesc& scene, const std::array<GraspPose, 2>& grasps) {
   std::vector<double> ms;
   auto world = std::make_unique<World>();
   instantiate(scene, *world);
   auto physics = std::move(*HandPhysics::create(*world, scene));
   long frame = 0;
   for (auto _ : state) {
-    if (frame == 900) {  // every 10 s a fresh scene, so objects pushed off the table come back
+    if (frame == 900) {
       state.PauseTiming();
       physics.reset();
       world = std::make_unique<World>();
@@ -111,6 +108,14 @@ void BM_HandPhysicsFrame(benchmark::State& state) {
   }
   report(state, ms);
 }
+
+// rhot's frame: hand colliders driven, grasp logic, Bullet step (2 substeps by default, 1 for
+// comparison), interactions.
+void BM_HandPhysicsFrame(benchmark::State& state) {
+  SceneDesc scene = bench_scene();
+  scene.settings.physics_substeps = static_cast<int>(state.range(0));
+  run_frames(state, scene, {make_grasp(HandSide::kLeft, 0.05), make_grasp(HandSide::kRight, 0.05)});
+}
 BENCHMARK(BM_HandPhysicsFrame)->ArgName("substeps")->Arg(2)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 // The showcase scene (assets/scenes/workbench.json: a hinged door, a drawer, a button, a socket,
@@ -122,29 +127,7 @@ void BM_WorkbenchFrame(benchmark::State& state) {
     state.SkipWithError(scene.error().to_string().c_str());
     return;
   }
-  const std::array<GraspPose, 2> grasps{make_grasp(HandSide::kLeft, 0.03), make_grasp(HandSide::kRight, 0.03)};
-  std::vector<double> ms;
-  auto world = std::make_unique<World>();
-  instantiate(*scene, *world);
-  auto physics = std::move(*HandPhysics::create(*world, *scene));
-  long frame = 0;
-  for (auto _ : state) {
-    if (frame == 900) {
-      state.PauseTiming();
-      physics.reset();
-      world = std::make_unique<World>();
-      instantiate(*scene, *world);
-      physics = std::move(*HandPhysics::create(*world, *scene));
-      frame = 0;
-      state.ResumeTiming();
-    }
-    const auto in = hands_at(grasps, static_cast<double>(frame) / 90.0);
-    const auto begin = std::chrono::steady_clock::now();
-    physics->step(*world, in);
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count());
-    ++frame;
-  }
-  report(state, ms);
+  run_frames(state, *scene, {make_grasp(HandSide::kLeft, 0.03), make_grasp(HandSide::kRight, 0.03)});
 }
 BENCHMARK(BM_WorkbenchFrame)->Unit(benchmark::kMicrosecond);
 

@@ -70,6 +70,74 @@ std::expected<void, std::string> check_image(const cv::Mat& bgr) {
   return {};
 }
 
+// The circle of a partly hidden marker (kPartial* above) through the edge pixels of a blob of n
+// pixels, as (centre x, centre y, radius), or nothing when they do not hold one no larger than
+// max_radius_px.
+std::optional<Eigen::Vector3d> partial_circle(const std::vector<Eigen::Vector2d>& edge, double n, double max_radius_px) {
+  if (edge.size() < 8) return std::nullopt;
+  std::vector<cv::Point2f> edge_f;
+  for (const Eigen::Vector2d& e : edge) edge_f.emplace_back(static_cast<float>(e.x()), static_cast<float>(e.y()));
+  cv::Point2f centre;
+  float radius = 0.0f;
+  cv::minEnclosingCircle(edge_f, centre, radius);
+  Eigen::Vector2d c(static_cast<double>(centre.x), static_cast<double>(centre.y));
+  double r = static_cast<double>(radius);
+  // Twice: the edge pixels on the circle, and the circle through them (algebraic least squares:
+  // x^2 + y^2 = 2 a x + 2 b y + c).
+  for (int pass = 0; pass < 2; ++pass) {
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+    int on = 0;
+    for (const Eigen::Vector2d& e : edge) {
+      const Eigen::Vector2d d = e - c;  // about the last centre, for precision
+      if (std::abs(d.norm() - r) > kOnCircle) continue;
+      const Eigen::Vector3d row(2.0 * d.x(), 2.0 * d.y(), 1.0);
+      ata += row * row.transpose();
+      atb += row * d.squaredNorm();
+      ++on;
+    }
+    if (on < 6) return std::nullopt;
+    const Eigen::Vector3d abc = ata.ldlt().solve(atb);
+    const double r2 = abc.z() + abc.head<2>().squaredNorm();
+    if (!abc.allFinite() || !(r2 > 1.0)) return std::nullopt;
+    c += abc.head<2>();
+    r = std::sqrt(r2);
+  }
+  // The blob inside the circle (pixel centres lie half a pixel inside the edge they mark).
+  if (r > max_radius_px) return std::nullopt;
+  if (n < kPartialCover * std::numbers::pi * (r + 0.5) * (r + 0.5)) return std::nullopt;
+  std::array<bool, 24> sector{};
+  for (const Eigen::Vector2d& e : edge) {
+    const double d = (e - c).norm();
+    if (d > r + kOnCircle) return std::nullopt;
+    if (d < r - kOnCircle) continue;
+    const double a = std::atan2(e.y() - c.y(), e.x() - c.x()) + std::numbers::pi;
+    sector[std::min<std::size_t>(23, static_cast<std::size_t>(a / (2.0 * std::numbers::pi) * 24.0))] = true;
+  }
+  // One arc, the far side from the bite: the longest run of sectors with edge pixels on the
+  // circle (a one-sector gap bridged) and no more than one such sector elsewhere. Two markers
+  // whose images touch show two arcs, one at each end, and are not one marker in between.
+  const int n_sectors = static_cast<int>(sector.size());
+  int best_run = 0, best_start = 0;
+  for (int start = 0; start < n_sectors; ++start) {
+    if (!sector[static_cast<std::size_t>(start)] || sector[static_cast<std::size_t>((start + n_sectors - 1) % n_sectors)]) continue;
+    int end = start;  // one past the run's last sector with a pixel on the circle
+    for (int k = start; k < start + n_sectors; ++k) {
+      if (sector[static_cast<std::size_t>(k % n_sectors)])
+        end = k + 1;
+      else if (!sector[static_cast<std::size_t>((k + 1) % n_sectors)])
+        break;
+    }
+    if (end - start > best_run) best_run = end - start, best_start = start;
+  }
+  if (best_run == 0) best_run = n_sectors, best_start = 0;  // on the circle all round (no bite)
+  if (best_run < kPartialArc / (2.0 * std::numbers::pi) * n_sectors) return std::nullopt;
+  int elsewhere = 0;
+  for (int k = best_start + best_run; k < best_start + n_sectors; ++k) elsewhere += sector[static_cast<std::size_t>(k % n_sectors)] ? 1 : 0;
+  if (elsewhere > 1) return std::nullopt;
+  return Eigen::Vector3d(c.x(), c.y(), r);
+}
+
 }  // namespace
 
 void ColourDetector::scan(const cv::Mat& bgr, const cv::Rect& rect) {
@@ -197,10 +265,9 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
     d.confidence = static_cast<float>(m.w / m.n);
     out.push_back(d);
   };
-  // The circle of a partly hidden marker (kPartial* above): the pixels of blob b that `keep`
-  // accepts (n of them), as (centre x, centre y, radius), or nothing. Its edge pixels: pixels with
-  // a 4-neighbour outside it.
-  const auto circle_of = [&](std::size_t b, const auto& keep, double n) -> std::optional<Eigen::Vector3d> {
+  // The circle of a partly hidden marker (kPartial* above) from blob b's n pixels, as (centre x,
+  // centre y, radius), or nothing. Its edge pixels: pixels with a 4-neighbour outside it.
+  const auto circle_of = [&](std::size_t b, double n) -> std::optional<Eigen::Vector3d> {
     if (n < kPartialMinArea) return std::nullopt;
     int x0 = bgr.cols, x1 = 0, y0 = bgr.rows, y1 = 0;
     for (std::size_t i = 0; i < runs_.size(); ++i) {
@@ -210,86 +277,22 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
     cv::Mat1b mask(y1 - y0 + 2, x1 - x0 + 2, std::uint8_t{0});
     for (std::size_t i = 0; i < runs_.size(); ++i) {
       if (blob_of_run[i] != static_cast<int>(b)) continue;
-      for (int x = runs_[i].x0; x < runs_[i].x1; ++x) mask(runs_[i].y - y0 + 1, x - x0 + 1) = keep(x, runs_[i].y) ? 1 : 0;
+      for (int x = runs_[i].x0; x < runs_[i].x1; ++x) mask(runs_[i].y - y0 + 1, x - x0 + 1) = 1;
     }
-    std::vector<cv::Point2f> edge_f;
     std::vector<Eigen::Vector2d> edge;
     for (int y = 1; y < mask.rows - 1; ++y) {
       for (int x = 1; x < mask.cols - 1; ++x) {
-        if (mask(y, x) && (!mask(y - 1, x) || !mask(y + 1, x) || !mask(y, x - 1) || !mask(y, x + 1))) {
+        if (mask(y, x) && (!mask(y - 1, x) || !mask(y + 1, x) || !mask(y, x - 1) || !mask(y, x + 1)))
           edge.emplace_back(x + x0 - 1, y + y0 - 1);
-          edge_f.emplace_back(static_cast<float>(x + x0 - 1), static_cast<float>(y + y0 - 1));
-        }
       }
     }
-    if (edge.size() < 8) return std::nullopt;
-    cv::Point2f centre;
-    float radius = 0.0f;
-    cv::minEnclosingCircle(edge_f, centre, radius);
-    Eigen::Vector2d c(static_cast<double>(centre.x), static_cast<double>(centre.y));
-    double r = static_cast<double>(radius);
-    // Twice: the edge pixels on the circle, and the circle through them (algebraic least squares:
-    // x^2 + y^2 = 2 a x + 2 b y + c).
-    for (int pass = 0; pass < 2; ++pass) {
-      Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-      Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-      int on = 0;
-      for (const Eigen::Vector2d& e : edge) {
-        const Eigen::Vector2d d = e - c;  // about the last centre, for precision
-        if (std::abs(d.norm() - r) > kOnCircle) continue;
-        const Eigen::Vector3d row(2.0 * d.x(), 2.0 * d.y(), 1.0);
-        ata += row * row.transpose();
-        atb += row * d.squaredNorm();
-        ++on;
-      }
-      if (on < 6) return std::nullopt;
-      const Eigen::Vector3d abc = ata.ldlt().solve(atb);
-      const double r2 = abc.z() + abc.head<2>().squaredNorm();
-      if (!abc.allFinite() || !(r2 > 1.0)) return std::nullopt;
-      c += abc.head<2>();
-      r = std::sqrt(r2);
-    }
-    // The blob inside the circle (pixel centres lie half a pixel inside the edge they mark).
-    if (r > std::sqrt(settings_.max_area_px / std::numbers::pi) + 1.0) return std::nullopt;
-    if (n < kPartialCover * std::numbers::pi * (r + 0.5) * (r + 0.5)) return std::nullopt;
-    std::array<bool, 24> sector{};
-    for (const Eigen::Vector2d& e : edge) {
-      const double d = (e - c).norm();
-      if (d > r + kOnCircle) return std::nullopt;
-      if (d < r - kOnCircle) continue;
-      const double a = std::atan2(e.y() - c.y(), e.x() - c.x()) + std::numbers::pi;
-      sector[std::min<std::size_t>(23, static_cast<std::size_t>(a / (2.0 * std::numbers::pi) * 24.0))] = true;
-    }
-    // One arc, the far side from the bite: the longest run of sectors with edge pixels on the
-    // circle (a one-sector gap bridged) and no more than one such sector elsewhere. Two markers
-    // whose images touch show two arcs, one at each end, and are not one marker in between.
-    const int n_sectors = static_cast<int>(sector.size());
-    int best_run = 0, best_start = 0;
-    for (int start = 0; start < n_sectors; ++start) {
-      if (!sector[static_cast<std::size_t>(start)] || sector[static_cast<std::size_t>((start + n_sectors - 1) % n_sectors)]) continue;
-      int end = start;  // one past the run's last sector with a pixel on the circle
-      for (int k = start; k < start + n_sectors; ++k) {
-        if (sector[static_cast<std::size_t>(k % n_sectors)])
-          end = k + 1;
-        else if (!sector[static_cast<std::size_t>((k + 1) % n_sectors)])
-          break;
-      }
-      if (end - start > best_run) best_run = end - start, best_start = start;
-    }
-    if (best_run == 0) best_run = n_sectors, best_start = 0;  // on the circle all round (no bite)
-    if (best_run < kPartialArc / (2.0 * std::numbers::pi) * n_sectors) return std::nullopt;
-    int elsewhere = 0;
-    for (int k = best_start + best_run; k < best_start + n_sectors; ++k)
-      elsewhere += sector[static_cast<std::size_t>(k % n_sectors)] ? 1 : 0;
-    if (elsewhere > 1) return std::nullopt;
-    return Eigen::Vector3d(c.x(), c.y(), r);
+    return partial_circle(edge, n, std::sqrt(settings_.max_area_px / std::numbers::pi) + 1.0);
   };
   // A marker at a circle's centre, measured otherwise as m.
   const auto emit_at = [&](Moments m, const Eigen::Vector3d& circle) {
     m.wx = circle.x() * m.w, m.wy = circle.y() * m.w;
     emit(m);
   };
-  const auto all = [](int, int) { return true; };
   // Two markers of one colour whose images touch: cut across the major axis at the centroid; both
   // halves must come out round, full and of similar size, with a waist between them.
   const auto split = [&](std::size_t b, const Moments& m, const Shape& sh) -> bool {
@@ -336,14 +339,14 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
     if (sh.fill >= settings_.min_fill && sh.elongation <= settings_.max_elongation) {
       // Round enough to be a marker; one not quite round may be a partly hidden one, whose
       // visible part's centroid leans away from the bite by up to a pixel or two.
-      const auto circle = sh.elongation > kRoundAt ? circle_of(b, all, m.n) : std::nullopt;
+      const auto circle = sh.elongation > kRoundAt ? circle_of(b, m.n) : std::nullopt;
       if (circle)
         emit_at(m, *circle);
       else
         emit(m);
       continue;
     }
-    if (const auto circle = circle_of(b, all, m.n)) emit_at(m, *circle);
+    if (const auto circle = circle_of(b, m.n)) emit_at(m, *circle);
   }
   if (static_cast<int>(out.size()) > settings_.max_blobs) {
     std::nth_element(out.begin(), out.begin() + settings_.max_blobs, out.end(),
