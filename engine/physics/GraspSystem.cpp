@@ -61,19 +61,64 @@ GraspSystem::GraspSystem(PhysicsWorld& physics, std::array<HandColliders*, 2> ha
 std::optional<HandSide> GraspSystem::held_by(Entity object) const {
   const auto it = held_.find(object);
   if (it == held_.end()) return std::nullopt;
-  return side_of(it->second.hand);
+  return side_of(it->second.first());
+}
+
+bool GraspSystem::held_by_both(Entity object) const {
+  const auto it = held_.find(object);
+  return it != held_.end() && it->second.both();
 }
 
 std::optional<Entity> GraspSystem::holding(HandSide hand) const {
-  for (const auto& [e, h] : held_) {
-    if (side_of(h.hand) == hand) return e;
+  const std::size_t h = hand == HandSide::kLeft ? 0 : 1;
+  for (const auto& [e, held] : held_) {
+    if (held.by[h]) return e;
   }
   return std::nullopt;
 }
 
+btVector3 GraspSystem::grip_centre(const Held& held, int hand) const {
+  return to_bt(hands_[static_cast<std::size_t>(hand)]->input().world_from_hand) * held.by[static_cast<std::size_t>(hand)]->centre;
+}
+
+// The frame two hands span: origin midway between their grips, x from the left grip toward the
+// right one, y the pair's first y turned by the mean of the hands' turns since and made
+// perpendicular to x.
+btTransform GraspSystem::pair_frame(const Held& held) const {
+  const btVector3 left = grip_centre(held, 0), right = grip_centre(held, 1);
+  btVector3 x = right - left;
+  x = x.length() > btScalar(1e-6) ? x.normalized() : btVector3(1, 0, 0);
+  const auto turn = [&](int hand) {
+    const btQuaternion now = to_bt(hands_[static_cast<std::size_t>(hand)]->input().world_from_hand).getRotation();
+    return now * held.by[static_cast<std::size_t>(hand)]->rotation_paired.inverse();
+  };
+  btVector3 y = quatRotate(turn(0).slerp(turn(1), btScalar(0.5)), held.pair_up);
+  y -= x * x.dot(y);
+  if (y.length() < btScalar(0.1)) {  // the hands rolled the first y onto the line: fall back on it
+    y = held.pair_up - x * x.dot(held.pair_up);
+    if (y.length() < btScalar(0.1)) y = btVector3(0, 0, 1) - x * x.z();
+  }
+  y.normalize();
+  const btVector3 z = x.cross(y);
+  const btMatrix3x3 basis(x.x(), y.x(), z.x(), x.y(), y.y(), z.y(), x.z(), y.z(), z.z());
+  return btTransform(basis, (left + right) * btScalar(0.5));
+}
+
+double GraspSystem::pair_scale(const Held& held) const {
+  if (!held.options.scale_with_hands || held.span_m <= 1e-6) return held.scale_paired;
+  const double span = static_cast<double>((grip_centre(held, 1) - grip_centre(held, 0)).length());
+  return std::clamp(held.scale_paired * span / held.span_m, static_cast<double>(held.options.min_scale),
+                    static_cast<double>(held.options.max_scale));
+}
+
 btTransform GraspSystem::target_of(const Held& held) const {
-  const HandColliders* hand = hands_[static_cast<std::size_t>(held.hand)];
-  return to_bt(hand->input().world_from_hand) * held.hand_from_object;
+  if (held.both()) {
+    btTransform pair_from_object = held.pair_from_object;
+    pair_from_object.setOrigin(pair_from_object.getOrigin() * static_cast<btScalar>(pair_scale(held) / held.scale_paired));
+    return pair_frame(held) * pair_from_object;
+  }
+  const int hand = held.first();
+  return to_bt(hands_[static_cast<std::size_t>(hand)]->input().world_from_hand) * held.by[static_cast<std::size_t>(hand)]->hand_from_object;
 }
 
 std::optional<btTransform> GraspSystem::grip_target(Entity object) const {
@@ -121,11 +166,12 @@ double GraspSystem::curl_rad(int hand, int finger) const {
   return std::acos(std::clamp(first.dot(last), -1.0, 1.0));
 }
 
-void GraspSystem::pre_step(World&) {
+void GraspSystem::pre_step(World& world) {
   const btScalar dt = static_cast<btScalar>(physics_.step_s());
   for (auto& [object, held] : held_) {
     btRigidBody* body = physics_.body(object);
     if (!body) continue;
+    if (held.both() && held.options.scale_with_hands) physics_.set_scale(world, object, pair_scale(held));
     const btTransform target = target_of(held);
     held.history.emplace_back(physics_.time_s(), target);
     while (held.history.size() > 2 && held.history.front().first < physics_.time_s() - 0.25) held.history.pop_front();
@@ -140,15 +186,23 @@ void GraspSystem::pre_step(World&) {
   }
 }
 
-void GraspSystem::begin_grasp(World&, int hand, Entity object, const std::vector<Contact>& contacts, const std::vector<int>& groups) {
+void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::vector<Contact>& contacts, const std::vector<int>& groups) {
   btRigidBody* body = physics_.body(object);
   HandColliders* h = hands_[static_cast<std::size_t>(hand)];
-  if (const auto it = held_.find(object); it != held_.end()) release(object, true);  // a hand-over
-  Held held;
-  held.hand = hand;
-  const btTransform world_from_object = body->getWorldTransform();
-  held.hand_from_object = to_bt(h->input().world_from_hand).inverse() * world_from_object;
+  const btTransform world_from_hand = to_bt(h->input().world_from_hand);
+  const Grabbable options = world.get<Grabbable>(object);
+  auto it = held_.find(object);
+  if (it != held_.end() && !options.two_handed) {
+    release(object, it->second.first(), LetGo::kTaken);  // the other hand takes it over
+    it = held_.end();
+  }
+  const bool joining = it != held_.end();
+  // A joining hand takes the object where the pair's target has it (no jump); a first hand where it is.
+  const btTransform world_from_object = joining ? target_of(it->second) : body->getWorldTransform();
+  HandGrip grip;
+  grip.hand_from_object = world_from_hand.inverse() * world_from_object;
   const btTransform object_from_world = world_from_object.inverse();
+  btVector3 centre(0, 0, 0);
   for (const Contact& c : contacts) {
     const int group = hand_bones()[static_cast<std::size_t>(c.bone)].group;
     if (std::find(groups.begin(), groups.end(), group) == groups.end()) continue;
@@ -158,23 +212,60 @@ void GraspSystem::begin_grasp(World&, int hand, Entity object, const std::vector
     g.on_object = object_from_world * c.point;
     g.normal = object_from_world.getBasis() * c.normal;
     g.on_bone = h->tracked_bone(c.bone).inverse() * c.point;
-    held.grip.push_back(g);
+    grip.grip.push_back(g);
+    centre += c.point;
   }
-  body->setGravity({0, 0, 0});
-  body->activate(true);
+  grip.centre = world_from_hand.inverse() * (centre / static_cast<btScalar>(std::max<std::size_t>(1, grip.grip.size())));
+  if (!joining) {
+    Held held;
+    held.options = options;
+    held.by[static_cast<std::size_t>(hand)] = std::move(grip);
+    held_[object] = std::move(held);
+    body->setGravity({0, 0, 0});
+    body->activate(true);
+  } else {
+    Held& held = it->second;
+    held.by[static_cast<std::size_t>(hand)] = std::move(grip);
+    for (int k = 0; k < 2; ++k) {
+      held.by[static_cast<std::size_t>(k)]->rotation_paired =
+          to_bt(hands_[static_cast<std::size_t>(k)]->input().world_from_hand).getRotation();
+    }
+    // The pair frame's first y: the world's up made perpendicular to the line between the hands
+    // (or, for hands one above the other, the world's z).
+    btVector3 x = grip_centre(held, 1) - grip_centre(held, 0);
+    held.span_m = static_cast<double>(x.length());
+    x = held.span_m > 1e-6 ? x / static_cast<btScalar>(held.span_m) : btVector3(1, 0, 0);
+    btVector3 up = btVector3(0, 1, 0) - x * x.y();
+    if (up.length() < btScalar(0.3)) up = btVector3(0, 0, 1) - x * x.z();
+    held.pair_up = up.normalized();
+    held.scale_paired = physics_.scale(object);
+    held.pair_from_object = pair_frame(held).inverse() * world_from_object;
+  }
   ignore_hand(body, hand, true);
   std::erase_if(reenable_, [&](const auto& r) { return r.first == object && r.second == hand; });
-  held_[object] = std::move(held);
   emit(InteractionEventType::kGrasp, object, hand);
 }
 
-void GraspSystem::release(Entity object, bool handed_over) {
+void GraspSystem::release(Entity object, int hand, LetGo how) {
   const auto it = held_.find(object);
-  if (it == held_.end()) return;
+  if (it == held_.end() || !it->second.by[static_cast<std::size_t>(hand)]) return;
   Held& held = it->second;
+  const bool handed_over = how == LetGo::kTaken || (how == LetGo::kOpened && held.both());
   btRigidBody* body = physics_.body(object);
-  InteractionEvent e{InteractionEventType::kRelease, physics_.time_s(), object, side_of(held.hand), {}, handed_over,
+  InteractionEvent e{InteractionEventType::kRelease, physics_.time_s(), object, side_of(hand), {}, handed_over,
                      Eigen::Vector3d::Zero(),        Entity{},          0.0};
+  if (held.both()) {
+    // The other hand carries on from where the pair had the object.
+    const int other = 1 - hand;
+    const btTransform world_from_object = target_of(held);
+    held.by[static_cast<std::size_t>(other)]->hand_from_object =
+        to_bt(hands_[static_cast<std::size_t>(other)]->input().world_from_hand).inverse() * world_from_object;
+    held.by[static_cast<std::size_t>(hand)].reset();
+    if (body) reenable_.emplace_back(object, hand);
+    released_at_s_[static_cast<std::size_t>(hand)] = physics_.time_s();
+    events_.push_back(std::move(e));
+    return;
+  }
   if (body && !handed_over) {
     // The hand's velocity: a least-squares line through the grip's recent positions.
     const double end = physics_.time_s() - settings_.throw_window_end_s;
@@ -216,9 +307,9 @@ void GraspSystem::release(Entity object, bool handed_over) {
   if (body) {
     body->setGravity(physics_.bullet().getGravity());
     body->activate(true);
-    reenable_.emplace_back(object, held.hand);
+    reenable_.emplace_back(object, hand);
   }
-  released_at_s_[static_cast<std::size_t>(held.hand)] = physics_.time_s();
+  released_at_s_[static_cast<std::size_t>(hand)] = physics_.time_s();
   held_.erase(it);
   events_.push_back(std::move(e));
 }
@@ -296,49 +387,58 @@ void GraspSystem::update_hover_and_contact(const HandContacts& contacts) {
   }
 }
 
-// Releases: fingers opened, or the object stuck far from the hand.
+// Releases: fingers opened, or the object stuck far from its grip.
 void GraspSystem::release_opened() {
-  std::vector<Entity> to_release;
+  std::vector<std::pair<Entity, int>> to_release;  // (object, hand)
   for (auto& [object, held] : held_) {
-    const HandColliders* h = hands_[static_cast<std::size_t>(held.hand)];
     btRigidBody* body = physics_.body(object);
-    if (!h->active()) continue;  // the hand is lost: keep holding
     const btTransform target = target_of(held);
     const double error = static_cast<double>((body->getWorldTransform().getOrigin() - target.getOrigin()).length());
     if (error > settings_.max_hold_error_m) {
       if (held.stuck_since_s < 0.0) held.stuck_since_s = physics_.time_s();
       if (physics_.time_s() - held.stuck_since_s > 0.1) {
-        to_release.push_back(object);
+        for (int hand = 0; hand < 2; ++hand) {
+          if (held.by[static_cast<std::size_t>(hand)]) to_release.emplace_back(object, hand);
+        }
         continue;
       }
     } else {
       held.stuck_since_s = -1.0;
     }
-    bool anchor_open = false, any_anchor = false;
-    bool fingers_open = true, any_finger = false;
-    for (const GripPoint& g : held.grip) {
-      const HandBone& bone = hand_bones()[static_cast<std::size_t>(g.bone)];
-      // A finger is measured when its tip is (its other joints are inferred by IK); the palm when
-      // its knuckles are.
-      const HandJoint judge = g.group == kPalmGroup ? bone.to : chain_joints(static_cast<Finger>(g.group))[3];
-      const double confidence = h->input().confidence[static_cast<std::size_t>(judge)];
-      const bool trusted = confidence >= settings_.confident;
-      const btVector3 on_bone = h->tracked_bone(g.bone) * g.on_bone;
-      const btVector3 on_object = target * g.on_object;
-      const btVector3 normal = target.getBasis() * g.normal;
-      const bool open = trusted && static_cast<double>((on_bone - on_object).dot(normal)) > settings_.release_distance_m;
-      if (g.group == 0 || g.group == kPalmGroup) {
-        any_anchor = true;
-        anchor_open = anchor_open || open;
-      } else {
-        any_finger = true;
-        fingers_open = fingers_open && open;
+    for (int hand = 0; hand < 2; ++hand) {
+      const auto& grip = held.by[static_cast<std::size_t>(hand)];
+      const HandColliders* h = hands_[static_cast<std::size_t>(hand)];
+      if (!grip || !h->active()) continue;  // a lost hand keeps holding
+      bool anchor_open = false, any_anchor = false;
+      bool fingers_open = true, any_finger = false;
+      for (const GripPoint& g : grip->grip) {
+        const HandBone& bone = hand_bones()[static_cast<std::size_t>(g.bone)];
+        // A finger is measured when its tip is (its other joints are inferred by IK); the palm
+        // when its knuckles are.
+        const HandJoint judge = g.group == kPalmGroup ? bone.to : chain_joints(static_cast<Finger>(g.group))[3];
+        const double confidence = h->input().confidence[static_cast<std::size_t>(judge)];
+        const bool trusted = confidence >= settings_.confident;
+        const btVector3 on_bone = h->tracked_bone(g.bone) * g.on_bone;
+        const btVector3 on_object = target * g.on_object;
+        const btVector3 normal = target.getBasis() * g.normal;
+        const bool open = trusted && static_cast<double>((on_bone - on_object).dot(normal)) > settings_.release_distance_m;
+        if (g.group == 0 || g.group == kPalmGroup) {
+          any_anchor = true;
+          anchor_open = anchor_open || open;
+        } else {
+          any_finger = true;
+          fingers_open = fingers_open && open;
+        }
       }
+      // The anchor opens when any of its grip points left; fingers when all of theirs did.
+      if ((any_anchor && anchor_open) || (any_finger && fingers_open)) to_release.emplace_back(object, hand);
     }
-    // The anchor opens when any of its grip points left; fingers when all of theirs did.
-    if ((any_anchor && anchor_open) || (any_finger && fingers_open)) to_release.push_back(object);
   }
-  for (const Entity object : to_release) release(object, false);
+  for (std::size_t i = 0; i < to_release.size(); ++i) {
+    const auto [object, hand] = to_release[i];
+    const bool both = (i + 1 < to_release.size() && to_release[i + 1].first == object) || (i > 0 && to_release[i - 1].first == object);
+    release(object, hand, both ? LetGo::kBoth : LetGo::kOpened);
+  }
 }
 
 // New grasps: a hand not holding anything whose anchor (thumb or palm) and a curled finger touch
@@ -352,7 +452,7 @@ void GraspSystem::begin_new_grasps(World& world, const HandContacts& contacts) {
     for (const auto& [object, list] : contacts[static_cast<std::size_t>(hand)]) {
       btRigidBody* body = physics_.body(object);
       if (!body || body->isStaticOrKinematicObject() || !world.alive(object) || !world.has<Grabbable>(object)) continue;
-      if (const auto it = held_.find(object); it != held_.end() && it->second.hand == hand) continue;
+      if (const auto it = held_.find(object); it != held_.end() && it->second.by[static_cast<std::size_t>(hand)]) continue;
       // Contacts by group; an anchor and a finger oppose when any pair of their contacts does
       // (the thumb's tip may be on the far side while its base touches the near face).
       std::array<std::vector<const Contact*>, 6> by_group;
@@ -392,7 +492,7 @@ void GraspSystem::resume_collisions() {
     btRigidBody* body = physics_.body(r.first);
     HandColliders* h = hands_[static_cast<std::size_t>(r.second)];
     if (!body || !h) return true;
-    if (const auto it = held_.find(r.first); it != held_.end() && it->second.hand == r.second) return true;
+    if (const auto it = held_.find(r.first); it != held_.end() && it->second.by[static_cast<std::size_t>(r.second)]) return true;
     btVector3 lo, hi;
     body->getAabb(lo, hi);
     const btVector3 pad(0.002f, 0.002f, 0.002f);

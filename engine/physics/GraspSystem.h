@@ -17,8 +17,15 @@
 // never counts as open, so a hand whose curled fingers hide their own markers keeps holding. On
 // release the object takes the hand's velocity, fitted by least squares over a window that ends
 // a little before the release (the hand slows while it opens), and its angular velocity, so it
-// can be thrown. A hand cannot grasp again within `regrasp_delay_s` of releasing. Another hand
-// that grasps a held object takes it over (a hand-over).
+// can be thrown. A hand cannot grasp again within `regrasp_delay_s` of releasing.
+//
+// Two hands: another hand that grasps a held object joins the grasp (when the object is
+// `Grabbable::two_handed`; otherwise it takes the object over). Held in both, the object keeps its
+// pose in the frame the hands span: origin midway between their grips, x along the line from the
+// left grip to the right one, y the hands' mean roll about that line; so it moves with both hands'
+// midpoint and turns with the line between them, and (with `scale_with_hands`) grows and shrinks
+// with their distance. When one hand lets go, the other keeps the object where the pair held it
+// (a hand-over: its release says `handed_over`), and carries on alone without a jump.
 //
 // Collisions between a released object and its hand's bones resume once no bone overlaps it.
 
@@ -78,7 +85,9 @@ class GraspSystem {
 
   // Events of the last post_step.
   const std::vector<InteractionEvent>& events() const { return events_; }
+  // The hand holding `object` (the left one when both do).
   std::optional<HandSide> held_by(Entity object) const;
+  bool held_by_both(Entity object) const;
   std::optional<Entity> holding(HandSide hand) const;
   const GraspSettings& settings() const { return settings_; }
   // Where the hand holds `object` now (world), if held.
@@ -101,12 +110,26 @@ class GraspSystem {
     btVector3 normal;     // object frame, outward
     btVector3 on_bone;    // tracked bone frame
   };
-  struct Held {
-    int hand = 0;
-    btTransform hand_from_object;
+  // One hand's hold of an object.
+  struct HandGrip {
+    btTransform hand_from_object;  // where the object is, hand frame (while this hand holds it alone)
     std::vector<GripPoint> grip;
+    btVector3 centre;              // hand frame: the middle of its grip points
+    btQuaternion rotation_paired;  // the hand's rotation (world) when the other hand joined
+  };
+  struct Held {
+    std::array<std::optional<HandGrip>, 2> by;  // per hand (left, right)
+    Grabbable options;
+    // Both hands: the object in the frame they span, when they began holding it together.
+    btTransform pair_from_object;
+    btVector3 pair_up;  // world: that frame's y then
+    double span_m = 0.0;
+    double scale_paired = 1.0;
     std::deque<std::pair<double, btTransform>> history;  // (time, target)
     double stuck_since_s = -1.0;
+
+    bool both() const { return by[0] && by[1]; }
+    int first() const { return by[0] ? 0 : 1; }
   };
   struct PairState {
     bool hovering = false;
@@ -121,8 +144,14 @@ class GraspSystem {
   void resume_collisions();
 
   void begin_grasp(World& world, int hand, Entity object, const std::vector<Contact>& contacts, const std::vector<int>& groups);
-  void release(Entity object, bool handed_over);
+  // How a hand lets go: it opened (a hand-over when the other still holds), the other hand took
+  // the object from it (a hand-over), or both let go at once (none).
+  enum class LetGo { kOpened, kTaken, kBoth };
+  void release(Entity object, int hand, LetGo how);
   btTransform target_of(const Held& held) const;
+  btVector3 grip_centre(const Held& held, int hand) const;  // world
+  btTransform pair_frame(const Held& held) const;
+  double pair_scale(const Held& held) const;
   void ignore_hand(btRigidBody* object, int hand, bool ignore);
   void emit(InteractionEventType type, Entity object, std::optional<int> hand);
   double curl_rad(int hand, int finger) const;

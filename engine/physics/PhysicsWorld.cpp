@@ -19,6 +19,7 @@ struct PhysicsWorld::Owned {
   std::unique_ptr<btCollisionShape> inner;  // a hull's full point cloud, kept while the hull lives
   std::unique_ptr<btDefaultMotionState> motion;
   std::unique_ptr<btRigidBody> body;
+  double scale = 1.0;  // set_scale's factor
 };
 
 namespace {
@@ -167,6 +168,7 @@ std::expected<void, std::string> PhysicsWorld::add_scene_bodies(World& world) {
     world_->addRigidBody(b, kSceneGroup, kSceneGroup | kHandGroup);
     bodies_[fresh_entities[i]] = b;
     entity_by_object_[b] = fresh_entities[i];
+    owned_by_entity_[fresh_entities[i]] = fresh[i].get();
     entities_.push_back(fresh_entities[i]);
     owned_.push_back(std::move(fresh[i]));
   }
@@ -194,6 +196,34 @@ void PhysicsWorld::set_enabled(Entity e, bool enabled) {
   } else if (!enabled && in_world) {
     world_->removeRigidBody(b);
   }
+}
+
+void PhysicsWorld::set_scale(World& world, Entity e, double factor) {
+  const auto it = owned_by_entity_.find(e);
+  if (it == owned_by_entity_.end() || !std::isfinite(factor) || factor <= 0.0) return;
+  Owned& o = *it->second;
+  btRigidBody* b = o.body.get();
+  if (b->isStaticOrKinematicObject() || factor == o.scale) return;
+  const btScalar f = static_cast<btScalar>(factor);
+  o.shape->setLocalScaling(btVector3(f, f, f));
+  if (b->getInvMass() > 0) {
+    const btScalar mass = 1 / b->getInvMass();
+    btVector3 inertia(0, 0, 0);
+    o.shape->calculateLocalInertia(mass, inertia);
+    b->setMassProps(mass, inertia);
+    b->updateInertiaTensor();
+  }
+  if (b->getBroadphaseHandle()) world_->updateSingleAabb(b);
+  const float ratio = static_cast<float>(factor / o.scale);
+  o.scale = factor;
+  if (WorldTransform* wt = world.find<WorldTransform>(e))
+    wt->world_from_local = wt->world_from_local * glm::scale(glm::mat4(1.0f), glm::vec3(ratio));
+  if (Transform* t = world.find<Transform>(e)) t->scale *= ratio;
+}
+
+double PhysicsWorld::scale(Entity e) const {
+  const auto it = owned_by_entity_.find(e);
+  return it == owned_by_entity_.end() ? 1.0 : it->second->scale;
 }
 
 void PhysicsWorld::add_external(btRigidBody* body, int group, int mask) { world_->addRigidBody(body, group, mask); }

@@ -65,6 +65,13 @@ class PhysicsWorld {
   // puts it back where it was (true). Nothing for an entity without a body.
   void set_enabled(Entity e, bool enabled);
 
+  // Scales an entity's body, shape and mass distribution, to `factor` times the size it was
+  // created with, and its entity's Transform and WorldTransform with it (a two-handed stretch).
+  // Nothing for an entity without a body, a static one, or a factor that is not finite and > 0.
+  void set_scale(World& world, Entity e, double factor);
+  // The factor last set (1 for a body never scaled).
+  double scale(Entity e) const;
+
   // A body owned by someone else (hand bones): added with its group and mask, removed by them.
   void add_external(btRigidBody* body, int group, int mask);
   void remove_external(btRigidBody* body);
@@ -80,6 +87,7 @@ class PhysicsWorld {
   std::vector<std::unique_ptr<Owned>> owned_;
   std::vector<Entity> entities_;
   std::unordered_map<Entity, btRigidBody*> bodies_;
+  std::unordered_map<Entity, Owned*> owned_by_entity_;
   std::unordered_map<const btCollisionObject*, Entity> entity_by_object_;
   double time_s_ = 0.0;
   long steps_ = 0;

@@ -143,7 +143,7 @@ void SceneRules::apply(World& world, PhysicsWorld& physics, Mechanisms& mechanis
     const std::optional<Material> material = world.has<Material>(target) ? std::optional(world.get<Material>(target)) : std::nullopt;
     const std::optional<PhysicsBody> body = world.has<PhysicsBody>(target) ? std::optional(world.get<PhysicsBody>(target)) : std::nullopt;
     const std::optional<Tags> tags = world.has<Tags>(target) ? std::optional(world.get<Tags>(target)) : std::nullopt;
-    const bool grabbable = world.has<Grabbable>(target);
+    const std::optional<Grabbable> grabbable = world.has<Grabbable>(target) ? std::optional(world.get<Grabbable>(target)) : std::nullopt;
     Transform t;
     t.position = glm::vec3(world_from_local[3]);
     glm::mat3 r(world_from_local);
@@ -159,7 +159,7 @@ void SceneRules::apply(World& world, PhysicsWorld& physics, Mechanisms& mechanis
     if (mesh) world.add<Mesh>(copy, *mesh);
     if (material) world.add<Material>(copy, *material);
     if (body) world.add<PhysicsBody>(copy, *body);
-    if (grabbable) world.add<Grabbable>(copy);
+    if (grabbable) world.add<Grabbable>(copy, *grabbable);
     if (tags) world.add<Tags>(copy, *tags);
     (void)physics.add_scene_bodies(world);  // its mesh was loaded once already: cannot fail for it
   }

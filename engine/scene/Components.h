@@ -65,7 +65,17 @@ struct PhysicsBody {
 };
 
 // May be picked up by a hand. Only on dynamic bodies.
-struct Grabbable {};
+struct Grabbable {
+  // A second hand that grasps the object joins the first: the object then moves with the midpoint
+  // of the hands and turns with the line between them (and their mean roll about it). False: the
+  // second hand takes the object over from the first.
+  bool two_handed = true;
+  // Held in both hands, the object scales with the hands' distance (as MRTK's object manipulator
+  // does), within [min_scale, max_scale] of the size it was created with.
+  bool scale_with_hands = false;
+  float min_scale = 0.5f;
+  float max_scale = 2.0f;
+};
 
 // The entity follows the pose of a tracked marker star (its id in the marker-star set).
 struct TrackedBy {

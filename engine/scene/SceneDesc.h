@@ -83,7 +83,7 @@ struct EntityDesc {
   std::optional<Mesh> mesh;
   std::optional<Material> material;
   std::optional<PhysicsBody> body;
-  bool grabbable = false;
+  std::optional<Grabbable> grabbable;
   std::optional<int> tracked_by;  // marker-star id
   std::vector<std::string> tags;
   std::optional<Joint> joint;

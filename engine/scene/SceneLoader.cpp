@@ -377,6 +377,23 @@ Button read_button(const Node& n) {
   return b;
 }
 
+// true, false, or an object of options.
+std::optional<Grabbable> read_grabbable(const Node& n) {
+  if (n.raw().is_boolean()) return n.boolean() ? std::optional<Grabbable>(Grabbable{}) : std::nullopt;
+  if (!n.raw().is_object()) n.fail("expected true, false or an object, got " + describe(n.raw()));
+  n.expect_object({"two_handed", "scale_with_hands"});
+  Grabbable g;
+  if (auto t = n.optional("two_handed")) g.two_handed = t->boolean();
+  if (auto s = n.optional("scale_with_hands")) {
+    s->expect_object({"min", "max"});
+    g.scale_with_hands = true;
+    if (auto lo = s->optional("min")) g.min_scale = static_cast<float>(lo->number_in(0.05, 1.0, "a factor from 0.05 to 1"));
+    if (auto hi = s->optional("max")) g.max_scale = static_cast<float>(hi->number_in(1.0, 20.0, "a factor from 1 to 20"));
+    if (!g.two_handed) s->fail("scaling with the hands needs a two-handed grab");
+  }
+  return g;
+}
+
 Socket read_socket(const Node& n) {
   n.expect_object({"accepts", "snap_distance_m", "attach"});
   Socket s;
@@ -410,7 +427,7 @@ EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir) {
     }
   }
   if (auto g = n.optional("grabbable")) {
-    e.grabbable = g->boolean();
+    e.grabbable = read_grabbable(*g);
     if (e.grabbable && (!e.body || e.body->type != BodyType::kDynamic)) {
       g->fail("only an entity with a dynamic body can be grabbable");
     }
@@ -665,7 +682,7 @@ std::vector<Entity> instantiate(const SceneDesc& scene, World& world) {
     if (d.mesh) world.add<Mesh>(e, *d.mesh);
     if (d.mesh || d.material) world.add<Material>(e, d.material.value_or(Material{}));
     if (d.body) world.add<PhysicsBody>(e, *d.body);
-    if (d.grabbable) world.add<Grabbable>(e);
+    if (d.grabbable) world.add<Grabbable>(e, *d.grabbable);
     if (d.tracked_by) world.add<TrackedBy>(e, TrackedBy{*d.tracked_by});
     if (!d.tags.empty()) world.add<Tags>(e, Tags{d.tags});
     if (d.joint) world.add<Joint>(e, *d.joint);

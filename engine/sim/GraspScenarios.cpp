@@ -81,7 +81,7 @@ SceneDesc make_scene(bool sphere, double size_m, bool second_pedestal, float ped
     object.mesh = Mesh{BoxShape{glm::vec3(static_cast<float>(size_m))}};
   }
   object.body = PhysicsBody{BodyType::kDynamic, 0.1f, 0.8f, 0.0f};
-  object.grabbable = true;
+  object.grabbable = Grabbable{};
   scene.entities.push_back(object);
   return scene;
 }

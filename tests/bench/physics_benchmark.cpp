@@ -54,7 +54,7 @@ SceneDesc bench_scene() {
       o.transform.position = {x, kTableTop + 0.025f, z};
     }
     o.body = PhysicsBody{BodyType::kDynamic, 0.1f, 0.8f, 0.0f};
-    o.grabbable = true;
+    o.grabbable = Grabbable{};
     scene.entities.push_back(o);
   }
   return scene;

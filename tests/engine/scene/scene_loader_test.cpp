@@ -151,7 +151,7 @@ TEST_F(SceneFiles, WrongTypes) {
   EXPECT_EQ(error_of(scene_with(R"({"name": 5})")), "/entities/0/name: expected a string, got 5");
   EXPECT_EQ(error_of(R"({"entities": {"name": "a"}})"), "/entities: expected an array, got an object");
   EXPECT_EQ(error_of(scene_with(std::string(kCube) + R"(, {"name": "b", "grabbable": "yes"})")),
-            "/entities/1/grabbable: expected true or false, got \"yes\"");
+            "/entities/1/grabbable: expected true, false or an object, got \"yes\"");
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "mesh": {"shape": "cone"}})")),
             "/entities/0/mesh/shape: expected one of \"box\", \"sphere\", \"capsule\", \"plane\", \"gltf\", got \"cone\"");
   EXPECT_EQ(error_of("[1, 2]"), "/: expected an object, got an array");

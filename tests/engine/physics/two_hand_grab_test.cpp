@@ -1,0 +1,203 @@
+// Two-handed grabs through Bullet: a bar held at both ends moves with the hands' midpoint, tilts
+// with the line between them, hands over to the remaining hand without a jump, and (when the
+// scene asks) scales with the hands' distance; an object that is not two-handed is taken over.
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "engine/physics/GraspSystem.h"
+#include "engine/sim/ScriptedHands.h"
+#include "tests/engine/physics/PhysicsTestScenes.h"
+
+namespace rhot {
+namespace {
+
+// A 60 cm bar (4 cm square) lying along x on a stand, its top at 0.84 m.
+std::string bar_scene(const std::string& grabbable) {
+  return std::string(R"({"entities": [)") + test::kFloor +
+         R"(, {"name": "stand", "transform": {"position": [0, 0.4, 0]}, "mesh": {"shape": "box", "size_m": [0.2, 0.8, 0.12]},
+               "body": {"type": "static", "friction": 0.8}},
+             {"name": "bar", "transform": {"position": [0, 0.82, 0]}, "mesh": {"shape": "box", "size_m": [0.6, 0.04, 0.04]},
+              "body": {"type": "dynamic", "mass_kg": 0.4, "friction": 0.8}, "grabbable": )" +
+         grabbable + "}]}";
+}
+
+constexpr double kBarY = 0.82;
+constexpr double kGripX = 0.22;  // each hand this far from the bar's middle
+
+struct TwoHands {
+  World world;
+  std::unique_ptr<HandPhysics> physics;
+  Entity bar;
+  std::array<GraspPose, 2> grasp{make_grasp(HandSide::kLeft, 0.04, 0.006, 2), make_grasp(HandSide::kRight, 0.04, 0.006, 2)};
+  std::array<Eigen::Vector3d, 2> at{Eigen::Vector3d(-kGripX, kBarY, 0.0), Eigen::Vector3d(kGripX, kBarY, 0.0)};
+  std::array<double, 2> closure{0.0, 0.0};
+  std::vector<InteractionEvent> events;
+
+  explicit TwoHands(const std::string& grabbable = "true") {
+    physics = test::physics_for(world, test::parse(bar_scene(grabbable)));
+    bar = find_named(world, "bar");
+  }
+  void step() {
+    std::array<HandInput, 2> hands;
+    for (std::size_t h = 0; h < 2; ++h) hands[h] = hand_input(grasp[h].place(at[h], Eigen::Vector3d::UnitZ()), grasp[h].pose(closure[h]));
+    physics->step(world, hands);
+    for (const InteractionEvent& e : physics->events()) events.push_back(e);
+  }
+  // `steps` steps moving the hands linearly by `move` (per hand) and their closures to `close`.
+  void go(int steps, const std::array<Eigen::Vector3d, 2>& move, const std::array<double, 2>& close) {
+    const auto from = at;
+    const auto closure_from = closure;
+    for (int i = 1; i <= steps; ++i) {
+      const double f = static_cast<double>(i) / steps;
+      for (std::size_t h = 0; h < 2; ++h) {
+        at[h] = from[h] + f * move[h];
+        closure[h] = closure_from[h] + f * (close[h] - closure_from[h]);
+      }
+      step();
+    }
+  }
+  void grab_both() {
+    const Eigen::Vector3d up(0.0, 0.15, 0.0);
+    at[0] += up;
+    at[1] += up;
+    go(45, {-up, -up}, {0.0, 0.0});
+    go(45, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {1.0, 1.0});
+  }
+  btTransform pose() const { return physics->physics().body(bar)->getWorldTransform(); }
+  int count(InteractionEventType type) const {
+    return static_cast<int>(std::count_if(events.begin(), events.end(), [&](const InteractionEvent& e) { return e.type == type; }));
+  }
+};
+
+double degrees(double rad) { return rad * 180.0 / std::numbers::pi; }
+
+TEST(TwoHandGrab, ABarHeldAtBothEndsMovesAndTurnsWithBothHandsAndHandsOverWithoutAJump) {
+  TwoHands t;
+  t.grab_both();
+  ASSERT_EQ(t.count(InteractionEventType::kGrasp), 2);
+  const GraspSystem& g = t.physics->grasp();
+  ASSERT_TRUE(g.held_by_both(t.bar));
+  EXPECT_EQ(g.holding(HandSide::kLeft), t.bar);
+  EXPECT_EQ(g.holding(HandSide::kRight), t.bar);
+  const btVector3 start = t.pose().getOrigin();
+
+  // Both hands up 10 cm and forward 10 cm: the bar comes along, level.
+  const Eigen::Vector3d lift(0.0, 0.1, 0.1);
+  t.go(90, {lift, lift}, {1.0, 1.0});
+  for (int i = 0; i < 20; ++i) t.step();
+  btVector3 moved = t.pose().getOrigin() - start;
+  EXPECT_NEAR(moved.y(), 0.1, 0.005);
+  EXPECT_NEAR(moved.z(), 0.1, 0.005);
+  EXPECT_NEAR(moved.x(), 0.0, 0.005);
+  const btVector3 level = quatRotate(t.pose().getRotation(), btVector3(1, 0, 0));
+  EXPECT_LT(degrees(std::asin(std::abs(static_cast<double>(level.y())))), 1.0);
+
+  // The right hand 10 cm higher: the bar tilts with the line between the hands.
+  t.go(90, {Eigen::Vector3d::Zero(), Eigen::Vector3d(0.0, 0.1, 0.0)}, {1.0, 1.0});
+  for (int i = 0; i < 20; ++i) t.step();
+  const btVector3 along = quatRotate(t.pose().getRotation(), btVector3(1, 0, 0));
+  const double tilt = degrees(std::asin(static_cast<double>(along.y())));
+  EXPECT_NEAR(tilt, degrees(std::atan2(0.1, 2 * kGripX)), 1.0);
+  EXPECT_NEAR(static_cast<double>(t.pose().getOrigin().y()) - static_cast<double>(start.y()), 0.15, 0.005) << "midway between the hands";
+
+  // The right hand opens: a hand-over to the left, and the bar stays where the pair held it.
+  const btTransform before = t.pose();
+  const int releases = t.count(InteractionEventType::kRelease);
+  t.go(9, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {1.0, 0.0});
+  ASSERT_EQ(t.count(InteractionEventType::kRelease), releases + 1);
+  const auto release =
+      std::find_if(t.events.rbegin(), t.events.rend(), [](const InteractionEvent& e) { return e.type == InteractionEventType::kRelease; });
+  EXPECT_EQ(release->hand, HandSide::kRight);
+  EXPECT_TRUE(release->handed_over);
+  EXPECT_FALSE(g.held_by_both(t.bar));
+  EXPECT_EQ(g.holding(HandSide::kLeft), t.bar);
+  EXPECT_FALSE(g.holding(HandSide::kRight).has_value());
+  for (int i = 0; i < 10; ++i) t.step();
+  EXPECT_LT(static_cast<double>((t.pose().getOrigin() - before.getOrigin()).length()), 0.004);
+  EXPECT_LT(degrees(static_cast<double>(t.pose().getRotation().angleShortestPath(before.getRotation()))), 1.0);
+
+  // The left hand alone carries it 10 cm to the left.
+  const btVector3 alone = t.pose().getOrigin();
+  t.go(45, {Eigen::Vector3d(-0.1, 0.0, 0.0), Eigen::Vector3d::Zero()}, {1.0, 0.0});
+  for (int i = 0; i < 10; ++i) t.step();
+  EXPECT_NEAR(static_cast<double>(t.pose().getOrigin().x() - alone.x()), -0.1, 0.005);
+
+  // ... and lets go: an ordinary release, and the bar falls.
+  t.go(9, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {0.0, 0.0});
+  const auto last =
+      std::find_if(t.events.rbegin(), t.events.rend(), [](const InteractionEvent& e) { return e.type == InteractionEventType::kRelease; });
+  EXPECT_EQ(last->hand, HandSide::kLeft);
+  EXPECT_FALSE(last->handed_over);
+  EXPECT_FALSE(g.held_by(t.bar).has_value());
+  const double y = static_cast<double>(t.pose().getOrigin().y());
+  for (int i = 0; i < 20; ++i) t.step();
+  EXPECT_LT(static_cast<double>(t.pose().getOrigin().y()), y - 0.02);
+}
+
+TEST(TwoHandGrab, HandsMovingApartScaleAnObjectThatAsksForIt) {
+  TwoHands t(R"({"scale_with_hands": {"min": 0.5, "max": 1.4}})");
+  t.grab_both();
+  ASSERT_TRUE(t.physics->grasp().held_by_both(t.bar));
+  const Eigen::Vector3d out(0.11, 0.0, 0.0);  // each hand: the span grows from 0.44 to 0.66 m
+  t.go(45, {-out, out}, {1.0, 1.0});
+  for (int i = 0; i < 10; ++i) t.step();
+  EXPECT_NEAR(t.physics->physics().scale(t.bar), 1.4, 1e-6) << "capped at max";
+  btVector3 lo, hi;
+  t.physics->physics().body(t.bar)->getAabb(lo, hi);
+  EXPECT_NEAR(static_cast<double>(hi.x() - lo.x()), 0.6 * 1.4, 0.01);
+  EXPECT_NEAR(t.world.get<Transform>(t.bar).scale.x, 1.4f, 1e-4f);
+  // Back together to a span of 0.55 m: 1.25 times the first.
+  const Eigen::Vector3d in(-0.055, 0.0, 0.0);
+  t.go(45, {-in, in}, {1.0, 1.0});
+  for (int i = 0; i < 10; ++i) t.step();
+  EXPECT_NEAR(t.physics->physics().scale(t.bar), 0.55 / (2 * kGripX), 0.02);
+}
+
+TEST(TwoHandGrab, ABarThatIsNotScaledKeepsItsSizeWhenTheHandsMoveApart) {
+  TwoHands t;
+  t.grab_both();
+  const Eigen::Vector3d out(0.05, 0.0, 0.0);
+  t.go(45, {-out, out}, {1.0, 1.0});
+  EXPECT_EQ(t.physics->physics().scale(t.bar), 1.0);
+  EXPECT_TRUE(t.physics->grasp().held_by_both(t.bar));
+}
+
+TEST(TwoHandGrab, AnObjectThatIsNotTwoHandedIsTakenOverByTheSecondHand) {
+  TwoHands t(R"({"two_handed": false})");
+  // The right hand grasps first, then the left.
+  t.at[1].y() += 0.15;
+  t.go(45, {Eigen::Vector3d::Zero(), Eigen::Vector3d(0.0, -0.15, 0.0)}, {0.0, 0.0});
+  t.go(45, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {0.0, 1.0});
+  ASSERT_EQ(t.physics->grasp().holding(HandSide::kRight), t.bar);
+  t.go(45, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {1.0, 1.0});
+  ASSERT_EQ(t.count(InteractionEventType::kGrasp), 2);
+  ASSERT_EQ(t.count(InteractionEventType::kRelease), 1);
+  const auto release =
+      std::find_if(t.events.begin(), t.events.end(), [](const InteractionEvent& e) { return e.type == InteractionEventType::kRelease; });
+  EXPECT_EQ(release->hand, HandSide::kRight);
+  EXPECT_TRUE(release->handed_over);
+  EXPECT_EQ(t.physics->grasp().holding(HandSide::kLeft), t.bar);
+  EXPECT_FALSE(t.physics->grasp().held_by_both(t.bar));
+}
+
+TEST(TwoHandGrab, GrabbableOptionsInAScene) {
+  const auto error_of = [](const std::string& grabbable) {
+    auto scene = parse_scene(bar_scene(grabbable), ".", "s.json");
+    return scene ? std::string() : scene.error().to_string();
+  };
+  EXPECT_EQ(error_of(R"({"two_handed": true, "scale_with_hands": {"max": 3}})"), "");
+  EXPECT_EQ(error_of(R"({"two_hands": true})"),
+            "s.json: /entities/2/grabbable/two_hands: unknown key \"two_hands\"; expected one of: two_handed, scale_with_hands");
+  EXPECT_EQ(error_of(R"({"two_handed": false, "scale_with_hands": {}})"),
+            "s.json: /entities/2/grabbable/scale_with_hands: scaling with the hands needs a two-handed grab");
+  EXPECT_EQ(error_of(R"({"scale_with_hands": {"min": 2}})"),
+            "s.json: /entities/2/grabbable/scale_with_hands/min: expected a factor from 0.05 to 1, got 2");
+  EXPECT_EQ(error_of(R"("yes")"), "s.json: /entities/2/grabbable: expected true, false or an object, got \"yes\"");
+}
+
+}  // namespace
+}  // namespace rhot
