@@ -220,7 +220,8 @@ bool Mechanisms::drive(Entity e, double velocity, double max_force) {
   if (it == by_entity_.end()) return false;
   Part& p = *parts_[it->second];
   if (p.kind != Part::Kind::kJoint || !p.six || p.axis < 0) return false;
-  const double scale = p.axis == kAngularX ? 1.0 / kDegPerRad : 1.0;
+  // Bullet's linear motor drives the other body's frame along the axis, the reverse of the value.
+  const double scale = p.axis == kAngularX ? 1.0 / kDegPerRad : -1.0;
   // Friction is a motor that holds still with at most the friction force.
   const bool motor = max_force > 0.0;
   const double force = motor ? max_force : p.friction;

@@ -1,5 +1,6 @@
 #include "engine/scene/SceneLoader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -14,6 +15,7 @@
 #include "engine/core/World.h"
 #include "base/Check.h"
 #include "base/Json.h"
+#include "engine/scene/GltfPhysics.h"
 
 namespace rhot {
 
@@ -410,9 +412,45 @@ Socket read_socket(const Node& n) {
   return s;
 }
 
-EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir) {
+// An error in a file a scene refers to (a glTF), reported as that file's.
+struct ReferencedFileFailure {
+  JsonError error;
+};
+
+// A `gltf` entity's bodies and joints: children of the entity (`gltf` is a file name, or an object
+// with `file` and `grabbable`, the names of its nodes that hands may pick up).
+std::vector<EntityDesc> read_gltf_entities(const Node& n, const EntityDesc& owner, const std::filesystem::path& base_dir) {
+  const bool short_form = n.raw().is_string();
+  if (!short_form) n.expect_object({"file", "grabbable"});
+  const Node file = short_form ? n : n["file"];
+  const std::filesystem::path path = existing_file(file, base_dir);
+  const std::string ext = path.extension().string();
+  if (ext != ".gltf" && ext != ".glb") file.fail("expected a .gltf or .glb file, got " + describe(file.raw()));
+  auto entities = read_gltf_physics(path.lexically_normal(), owner.name);
+  if (!entities) throw ReferencedFileFailure{entities.error()};
+  if (entities->empty()) file.fail("no nodes with KHR_physics_rigid_bodies colliders in " + path.filename().string());
+  if (auto g = short_form ? std::nullopt : n.optional("grabbable")) {
+    for (const Node& name : g->elements()) {
+      const std::string full = owner.name + "/" + name.non_empty_string();
+      const auto it = std::find_if(entities->begin(), entities->end(), [&](const EntityDesc& e) { return e.name == full; });
+      if (it == entities->end()) name.fail("no body named \"" + full + "\" in " + path.filename().string());
+      if (it->body->type != BodyType::kDynamic) name.fail("\"" + full + "\" is not a dynamic body and cannot be grabbable");
+      it->grabbable = Grabbable{};
+    }
+  }
+  return std::move(*entities);
+}
+
+EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir, std::vector<EntityDesc>& from_files) {
   n.expect_object(
-      {"name", "parent", "transform", "mesh", "material", "body", "grabbable", "tracked_by", "tags", "joint", "button", "socket"});
+      {"name", "parent", "transform", "mesh", "material", "body", "grabbable", "tracked_by", "tags", "joint", "button", "socket", "gltf"});
+  if (n.has("gltf")) {
+    for (const char* key : {"mesh", "material", "body", "grabbable", "tracked_by", "joint", "button", "socket"}) {
+      if (n.has(key))
+        n[key].fail("an entity made from a glTF file takes its shapes, bodies and joints from the file; no \"" + std::string(key) +
+                    "\" here");
+    }
+  }
   EntityDesc e;
   e.name = n["name"].non_empty_string();
   if (auto p = n.optional("parent")) e.parent = p->non_empty_string();
@@ -454,6 +492,9 @@ EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir) {
     if (e.grabbable) b->fail("a button cannot be grabbable");
   }
   if (auto s = n.optional("socket")) e.socket = read_socket(*s);
+  if (auto g = n.optional("gltf")) {
+    for (EntityDesc& child : read_gltf_entities(*g, e, base_dir)) from_files.push_back(std::move(child));
+  }
   return e;
 }
 
@@ -639,7 +680,9 @@ SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
   SceneDesc scene;
   if (auto s = n.optional("settings")) scene.settings = read_settings(*s, base_dir);
   if (auto list = n.optional("entities")) {
-    for (const Node& e : list->elements()) scene.entities.push_back(read_entity(e, base_dir));
+    std::vector<EntityDesc> from_files;
+    for (const Node& e : list->elements()) scene.entities.push_back(read_entity(e, base_dir, from_files));
+    for (EntityDesc& e : from_files) scene.entities.push_back(std::move(e));
   }
   check_references(scene.entities);
   if (auto list = n.optional("interactions")) {
@@ -656,7 +699,17 @@ SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
 }  // namespace
 
 std::expected<SceneDesc, SceneError> parse_scene(std::string_view json_text, const std::filesystem::path& base_dir, std::string_view name) {
-  return parse_json<SceneDesc>(json_text, name, [&](const JsonNode& root) { return read_scene(root.raw(), base_dir); });
+  std::optional<JsonError> referenced;
+  auto scene = parse_json<SceneDesc>(json_text, name, [&](const JsonNode& root) {
+    try {
+      return read_scene(root.raw(), base_dir);
+    } catch (const ReferencedFileFailure& f) {
+      referenced = f.error;
+      throw JsonFailure{"", ""};
+    }
+  });
+  if (referenced) return std::unexpected(*referenced);
+  return scene;
 }
 
 std::expected<SceneDesc, SceneError> load_scene_file(const std::filesystem::path& file) {

@@ -95,7 +95,10 @@ TEST(Joints, ADrawerSlidesWithinItsLimitsAndASpringPullsItBack) {
       "body": {"type": "dynamic", "mass_kg": 1}, "joint": {"type": "slider", "axis": [0, 0, 1], "limits_m": [0, 0.25]}},
       {"name": "sprung", "transform": {"position": [1, 0.5, 0]}, "mesh": {"shape": "box", "size_m": [0.3, 0.1, 0.3]},
       "body": {"type": "dynamic", "mass_kg": 1}, "joint": {"type": "slider", "axis": [0, 0, 1], "limits_m": [-0.3, 0.3],
-      "spring": {"stiffness": 100, "damping": 20, "rest": 0.1}}})";
+      "spring": {"stiffness": 100, "damping": 20, "rest": 0.1}}},
+      {"name": "driven", "transform": {"position": [2, 0.5, 0]}, "mesh": {"shape": "box", "size_m": [0.3, 0.1, 0.3]},
+      "body": {"type": "dynamic", "mass_kg": 1}, "joint": {"type": "slider", "axis": [0, 0, 1], "limits_m": [0, 0.25],
+      "motor": {"velocity": 0.1, "max_force": 50}}})";
   Stage r(scene_of(drawer));
   r.body("drawer")->setLinearVelocity(btVector3(0.3f, 0.5f, 2.0f));  // out, and sideways and up
   r.seconds(1.0);
@@ -104,6 +107,9 @@ TEST(Joints, ADrawerSlidesWithinItsLimitsAndASpringPullsItBack) {
   EXPECT_NEAR(p.x(), 0.0f, 0.003f);
   EXPECT_NEAR(p.y(), 0.5f, 0.003f);
   EXPECT_NEAR(p.z(), 0.25f, 0.005f);
+  // The driven one moves out at its motor's 10 cm/s, along +axis as the value counts.
+  EXPECT_NEAR(r.value("driven"), 0.1, 0.01);
+  EXPECT_NEAR(static_cast<double>(r.body("driven")->getWorldTransform().getOrigin().z()), 0.1, 0.01);
   // The sprung one settles at its rest position, 10 cm out.
   r.seconds(3.0);
   EXPECT_NEAR(r.value("sprung"), 0.1, 0.01);
