@@ -46,8 +46,12 @@ const EntityDesc* find(const SceneDesc& scene, const std::string& name) {
 DemoScript::DemoScript(const SceneDesc& scene) {
   const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
   // Hands rest above the table in front of the user when they have nothing to do.
-  scripts_[0] = {HandSide::kLeft, {{0.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0}}, 0.05, -Eigen::Vector3d::UnitX()};
-  scripts_[1] = {HandSide::kRight, {{0.0, Eigen::Vector3d(0.25, 0.95, -0.3), 0.0}}, 0.05, Eigen::Vector3d::UnitX()};
+  scripts_[0] = {HandSide::kLeft, {{0.0, Eigen::Vector3d(-0.25, 0.95, -0.3), 0.0}}, 0.05, -Eigen::Vector3d::UnitX(), {}};
+  scripts_[1] = {HandSide::kRight, {{0.0, Eigen::Vector3d(0.25, 0.95, -0.3), 0.0}}, 0.05, Eigen::Vector3d::UnitX(), {}};
+  if (wants_showcase(scene)) {
+    build_showcase(scene);
+    return;
+  }
   for (const EntityDesc& e : scene.entities) {
     if (e.tracked_by) objects_at_start_[*e.tracked_by] = pose_of(e);
   }
@@ -149,6 +153,7 @@ void DemoScript::reaim(double t_s, const Eigen::Vector3d& cube_position) {
 }
 
 HandTruth DemoScript::hand_at(const HandScript& s, double t) const {
+  if (!s.show.empty()) return show_hand_at(s, t);
   Eigen::Vector3d centre = s.keys.back().centre;
   double closure = s.keys.back().closure;
   if (t <= s.keys.front().t) {
@@ -174,7 +179,7 @@ HandTruth DemoScript::hand_at(const HandScript& s, double t) const {
 
 SceneTruth DemoScript::at(double t_s) const {
   // The script repeats; each round ends where it began.
-  const double t = t_s >= 0.0 ? std::fmod(t_s, duration_s()) : 0.0;
+  const double t = t_s < 0.0 ? 0.0 : once_ ? t_s : std::fmod(t_s, duration_s());
   SceneTruth truth;
   truth.hands[0] = hand_at(scripts_[0], t);
   truth.hands[1] = hand_at(scripts_[1], t);

@@ -8,6 +8,19 @@
 // is a real object: it moves because the hand carries it, and tracking sees its star move). Then
 // each hand carries its object back (12-26 s), and the 26 s script starts again. In other
 // scenes a hand whose object is missing rests above the table.
+//
+// A scene with rules or place interactions to exercise (assets/scenes/workbench.json) gets the
+// showcase script instead (engine/sim/ShowcaseScript.cpp), one task after another, each derived
+// from the scene's data:
+//   value_above on a hinge or slider   a hand grasps the joint's handle (a grabbable entity fixed
+//                                      to it, or the jointed entity itself) and swings it about the
+//                                      hinge, or pulls it along the slider, past the threshold
+//   press on a button                  a pointing index finger pushes it in and lifts off
+//   snap on a socket                   a hand carries the object the rule names (or the first the
+//                                      socket accepts) over the socket's attach pose and lets go
+//   place interaction                  the object carried into its zone and put down; with both
+//                                      hands, near its ends, when it is 30 cm or longer
+// The script plays once and then rests.
 
 #include <array>
 #include <map>
@@ -42,8 +55,21 @@ class DemoScript {
   // (the hand resting), the next round's at 20 s (the hand waiting above home). Without this each round would start from the last round's
   // small placement errors.
   void reaim(double t_s, const Eigen::Vector3d& cube_position);
-  // One round of the script; at() repeats it.
-  double duration_s() const { return 26.0; }
+  // One round of the script; at() repeats it (the showcase: plays once, then rests).
+  double duration_s() const { return duration_s_; }
+
+  // A showcase task: what it works ("hinge", "slider", "poke", "socket", "place"), on which
+  // entity (the jointed entity, the button, the socket, the placed object), when.
+  struct Task {
+    std::string kind;
+    std::string entity;
+    double begin_s = 0.0;
+    double end_s = 0.0;
+  };
+  // The showcase's tasks (empty for the demo script).
+  const std::vector<Task>& tasks() const { return tasks_; }
+  // Whether a scene gets the showcase script.
+  static bool wants_showcase(const SceneDesc& scene);
   // The entity names the script acts on ("" when the scene lacks them).
   const std::string& right_target() const { return right_target_; }
   const std::string& left_target() const { return left_target_; }
@@ -54,14 +80,32 @@ class DemoScript {
     Eigen::Vector3d centre;
     double closure;
   };
+  // A showcase key: the grasp's width and axis at it, the hand turned about the grip point, or a
+  // pointing hand with its index tip at `centre`.
+  struct ShowKey {
+    double t;
+    Eigen::Vector3d centre;
+    double closure;
+    double width_m;
+    Eigen::Vector3d axis;
+    Eigen::Quaterniond turn;
+    bool pointing;
+  };
   struct HandScript {
     HandSide side;
     std::vector<Key> keys;
     double width_m = 0.05;
     Eigen::Vector3d axis = Eigen::Vector3d::UnitX();
+    std::vector<ShowKey> show;  // the showcase's keys (instead of keys)
   };
   HandTruth hand_at(const HandScript& s, double t) const;
+  HandTruth show_hand_at(const HandScript& s, double t) const;
   void build_right_keys();
+  void build_showcase(const SceneDesc& scene);
+
+  double duration_s_ = 26.0;
+  bool once_ = false;  // the showcase plays once
+  std::vector<Task> tasks_;
 
   std::array<HandScript, 2> scripts_;
   std::string right_target_, left_target_;

@@ -112,6 +112,15 @@ struct GraspArgs {
   unsigned seed = 1;
 };
 int grasp(const GraspArgs& args);
+// `rhot-eval interactions`'s flags.
+struct InteractionsArgs {
+  std::string scene_file;
+  int seeds = 20;
+  unsigned seed = 1;
+  std::string hands = "tracked";
+  WorldFlags world;
+};
+int interactions(const InteractionsArgs& args);
 int demo(const std::string& scene_file, int placements, unsigned seed, const WorldFlags& world, const std::string& hands, int frames);
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading,
           const WorldFlags& world);

@@ -258,6 +258,22 @@ int main(int argc, char** argv) {
   DemoArgs demo_args;
   demo_args.scene_file = scene_file;
   CLI::App* demo_cmd = add_demo_command(app, demo_args, json);
+  InteractionsArgs inter_args;
+  inter_args.scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/workbench.json";
+  auto* inter_cmd = app.add_subcommand(
+      "interactions", "a scene's showcase script through tracked hands and physics, per seed: each interaction's success, time, events");
+  inter_cmd->add_option("--scene", inter_args.scene_file, "scene file (JSON) with rules or place interactions to exercise")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
+  inter_cmd->add_option("--seeds", inter_args.seeds, "runs, each its own simulated world")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000));
+  inter_cmd->add_option("--seed", inter_args.seed, "the first run's seed (then +1 each)")->capture_default_str();
+  inter_cmd->add_option("--hands", inter_args.hands, "tracked (through the cameras) or perfect (the script's)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"tracked", "perfect"}));
+  add_world_flags(*inter_cmd, inter_args.world, true);
+  inter_cmd->add_flag("--json", json, "print JSON (the only output format)");
   auto* calib_cmd = app.add_subcommand("calibration", "a simulated wand session calibrated from unknown extrinsics, against the true rig");
   int calib_frames = 2000;
   double calib_wand_mm = 500.0;
@@ -283,6 +299,7 @@ int main(int argc, char** argv) {
     }
   }
   if (grasp_cmd->parsed()) return grasp(grasp_args);
+  if (inter_cmd->parsed()) return interactions(inter_args);
   if (nodes_cmd->parsed()) return nodes(nodes_args);
   if (colour_cmd->parsed()) {
     colour_args.clutter = clutter == "on";

@@ -1,0 +1,298 @@
+// The showcase script (engine/sim/DemoScript.h): tasks derived from a scene's rules and place
+// interactions, played one after another by scripted hands.
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numbers>
+
+#include <Eigen/Geometry>
+#include <glm/gtc/quaternion.hpp>
+
+#include "engine/core/Transform.h"
+#include "engine/math/EigenGlm.h"
+#include "engine/sim/DemoScript.h"
+
+namespace rhot {
+
+namespace {
+
+const Eigen::Vector3d kUp = Eigen::Vector3d::UnitY();
+const std::array<Eigen::Vector3d, 2> kRest{Eigen::Vector3d(-0.25, 0.95, -0.3), Eigen::Vector3d(0.25, 0.95, -0.3)};
+
+const EntityDesc* named(const SceneDesc& scene, const std::string& name) {
+  for (const EntityDesc& e : scene.entities) {
+    if (e.name == name) return &e;
+  }
+  return nullptr;
+}
+
+// An entity's pose in the world (its parents' transforms applied), without scale.
+Rigid3d world_pose(const SceneDesc& scene, const EntityDesc& e) {
+  glm::mat4 m = e.transform.matrix();
+  for (const EntityDesc* p = named(scene, e.parent); p; p = named(scene, p->parent)) m = p->transform.matrix() * m;
+  glm::mat3 r(m);
+  for (int i = 0; i < 3; ++i) r[i] = glm::normalize(r[i]);
+  Rigid3d out;
+  out.translation = to_eigen(glm::vec3(m[3]));
+  out.rotation = to_eigen(glm::normalize(glm::quat_cast(r)));
+  return out;
+}
+
+// Half the entity's shape along its own axes, scaled.
+Eigen::Vector3d half_of(const EntityDesc& e) {
+  const auto h = e.mesh ? shape_half_extents(e.mesh->shape) : std::nullopt;
+  if (!h) return Eigen::Vector3d::Constant(0.025);
+  return Eigen::Vector3d(h->x * e.transform.scale.x, h->y * e.transform.scale.y, h->z * e.transform.scale.z);
+}
+
+// The hand for a point: the left one left of the middle of the table.
+int hand_for(const Eigen::Vector3d& p) { return p.x() < -0.1 ? 0 : 1; }
+
+// How a hand closes on an entity from above, palm down: the grip point (its centre, or 2.5 cm
+// below the top of a tall one), the horizontal axis across its thinnest side, and its width there.
+struct Grip {
+  Eigen::Vector3d point;
+  Eigen::Vector3d axis;
+  double width_m;
+};
+Grip grip_of(const SceneDesc& scene, const EntityDesc& e) {
+  const Rigid3d pose = world_pose(scene, e);
+  const Eigen::Vector3d half = half_of(e);
+  Grip g;
+  g.point = pose.translation + kUp * std::max(0.0, half.y() - 0.025);
+  // The entity's x and z axes, flattened: the thinner one is the grip axis.
+  const Eigen::Vector3d x = pose.rotation * Eigen::Vector3d::UnitX(), z = pose.rotation * Eigen::Vector3d::UnitZ();
+  const bool across_x = half.x() <= half.z();
+  Eigen::Vector3d axis = across_x ? x : z;
+  axis.y() = 0.0;
+  g.axis = axis.norm() > 1e-6 ? axis.normalized() : Eigen::Vector3d::UnitX();
+  // The way a hand reaching forward closes: from the thumb toward the fingers away from the user
+  // (-z), or across toward its own side (the left hand -x, the right +x).
+  if (std::abs(g.axis.z()) > std::abs(g.axis.x())) {
+    if (g.axis.z() > 0.0) g.axis = -g.axis;
+  } else if ((g.axis.x() > 0.0) != (hand_for(g.point) == 1)) {
+    g.axis = -g.axis;
+  }
+  g.width_m = 2.0 * (across_x ? half.x() : half.z());
+  return g;
+}
+
+}  // namespace
+
+bool DemoScript::wants_showcase(const SceneDesc& scene) {
+  for (const RuleDesc& r : scene.rules) {
+    if (r.when.event == "value_above" || r.when.event == "press" || r.when.event == "snap") return true;
+  }
+  return false;
+}
+
+void DemoScript::build_showcase(const SceneDesc& scene) {
+  once_ = true;
+  double t = 0.5;  // both hands rest until then
+  std::array<std::vector<ShowKey>, 2> keys;
+  const Eigen::Quaterniond none = Eigen::Quaterniond::Identity();
+  for (std::size_t h = 0; h < 2; ++h) {
+    const Eigen::Vector3d axis = h == 0 ? Eigen::Vector3d(-1.0, 0.0, 0.0) : Eigen::Vector3d(1.0, 0.0, 0.0);
+    keys[h].push_back({0.0, kRest[h], 0.0, 0.05, axis, none, false});
+  }
+  const auto add = [&](int h, double at, const Eigen::Vector3d& c, double closure, const Grip& g, const Eigen::Quaterniond& turn,
+                       bool pointing = false) {
+    keys[static_cast<std::size_t>(h)].push_back({at, c, closure, g.width_m, g.axis, turn, pointing});
+  };
+  // Reach over a grip, down, close; `move(u)` (u 0..1) takes the grip point and the hand's turn
+  // through the task; open, lift off, back to rest. Several hands at once for a two-handed carry.
+  const auto grasp_task = [&](const std::vector<int>& hands, const std::vector<Grip>& grips, double move_s,
+                              const std::function<std::pair<Eigen::Vector3d, Eigen::Quaterniond>(std::size_t, double)>& move) {
+    for (std::size_t k = 0; k < hands.size(); ++k) {
+      const int h = hands[k];
+      const Grip& g = grips[k];
+      const Eigen::Vector3d rest = keys[static_cast<std::size_t>(h)].back().centre;
+      add(h, t, rest, 0.0, g, none);
+      add(h, t + 1.0, g.point + 0.15 * kUp, 0.0, g, none);
+      add(h, t + 1.7, g.point, 0.0, g, none);
+      add(h, t + 2.3, g.point, 1.0, g, none);
+      constexpr int kSteps = 12;
+      for (int i = 1; i <= kSteps; ++i) {
+        const double u = static_cast<double>(i) / kSteps;
+        const auto [p, turn] = move(k, u);
+        add(h, t + 2.3 + move_s * u, p, 1.0, g, turn);
+      }
+      const auto [end, turn] = move(k, 1.0);
+      add(h, t + 2.5 + move_s, end, 1.0, g, turn);
+      add(h, t + 2.9 + move_s, end, 0.0, g, turn);
+      add(h, t + 3.5 + move_s, end + 0.1 * kUp, 0.0, g, turn);
+      add(h, t + 4.4 + move_s, kRest[static_cast<std::size_t>(h)], 0.0, g, none);
+    }
+    t += 4.6 + move_s;
+  };
+
+  for (const RuleDesc& rule : scene.rules) {
+    const EntityDesc* e = named(scene, rule.when.entity);
+    if (!e) continue;
+    const std::string& ev = rule.when.event;
+    if (ev == "value_above" && e->joint && (e->joint->type == JointType::kHinge || e->joint->type == JointType::kSlider)) {
+      // The handle: a grabbable entity fixed to the jointed one, or that one itself.
+      const EntityDesc* handle = e->grabbable ? e : nullptr;
+      for (const EntityDesc& c : scene.entities) {
+        if (!handle && c.grabbable && c.joint && c.joint->type == JointType::kFixed && c.joint->connected_to == e->name) handle = &c;
+      }
+      if (!handle) continue;
+      const Grip g = grip_of(scene, *handle);
+      const Rigid3d pose = world_pose(scene, *e);
+      const Eigen::Vector3d axis = (pose.rotation * to_eigen(e->joint->axis)).normalized();
+      const double begin_s = t;
+      if (e->joint->type == JointType::kHinge) {
+        const double upper = e->joint->limits ? (*e->joint->limits)[1] : 180.0;
+        const double target = std::min(rule.when.value + 15.0, upper - 5.0) * std::numbers::pi / 180.0;
+        const Eigen::Vector3d pivot = pose * to_eigen(e->joint->anchor_m);
+        grasp_task({hand_for(g.point)}, {g}, 2.0, [&](std::size_t, double u) {
+          const Eigen::Quaterniond turn(Eigen::AngleAxisd(target * u, axis));
+          return std::make_pair(Eigen::Vector3d(pivot + turn * (g.point - pivot)), turn);
+        });
+        tasks_.push_back({"hinge", e->name, begin_s, t});
+      } else {
+        const double upper = e->joint->limits ? (*e->joint->limits)[1] : 1.0;
+        const double target = std::min(rule.when.value + 0.04, upper - 0.01);
+        grasp_task({hand_for(g.point)}, {g}, 1.5,
+                   [&](std::size_t, double u) { return std::make_pair(Eigen::Vector3d(g.point + target * u * axis), none); });
+        tasks_.push_back({"slider", e->name, begin_s, t});
+      }
+    } else if (ev == "press" && e->button) {
+      // A pointing index finger from 5 cm above the cap down 70 % of its travel past the top, and
+      // back up.
+      const Rigid3d pose = world_pose(scene, *e);
+      const Eigen::Vector3d push = (pose.rotation * to_eigen(e->button->axis)).normalized();
+      const Eigen::Vector3d half = half_of(*e), local = to_eigen(e->button->axis).normalized();
+      const double depth = std::abs(local.x()) * half.x() + std::abs(local.y()) * half.y() + std::abs(local.z()) * half.z();
+      const Eigen::Vector3d top = pose.translation - depth * push;
+      const Eigen::Vector3d above = top - 0.05 * push, pressed = top + 0.7 * e->button->travel_m * push;
+      const int h = hand_for(top);
+      const Grip g{top, Eigen::Vector3d::UnitX(), 0.05};
+      const double begin_s = t;
+      add(h, t, keys[static_cast<std::size_t>(h)].back().centre, 0.0, g, none, true);
+      add(h, t + 1.0, above, 0.0, g, none, true);
+      add(h, t + 1.6, above, 0.0, g, none, true);
+      add(h, t + 2.1, pressed, 0.0, g, none, true);
+      add(h, t + 2.3, pressed, 0.0, g, none, true);
+      add(h, t + 2.8, above, 0.0, g, none, true);
+      add(h, t + 3.6, kRest[static_cast<std::size_t>(h)], 0.0, g, none, true);
+      t += 3.8;
+      tasks_.push_back({"poke", e->name, begin_s, t});
+    } else if (ev == "snap" && e->socket) {
+      const EntityDesc* object = rule.when.object.empty() ? nullptr : named(scene, rule.when.object);
+      for (const EntityDesc& c : scene.entities) {
+        if (object) break;
+        if (!c.grabbable) continue;
+        const auto& acc = e->socket->accepts;
+        const bool ok = acc.empty() || std::find(acc.begin(), acc.end(), c.name) != acc.end() ||
+                        std::any_of(c.tags.begin(), c.tags.end(),
+                                    [&](const std::string& tag) { return std::find(acc.begin(), acc.end(), tag) != acc.end(); });
+        if (ok) object = &c;
+      }
+      if (!object) continue;
+      const Grip g = grip_of(scene, *object);
+      const Eigen::Vector3d offset = g.point - world_pose(scene, *object).translation;
+      const Eigen::Vector3d attach = world_pose(scene, *e) * to_eigen(e->socket->attach_position) + offset + 0.01 * kUp;
+      const Eigen::Vector3d lifted = g.point + 0.12 * kUp;
+      const Eigen::Vector3d over(attach.x(), std::max(lifted.y(), attach.y() + 0.08), attach.z());
+      const double begin_s = t;
+      grasp_task({hand_for(g.point)}, {g}, 2.0, [&](std::size_t, double u) {
+        // Up, over, down: a third of the time each.
+        Eigen::Vector3d p;
+        if (u < 1.0 / 3.0) {
+          p = g.point + 3.0 * u * (lifted - g.point);
+        } else if (u < 2.0 / 3.0) {
+          p = lifted + (3.0 * u - 1.0) * (over - lifted);
+        } else {
+          p = over + (3.0 * u - 2.0) * (attach - over);
+        }
+        return std::make_pair(p, none);
+      });
+      tasks_.push_back({"socket", e->name, begin_s, t});
+    }
+  }
+  for (const InteractionDesc& in : scene.interactions) {
+    if (in.type != InteractionType::kPlace) continue;
+    const EntityDesc* object = named(scene, in.object);
+    const EntityDesc* zone = named(scene, in.zone);
+    if (!object || !zone || !object->grabbable) continue;
+    const Rigid3d pose = world_pose(scene, *object);
+    const Eigen::Vector3d half = half_of(*object);
+    const Eigen::Vector3d goal = world_pose(scene, *zone).translation;
+    const Eigen::Vector3d rest_at(goal.x(), pose.translation.y() + 0.003, goal.z());  // where its centre is put down
+    std::vector<int> hands;
+    std::vector<Grip> grips;
+    const double length = 2.0 * std::max(half.x(), half.z());
+    if (length >= 0.3) {
+      // Both hands, 37 % of the length out from the middle, across the long side.
+      Eigen::Vector3d along = pose.rotation * (half.x() >= half.z() ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ());
+      along.y() = 0.0;
+      along.normalize();
+      if (along.x() < 0.0) along = -along;
+      const Eigen::Vector3d across = kUp.cross(along).normalized();
+      const double width = 2.0 * std::min(half.x(), half.z());
+      for (int h = 0; h < 2; ++h) {
+        hands.push_back(h);
+        grips.push_back({pose.translation + (h == 0 ? -0.37 : 0.37) * length * along, across, width});
+      }
+    } else {
+      const Grip g = grip_of(scene, *object);
+      hands.push_back(hand_for(g.point));
+      grips.push_back(g);
+    }
+    const double begin_s = t;
+    grasp_task(hands, grips, 2.5, [&](std::size_t k, double u) {
+      const Eigen::Vector3d from = grips[k].point;
+      const Eigen::Vector3d to = grips[k].point + (rest_at - pose.translation);
+      const Eigen::Vector3d up_from = from + 0.1 * kUp, up_to = to + 0.1 * kUp;
+      Eigen::Vector3d p;
+      if (u < 0.25) {
+        p = from + 4.0 * u * (up_from - from);
+      } else if (u < 0.75) {
+        p = up_from + 2.0 * (u - 0.25) * (up_to - up_from);
+      } else {
+        p = up_to + 4.0 * (u - 0.75) * (to - up_to);
+      }
+      return std::make_pair(p, none);
+    });
+    tasks_.push_back({"place", object->name, begin_s, t});
+  }
+  // Both hands hold still at the end of their keys; the script ends a second later.
+  duration_s_ = t + 1.0;
+  for (std::size_t h = 0; h < 2; ++h) {
+    keys[h].push_back({duration_s_, kRest[h], 0.0, keys[h].back().width_m, keys[h].back().axis, none, keys[h].back().pointing});
+    scripts_[h].show = std::move(keys[h]);
+  }
+}
+
+HandTruth DemoScript::show_hand_at(const HandScript& s, double t) const {
+  // The segment t is in, smoothed at both ends; the pose (width, axis, pointing) of its end key.
+  std::size_t i = 0;
+  while (i + 1 < s.show.size() && t > s.show[i].t) ++i;
+  const ShowKey& b = s.show[i];
+  const ShowKey& a = s.show[i > 0 ? i - 1 : 0];
+  double u = b.t > a.t ? std::clamp((t - a.t) / (b.t - a.t), 0.0, 1.0) : 1.0;
+  u = u * u * (3.0 - 2.0 * u);
+  const Eigen::Vector3d centre = a.centre + u * (b.centre - a.centre);
+  const double closure = a.closure + u * (b.closure - a.closure);
+  const Eigen::Quaterniond turn = a.turn.slerp(u, b.turn);
+  const auto key = std::make_pair(static_cast<int>(s.side), std::lround(b.width_m * 1e5));
+  auto it = grasps_.find(key);
+  if (it == grasps_.end()) it = grasps_.emplace(key, make_grasp(s.side, b.width_m)).first;
+  if (b.pointing) {
+    // The index finger straight down, its tip at the centre.
+    const HandPose pose = pointing_hand(s.side);
+    const Eigen::Vector3d tip = pose.position_m[static_cast<std::size_t>(HandJoint::kIndexTip)];
+    const Eigen::Vector3d dir = tip - pose.position_m[static_cast<std::size_t>(HandJoint::kIndexProximal)];
+    const Eigen::Quaterniond q = turn * Eigen::Quaterniond::FromTwoVectors(dir, -kUp);
+    return {Rigid3d{q, centre - q * tip}, pose};
+  }
+  // Turned about the grip point.
+  Rigid3d hand = it->second.place(centre, b.axis);
+  hand.rotation = turn * hand.rotation;
+  hand.translation = centre + turn * (hand.translation - centre);
+  return {hand, it->second.pose(closure)};
+}
+
+}  // namespace rhot
