@@ -100,6 +100,7 @@ class DemoScript {
   };
   HandTruth hand_at(const HandScript& s, double t) const;
   HandTruth show_hand_at(const HandScript& s, double t) const;
+  HandTruth show_pose(HandSide side, const ShowKey& k, const Eigen::Vector3d& centre, double closure, const Eigen::Quaterniond& turn) const;
   void build_right_keys();
   void build_showcase(const SceneDesc& scene);
 

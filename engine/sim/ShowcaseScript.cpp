@@ -100,6 +100,12 @@ void DemoScript::build_showcase(const SceneDesc& scene) {
                        bool pointing = false) {
     keys[static_cast<std::size_t>(h)].push_back({at, c, closure, g.width_m, g.axis, turn, pointing});
   };
+  // The hand stays as it is until `at` (its shape then changes on the way to the next key).
+  const auto hold = [&](int h, double at) {
+    ShowKey k = keys[static_cast<std::size_t>(h)].back();
+    k.t = at;
+    keys[static_cast<std::size_t>(h)].push_back(k);
+  };
   // Reach over a grip, down, close; `move(u)` (u 0..1) takes the grip point and the hand's turn
   // through the task; open, lift off, back to rest. Several hands at once for a two-handed carry.
   const auto grasp_task = [&](const std::vector<int>& hands, const std::vector<Grip>& grips, double move_s,
@@ -107,8 +113,7 @@ void DemoScript::build_showcase(const SceneDesc& scene) {
     for (std::size_t k = 0; k < hands.size(); ++k) {
       const int h = hands[k];
       const Grip& g = grips[k];
-      const Eigen::Vector3d rest = keys[static_cast<std::size_t>(h)].back().centre;
-      add(h, t, rest, 0.0, g, none);
+      hold(h, t);
       add(h, t + 1.0, g.point + 0.15 * kUp, 0.0, g, none);
       add(h, t + 1.7, g.point, 0.0, g, none);
       add(h, t + 2.3, g.point, 1.0, g, none);
@@ -170,7 +175,7 @@ void DemoScript::build_showcase(const SceneDesc& scene) {
       const int h = hand_for(top);
       const Grip g{top, Eigen::Vector3d::UnitX(), 0.05};
       const double begin_s = t;
-      add(h, t, keys[static_cast<std::size_t>(h)].back().centre, 0.0, g, none, true);
+      hold(h, t);
       add(h, t + 1.0, above, 0.0, g, none, true);
       add(h, t + 1.6, above, 0.0, g, none, true);
       add(h, t + 2.1, pressed, 0.0, g, none, true);
@@ -277,19 +282,37 @@ HandTruth DemoScript::show_hand_at(const HandScript& s, double t) const {
   const Eigen::Vector3d centre = a.centre + u * (b.centre - a.centre);
   const double closure = a.closure + u * (b.closure - a.closure);
   const Eigen::Quaterniond turn = a.turn.slerp(u, b.turn);
-  const auto key = std::make_pair(static_cast<int>(s.side), std::lround(b.width_m * 1e5));
-  auto it = grasps_.find(key);
-  if (it == grasps_.end()) it = grasps_.emplace(key, make_grasp(s.side, b.width_m)).first;
-  if (b.pointing) {
-    // The index finger straight down, its tip at the centre.
-    const HandPose pose = pointing_hand(s.side);
+  const HandTruth to = show_pose(s.side, b, centre, closure, turn);
+  if (a.pointing == b.pointing && a.width_m == b.width_m && a.axis == b.axis) return to;
+  // A change of hand shape (pointing or grasping, another width or way round): the joints and the
+  // hand's frame blend from the one to the other through the segment, as a real hand's would.
+  const HandTruth from = show_pose(s.side, a, centre, closure, turn);
+  HandTruth out = to;
+  out.world_from_hand.rotation = from.world_from_hand.rotation.slerp(u, to.world_from_hand.rotation);
+  out.world_from_hand.translation =
+      from.world_from_hand.translation + u * (to.world_from_hand.translation - from.world_from_hand.translation);
+  for (std::size_t j = 0; j < out.pose.position_m.size(); ++j) {
+    out.pose.position_m[j] = from.pose.position_m[j] + u * (to.pose.position_m[j] - from.pose.position_m[j]);
+    out.pose.radius_m[j] = from.pose.radius_m[j] + u * (to.pose.radius_m[j] - from.pose.radius_m[j]);
+  }
+  return out;
+}
+
+HandTruth DemoScript::show_pose(HandSide side, const ShowKey& k, const Eigen::Vector3d& centre, double closure,
+                                const Eigen::Quaterniond& turn) const {
+  if (k.pointing) {
+    // The hand frame's pointing hand points its index along -z with the palm down: tilted 50
+    // degrees down about x, the back of the hand stays toward the cameras above.
+    const HandPose pose = pointing_hand(side);
     const Eigen::Vector3d tip = pose.position_m[static_cast<std::size_t>(HandJoint::kIndexTip)];
-    const Eigen::Vector3d dir = tip - pose.position_m[static_cast<std::size_t>(HandJoint::kIndexProximal)];
-    const Eigen::Quaterniond q = turn * Eigen::Quaterniond::FromTwoVectors(dir, -kUp);
+    const Eigen::Quaterniond q = turn * Eigen::Quaterniond(Eigen::AngleAxisd(-50.0 * std::numbers::pi / 180.0, Eigen::Vector3d::UnitX()));
     return {Rigid3d{q, centre - q * tip}, pose};
   }
+  const auto key = std::make_pair(static_cast<int>(side), std::lround(k.width_m * 1e5));
+  auto it = grasps_.find(key);
+  if (it == grasps_.end()) it = grasps_.emplace(key, make_grasp(side, k.width_m)).first;
   // Turned about the grip point.
-  Rigid3d hand = it->second.place(centre, b.axis);
+  Rigid3d hand = it->second.place(centre, k.axis);
   hand.rotation = turn * hand.rotation;
   hand.translation = centre + turn * (hand.translation - centre);
   return {hand, it->second.pose(closure)};
