@@ -166,6 +166,14 @@ double GraspSystem::curl_rad(int hand, int finger) const {
   return std::acos(std::clamp(first.dot(last), -1.0, 1.0));
 }
 
+double GraspSystem::grip_confidence(int hand, const GripPoint& g) const {
+  // A finger is measured when its tip is (its other joints are inferred by IK); the palm when its
+  // knuckles are.
+  const HandBone& bone = hand_bones()[static_cast<std::size_t>(g.bone)];
+  const HandJoint judge = g.group == kPalmGroup ? bone.to : chain_joints(static_cast<Finger>(g.group))[3];
+  return hands_[static_cast<std::size_t>(hand)]->input().confidence[static_cast<std::size_t>(judge)];
+}
+
 void GraspSystem::pre_step(World& world) {
   const btScalar dt = static_cast<btScalar>(physics_.step_s());
   for (auto& [object, held] : held_) {
@@ -212,6 +220,7 @@ void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::
     g.on_object = object_from_world * c.point;
     g.normal = object_from_world.getBasis() * c.normal;
     g.on_bone = h->tracked_bone(c.bone).inverse() * c.point;
+    g.measured = grip_confidence(hand, g) >= settings_.confident;
     grip.grip.push_back(g);
     centre += c.point;
   }
@@ -406,19 +415,19 @@ void GraspSystem::release_opened() {
       held.stuck_since_s = -1.0;
     }
     for (int hand = 0; hand < 2; ++hand) {
-      const auto& grip = held.by[static_cast<std::size_t>(hand)];
+      auto& grip = held.by[static_cast<std::size_t>(hand)];
       const HandColliders* h = hands_[static_cast<std::size_t>(hand)];
       if (!grip || !h->active()) continue;  // a lost hand keeps holding
       bool anchor_open = false, any_anchor = false;
       bool fingers_open = true, any_finger = false;
-      for (const GripPoint& g : grip->grip) {
-        const HandBone& bone = hand_bones()[static_cast<std::size_t>(g.bone)];
-        // A finger is measured when its tip is (its other joints are inferred by IK); the palm
-        // when its knuckles are.
-        const HandJoint judge = g.group == kPalmGroup ? bone.to : chain_joints(static_cast<Finger>(g.group))[3];
-        const double confidence = h->input().confidence[static_cast<std::size_t>(judge)];
-        const bool trusted = confidence >= settings_.confident;
+      for (GripPoint& g : grip->grip) {
+        const bool trusted = grip_confidence(hand, g) >= settings_.confident;
         const btVector3 on_bone = h->tracked_bone(g.bone) * g.on_bone;
+        if (trusted && !g.measured) {
+          // Measured for the first time since the grasp: held from where it is now.
+          g.on_object = target.inverse() * on_bone;
+          g.measured = true;
+        }
         const btVector3 on_object = target * g.on_object;
         const btVector3 normal = target.getBasis() * g.normal;
         const bool open = trusted && static_cast<double>((on_bone - on_object).dot(normal)) > settings_.release_distance_m;

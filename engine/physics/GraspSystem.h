@@ -14,7 +14,9 @@
 // has moved more than `release_distance_m` out of the object's surface from where it touched;
 // the grasp ends when the thumb (or palm) or every opposing finger is open. A finger whose joints
 // are not measured this frame (confidence below `confident`: a hidden fingertip marker, say)
-// never counts as open, so a hand whose curled fingers hide their own markers keeps holding. On
+// never counts as open, so a hand whose curled fingers hide their own markers keeps holding; and a
+// finger that was not measured when the grasp began is re-anchored where it is the first time it
+// is (its estimate may have been centimetres off: the jump to its marker is no opening). On
 // release the object takes the hand's velocity, fitted by least squares over a window that ends
 // a little before the release (the hand slows while it opens), and its angular velocity, so it
 // can be thrown. A hand cannot grasp again within `regrasp_delay_s` of releasing.
@@ -106,9 +108,10 @@ class GraspSystem {
   struct GripPoint {
     int bone = 0;
     int group = 0;
-    btVector3 on_object;  // object frame
-    btVector3 normal;     // object frame, outward
-    btVector3 on_bone;    // tracked bone frame
+    btVector3 on_object;   // object frame
+    btVector3 normal;      // object frame, outward
+    btVector3 on_bone;     // tracked bone frame
+    bool measured = true;  // its finger was measured when the grip began (else: it is, once measured, re-anchored)
   };
   // One hand's hold of an object.
   struct HandGrip {
@@ -155,6 +158,8 @@ class GraspSystem {
   void ignore_hand(btRigidBody* object, int hand, bool ignore);
   void emit(InteractionEventType type, Entity object, std::optional<int> hand);
   double curl_rad(int hand, int finger) const;
+  // The confidence of the joint that tells whether a grip point's finger is measured.
+  double grip_confidence(int hand, const GripPoint& g) const;
 
   PhysicsWorld& physics_;
   std::array<HandColliders*, 2> hands_;

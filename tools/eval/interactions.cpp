@@ -3,7 +3,7 @@
 // success and the events it raised; overall the success fraction and presses no poke asked for.
 
 #include <algorithm>
-#include <cstdlib>
+#include <cmath>
 #include <iostream>
 #include <map>
 #include <set>
@@ -106,20 +106,8 @@ int interactions(const InteractionsArgs& args) {
     for (int f = 0; f < frames; ++f) {
       const double t = f / rate_hz;
       demo.runtime().run_frame(t);
-      if (std::getenv("RHOT_EVAL_TIPS") && demo.simulated() && demo.simulated()->truth() && f % 9 == 0) {
-        const SceneTruth& truth = *demo.simulated()->truth();
-        for (std::size_t h = 0; h < 2; ++h) {
-          const HandInput& hand = demo.runtime().tracking().results().hands[h];
-          const auto tip = static_cast<std::size_t>(HandJoint::kIndexTip), thumb = static_cast<std::size_t>(HandJoint::kThumbTip);
-          const Eigen::Vector3d ti = truth.hands[h].world_from_hand * truth.hands[h].pose.position_m[tip];
-          const Eigen::Vector3d tt = truth.hands[h].world_from_hand * truth.hands[h].pose.position_m[thumb];
-          std::cerr << "TIP t " << t << " hand " << h << " seen " << hand.seen << " index_err_mm "
-                    << 1000 * (hand.joints_world[tip] - ti).norm() << " thumb_err_mm " << 1000 * (hand.joints_world[thumb] - tt).norm()
-                    << " conf " << hand.confidence[tip] << " index_y " << ti.y() << "\n";
-        }
-      }
       for (const InteractionEvent& e : demo.runtime().physics().events()) {
-        if (!counted(e.type) && !std::getenv("RHOT_EVAL_CONTACTS")) continue;
+        if (!counted(e.type)) continue;
         const Name* object = demo.world().find<Name>(e.object);
         const Name* subject = demo.world().find<Name>(e.subject);
         if (e.type == InteractionEventType::kSuccess && !succeeded.contains(e.interaction)) succeeded[e.interaction] = t;

@@ -36,11 +36,12 @@ struct Bench {
     cube = find_named(world, "cube");
   }
   // One step with the right hand at `closure` (0 open .. 1 closed), `lift_m` above the cube's
-  // start; `seen` false: the hand is not tracked.
-  void step(double closure, double lift_m = 0.0, bool seen = true) {
+  // start; `seen` false: the hand is not tracked; `confidence` of every joint.
+  void step(double closure, double lift_m = 0.0, bool seen = true, double confidence = 1.0) {
     std::array<HandInput, 2> hands;
     hands[1] = hand_input(grasp.place(Eigen::Vector3d(0.0, 0.825 + lift_m, 0.0), Eigen::Vector3d::UnitX()), grasp.pose(closure));
     hands[1].seen = seen;
+    hands[1].confidence.fill(confidence);
     physics->step(world, hands);
     for (const InteractionEvent& e : physics->events()) events.push_back(e);
     t += physics->physics().step_s();
@@ -116,6 +117,38 @@ TEST(GraspSystem, OpeningReleasesAndTheHandCannotGraspAgainAtOnce) {
                                                      [](const InteractionEvent& e) { return e.type == InteractionEventType::kGrasp; }) -
                                         b.events.rbegin())];
   EXPECT_GE(again.time_s - released_at, b.physics->grasp().settings().regrasp_delay_s - 1e-9);
+}
+
+// Fingers only estimated when the grasp began (their markers hidden) and then measured somewhere
+// else: the jump is no opening; the grip goes on from where they are measured.
+TEST(GraspSystem, FingersEstimatedAtTheGraspAreReanchoredWhenFirstMeasured) {
+  // How far the fingertips of a half closed hand are from the closed hand's: more than the
+  // release distance, so without re-anchoring this would count as opening.
+  Bench probe;
+  const HandPose closed = probe.grasp.pose(1.0), wider = probe.grasp.pose(0.5);
+  const auto tip = static_cast<std::size_t>(HandJoint::kIndexTip);
+  ASSERT_GT((wider.position_m[tip] - closed.position_m[tip]).norm(), probe.physics->grasp().settings().release_distance_m + 0.003);
+
+  Bench b;
+  for (int i = 0; i < 45; ++i) b.step(0.0, 0.15 * (1.0 - i / 44.0));
+  for (int i = 0; i < 45; ++i) b.step(i / 44.0, 0.0, true, 0.5);  // closing, nothing measured
+  ASSERT_EQ(b.count(InteractionEventType::kGrasp), 1);
+  for (int i = 0; i < 20; ++i) b.step(1.0, 0.0, true, 0.5);
+  // Measured, half as closed as the estimate had it: still held, and lifted.
+  for (int i = 0; i < 45; ++i) b.step(0.5, 0.1 * i / 44.0);
+  EXPECT_EQ(b.count(InteractionEventType::kRelease), 0);
+  EXPECT_TRUE(b.physics->grasp().holding(HandSide::kRight).has_value());
+  EXPECT_GT(static_cast<double>(b.physics->physics().body(b.cube)->getWorldTransform().getOrigin().y()), 0.825 + 0.08);
+  // Opening from there releases.
+  for (int i = 0; i < 9; ++i) b.step(0.5 - 0.5 * i / 8.0, 0.1);
+  EXPECT_EQ(b.count(InteractionEventType::kRelease), 1);
+
+  // The same jump with the fingers measured at the grasp is an opening.
+  Bench measured;
+  measured.reach_and_close();
+  ASSERT_EQ(measured.count(InteractionEventType::kGrasp), 1);
+  for (int i = 0; i < 5; ++i) measured.step(0.5);
+  EXPECT_EQ(measured.count(InteractionEventType::kRelease), 1);
 }
 
 }  // namespace
