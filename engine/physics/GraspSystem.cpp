@@ -51,6 +51,12 @@ const char* event_name(InteractionEventType type) {
       return "value_above";
     case InteractionEventType::kValueBelow:
       return "value_below";
+    case InteractionEventType::kPoke:
+      return "poke";
+    case InteractionEventType::kEnter:
+      return "enter";
+    case InteractionEventType::kExit:
+      return "exit";
   }
   return "?";
 }

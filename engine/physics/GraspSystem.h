@@ -61,6 +61,9 @@ enum class InteractionEventType {
   kUnsnap,      // a hand took it out
   kValueAbove,  // a joint's value rose past a rule's threshold (subject: the joint's entity, value)
   kValueBelow,  // ... fell below it
+  kPoke,        // a fingertip touched a pokeable entity (subject), untouched by fingertips for 0.2 s before
+  kEnter,       // an object's centre came into a zone (subject: the zone, object: what came in)
+  kExit,        // ... and left it
 };
 const char* event_name(InteractionEventType type);
 

@@ -186,6 +186,7 @@ std::expected<std::unique_ptr<Mechanisms>, std::string> Mechanisms::create(World
     part->socket = socket;
     out.parts_.push_back(std::move(part));
   });
+  world.view<Pokeable>().each([&](Entity e, Pokeable&) { out.pokeables_.push_back({e}); });
   // All built: now into the world (nothing half added on failure above).
   out.physics_ = &physics;
   for (std::size_t i = 0; i < out.parts_.size(); ++i) {
@@ -250,18 +251,27 @@ void Mechanisms::update(World& world, const GraspSystem& grasp, std::vector<Inte
     events.push_back(std::move(ev));
   };
   const std::size_t grasp_events = events.size();
+  const auto fingertip_on = [&](Entity e) {
+    for (const auto& hand : grasp.contacts()) {
+      const auto it = hand.find(e);
+      if (it == hand.end()) continue;
+      for (const GraspSystem::Contact& c : it->second) {
+        if (is_fingertip_bone(c.bone)) return true;
+      }
+    }
+    return false;
+  };
+  for (Poked& p : pokeables_) {
+    if (!fingertip_on(p.entity)) continue;
+    if (now - p.touched_s > kPokeGap_s) raise(InteractionEventType::kPoke, p.entity, p.entity);
+    p.touched_s = now;
+  }
   for (auto& part : parts_) {
     Part& p = *part;
     if (p.kind == Part::Kind::kButton) {
       const double depth = value(p.entity).value_or(0.0);
       if (!p.pressed && depth >= p.button.press_at * p.button.travel_m) {
-        bool fingertip = false;
-        for (const auto& hand : grasp.contacts()) {
-          const auto it = hand.find(p.entity);
-          if (it == hand.end()) continue;
-          for (const GraspSystem::Contact& c : it->second) fingertip = fingertip || is_fingertip_bone(c.bone);
-        }
-        if (fingertip) {
+        if (fingertip_on(p.entity)) {
           p.pressed = true;
           raise(InteractionEventType::kPress, p.entity, p.entity);
         }

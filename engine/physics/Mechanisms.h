@@ -45,8 +45,8 @@ class Mechanisms {
   [[nodiscard]] static std::expected<std::unique_ptr<Mechanisms>, std::string> create(World& world, PhysicsWorld& physics);
 
   // After the grasp system's post_step: buttons pressed and released, objects snapped and taken
-  // out; appends kPress, kUnpress, kSnap, kUnsnap events to `events` (which holds the grasp
-  // system's of this step).
+  // out, pokeable entities touched by a fingertip; appends kPress, kUnpress, kSnap, kUnsnap,
+  // kPoke events to `events` (which holds the grasp system's of this step).
   void update(World& world, const GraspSystem& grasp, std::vector<InteractionEvent>& events);
 
   // A hinge's angle in degrees or a slider's position in metres (a button's depth in metres),
@@ -65,6 +65,12 @@ class Mechanisms {
   PhysicsWorld* physics_ = nullptr;
   std::vector<std::unique_ptr<Part>> parts_;
   std::unordered_map<Entity, std::size_t> by_entity_;
+  struct Poked {
+    Entity entity;
+    double touched_s = -1e9;  // the last step a fingertip touched it
+  };
+  std::vector<Poked> pokeables_;
+  static constexpr double kPokeGap_s = 0.2;  // untouched this long, a touch is a new poke
 };
 
 }  // namespace rhot

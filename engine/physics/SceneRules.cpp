@@ -1,6 +1,9 @@
 #include "engine/physics/SceneRules.h"
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
+#include <variant>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -22,6 +25,9 @@ InteractionEventType event_type(const std::string& name) {
   if (name == "unsnap") return InteractionEventType::kUnsnap;
   if (name == "value_above") return InteractionEventType::kValueAbove;
   if (name == "value_below") return InteractionEventType::kValueBelow;
+  if (name == "poke") return InteractionEventType::kPoke;
+  if (name == "enter") return InteractionEventType::kEnter;
+  if (name == "exit") return InteractionEventType::kExit;
   return InteractionEventType::kSuccess;
 }
 
@@ -55,8 +61,13 @@ std::expected<SceneRules, std::string> SceneRules::create(World& world, const st
       r.last_value = *v;
       r.has_value = true;
     }
+    if ((d.when.event == "enter" || d.when.event == "exit") &&
+        std::find(out.zones_.begin(), out.zones_.end(), r.entity) == out.zones_.end()) {
+      out.zones_.push_back(r.entity);
+    }
     out.rules_.push_back(std::move(r));
   }
+  out.inside_.resize(out.zones_.size());
   out.fired_.assign(out.rules_.size(), 0);
   return out;
 }
@@ -72,6 +83,8 @@ bool SceneRules::matches(const Rule& rule, const InteractionEvent& e) const {
       return w.interaction.empty() || e.interaction == w.interaction;
     case InteractionEventType::kSnap:
     case InteractionEventType::kUnsnap:
+    case InteractionEventType::kEnter:
+    case InteractionEventType::kExit:
       return (rule.entity.is_null() || e.subject == rule.entity) && (rule.object.is_null() || e.object == rule.object);
     case InteractionEventType::kValueAbove:
     case InteractionEventType::kValueBelow:
@@ -103,6 +116,36 @@ void SceneRules::update(World& world, PhysicsWorld& physics, Mechanisms& mechani
     }
     r.last_value = *v;
   }
+  // Objects (dynamic bodies) whose centre came into or left a zone the rules watch. The first
+  // step only notes what is inside.
+  for (std::size_t z = 0; z < zones_.size(); ++z) {
+    const WorldTransform* zone = world.find<WorldTransform>(zones_[z]);
+    const Mesh* mesh = world.find<Mesh>(zones_[z]);
+    if (!zone || !mesh || !world.alive(zones_[z]) || !std::holds_alternative<BoxShape>(mesh->shape)) continue;
+    const glm::mat4 local_from_world = glm::inverse(zone->world_from_local);
+    const glm::vec3 half = 0.5f * std::get<BoxShape>(mesh->shape).size_m;
+    std::vector<Entity> now;
+    for (const Entity e : physics.entities()) {
+      const btRigidBody* b = physics.body(e);
+      if (!b || b->isStaticOrKinematicObject() || !b->getBroadphaseHandle()) continue;
+      const btVector3 p = b->getWorldTransform().getOrigin();
+      const glm::vec4 l = local_from_world * glm::vec4(p.x(), p.y(), p.z(), 1.0f);
+      if (std::abs(l.x) <= half.x && std::abs(l.y) <= half.y && std::abs(l.z) <= half.z) now.push_back(e);
+    }
+    if (zones_seen_) {
+      const auto raise = [&](InteractionEventType type, Entity object) {
+        events.push_back({type, physics.time_s(), object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), zones_[z], 0.0});
+      };
+      for (const Entity e : now) {
+        if (std::find(inside_[z].begin(), inside_[z].end(), e) == inside_[z].end()) raise(InteractionEventType::kEnter, e);
+      }
+      for (const Entity e : inside_[z]) {
+        if (std::find(now.begin(), now.end(), e) == now.end()) raise(InteractionEventType::kExit, e);
+      }
+    }
+    inside_[z] = std::move(now);
+  }
+  zones_seen_ = true;
   for (std::size_t k = 0; k < events.size() && k < kMaxEventsPerStep; ++k) {
     for (std::size_t i = 0; i < rules_.size(); ++i) {
       Rule& r = rules_[i];

@@ -2,7 +2,8 @@
 // A scene's rules (docs/scene-format.md "rules"): when an event of a kind happens to an entity,
 // do actions, without code. Events: grasp, release (of an object), press, unpress (a button),
 // snap, unsnap (a socket), value_above, value_below (a joint's value crossing a threshold,
-// raised here), success (an interaction or a "succeed" action). Actions: set_color, enable,
+// raised here), poke (a pokeable entity touched by a fingertip), enter, exit (an object's centre
+// into or out of a zone, raised here), success (an interaction or a "succeed" action). Actions: set_color, enable,
 // disable (an entity leaves the drawn and the physical world and comes back), motor (drive a
 // joint), spawn (a copy of an entity), succeed (raise a success event with a name).
 //
@@ -56,6 +57,9 @@ class SceneRules {
   std::vector<Rule> rules_;
   std::vector<int> fired_;
   int spawned_ = 0;
+  std::vector<Entity> zones_;                // the zones enter and exit rules watch
+  std::vector<std::vector<Entity>> inside_;  // per zone: the objects inside after the last step
+  bool zones_seen_ = false;
 };
 
 }  // namespace rhot

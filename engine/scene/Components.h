@@ -133,6 +133,9 @@ struct Socket {
   glm::quat attach_rotation{1.0f, 0.0f, 0.0f, 0.0f};
 };
 
+// Fingertips touching it raise poke events (a flat panel, a touch pad). Needs a body.
+struct Pokeable {};
+
 // Neither drawn nor in the physics world (a scene's "disable" action; "enable" removes it).
 struct Disabled {};
 

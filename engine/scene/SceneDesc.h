@@ -89,6 +89,7 @@ struct EntityDesc {
   std::optional<Joint> joint;
   std::optional<Button> button;
   std::optional<Socket> socket;
+  bool pokeable = false;
 };
 
 // What a rule listens for (docs/scene-format.md "rules"): an event of this kind about `entity`
@@ -124,8 +125,8 @@ struct RuleDesc {
 
 // The vocabulary a scene's rules may use.
 inline const std::vector<std::string>& rule_event_names() {
-  static const std::vector<std::string> names{"grasp",  "release",     "press",       "unpress", "snap",
-                                              "unsnap", "value_above", "value_below", "success"};
+  static const std::vector<std::string> names{"grasp",       "release",     "press", "unpress", "snap", "unsnap",
+                                              "value_above", "value_below", "poke",  "enter",   "exit", "success"};
   return names;
 }
 inline const std::vector<std::string>& rule_action_names() {

@@ -442,10 +442,10 @@ std::vector<EntityDesc> read_gltf_entities(const Node& n, const EntityDesc& owne
 }
 
 EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir, std::vector<EntityDesc>& from_files) {
-  n.expect_object(
-      {"name", "parent", "transform", "mesh", "material", "body", "grabbable", "tracked_by", "tags", "joint", "button", "socket", "gltf"});
+  n.expect_object({"name", "parent", "transform", "mesh", "material", "body", "grabbable", "tracked_by", "tags", "joint", "button",
+                   "socket", "pokeable", "gltf"});
   if (n.has("gltf")) {
-    for (const char* key : {"mesh", "material", "body", "grabbable", "tracked_by", "joint", "button", "socket"}) {
+    for (const char* key : {"mesh", "material", "body", "grabbable", "tracked_by", "joint", "button", "socket", "pokeable"}) {
       if (n.has(key))
         n[key].fail("an entity made from a glTF file takes its shapes, bodies and joints from the file; no \"" + std::string(key) +
                     "\" here");
@@ -492,6 +492,10 @@ EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir, std
     if (e.grabbable) b->fail("a button cannot be grabbable");
   }
   if (auto s = n.optional("socket")) e.socket = read_socket(*s);
+  if (auto p = n.optional("pokeable")) {
+    e.pokeable = p->boolean();
+    if (e.pokeable && !e.body) p->fail("only an entity with a body can be poked");
+  }
   if (auto g = n.optional("gltf")) {
     for (EntityDesc& child : read_gltf_entities(*g, e, base_dir)) from_files.push_back(std::move(child));
   }
@@ -547,7 +551,7 @@ RuleDesc read_rule(const Node& n) {
     when.expect_object({"event", "entity", "value"});
     r.when.entity = when["entity"].non_empty_string();
     r.when.value = when["value"].number_in(-1e3, 1e3, "a value from -1000 to 1000 (degrees or metres)");
-  } else if (ev == "snap" || ev == "unsnap") {
+  } else if (ev == "snap" || ev == "unsnap" || ev == "enter" || ev == "exit") {
     when.expect_object({"event", "entity", "object"});
     if (auto e = when.optional("entity")) r.when.entity = e->non_empty_string();
     if (auto o = when.optional("object")) r.when.object = o->non_empty_string();
@@ -591,9 +595,16 @@ void check_rules(const SceneDesc& scene) {
       }
       if ((ev == "press" || ev == "unpress") && !e->button) throw JsonFailure{where, "\"" + r.when.entity + "\" is not a button"};
       if ((ev == "snap" || ev == "unsnap") && !e->socket) throw JsonFailure{where, "\"" + r.when.entity + "\" is not a socket"};
+      if (ev == "poke" && !e->pokeable) throw JsonFailure{where, "\"" + r.when.entity + "\" is not pokeable"};
+      if ((ev == "enter" || ev == "exit") && (e->body || !e->mesh || !std::holds_alternative<BoxShape>(e->mesh->shape))) {
+        throw JsonFailure{where, "\"" + r.when.entity + "\" is not a zone (a box mesh without a body)"};
+      }
       if ((ev == "grasp" || ev == "release") && !e->grabbable) {
         throw JsonFailure{where, "\"" + r.when.entity + "\" is not grabbable"};
       }
+    }
+    if ((ev == "enter" || ev == "exit") && r.when.entity.empty()) {
+      throw JsonFailure{path + "/when", "an " + ev + " rule needs the zone as its \"entity\""};
     }
     if (!r.when.object.empty() && !find(r.when.object)) {
       throw JsonFailure{path + "/when/object", "no entity is named \"" + r.when.object + "\""};
@@ -741,6 +752,7 @@ std::vector<Entity> instantiate(const SceneDesc& scene, World& world) {
     if (d.joint) world.add<Joint>(e, *d.joint);
     if (d.button) world.add<Button>(e, *d.button);
     if (d.socket) world.add<Socket>(e, *d.socket);
+    if (d.pokeable) world.add<Pokeable>(e);
   }
   for (std::size_t i = 0; i < scene.entities.size(); ++i) {
     const std::string& parent = scene.entities[i].parent;

@@ -201,6 +201,72 @@ TEST(Buttons, AFingertipPressesOncePerPushAndThePalmNever) {
   EXPECT_LT(palm.value("button"), 0.001);
 }
 
+// A flat touch panel: its top at 0.8 m.
+const std::string kPanel = R"({"name": "panel", "transform": {"position": [0, 0.4, 0]}, "mesh": {"shape": "box", "size_m": [0.1, 0.8, 0.1]},
+      "body": {"type": "static"}, "pokeable": true})";
+
+TEST(Pokes, AFingertipTouchingAPokeablePanelPokesOncePerTouchAndThePalmNever) {
+  Stage r(
+      scene_of(kPanel, R"(, "rules": [{"when": {"event": "poke", "entity": "panel"}, "do": [{"action": "succeed", "name": "poked"}]}])"));
+  // Down onto the panel and 3 mm into it, held there 0.5 s (one poke), up 3 cm for 0.3 s, down again.
+  const auto touch = [&](double hold_s) {
+    for (int i = 0; i <= 20; ++i) r.step({HandInput{}, pointing_at(Eigen::Vector3d(0, 0.8 + 0.03 - 0.033 * i / 20.0 + 0.008, 0))});
+    for (int i = 0; i < static_cast<int>(hold_s * 90); ++i) r.step({HandInput{}, pointing_at(Eigen::Vector3d(0, 0.797 + 0.008, 0))});
+    for (int i = 0; i <= 27; ++i) r.step({HandInput{}, pointing_at(Eigen::Vector3d(0, 0.83 + 0.008, 0))});
+  };
+  touch(0.5);
+  EXPECT_EQ(r.count(InteractionEventType::kPoke), 1);
+  touch(0.2);
+  EXPECT_EQ(r.count(InteractionEventType::kPoke), 2);
+  EXPECT_EQ(r.count(InteractionEventType::kSuccess), 2);
+  const auto poke =
+      std::find_if(r.events.begin(), r.events.end(), [](const InteractionEvent& e) { return e.type == InteractionEventType::kPoke; });
+  EXPECT_EQ(poke->subject, r.named("panel"));
+  // The palm flat on it (the pointing finger off its edge): no poke.
+  Stage palm(scene_of(kPanel));
+  bool touched = false;
+  for (int i = 0; i <= 60; ++i) {
+    const double depth = i <= 30 ? 0.06 - 0.062 * i / 30.0 : -0.002 + 0.062 * (i - 30) / 30.0;
+    palm.step({HandInput{}, palm_at(Eigen::Vector3d(-0.03, 0.8 + depth, 0))});
+    touched = touched || palm.physics->grasp().contacts()[1].contains(palm.named("panel"));
+  }
+  EXPECT_TRUE(touched) << "the palm touched it";
+  EXPECT_EQ(palm.count(InteractionEventType::kPoke), 0);
+}
+
+TEST(Zones, AnObjectComingIntoAndLeavingAZoneRaisesEnterAndExit) {
+  const std::string entities =
+      R"({"name": "zone", "transform": {"position": [0, 0.1, 0]}, "mesh": {"shape": "box", "size_m": [0.3, 0.2, 0.3]}},
+      {"name": "cube", "transform": {"position": [-0.5, 0.025, 0]}, "mesh": {"shape": "box", "size_m": [0.05, 0.05, 0.05]},
+      "body": {"type": "dynamic", "mass_kg": 0.1, "friction": 0.0}},
+      {"name": "lamp", "transform": {"position": [1, 1, 1]}, "mesh": {"shape": "sphere", "radius_m": 0.05}, "material": {"color": [0.2, 0.2, 0.2]}})";
+  const std::string rules = R"(, "rules": [
+      {"when": {"event": "enter", "entity": "zone", "object": "cube"}, "do": [{"action": "set_color", "entity": "lamp", "color": [1, 1, 0]}]},
+      {"when": {"event": "exit", "entity": "zone"}, "do": [{"action": "set_color", "entity": "lamp", "color": [0, 0, 1]}]}])";
+  Stage r(scene_of(entities, rules));
+  r.seconds(0.2);
+  EXPECT_EQ(r.count(InteractionEventType::kEnter), 0);
+  // Slid along the floor through the zone at 1 m/s.
+  for (int i = 0; i < 90; ++i) {
+    r.body("cube")->setLinearVelocity(btVector3(1, 0, 0));
+    r.step();
+    if (r.count(InteractionEventType::kEnter) == 1 && r.count(InteractionEventType::kExit) == 0) {
+      EXPECT_EQ(r.world.get<Material>(r.named("lamp")).color, glm::vec4(1, 1, 0, 1));
+    }
+  }
+  ASSERT_EQ(r.count(InteractionEventType::kEnter), 1);
+  ASSERT_EQ(r.count(InteractionEventType::kExit), 1);
+  const auto enter =
+      std::find_if(r.events.begin(), r.events.end(), [](const InteractionEvent& e) { return e.type == InteractionEventType::kEnter; });
+  const auto exit =
+      std::find_if(r.events.begin(), r.events.end(), [](const InteractionEvent& e) { return e.type == InteractionEventType::kExit; });
+  EXPECT_EQ(enter->subject, r.named("zone"));
+  EXPECT_EQ(enter->object, r.named("cube"));
+  // Entered at x = -0.15, left at 0.15: 0.3 s apart at 1 m/s.
+  EXPECT_NEAR(exit->time_s - enter->time_s, 0.3, 0.03);
+  EXPECT_EQ(r.world.get<Material>(r.named("lamp")).color, glm::vec4(0, 0, 1, 1));
+}
+
 TEST(Rules, APressLightsTheLampAndADoorOpenedPastSixtyDegreesSucceeds) {
   const std::string rules = R"(, "rules": [
       {"when": {"event": "press", "entity": "button"}, "do": [{"action": "set_color", "entity": "lamp", "color": [1, 0.9, 0.5]},
@@ -304,7 +370,7 @@ TEST(SceneRulesFile, UnknownEventsActionsAndWrongEntitiesAreRefusedNamingWhere) 
   const std::string d = door(R"(, "limits_deg": [0, 90])");
   EXPECT_EQ(error(d, R"(, "rules": [{"when": {"event": "explode"}, "do": [{"action": "succeed", "name": "x"}]}])"),
             "s.json: /rules/0/when/event: unknown event \"explode\"; expected one of: \"grasp\", \"release\", \"press\", \"unpress\", "
-            "\"snap\", \"unsnap\", \"value_above\", \"value_below\", \"success\"");
+            "\"snap\", \"unsnap\", \"value_above\", \"value_below\", \"poke\", \"enter\", \"exit\", \"success\"");
   EXPECT_EQ(error(d, R"(, "rules": [{"when": {"event": "press"}, "do": [{"action": "teleport", "entity": "door"}]}])"),
             "s.json: /rules/0/do/0/action: unknown action \"teleport\"; expected one of: \"set_color\", \"enable\", \"disable\", "
             "\"motor\", \"spawn\", \"succeed\"");
@@ -320,6 +386,14 @@ TEST(SceneRulesFile, UnknownEventsActionsAndWrongEntitiesAreRefusedNamingWhere) 
             R"(, "rules": [{"when": {"event": "grasp"}, "do": [{"action": "motor", "entity": "floor", "velocity": 1, "max_force": 1}]}])"),
       "s.json: /rules/0/do/0/entity: \"floor\" has no hinge or slider joint to drive");
   EXPECT_EQ(error(d, R"(, "rules": [{"when": {"event": "grasp"}, "do": []}])"), "s.json: /rules/0/do: expected at least one action");
+  EXPECT_EQ(error(d, R"(, "rules": [{"when": {"event": "poke", "entity": "door"}, "do": [{"action": "succeed", "name": "x"}]}])"),
+            "s.json: /rules/0/when/entity: \"door\" is not pokeable");
+  EXPECT_EQ(error(d, R"(, "rules": [{"when": {"event": "enter", "entity": "door"}, "do": [{"action": "succeed", "name": "x"}]}])"),
+            "s.json: /rules/0/when/entity: \"door\" is not a zone (a box mesh without a body)");
+  EXPECT_EQ(error(d, R"(, "rules": [{"when": {"event": "exit"}, "do": [{"action": "succeed", "name": "x"}]}])"),
+            "s.json: /rules/0/when: an exit rule needs the zone as its \"entity\"");
+  EXPECT_EQ(error(R"({"name": "p", "mesh": {"shape": "sphere", "radius_m": 0.1}, "pokeable": true})", ""),
+            "s.json: /entities/1/pokeable: only an entity with a body can be poked");
   EXPECT_EQ(
       error(d, R"(, "rules": [{"when": {"event": "success", "interaction": "nope"}, "do": [{"action": "enable", "entity": "door"}]}])"),
       "s.json: /rules/0/when/interaction: no interaction or \"succeed\" action is named \"nope\"");
