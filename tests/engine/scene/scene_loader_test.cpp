@@ -138,7 +138,7 @@ TEST_F(SceneFiles, MissingSceneFile) {
 TEST_F(SceneFiles, UnknownKey) {
   EXPECT_EQ(error_of(scene_with(R"({"name": "a", "bodyy": {}})")),
             "/entities/0/bodyy: unknown key \"bodyy\"; expected one of: name, parent, transform, mesh, material, "
-            "body, grabbable, tracked_by, tags, joint, button, socket, gltf");
+            "body, grabbable, tracked_by, tags, joint, button, socket, pokeable, gltf");
   EXPECT_EQ(error_of(R"({"entities": [], "setings": {}})"),
             "/setings: unknown key \"setings\"; expected one of: format, version, settings, entities, interactions, rules");
 }
