@@ -140,6 +140,32 @@ TEST(EvalCli, GraspPrintsTheScenarioJson) {
       << bad.output;
 }
 
+TEST(EvalCli, InteractionsRunsTheWorkbenchShowcasePerSeed) {
+  // The script's own hands: every interaction succeeds in each of two runs, nothing pressed that
+  // was not poked.
+  const EvalRun r = run_eval("interactions --seeds 2 --hands perfect --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["seeds"].get<int>(), 2);
+  EXPECT_EQ(j["success_fraction"].get<double>(), 1.0);
+  EXPECT_EQ(j["false_press_count"].get<int>(), 0);
+  for (const char* name : {"door-open", "drawer-open", "lamp-on", "peg-in", "bar-to-rack"}) {
+    ASSERT_TRUE(j["interactions"].contains(name)) << name;
+    EXPECT_EQ(j["interactions"][name]["success_fraction"].get<double>(), 1.0) << name;
+    EXPECT_GT(j["interactions"][name]["time_to_success_s"]["median"].get<double>(), 0.0) << name;
+  }
+  EXPECT_EQ(j["interactions"]["bar-to-rack"]["events"]["grasp"].get<int>(), 4) << "two hands, twice";
+  EXPECT_EQ(j["interactions"]["peg-in"]["events"]["snap"].get<int>(), 2);
+  ASSERT_EQ(j["runs"].size(), 2u);
+  // A scene with nothing to exercise is refused.
+  const auto none = rhot::test::run_program("rhot-eval", "interactions --scene " RHOT_ASSET_DIR "/scenes/default.json --json", "2>&1");
+  EXPECT_EQ(none.exit_code, 1);
+  EXPECT_NE(none.output.find("default.json: nothing for the showcase script to exercise (no value_above, press or snap rules; "
+                             "docs/scene-format.md)"),
+            std::string::npos)
+      << none.output;
+}
+
 TEST(EvalCli, FramePrintsTheWholeFrameAndEveryStage) {
   const EvalRun r = run_eval("frame --eye 64x64 --frames 20 --device cpu --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
