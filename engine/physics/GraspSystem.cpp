@@ -102,7 +102,11 @@ btTransform GraspSystem::pair_frame(const Held& held) const {
   y -= x * x.dot(y);
   if (y.length() < btScalar(0.1)) {  // the hands rolled the first y onto the line: fall back on it
     y = held.pair_up - x * x.dot(held.pair_up);
-    if (y.length() < btScalar(0.1)) y = btVector3(0, 0, 1) - x * x.z();
+    if (y.length() < btScalar(0.1)) {
+      btVector3 a, b;
+      btPlaneSpace1(x, a, b);  // any unit vector perpendicular to x
+      y = a;
+    }
   }
   y.normalize();
   const btVector3 z = x.cross(y);
@@ -187,6 +191,10 @@ void GraspSystem::pre_step(World& world) {
     if (!body) continue;
     if (held.both() && held.options.scale_with_hands) physics_.set_scale(world, object, pair_scale(held));
     const btTransform target = target_of(held);
+    if (!finite(target.getOrigin()) || !finite(target.getBasis().getRow(0)) || !finite(target.getBasis().getRow(1)) ||
+        !finite(target.getBasis().getRow(2))) {
+      continue;  // (cannot happen from finite hands; the body then just keeps its velocity)
+    }
     held.history.emplace_back(physics_.time_s(), target);
     while (held.history.size() > 2 && held.history.front().first < physics_.time_s() - 0.25) held.history.pop_front();
     const btTransform& now = body->getWorldTransform();
@@ -206,8 +214,14 @@ void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::
   const btTransform world_from_hand = to_bt(h->input().world_from_hand);
   const Grabbable options = world.get<Grabbable>(object);
   auto it = held_.find(object);
-  if (it != held_.end() && !options.two_handed) {
-    release(object, it->second.first(), LetGo::kTaken);  // the other hand takes it over
+  // The other hand takes the object over when it is not two-handed or the grips would be too
+  // close together to make a pair (the line between them would be noise).
+  btVector3 centre_now(0, 0, 0);
+  for (const Contact& c : contacts) centre_now += c.point;
+  centre_now /= static_cast<btScalar>(std::max<std::size_t>(1, contacts.size()));
+  if (it != held_.end() &&
+      (!options.two_handed || static_cast<double>((grip_centre(it->second, it->second.first()) - centre_now).length()) < kMinPairSpan_m)) {
+    release(object, it->second.first(), LetGo::kTaken);
     it = held_.end();
   }
   const bool joining = it != held_.end();
@@ -231,6 +245,7 @@ void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::
     centre += c.point;
   }
   grip.centre = world_from_hand.inverse() * (centre / static_cast<btScalar>(std::max<std::size_t>(1, grip.grip.size())));
+  grip.scale = physics_.scale(object);
   if (!joining) {
     Held held;
     held.options = options;
@@ -271,10 +286,15 @@ void GraspSystem::release(Entity object, int hand, LetGo how) {
                      Eigen::Vector3d::Zero(),        Entity{},          0.0};
   if (held.both()) {
     // The other hand carries on from where the pair had the object.
+    // Its grip points are taken afresh where its fingers are now: while paired the object moved
+    // (and maybe scaled) relative to each hand.
     const int other = 1 - hand;
     const btTransform world_from_object = target_of(held);
-    held.by[static_cast<std::size_t>(other)]->hand_from_object =
-        to_bt(hands_[static_cast<std::size_t>(other)]->input().world_from_hand).inverse() * world_from_object;
+    HandGrip& stays = *held.by[static_cast<std::size_t>(other)];
+    HandColliders* h = hands_[static_cast<std::size_t>(other)];
+    stays.hand_from_object = to_bt(h->input().world_from_hand).inverse() * world_from_object;
+    for (GripPoint& g : stays.grip) g.on_object = world_from_object.inverse() * (h->tracked_bone(g.bone) * g.on_bone);
+    stays.scale = physics_.scale(object);
     held.by[static_cast<std::size_t>(hand)].reset();
     if (body) reenable_.emplace_back(object, hand);
     released_at_s_[static_cast<std::size_t>(hand)] = physics_.time_s();
@@ -431,10 +451,10 @@ void GraspSystem::release_opened() {
         const btVector3 on_bone = h->tracked_bone(g.bone) * g.on_bone;
         if (trusted && !g.measured) {
           // Measured for the first time since the grasp: held from where it is now.
-          g.on_object = target.inverse() * on_bone;
+          g.on_object = target.inverse() * on_bone * static_cast<btScalar>(grip->scale / physics_.scale(object));
           g.measured = true;
         }
-        const btVector3 on_object = target * g.on_object;
+        const btVector3 on_object = target * (g.on_object * static_cast<btScalar>(physics_.scale(object) / grip->scale));
         const btVector3 normal = target.getBasis() * g.normal;
         const bool open = trusted && static_cast<double>((on_bone - on_object).dot(normal)) > settings_.release_distance_m;
         if (g.group == 0 || g.group == kPalmGroup) {

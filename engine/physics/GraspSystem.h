@@ -122,6 +122,7 @@ class GraspSystem {
     std::vector<GripPoint> grip;
     btVector3 centre;              // hand frame: the middle of its grip points
     btQuaternion rotation_paired;  // the hand's rotation (world) when the other hand joined
+    double scale = 1.0;            // the object's scale (PhysicsWorld::scale) when the grip points were taken
   };
   struct Held {
     std::array<std::optional<HandGrip>, 2> by;  // per hand (left, right)
@@ -153,6 +154,8 @@ class GraspSystem {
   // How a hand lets go: it opened (a hand-over when the other still holds), the other hand took
   // the object from it (a hand-over), or both let go at once (none).
   enum class LetGo { kOpened, kTaken, kBoth };
+  // Two grips closer than this do not make a pair: the second hand takes the object over.
+  static constexpr double kMinPairSpan_m = 0.05;
   void release(Entity object, int hand, LetGo how);
   btTransform target_of(const Held& held) const;
   btVector3 grip_centre(const Held& held, int hand) const;  // world

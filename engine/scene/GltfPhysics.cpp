@@ -52,7 +52,7 @@ std::expected<json, JsonError> read_gltf_json(const std::filesystem::path& file)
   if (bytes.size() < 20) return std::unexpected(JsonError{name, "", "a binary glTF cut short: " + std::to_string(bytes.size()) + " bytes"});
   if (u32(4) != 2) return std::unexpected(JsonError{name, "", "binary glTF version " + std::to_string(u32(4)) + "; expected 2"});
   const std::uint32_t length = u32(12);
-  if (u32(16) != 0x4E4F534Au || 20u + length > bytes.size()) {
+  if (u32(16) != 0x4E4F534Au || length > bytes.size() - 20) {
     return std::unexpected(JsonError{name, "", "binary glTF without a whole JSON chunk first"});
   }
   return parse_json_text(std::string_view(bytes).substr(20, length), name);
@@ -139,6 +139,7 @@ class Reader {
   const glm::mat4& world_of(const std::vector<Node>& nodes, std::size_t i, std::vector<bool>& done, std::size_t depth) {
     if (done[i]) return root_from_node_[i];
     if (depth > count_) nodes[i].fail("the node hierarchy has a cycle");
+    if (depth > kMaxDepth) nodes[i].fail("nodes nested more than " + std::to_string(kMaxDepth) + " deep");
     const glm::mat4 local = local_matrix(nodes[i]);
     const int p = parent_of_[i];
     root_from_node_[i] = p < 0 ? local : world_of(nodes, static_cast<std::size_t>(p), done, depth + 1) * local;
@@ -284,6 +285,9 @@ class Reader {
     }
     EntityDesc e;
     e.name = node_name(i);
+    for (const EntityDesc& other : out_) {
+      if (other.name == e.name) (n.has("name") ? n["name"] : n).fail("two bodies would both be named \"" + e.name + "\"");
+    }
     e.parent = parent_;
     e.transform = decompose(root_from_node_[i], n);
     e.mesh = read_shape((*collider)["geometry"]);
@@ -470,12 +474,14 @@ class Reader {
     // The joint's frame in the carrier's (unscaled) frame.
     glm::mat4 body_frame = root_from_node_[carrier];
     for (int c = 0; c < 3; ++c) body_frame[c] = glm::normalize(body_frame[c]);
+    if (glm::determinant(glm::mat3(body_frame)) < 0.0f) body_frame[0] = -body_frame[0];  // as decompose() has the body
     const glm::mat4 local = glm::inverse(body_frame) * root_from_node_[frame];
     joint.anchor_m = glm::vec3(local[3]);
     if (axis >= 0) joint.axis = sign * glm::normalize(glm::vec3(local[axis]));
     e.joint = joint;
   }
 
+  static constexpr std::size_t kMaxDepth = 1000;
   Node root_;
   std::string parent_;
   std::size_t count_ = 0;

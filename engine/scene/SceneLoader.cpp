@@ -441,7 +441,13 @@ std::vector<EntityDesc> read_gltf_entities(const Node& n, const EntityDesc& owne
   return std::move(*entities);
 }
 
-EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir, std::vector<EntityDesc>& from_files) {
+// An entity a referenced file gave, with the JSON path of the reference.
+struct FromFile {
+  EntityDesc entity;
+  std::string path;
+};
+
+EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir, std::vector<FromFile>& from_files) {
   n.expect_object({"name", "parent", "transform", "mesh", "material", "body", "grabbable", "tracked_by", "tags", "joint", "button",
                    "socket", "pokeable", "gltf"});
   if (n.has("gltf")) {
@@ -497,7 +503,11 @@ EntityDesc read_entity(const Node& n, const std::filesystem::path& base_dir, std
     if (e.pokeable && !e.body) p->fail("only an entity with a body can be poked");
   }
   if (auto g = n.optional("gltf")) {
-    for (EntityDesc& child : read_gltf_entities(*g, e, base_dir)) from_files.push_back(std::move(child));
+    if (e.transform.scale != glm::vec3(1.0f)) {
+      n["transform"]["scale"].fail(
+          "an entity made from a glTF file is not scaled (its joints' anchors would not follow); scale the file's nodes");
+    }
+    for (EntityDesc& child : read_gltf_entities(*g, e, base_dir)) from_files.push_back({std::move(child), g->path()});
   }
   return e;
 }
@@ -691,9 +701,17 @@ SceneDesc read_scene(const json& root, const std::filesystem::path& base_dir) {
   SceneDesc scene;
   if (auto s = n.optional("settings")) scene.settings = read_settings(*s, base_dir);
   if (auto list = n.optional("entities")) {
-    std::vector<EntityDesc> from_files;
+    std::vector<FromFile> from_files;
     for (const Node& e : list->elements()) scene.entities.push_back(read_entity(e, base_dir, from_files));
-    for (EntityDesc& e : from_files) scene.entities.push_back(std::move(e));
+    const std::size_t own = scene.entities.size();
+    for (FromFile& f : from_files) {
+      for (std::size_t j = 0; j < own; ++j) {
+        if (scene.entities[j].name == f.entity.name) {
+          throw JsonFailure{f.path, "its body \"" + f.entity.name + "\" has the name of /entities/" + std::to_string(j)};
+        }
+      }
+      scene.entities.push_back(std::move(f.entity));
+    }
   }
   check_references(scene.entities);
   if (auto list = n.optional("interactions")) {

@@ -173,6 +173,18 @@ TEST(GltfPhysics, MalformedOrUnsupportedExtensionDataIsRefusedWithTheFilePathAnd
       error_with([](nlohmann::json&) {}, R"("broken.gltf", "body": {"type": "static"})"),
       "s.json: /entities/0/body: an entity made from a glTF file takes its shapes, bodies and joints from the file; no \"body\" here");
   EXPECT_EQ(error_with([](nlohmann::json&) {}, R"({"file": "broken.gltf", "grabbable": ["ball"]})"), "loaded");
+  EXPECT_EQ(error_with([](nlohmann::json& g) { g["nodes"][4]["name"] = "door"; }),
+            "broken.gltf: /nodes/4/name: two bodies would both be named \"cabinet/door\"");
+  EXPECT_EQ(error_with([](nlohmann::json&) {}, R"("broken.gltf", "transform": {"scale": 2})"),
+            "s.json: /entities/0/transform/scale: an entity made from a glTF file is not scaled (its joints' anchors would not follow); "
+            "scale the file's nodes");
+}
+
+TEST(GltfPhysics, ABodyFromAFileMayNotTakeAnotherEntitysName) {
+  const std::string scene = R"({"entities": [{"name": "cabinet", "gltf": "cabinet-physics.gltf"}, {"name": "cabinet/door"}]})";
+  auto loaded = parse_scene(scene, kData, "s.json");
+  ASSERT_FALSE(loaded.has_value());
+  EXPECT_EQ(loaded.error().to_string(), "s.json: /entities/0/gltf: its body \"cabinet/door\" has the name of /entities/1");
 }
 
 TEST(GltfPhysics, ABinaryGltfReadsItsJsonChunk) {

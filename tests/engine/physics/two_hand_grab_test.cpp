@@ -155,6 +155,19 @@ TEST(TwoHandGrab, HandsMovingApartScaleAnObjectThatAsksForIt) {
   t.go(45, {-in, in}, {1.0, 1.0});
   for (int i = 0; i < 10; ++i) t.step();
   EXPECT_NEAR(t.physics->physics().scale(t.bar), 0.55 / (2 * kGripX), 0.02);
+  // The right hand lets go: the left carries the stretched bar on (its grip taken afresh, not
+  // judged against where its fingers were on the smaller bar).
+  t.go(9, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {1.0, 0.0});
+  ASSERT_EQ(t.count(InteractionEventType::kRelease), 1);
+  t.go(30, {Eigen::Vector3d::Zero(), Eigen::Vector3d(0.0, 0.2, 0.0)}, {1.0, 0.0});  // the open hand out of the way
+  // (The stretched bar rests on the stand, a little above where the hand holds it: measured from
+  // the grip's target.)
+  const double before = static_cast<double>(t.physics->grasp().grip_target(t.bar)->getOrigin().y());
+  t.go(45, {Eigen::Vector3d(0.0, 0.05, 0.0), Eigen::Vector3d::Zero()}, {1.0, 0.0});
+  for (int i = 0; i < 10; ++i) t.step();
+  EXPECT_EQ(t.count(InteractionEventType::kRelease), 1);
+  EXPECT_EQ(t.physics->grasp().holding(HandSide::kLeft), t.bar);
+  EXPECT_NEAR(static_cast<double>(t.pose().getOrigin().y()) - before, 0.05, 0.003);
 }
 
 TEST(TwoHandGrab, ABarThatIsNotScaledKeepsItsSizeWhenTheHandsMoveApart) {
