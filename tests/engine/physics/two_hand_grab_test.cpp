@@ -197,6 +197,40 @@ TEST(TwoHandGrab, AnObjectThatIsNotTwoHandedIsTakenOverByTheSecondHand) {
   EXPECT_FALSE(t.physics->grasp().held_by_both(t.bar));
 }
 
+TEST(TwoHandGrab, TwoGripsTooCloseTogetherToSpanAFrameAreATakeOver) {
+  // A 5 cm cube on the stand, both hands closing on it at the same spot (hand bones pass through
+  // each other): the second hand takes it over instead of pairing.
+  World world;
+  auto physics = test::physics_for(world, test::parse(std::string(R"({"entities": [)") + test::kFloor + R"(,
+      {"name": "stand", "transform": {"position": [0, 0.4, 0]}, "mesh": {"shape": "box", "size_m": [0.12, 0.8, 0.12]}, "body": {"type": "static"}},
+      {"name": "cube", "transform": {"position": [0, 0.825, 0]}, "mesh": {"shape": "box", "size_m": [0.05, 0.05, 0.05]},
+       "body": {"type": "dynamic", "mass_kg": 0.1, "friction": 0.8}, "grabbable": true}]})"));
+  const Entity cube = find_named(world, "cube");
+  const std::array<GraspPose, 2> grasp{make_grasp(HandSide::kLeft, 0.05), make_grasp(HandSide::kRight, 0.05)};
+  const Eigen::Vector3d at(0.0, 0.825, 0.0);
+  std::vector<InteractionEvent> events;
+  // The right hand closes first; the left a third of a second later.
+  for (int i = 0; i < 150; ++i) {
+    std::array<HandInput, 2> hands;
+    const double right = std::clamp((i - 10) / 40.0, 0.0, 1.0), left = std::clamp((i - 60) / 40.0, 0.0, 1.0);
+    hands[1] = hand_input(grasp[1].place(at, Eigen::Vector3d::UnitX()), grasp[1].pose(right));
+    if (i >= 50) hands[0] = hand_input(grasp[0].place(at, -Eigen::Vector3d::UnitX()), grasp[0].pose(left));
+    physics->step(world, hands);
+    for (const InteractionEvent& e : physics->events()) events.push_back(e);
+  }
+  const auto count = [&](InteractionEventType type) {
+    return std::count_if(events.begin(), events.end(), [&](const InteractionEvent& e) { return e.type == type; });
+  };
+  ASSERT_EQ(count(InteractionEventType::kGrasp), 2);
+  ASSERT_EQ(count(InteractionEventType::kRelease), 1);
+  const auto release =
+      std::find_if(events.begin(), events.end(), [](const InteractionEvent& e) { return e.type == InteractionEventType::kRelease; });
+  EXPECT_EQ(release->hand, HandSide::kRight);
+  EXPECT_TRUE(release->handed_over);
+  EXPECT_EQ(physics->grasp().holding(HandSide::kLeft), cube);
+  EXPECT_FALSE(physics->grasp().held_by_both(cube));
+}
+
 TEST(TwoHandGrab, GrabbableOptionsInAScene) {
   const auto error_of = [](const std::string& grabbable) {
     auto scene = parse_scene(bar_scene(grabbable), ".", "s.json");
