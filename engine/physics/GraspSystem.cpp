@@ -446,15 +446,16 @@ void GraspSystem::release_opened() {
       if (!grip || !h->active()) continue;  // a lost hand keeps holding
       bool anchor_open = false, any_anchor = false;
       bool fingers_open = true, any_finger = false;
+      const btScalar grown = static_cast<btScalar>(physics_.scale(object) / grip->scale);  // the object's scale since the grip points
       for (GripPoint& g : grip->grip) {
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
         const btVector3 on_bone = h->tracked_bone(g.bone) * g.on_bone;
         if (trusted && !g.measured) {
           // Measured for the first time since the grasp: held from where it is now.
-          g.on_object = target.inverse() * on_bone * static_cast<btScalar>(grip->scale / physics_.scale(object));
+          g.on_object = target.inverse() * on_bone / grown;
           g.measured = true;
         }
-        const btVector3 on_object = target * (g.on_object * static_cast<btScalar>(physics_.scale(object) / grip->scale));
+        const btVector3 on_object = target * (g.on_object * grown);
         const btVector3 normal = target.getBasis() * g.normal;
         const bool open = trusted && static_cast<double>((on_bone - on_object).dot(normal)) > settings_.release_distance_m;
         if (g.group == 0 || g.group == kPalmGroup) {

@@ -143,6 +143,11 @@ class Reader {
     const glm::mat4 local = local_matrix(nodes[i]);
     const int p = parent_of_[i];
     root_from_node_[i] = p < 0 ? local : world_of(nodes, static_cast<std::size_t>(p), done, depth + 1) * local;
+    for (int c = 0; c < 4; ++c) {
+      for (int r = 0; r < 4; ++r) {
+        if (!(std::abs(root_from_node_[i][c][r]) < 1e6f)) nodes[i].fail("the node's transform is not finite or beyond 1e6");
+      }
+    }
     done[i] = true;
     return root_from_node_[i];
   }
@@ -333,71 +338,69 @@ class Reader {
     return s.empty() ? "none" : s;
   }
 
-  void read_joint(const Node& n, std::size_t i) {
-    const auto ext = extension(n, kBodies);
-    if (!ext || !ext->has("joint")) return;
-    const Node j = (*ext)["joint"];
-    j.expect_object({"connectedNode", "joint", "enableCollision", "extensions", "extras"});
-    if (auto c = j.optional("enableCollision"); c && c->boolean()) c->fail("rhot's joints never let the bodies they join collide");
-    const std::vector<Node> nodes = root_["nodes"].elements();
-    const Node connected = j["connectedNode"];
-    const std::size_t other = static_cast<std::size_t>(connected.integer_in(0, static_cast<int>(count_) - 1));
-    if (joints_.empty()) j["joint"].fail("no physicsJoints in the file");
-    const Node def = joints_[static_cast<std::size_t>(j["joint"].integer_in(0, static_cast<int>(joints_.size()) - 1))];
-    def.expect_object({"limits", "drives", "extensions", "extras"});
-
-    // Locked and limited axes.
+  // A joint definition's limits: the axes locked (min = max = 0) and the ranges of the others.
+  struct Limits {
     std::array<bool, 3> lin_locked{}, ang_locked{};
-    std::array<std::optional<std::array<double, 2>>, 3> lin_range, ang_range;
-    if (auto limits = def.optional("limits")) {
-      for (const Node& l : limits->elements()) {
-        l.expect_object({"linearAxes", "angularAxes", "min", "max", "stiffness", "damping", "extensions", "extras"});
-        const bool linear = l.has("linearAxes");
-        if (linear == l.has("angularAxes")) l.fail("a limit needs exactly one of \"linearAxes\" and \"angularAxes\"");
-        const Node axes = l[linear ? "linearAxes" : "angularAxes"];
-        const double lo = l.optional("min") ? l["min"].number() : -std::numeric_limits<double>::infinity();
-        const double hi = l.optional("max") ? l["max"].number() : std::numeric_limits<double>::infinity();
-        if (lo > hi) l.fail("min is greater than max");
-        const auto list = axes.elements();
-        if (list.empty()) axes.fail("expected 1 to 3 axes");
-        const bool locked = lo == 0.0 && hi == 0.0;
-        if (!locked && list.size() > 1) axes.fail("a limit over several axes (a cone or a distance) is not supported by rhot");
-        for (const Node& a : list) {
-          const std::size_t k = static_cast<std::size_t>(a.integer_in(0, 2));
-          if (locked) {
-            (linear ? lin_locked : ang_locked)[k] = true;
-          } else {
-            (linear ? lin_range : ang_range)[k] = std::array<double, 2>{lo, hi};
-          }
+    std::array<std::optional<std::array<double, 2>>, 3> lin_range, ang_range;  // a missing side: infinite
+  };
+  static Limits read_limits(const Node& def) {
+    Limits out;
+    auto limits = def.optional("limits");
+    if (!limits) return out;
+    for (const Node& l : limits->elements()) {
+      l.expect_object({"linearAxes", "angularAxes", "min", "max", "stiffness", "damping", "extensions", "extras"});
+      const bool linear = l.has("linearAxes");
+      if (linear == l.has("angularAxes")) l.fail("a limit needs exactly one of \"linearAxes\" and \"angularAxes\"");
+      const Node axes = l[linear ? "linearAxes" : "angularAxes"];
+      const double inf = std::numeric_limits<double>::infinity();
+      const double lo = l.optional("min") ? l["min"].number_in(-1e6, 1e6, "a number from -1e6 to 1e6") : -inf;
+      const double hi = l.optional("max") ? l["max"].number_in(-1e6, 1e6, "a number from -1e6 to 1e6") : inf;
+      if (lo > hi) l.fail("min is greater than max");
+      const auto list = axes.elements();
+      if (list.empty()) axes.fail("expected 1 to 3 axes");
+      const bool locked = lo == 0.0 && hi == 0.0;
+      if (!locked && list.size() > 1) axes.fail("a limit over several axes (a cone or a distance) is not supported by rhot");
+      for (const Node& a : list) {
+        const std::size_t k = static_cast<std::size_t>(a.integer_in(0, 2));
+        if (locked) {
+          (linear ? out.lin_locked : out.ang_locked)[k] = true;
+        } else {
+          (linear ? out.lin_range : out.ang_range)[k] = std::array<double, 2>{lo, hi};
         }
       }
     }
+    return out;
+  }
+
+  // The joint the limits make (and its free axis, -1 for fixed and ball), with the free axis's
+  // limits.
+  static std::pair<Joint, int> classify(const Node& def, const Limits& l) {
     const auto count = [](const std::array<bool, 3>& a) {
       return static_cast<int>(a[0]) + static_cast<int>(a[1]) + static_cast<int>(a[2]);
     };
     const auto free_axis = [](const std::array<bool, 3>& a) { return a[0] ? (a[1] ? 2 : 1) : 0; };
     Joint joint;
     int axis = -1;
-    const int nl = count(lin_locked), na = count(ang_locked);
+    const int nl = count(l.lin_locked), na = count(l.ang_locked);
     if (nl == 3 && na == 3) {
       joint.type = JointType::kFixed;
     } else if (nl == 3 && na == 2) {
       joint.type = JointType::kHinge;
-      axis = free_axis(ang_locked);
+      axis = free_axis(l.ang_locked);
     } else if (na == 3 && nl == 2) {
       joint.type = JointType::kSlider;
-      axis = free_axis(lin_locked);
+      axis = free_axis(l.lin_locked);
     } else if (nl == 3 && na == 0) {
       joint.type = JointType::kBall;
     } else {
-      def.fail("a joint that locks linear axes " + axes_text(lin_locked) + " and angular axes " + axes_text(ang_locked) +
+      def.fail("a joint that locks linear axes " + axes_text(l.lin_locked) + " and angular axes " + axes_text(l.ang_locked) +
                " is not a hinge, slider, fixed or ball joint, the ones rhot supports");
     }
     const bool hinge = joint.type == JointType::kHinge;
     for (std::size_t k = 0; k < 3; ++k) {
       const bool free_one = static_cast<int>(k) == axis;
-      const auto& range = hinge ? ang_range[k] : lin_range[k];
-      if ((lin_range[k] && !(joint.type == JointType::kSlider && free_one)) || (ang_range[k] && !(hinge && free_one))) {
+      const auto& range = hinge ? l.ang_range[k] : l.lin_range[k];
+      if ((l.lin_range[k] && !(joint.type == JointType::kSlider && free_one)) || (l.ang_range[k] && !(hinge && free_one))) {
         def["limits"].fail("a limit on an axis the joint locks or leaves free (ball) is not supported by rhot");
       }
       if (free_one && range && std::isfinite((*range)[0]) && std::isfinite((*range)[1])) {
@@ -405,42 +408,65 @@ class Reader {
             hinge ? std::array<double, 2>{(*range)[0] * 180.0 / std::numbers::pi, (*range)[1] * 180.0 / std::numbers::pi} : *range;
       }
     }
-    if (auto drives = def.optional("drives")) {
-      for (const Node& d : drives->elements()) {
-        d.expect_object(
-            {"type", "mode", "axis", "maxForce", "positionTarget", "velocityTarget", "stiffness", "damping", "extensions", "extras"});
-        const std::string type = d["type"].string();
-        const std::string mode = d["mode"].string();
-        if (type != "linear" && type != "angular")
-          d["type"].fail("expected \"linear\" or \"angular\", got " + describe_json(d["type"].raw()));
-        if (mode != "force") d["mode"].fail("only \"force\" drives are supported by rhot");
-        const int k = d["axis"].integer_in(0, 2);
-        if (k != axis || (type == "angular") != hinge) d.fail("a drive on an axis the joint does not move along is not supported by rhot");
-        const double scale = hinge ? 180.0 / std::numbers::pi : 1.0;
-        if (d.has("velocityTarget")) {
-          JointMotor m;
-          m.velocity = d["velocityTarget"].number() * scale;
-          m.max_force = d.optional("maxForce") ? d["maxForce"].number() : 1e4;
-          joint.motor = m;
-        }
-        if (d.has("positionTarget")) {
-          JointSpring s;
-          s.stiffness = d["stiffness"].number();
-          s.damping = d.optional("damping") ? d["damping"].number() : 0.0;
-          s.rest = d["positionTarget"].number() * scale;
-          joint.spring = s;
-        }
+    return {joint, axis};
+  }
+
+  // A force drive on the free axis: its velocity target a motor, its position target a spring.
+  static void read_drives(const Node& def, Joint& joint, int axis) {
+    auto drives = def.optional("drives");
+    if (!drives) return;
+    const bool hinge = joint.type == JointType::kHinge;
+    for (const Node& d : drives->elements()) {
+      d.expect_object(
+          {"type", "mode", "axis", "maxForce", "positionTarget", "velocityTarget", "stiffness", "damping", "extensions", "extras"});
+      const std::string type = d["type"].string();
+      const std::string mode = d["mode"].string();
+      if (type != "linear" && type != "angular")
+        d["type"].fail("expected \"linear\" or \"angular\", got " + describe_json(d["type"].raw()));
+      if (mode != "force") d["mode"].fail("only \"force\" drives are supported by rhot");
+      const int k = d["axis"].integer_in(0, 2);
+      if (k != axis || (type == "angular") != hinge) d.fail("a drive on an axis the joint does not move along is not supported by rhot");
+      const double scale = hinge ? 180.0 / std::numbers::pi : 1.0;
+      if (d.has("velocityTarget")) {
+        JointMotor m;
+        m.velocity = d["velocityTarget"].number_in(-100.0, 100.0, "a velocity from -100 to 100 (m/s or rad/s)") * scale;
+        m.max_force = d.optional("maxForce") ? d["maxForce"].number_in(0.0, 1e6, "a force from 0 to 1e6 (N or N m)") : 1e4;
+        joint.motor = m;
+      }
+      if (d.has("positionTarget")) {
+        JointSpring s;
+        s.stiffness = d["stiffness"].number_in(0.0, 1e6, "a stiffness from 0 to 1e6");
+        s.damping = d.optional("damping") ? d["damping"].number_in(0.0, 1e6, "a damping from 0 to 1e6") : 0.0;
+        s.rest = d["positionTarget"].number_in(-100.0, 100.0, "a position from -100 to 100 (m or rad)") * scale;
+        joint.spring = s;
       }
     }
+  }
 
-    // Which body carries it: the joint node's, or (when that one does not move) the connected one's.
+  void read_joint(const Node& n, std::size_t i) {
+    const auto ext = extension(n, kBodies);
+    if (!ext || !ext->has("joint")) return;
+    const Node j = (*ext)["joint"];
+    j.expect_object({"connectedNode", "joint", "enableCollision", "extensions", "extras"});
+    if (auto c = j.optional("enableCollision"); c && c->boolean()) c->fail("rhot's joints never let the bodies they join collide");
+    const Node connected = j["connectedNode"];
+    const std::size_t other = static_cast<std::size_t>(connected.integer_in(0, static_cast<int>(count_) - 1));
+    if (joints_.empty()) j["joint"].fail("no physicsJoints in the file");
+    const Node def = joints_[static_cast<std::size_t>(j["joint"].integer_in(0, static_cast<int>(joints_.size()) - 1))];
+    def.expect_object({"limits", "drives", "extensions", "extras"});
+    auto [joint, axis] = classify(def, read_limits(def));
+    read_drives(def, joint, axis);
+    attach(j, i, other, joint, axis);
+  }
+
+  // Puts the joint on whichever of its two bodies is dynamic (the connected node's first), in that
+  // body's frame, connected to the other body (or the static body above its node, or the world).
+  void attach(const Node& j, std::size_t i, std::size_t other, Joint joint, int axis) {
+    const std::vector<Node> nodes = root_["nodes"].elements();
     const auto a = body_node(nodes, i), b = body_node(nodes, other);
-    if (a && b && *a == *b) connected.fail("the joint's two nodes are on the same body");
+    if (a && b && *a == *b) j["connectedNode"].fail("the joint's two nodes are on the same body");
     const auto dynamic = [&](std::optional<std::size_t> node) {
       return node && entity_of_node_[*node] >= 0 && out_[static_cast<std::size_t>(entity_of_node_[*node])].body->type == BodyType::kDynamic;
-    };
-    const auto static_body = [&](std::size_t node) {
-      return entity_of_node_[node] >= 0 ? out_[static_cast<std::size_t>(entity_of_node_[node])].name : std::string();
     };
     std::size_t carrier = 0, frame = 0, partner_frame = 0;
     std::optional<std::size_t> partner;
@@ -459,13 +485,13 @@ class Reader {
     } else {
       j.fail("neither of the bodies this joint connects is dynamic");
     }
-    // A static partner: the node above it with a static collider, or the world.
     std::string partner_name;
     if (partner) {
       partner_name = out_[static_cast<std::size_t>(entity_of_node_[*partner])].name;
     } else {
       for (int k = static_cast<int>(partner_frame); k >= 0 && partner_name.empty(); k = parent_of_[static_cast<std::size_t>(k)]) {
-        partner_name = static_body(static_cast<std::size_t>(k));
+        if (entity_of_node_[static_cast<std::size_t>(k)] >= 0)
+          partner_name = out_[static_cast<std::size_t>(entity_of_node_[static_cast<std::size_t>(k)])].name;
       }
     }
     joint.connected_to = partner_name;

@@ -103,6 +103,7 @@ class DemoScript {
   HandTruth show_pose(HandSide side, const ShowKey& k, const Eigen::Vector3d& centre, double closure, const Eigen::Quaterniond& turn) const;
   void build_right_keys();
   void build_showcase(const SceneDesc& scene);
+  struct Showcase;  // builds the showcase's keys (ShowcaseScript.cpp)
 
   double duration_s_ = 26.0;
   bool once_ = false;  // the showcase plays once

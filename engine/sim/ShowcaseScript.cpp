@@ -87,36 +87,62 @@ bool DemoScript::wants_showcase(const SceneDesc& scene) {
   return false;
 }
 
-void DemoScript::build_showcase(const SceneDesc& scene) {
-  once_ = true;
-  double t = 0.5;  // both hands rest until then
-  std::array<std::vector<ShowKey>, 2> keys;
-  const Eigen::Quaterniond none = Eigen::Quaterniond::Identity();
-  for (std::size_t h = 0; h < 2; ++h) {
-    const Eigen::Vector3d axis = h == 0 ? Eigen::Vector3d(-1.0, 0.0, 0.0) : Eigen::Vector3d(1.0, 0.0, 0.0);
-    keys[h].push_back({0.0, kRest[h], 0.0, 0.05, axis, none, false});
+namespace {
+
+// The point `u` (0..1) of the way along a path through `points`, leg i ending at `ends[i]`.
+Eigen::Vector3d along_path(const std::vector<Eigen::Vector3d>& points, const std::vector<double>& ends, double u) {
+  double begin = 0.0;
+  for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+    if (u <= ends[i] || i + 2 == points.size()) {
+      const double f = ends[i] > begin ? std::clamp((u - begin) / (ends[i] - begin), 0.0, 1.0) : 1.0;
+      return points[i] + f * (points[i + 1] - points[i]);
+    }
+    begin = ends[i];
   }
-  const auto add = [&](int h, double at, const Eigen::Vector3d& c, double closure, const Grip& g, const Eigen::Quaterniond& turn,
-                       bool pointing = false) {
+  return points.back();
+}
+
+}  // namespace
+
+// Builds the showcase's keys, one task after another.
+struct DemoScript::Showcase {
+  using Move = std::function<std::pair<Eigen::Vector3d, Eigen::Quaterniond>(std::size_t, double)>;
+  static Eigen::Quaterniond none() { return Eigen::Quaterniond::Identity(); }
+
+  DemoScript& script;
+  const SceneDesc& scene;
+  std::array<std::vector<ShowKey>, 2> keys;
+  double t = 0.5;  // both hands rest until then
+
+  Showcase(DemoScript& s, const SceneDesc& sc) : script(s), scene(sc) {
+    for (std::size_t h = 0; h < 2; ++h) {
+      const Eigen::Vector3d axis = h == 0 ? Eigen::Vector3d(-1.0, 0.0, 0.0) : Eigen::Vector3d(1.0, 0.0, 0.0);
+      keys[h].push_back({0.0, kRest[h], 0.0, 0.05, axis, none(), false});
+    }
+  }
+
+  void add(int h, double at, const Eigen::Vector3d& c, double closure, const Grip& g, const Eigen::Quaterniond& turn,
+           bool pointing = false) {
     keys[static_cast<std::size_t>(h)].push_back({at, c, closure, g.width_m, g.axis, turn, pointing});
-  };
+  }
   // The hand stays as it is until `at` (its shape then changes on the way to the next key).
-  const auto hold = [&](int h, double at) {
+  void hold(int h, double at) {
     ShowKey k = keys[static_cast<std::size_t>(h)].back();
     k.t = at;
     keys[static_cast<std::size_t>(h)].push_back(k);
-  };
-  // Reach over a grip, down, close; `move(u)` (u 0..1) takes the grip point and the hand's turn
+  }
+  void task(const char* kind, const std::string& entity, double begin_s) { script.tasks_.push_back({kind, entity, begin_s, t}); }
+
+  // Reach over a grip, down, close; `move(k, u)` (u 0..1) takes hand k's grip point and turn
   // through the task; open, lift off, back to rest. Several hands at once for a two-handed carry.
-  const auto grasp_task = [&](const std::vector<int>& hands, const std::vector<Grip>& grips, double move_s,
-                              const std::function<std::pair<Eigen::Vector3d, Eigen::Quaterniond>(std::size_t, double)>& move) {
+  void grasp_task(const std::vector<int>& hands, const std::vector<Grip>& grips, double move_s, const Move& move) {
     for (std::size_t k = 0; k < hands.size(); ++k) {
       const int h = hands[k];
       const Grip& g = grips[k];
       hold(h, t);
-      add(h, t + 1.0, g.point + 0.15 * kUp, 0.0, g, none);
-      add(h, t + 1.7, g.point, 0.0, g, none);
-      add(h, t + 2.3, g.point, 1.0, g, none);
+      add(h, t + 1.0, g.point + 0.15 * kUp, 0.0, g, none());
+      add(h, t + 1.7, g.point, 0.0, g, none());
+      add(h, t + 2.3, g.point, 1.0, g, none());
       constexpr int kSteps = 12;
       for (int i = 1; i <= kSteps; ++i) {
         const double u = static_cast<double>(i) / kSteps;
@@ -127,110 +153,100 @@ void DemoScript::build_showcase(const SceneDesc& scene) {
       add(h, t + 2.5 + move_s, end, 1.0, g, turn);
       add(h, t + 2.9 + move_s, end, 0.0, g, turn);
       add(h, t + 3.5 + move_s, end + 0.1 * kUp, 0.0, g, turn);
-      add(h, t + 4.4 + move_s, kRest[static_cast<std::size_t>(h)], 0.0, g, none);
+      add(h, t + 4.4 + move_s, kRest[static_cast<std::size_t>(h)], 0.0, g, none());
     }
     t += 4.6 + move_s;
-  };
+  }
 
-  for (const RuleDesc& rule : scene.rules) {
-    const EntityDesc* e = named(scene, rule.when.entity);
-    if (!e) continue;
-    const std::string& ev = rule.when.event;
-    if (ev == "value_above" && e->joint && (e->joint->type == JointType::kHinge || e->joint->type == JointType::kSlider)) {
-      // The handle: a grabbable entity fixed to the jointed one, or that one itself.
-      const EntityDesc* handle = e->grabbable ? e : nullptr;
-      for (const EntityDesc& c : scene.entities) {
-        if (!handle && c.grabbable && c.joint && c.joint->type == JointType::kFixed && c.joint->connected_to == e->name) handle = &c;
-      }
-      if (!handle) continue;
-      const Grip g = grip_of(scene, *handle);
-      const Rigid3d pose = world_pose(scene, *e);
-      const Eigen::Vector3d axis = (pose.rotation * to_eigen(e->joint->axis)).normalized();
-      const double begin_s = t;
-      if (e->joint->type == JointType::kHinge) {
-        const double upper = e->joint->limits ? (*e->joint->limits)[1] : 180.0;
-        const double target = std::min(rule.when.value + 15.0, upper - 5.0) * std::numbers::pi / 180.0;
-        const Eigen::Vector3d pivot = pose * to_eigen(e->joint->anchor_m);
-        grasp_task({hand_for(g.point)}, {g}, 2.0, [&](std::size_t, double u) {
-          const Eigen::Quaterniond turn(Eigen::AngleAxisd(target * u, axis));
-          return std::make_pair(Eigen::Vector3d(pivot + turn * (g.point - pivot)), turn);
-        });
-        tasks_.push_back({"hinge", e->name, begin_s, t});
-      } else {
-        const double upper = e->joint->limits ? (*e->joint->limits)[1] : 1.0;
-        const double target = std::min(rule.when.value + 0.04, upper - 0.01);
-        grasp_task({hand_for(g.point)}, {g}, 1.5,
-                   [&](std::size_t, double u) { return std::make_pair(Eigen::Vector3d(g.point + target * u * axis), none); });
-        tasks_.push_back({"slider", e->name, begin_s, t});
-      }
-    } else if (ev == "press" && e->button) {
-      // A pointing index finger from 5 cm above the cap down 70 % of its travel past the top, and
-      // back up.
-      const Rigid3d pose = world_pose(scene, *e);
-      const Eigen::Vector3d push = (pose.rotation * to_eigen(e->button->axis)).normalized();
-      const Eigen::Vector3d half = half_of(*e), local = to_eigen(e->button->axis).normalized();
-      const double depth = std::abs(local.x()) * half.x() + std::abs(local.y()) * half.y() + std::abs(local.z()) * half.z();
-      const Eigen::Vector3d top = pose.translation - depth * push;
-      const Eigen::Vector3d above = top - 0.05 * push, pressed = top + 0.7 * e->button->travel_m * push;
-      const int h = hand_for(top);
-      const Grip g{top, Eigen::Vector3d::UnitX(), 0.05};
-      const double begin_s = t;
-      hold(h, t);
-      add(h, t + 1.0, above, 0.0, g, none, true);
-      add(h, t + 1.6, above, 0.0, g, none, true);
-      add(h, t + 2.1, pressed, 0.0, g, none, true);
-      add(h, t + 2.3, pressed, 0.0, g, none, true);
-      add(h, t + 2.8, above, 0.0, g, none, true);
-      add(h, t + 3.6, kRest[static_cast<std::size_t>(h)], 0.0, g, none, true);
-      t += 3.8;
-      tasks_.push_back({"poke", e->name, begin_s, t});
-    } else if (ev == "snap" && e->socket) {
-      const EntityDesc* object = rule.when.object.empty() ? nullptr : named(scene, rule.when.object);
-      for (const EntityDesc& c : scene.entities) {
-        if (object) break;
-        if (!c.grabbable) continue;
-        const auto& acc = e->socket->accepts;
-        const bool ok = acc.empty() || std::find(acc.begin(), acc.end(), c.name) != acc.end() ||
-                        std::any_of(c.tags.begin(), c.tags.end(),
-                                    [&](const std::string& tag) { return std::find(acc.begin(), acc.end(), tag) != acc.end(); });
-        if (ok) object = &c;
-      }
-      if (!object) continue;
-      const Grip g = grip_of(scene, *object);
-      const Eigen::Vector3d offset = g.point - world_pose(scene, *object).translation;
-      const Eigen::Vector3d attach = world_pose(scene, *e) * to_eigen(e->socket->attach_position) + offset + 0.01 * kUp;
-      const Eigen::Vector3d lifted = g.point + 0.12 * kUp;
-      const Eigen::Vector3d over(attach.x(), std::max(lifted.y(), attach.y() + 0.08), attach.z());
-      const double begin_s = t;
+  // value_above on a hinge or slider: its handle (a grabbable entity fixed to it, or it) swung or
+  // pulled past the threshold.
+  void joint_task(const RuleDesc& rule, const EntityDesc& e) {
+    const EntityDesc* handle = e.grabbable ? &e : nullptr;
+    for (const EntityDesc& c : scene.entities) {
+      if (!handle && c.grabbable && c.joint && c.joint->type == JointType::kFixed && c.joint->connected_to == e.name) handle = &c;
+    }
+    if (!handle) return;
+    const Grip g = grip_of(scene, *handle);
+    const Rigid3d pose = world_pose(scene, e);
+    const Eigen::Vector3d axis = (pose.rotation * to_eigen(e.joint->axis)).normalized();
+    const double begin_s = t;
+    if (e.joint->type == JointType::kHinge) {
+      const double upper = e.joint->limits ? (*e.joint->limits)[1] : 180.0;
+      const double target = std::min(rule.when.value + 15.0, upper - 5.0) * std::numbers::pi / 180.0;
+      const Eigen::Vector3d pivot = pose * to_eigen(e.joint->anchor_m);
       grasp_task({hand_for(g.point)}, {g}, 2.0, [&](std::size_t, double u) {
-        // Up, over, down: a third of the time each.
-        Eigen::Vector3d p;
-        if (u < 1.0 / 3.0) {
-          p = g.point + 3.0 * u * (lifted - g.point);
-        } else if (u < 2.0 / 3.0) {
-          p = lifted + (3.0 * u - 1.0) * (over - lifted);
-        } else {
-          p = over + (3.0 * u - 2.0) * (attach - over);
-        }
-        return std::make_pair(p, none);
+        const Eigen::Quaterniond turn(Eigen::AngleAxisd(target * u, axis));
+        return std::make_pair(Eigen::Vector3d(pivot + turn * (g.point - pivot)), turn);
       });
-      tasks_.push_back({"socket", e->name, begin_s, t});
+      task("hinge", e.name, begin_s);
+    } else {
+      const double upper = e.joint->limits ? (*e.joint->limits)[1] : 1.0;
+      const double target = std::min(rule.when.value + 0.04, upper - 0.01);
+      grasp_task({hand_for(g.point)}, {g}, 1.5,
+                 [&](std::size_t, double u) { return std::make_pair(Eigen::Vector3d(g.point + target * u * axis), none()); });
+      task("slider", e.name, begin_s);
     }
   }
-  for (const InteractionDesc& in : scene.interactions) {
-    if (in.type != InteractionType::kPlace) continue;
+
+  // press on a button: a pointing index finger from 5 cm above the cap down 70 % of its travel
+  // past the top, and back up.
+  void poke_task(const EntityDesc& e) {
+    const Rigid3d pose = world_pose(scene, e);
+    const Eigen::Vector3d push = (pose.rotation * to_eigen(e.button->axis)).normalized();
+    const Eigen::Vector3d half = half_of(e), local = to_eigen(e.button->axis).normalized();
+    const double depth = std::abs(local.x()) * half.x() + std::abs(local.y()) * half.y() + std::abs(local.z()) * half.z();
+    const Eigen::Vector3d top = pose.translation - depth * push;
+    const Eigen::Vector3d above = top - 0.05 * push, pressed = top + 0.7 * e.button->travel_m * push;
+    const int h = hand_for(top);
+    const Grip g{top, Eigen::Vector3d::UnitX(), 0.05};
+    const double begin_s = t;
+    hold(h, t);
+    add(h, t + 1.0, above, 0.0, g, none(), true);
+    add(h, t + 1.6, above, 0.0, g, none(), true);
+    add(h, t + 2.1, pressed, 0.0, g, none(), true);
+    add(h, t + 2.3, pressed, 0.0, g, none(), true);
+    add(h, t + 2.8, above, 0.0, g, none(), true);
+    add(h, t + 3.6, kRest[static_cast<std::size_t>(h)], 0.0, g, none(), true);
+    t += 3.8;
+    task("poke", e.name, begin_s);
+  }
+
+  // snap on a socket: the rule's object (or the first the socket accepts) carried up, over the
+  // attach pose and down, a third of the time each, and let go.
+  void socket_task(const RuleDesc& rule, const EntityDesc& e) {
+    const EntityDesc* object = rule.when.object.empty() ? nullptr : named(scene, rule.when.object);
+    const auto& acc = e.socket->accepts;
+    const auto accepted = [&](const std::string& n) { return std::find(acc.begin(), acc.end(), n) != acc.end(); };
+    for (const EntityDesc& c : scene.entities) {
+      if (!object && c.grabbable && (acc.empty() || accepted(c.name) || std::any_of(c.tags.begin(), c.tags.end(), accepted))) object = &c;
+    }
+    if (!object) return;
+    const Grip g = grip_of(scene, *object);
+    const Eigen::Vector3d offset = g.point - world_pose(scene, *object).translation;
+    const Eigen::Vector3d attach = world_pose(scene, e) * to_eigen(e.socket->attach_position) + offset + 0.01 * kUp;
+    const Eigen::Vector3d lifted = g.point + 0.12 * kUp;
+    const Eigen::Vector3d over(attach.x(), std::max(lifted.y(), attach.y() + 0.08), attach.z());
+    const double begin_s = t;
+    grasp_task({hand_for(g.point)}, {g}, 2.0, [&](std::size_t, double u) {
+      return std::make_pair(along_path({g.point, lifted, over, attach}, {1.0 / 3.0, 2.0 / 3.0, 1.0}, u), none());
+    });
+    task("socket", e.name, begin_s);
+  }
+
+  // place: the object carried into its zone (up 10 cm, over, down) and put down; with both hands,
+  // 37 % of its length out from the middle, when it is 30 cm or longer.
+  void place_task(const InteractionDesc& in) {
     const EntityDesc* object = named(scene, in.object);
     const EntityDesc* zone = named(scene, in.zone);
-    if (!object || !zone || !object->grabbable) continue;
+    if (!object || !zone || !object->grabbable) return;
     const Rigid3d pose = world_pose(scene, *object);
     const Eigen::Vector3d half = half_of(*object);
     const Eigen::Vector3d goal = world_pose(scene, *zone).translation;
-    const Eigen::Vector3d rest_at(goal.x(), pose.translation.y() + 0.003, goal.z());  // where its centre is put down
+    const Eigen::Vector3d shift = Eigen::Vector3d(goal.x(), pose.translation.y() + 0.003, goal.z()) - pose.translation;
     std::vector<int> hands;
     std::vector<Grip> grips;
     const double length = 2.0 * std::max(half.x(), half.z());
     if (length >= 0.3) {
-      // Both hands, 37 % of the length out from the middle, across the long side.
       Eigen::Vector3d along = pose.rotation * (half.x() >= half.z() ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ());
       along.y() = 0.0;
       along.normalize();
@@ -242,33 +258,47 @@ void DemoScript::build_showcase(const SceneDesc& scene) {
         grips.push_back({pose.translation + (h == 0 ? -0.37 : 0.37) * length * along, across, width});
       }
     } else {
-      const Grip g = grip_of(scene, *object);
-      hands.push_back(hand_for(g.point));
-      grips.push_back(g);
+      grips.push_back(grip_of(scene, *object));
+      hands.push_back(hand_for(grips.back().point));
     }
     const double begin_s = t;
     grasp_task(hands, grips, 2.5, [&](std::size_t k, double u) {
-      const Eigen::Vector3d from = grips[k].point;
-      const Eigen::Vector3d to = grips[k].point + (rest_at - pose.translation);
-      const Eigen::Vector3d up_from = from + 0.1 * kUp, up_to = to + 0.1 * kUp;
-      Eigen::Vector3d p;
-      if (u < 0.25) {
-        p = from + 4.0 * u * (up_from - from);
-      } else if (u < 0.75) {
-        p = up_from + 2.0 * (u - 0.25) * (up_to - up_from);
-      } else {
-        p = up_to + 4.0 * (u - 0.75) * (to - up_to);
-      }
-      return std::make_pair(p, none);
+      const Eigen::Vector3d from = grips[k].point, to = from + shift;
+      return std::make_pair(along_path({from, from + 0.1 * kUp, to + 0.1 * kUp, to}, {0.25, 0.75, 1.0}, u), none());
     });
-    tasks_.push_back({"place", object->name, begin_s, t});
+    task("place", object->name, begin_s);
   }
+
   // Both hands hold still at the end of their keys; the script ends a second later.
-  duration_s_ = t + 1.0;
-  for (std::size_t h = 0; h < 2; ++h) {
-    keys[h].push_back({duration_s_, kRest[h], 0.0, keys[h].back().width_m, keys[h].back().axis, none, keys[h].back().pointing});
-    scripts_[h].show = std::move(keys[h]);
+  void finish() {
+    script.duration_s_ = t + 1.0;
+    for (std::size_t h = 0; h < 2; ++h) {
+      const ShowKey& last = keys[h].back();
+      keys[h].push_back({script.duration_s_, kRest[h], 0.0, last.width_m, last.axis, none(), last.pointing});
+      script.scripts_[h].show = std::move(keys[h]);
+    }
   }
+};
+
+void DemoScript::build_showcase(const SceneDesc& scene) {
+  once_ = true;
+  Showcase showcase(*this, scene);
+  for (const RuleDesc& rule : scene.rules) {
+    const EntityDesc* e = named(scene, rule.when.entity);
+    if (!e) continue;
+    const std::string& ev = rule.when.event;
+    if (ev == "value_above" && e->joint && (e->joint->type == JointType::kHinge || e->joint->type == JointType::kSlider)) {
+      showcase.joint_task(rule, *e);
+    } else if (ev == "press" && e->button) {
+      showcase.poke_task(*e);
+    } else if (ev == "snap" && e->socket) {
+      showcase.socket_task(rule, *e);
+    }
+  }
+  for (const InteractionDesc& in : scene.interactions) {
+    if (in.type == InteractionType::kPlace) showcase.place_task(in);
+  }
+  showcase.finish();
 }
 
 HandTruth DemoScript::show_hand_at(const HandScript& s, double t) const {

@@ -94,6 +94,23 @@ CLI::App* add_grasp_command(CLI::App& app, GraspArgs& a, bool& json) {
   return cmd;
 }
 
+CLI::App* add_interactions_command(CLI::App& app, InteractionsArgs& a, bool& json) {
+  a.scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/workbench.json";
+  auto* cmd = app.add_subcommand(
+      "interactions", "a scene's showcase script through tracked hands and physics, per seed: each interaction's success, time, events");
+  cmd->add_option("--scene", a.scene_file, "scene file (JSON) with rules or place interactions to exercise")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--seeds", a.seeds, "runs, each its own simulated world")->capture_default_str()->check(CLI::Range(1, 10000));
+  cmd->add_option("--seed", a.seed, "the first run's seed (then +1 each)")->capture_default_str();
+  cmd->add_option("--hands", a.hands, "tracked (through the cameras) or perfect (the script's)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"tracked", "perfect"}));
+  add_world_flags(*cmd, a.world, true);
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
 CLI::App* add_demo_command(CLI::App& app, DemoArgs& a, bool& json) {
   auto* cmd =
       app.add_subcommand("demo", "the demo's first pickup with the cube at random spots on the table: grasp success, lift, hand confusion");
@@ -259,21 +276,7 @@ int main(int argc, char** argv) {
   demo_args.scene_file = scene_file;
   CLI::App* demo_cmd = add_demo_command(app, demo_args, json);
   InteractionsArgs inter_args;
-  inter_args.scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/workbench.json";
-  auto* inter_cmd = app.add_subcommand(
-      "interactions", "a scene's showcase script through tracked hands and physics, per seed: each interaction's success, time, events");
-  inter_cmd->add_option("--scene", inter_args.scene_file, "scene file (JSON) with rules or place interactions to exercise")
-      ->capture_default_str()
-      ->check(CLI::ExistingFile);
-  inter_cmd->add_option("--seeds", inter_args.seeds, "runs, each its own simulated world")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 10000));
-  inter_cmd->add_option("--seed", inter_args.seed, "the first run's seed (then +1 each)")->capture_default_str();
-  inter_cmd->add_option("--hands", inter_args.hands, "tracked (through the cameras) or perfect (the script's)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"tracked", "perfect"}));
-  add_world_flags(*inter_cmd, inter_args.world, true);
-  inter_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  CLI::App* inter_cmd = add_interactions_command(app, inter_args, json);
   auto* calib_cmd = app.add_subcommand("calibration", "a simulated wand session calibrated from unknown extrinsics, against the true rig");
   int calib_frames = 2000;
   double calib_wand_mm = 500.0;

@@ -161,6 +161,15 @@ TEST(GltfPhysics, MalformedOrUnsupportedExtensionDataIsRefusedWithTheFilePathAnd
   EXPECT_EQ(error_with([](nlohmann::json& g) { g["nodes"][2]["extensions"]["KHR_physics_rigid_bodies"]["joint"]["connectedNode"] = 1; }),
             "broken.gltf: /nodes/2/extensions/KHR_physics_rigid_bodies/joint/connectedNode: the joint's two nodes are on the same body");
   EXPECT_EQ(error_with([](nlohmann::json& g) {
+              g["nodes"][1]["translation"] = {1e20, 0, 0};
+            }),
+            "broken.gltf: /nodes/1: the node's transform is not finite or beyond 1e6");
+  EXPECT_EQ(error_with([](nlohmann::json& g) {
+              g["extensions"]["KHR_physics_rigid_bodies"]["physicsJoints"][1]["drives"][0]["velocityTarget"] = 1e30;
+            }),
+            "broken.gltf: /extensions/KHR_physics_rigid_bodies/physicsJoints/1/drives/0/velocityTarget: expected a velocity from -100 to "
+            "100 (m/s or rad/s), got 1e+30");
+  EXPECT_EQ(error_with([](nlohmann::json& g) {
               g["nodes"][1]["children"] = {2, 3};
             }),
             "broken.gltf: /nodes/1/children/1: node 3 has two parents");
