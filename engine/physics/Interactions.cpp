@@ -9,6 +9,12 @@
 
 namespace rhot {
 
+bool inside_zone(const glm::mat4& world_from_zone, const BoxShape& zone, const btVector3& point) {
+  const glm::vec4 local = glm::inverse(world_from_zone) * glm::vec4(point.x(), point.y(), point.z(), 1.0f);
+  const glm::vec3 half = 0.5f * zone.size_m;
+  return std::abs(local.x) <= half.x && std::abs(local.y) <= half.y && std::abs(local.z) <= half.z;
+}
+
 std::expected<Interactions, std::string> Interactions::create(World& world, const std::vector<InteractionDesc>& list) {
   Interactions out;
   const auto find = [&](const std::string& name) { return find_named(world, name); };
@@ -49,10 +55,8 @@ void Interactions::update(World& world, const PhysicsWorld& physics, const Grasp
       const btRigidBody* body = physics.body(item.object);
       const WorldTransform* zone = world.find<WorldTransform>(item.zone);
       if (!body || !zone || !world.alive(item.zone)) continue;
-      const btVector3 p = body->getWorldTransform().getOrigin();
-      const glm::vec4 local = glm::inverse(zone->world_from_local) * glm::vec4(p.x(), p.y(), p.z(), 1.0f);
-      const glm::vec3 half = 0.5f * std::get<BoxShape>(world.get<Mesh>(item.zone).shape).size_m;
-      const bool inside = std::abs(local.x) <= half.x && std::abs(local.y) <= half.y && std::abs(local.z) <= half.z;
+      const bool inside =
+          inside_zone(zone->world_from_local, std::get<BoxShape>(world.get<Mesh>(item.zone).shape), body->getWorldTransform().getOrigin());
       const bool resting = body->getLinearVelocity().length() < 0.05f;
       if (inside && resting && !grasp.held_by(item.object)) {
         if (item.inside_since_s < 0.0) item.inside_since_s = physics.time_s();

@@ -16,6 +16,10 @@ namespace rhot {
 
 class World;
 
+// Whether `point` (world) lies inside a zone: the box `zone` (a box mesh's size) posed by
+// `world_from_zone`.
+bool inside_zone(const glm::mat4& world_from_zone, const BoxShape& zone, const btVector3& point);
+
 class Interactions {
  public:
   Interactions() = default;

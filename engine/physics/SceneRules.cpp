@@ -9,6 +9,7 @@
 
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
+#include "engine/physics/Interactions.h"
 #include "engine/scene/Components.h"
 #include "engine/scene/SceneLoader.h"
 
@@ -122,15 +123,11 @@ void SceneRules::update(World& world, PhysicsWorld& physics, Mechanisms& mechani
     const WorldTransform* zone = world.find<WorldTransform>(zones_[z]);
     const Mesh* mesh = world.find<Mesh>(zones_[z]);
     if (!zone || !mesh || !world.alive(zones_[z]) || !std::holds_alternative<BoxShape>(mesh->shape)) continue;
-    const glm::mat4 local_from_world = glm::inverse(zone->world_from_local);
-    const glm::vec3 half = 0.5f * std::get<BoxShape>(mesh->shape).size_m;
     std::vector<Entity> now;
     for (const Entity e : physics.entities()) {
       const btRigidBody* b = physics.body(e);
       if (!b || b->isStaticOrKinematicObject() || !b->getBroadphaseHandle()) continue;
-      const btVector3 p = b->getWorldTransform().getOrigin();
-      const glm::vec4 l = local_from_world * glm::vec4(p.x(), p.y(), p.z(), 1.0f);
-      if (std::abs(l.x) <= half.x && std::abs(l.y) <= half.y && std::abs(l.z) <= half.z) now.push_back(e);
+      if (inside_zone(zone->world_from_local, std::get<BoxShape>(mesh->shape), b->getWorldTransform().getOrigin())) now.push_back(e);
     }
     if (zones_seen_) {
       const auto raise = [&](InteractionEventType type, Entity object) {
