@@ -63,6 +63,22 @@ def main():
         a = 2 * math.pi * i / 8
         room.append(dict(webcam, name=f"wall-{i}", position=[2.2 * math.cos(a), 2.4, 2.2 * math.sin(a)], target=room_centre))
     write_rig("assets/rigs/room-8.yaml", "room-8", room, room_centre, [3.0, 1.6, 3.0])
+    # Stage: a 10 x 10 m floor tracked up to 2 m, 32 cameras with wider lenses (about 84 degrees
+    # across). 7 on each wall at 3.5 m, 1.5 m apart and 0.5 m outside the volume, each aimed 3.5 m
+    # into the volume at 1 m (so each sees about its own third of the floor), and 4 on the ceiling
+    # at 6 m above the quarters' centres, looking straight down a little off vertical.
+    stage_lens = dict(width=1280, height=720, f=700.0, dist=[-0.08, 0.015, 0.0, 0.0, 0.0])
+    stage = []
+    for wall, (nx, nz) in enumerate([(0, -1), (1, 0), (0, 1), (-1, 0)]):
+        for k in range(7):
+            along = -4.5 + 1.5 * k
+            tx, tz = -nz, nx  # along the wall
+            x, z = 5.5 * nx + along * tx, 5.5 * nz + along * tz
+            target = [x - 4.0 * nx, 1.0, z - 4.0 * nz]
+            stage.append(dict(stage_lens, name=f"wall-{wall}-{k}", position=[x, 3.5, z], target=target))
+    for k, (qx, qz) in enumerate([(-2.5, -2.5), (2.5, -2.5), (2.5, 2.5), (-2.5, 2.5)]):
+        stage.append(dict(stage_lens, name=f"ceiling-{k}", position=[qx, 6.0, qz], target=[qx * 0.9, 0.0, qz * 0.9 + 0.3]))
+    write_rig("assets/rigs/stage-32.yaml", "stage-32", stage, [0.0, 1.0, 0.0], [10.0, 2.0, 10.0])
     # Stereo pair: 20 cm baseline above the user's head, looking at the desk volume (Wiimote-like
     # 1024 x 768 infrared cameras, about 45 degrees across).
     wiimote = dict(width=1024, height=768, f=1280.0, dist=[0.0, 0.0, 0.0, 0.0, 0.0])

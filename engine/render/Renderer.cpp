@@ -185,6 +185,10 @@ std::expected<std::unique_ptr<Renderer>, std::string> Renderer::create(const Ren
   info.shading = settings.shading != Shading::kAuto ? settings.shading : info.cpu_device ? Shading::kPerVertex : Shading::kPerPixel;
   impl->pass = std::make_unique<vk::StereoPass>(*impl->context, settings.eye_width_px, settings.eye_height_px, multiview,
                                                 info.shading == Shading::kPerVertex, settings.clear_color);
+  if (settings.gpu_timings) {
+    info.gpu_timings = impl->pass->enable_gpu_timings();
+    if (!info.gpu_timings) spdlog::warn("renderer: GPU timings asked for, but the device's queue has no timestamps");
+  }
   if (window != nullptr) {
     impl->window = window;
     impl->swapchain = std::make_unique<vk::Swapchain>(*impl->context);
@@ -268,6 +272,9 @@ void Renderer::render(const FrameInput& frame) {
 std::array<Image, 2> Renderer::read_eyes() { return impl_->pass->read_back(); }
 
 void Renderer::finish() { impl_->pass->finish(); }
+
+const std::optional<FrameCompletion>& Renderer::last_completed() const { return impl_->pass->last_completed(); }
+std::uint64_t Renderer::frames_submitted() const { return impl_->pass->frames_submitted(); }
 
 Image Renderer::read_eye(int eye) {
   RHOT_PRECONDITION(eye == kLeftEye || eye == kRightEye, "Renderer::read_eye: eye is 0 (left) or 1 (right)");

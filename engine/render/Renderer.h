@@ -60,6 +60,9 @@ struct RendererSettings {
   // switched on by the environment variable RHOT_VK_VALIDATION=1.
   bool validation = false;
   glm::vec4 clear_color{0.55f, 0.62f, 0.70f, 1.0f};  // linear RGBA
+  // GPU timestamps around each eye's pass (FrameCompletion::gpu_eye_ms), where the device has
+  // them; info().gpu_timings says whether it did.
+  bool gpu_timings = false;
 
   [[nodiscard]] std::expected<void, std::string> check() const;
 };
@@ -103,6 +106,18 @@ struct RendererInfo {
   bool multiview_self_test_passed = false;  // meaningful where multiview_supported
   StereoMode mode = StereoMode::kTwoPass;   // what is actually used: kMultiview or kTwoPass
   Shading shading = Shading::kPerPixel;     // what is actually used: kPerPixel or kPerVertex
+  bool gpu_timings = false;                 // asked for, and the device has timestamps
+};
+
+// A frame the GPU has finished drawing: when it was submitted and when it was done, on the steady
+// clock (seconds), measured by a thread that waits for its fence (vk/FenceWatch.h).
+struct FrameCompletion {
+  std::uint64_t frame = 0;  // render() calls before it
+  double submitted_s = 0.0;
+  double done_s = 0.0;
+  // With RendererSettings::gpu_timings: the GPU's own time per eye from timestamps around each
+  // eye's pass (multiview draws both in one pass: all of it in eye 0). 0 otherwise.
+  std::array<double, 2> gpu_eye_ms{};
 };
 
 class Renderer {
@@ -132,6 +147,12 @@ class Renderer {
 
   // Waits until the last rendered frame has been drawn (and presented, with a window).
   void finish();
+
+  // The last frame known to be drawn (render() waits for the one before it; finish() for the
+  // last); nothing before the first. Its frame number counts render() calls from 0.
+  const std::optional<FrameCompletion>& last_completed() const;
+  // render() calls so far.
+  std::uint64_t frames_submitted() const;
 
   // Copies the last rendered frame of one eye (or both) to the CPU, waiting for it first.
   Image read_eye(int eye);

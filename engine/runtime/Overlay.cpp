@@ -82,6 +82,15 @@ void Overlay::frame_panel() {
   const double misses = frames == 0 ? 0.0 : 100.0 * static_cast<double>(stats_.frames_over_budget()) / static_cast<double>(frames);
   ImGui::Text("budget %.1f ms (yellow line): %llu of %llu over (%.2f %%)", stats_.budget_ms(),
               static_cast<unsigned long long>(stats_.frames_over_budget()), static_cast<unsigned long long>(frames), misses);
+  const LatencyStats& latency = demo_.latency();
+  if (latency.frames() >= latency_frames_ + 45 || latency.frames() < latency_frames_) {
+    latency_ = {latency.tracking(), latency.render(), latency.motion_to_photon()};
+    latency_frames_ = latency.frames();
+  }
+  ImGui::Text("latency p50 / p99: tracking %.1f / %.1f ms, render %.1f / %.1f ms", latency_[0].p50_ms, latency_[0].p99_ms,
+              latency_[1].p50_ms, latency_[1].p99_ms);
+  ImGui::Text("motion-to-photon %.1f / %.1f ms (hands drawn %s)", latency_[2].p50_ms, latency_[2].p99_ms,
+              demo_.predicting() ? "at display time" : "as tracked");
   if (ImGui::BeginTable("stages", 4, ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp)) {
     ImGui::TableSetupColumn("stage");
     ImGui::TableSetupColumn("last ms");

@@ -13,6 +13,7 @@
 // overlay frame has begun.
 
 #include <cstdint>
+#include <array>
 #include <deque>
 #include <string>
 
@@ -48,6 +49,9 @@ class Overlay {
   OverlayInfo info_;
   std::deque<std::string> events_;  // newest first
   std::uint64_t events_frame_ = ~0ull;
+  // Latency percentiles, recomputed twice a second (they sort the run's window).
+  std::array<TimingSummary, 3> latency_{};  // tracking, render, motion-to-photon
+  std::uint64_t latency_frames_ = 0;
 };
 
 }  // namespace rhot

@@ -1,8 +1,10 @@
 #include "engine/runtime/Runtime.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "base/Check.h"
+#include "base/SteadyClock.h"
 #include "engine/core/Transform.h"
 #include "engine/math/EigenGlm.h"
 #include "engine/render/StereoCamera.h"
@@ -42,7 +44,15 @@ std::expected<std::unique_ptr<Runtime>, std::string> Runtime::create(const Scene
 
   Runtime* self = r.get();
   for (TrackingStage& s : r->tracking_->stages()) r->stages_.push_back({std::move(s), false});
-  r->stages_.push_back({{"tracked", [self](double) { apply_tracking_results(self->world_, self->tracking_->results(), self->objects_); }}});
+  r->stages_.push_back({{"tracked", [self](double) {
+                           self->pose_s_ = steady_now_s();
+                           const TrackingResults& results = self->tracking_->results();
+                           apply_tracking_results(self->world_, results, self->objects_);
+                           for (std::size_t h = 0; h < 2; ++h) {
+                             self->hand_motion_[h].update(results.t_s, results.hands[h].joints_world, results.hands[h].seen);
+                           }
+                         }}});
+  r->hand_motion_.assign(2, MotionPredictor(kHandJointCount));
   if (r->recorder_) r->stages_.push_back({{"record", [self](double) { self->recorder_->record(self->tracking_->results()); }}});
   r->stages_.push_back({{"transforms", [self](double) { update_world_transforms(self->world_); }}, true});
   r->stages_.push_back({{"physics", [self](double) {
@@ -84,6 +94,10 @@ void Runtime::run_frame(double t_s) {
 }
 
 void Runtime::advance(const FrameContext& f) {
+  frame_start_s_ = steady_now_s();
+  pose_s_ = frame_start_s_;
+  // The headset's refresh, anchored at the first frame's start.
+  if (!vsync_) vsync_.emplace(1.0 / scene_.settings.headset.refresh_hz, frame_start_s_);
   // The runtime's clock starts where the frame loop's does and moves one step per frame it runs.
   if (frames_ == 0 && !started_) {
     next_time_s_ = f.time_s;
@@ -109,14 +123,39 @@ const Hand& Runtime::hand(HandSide side) { return world_.get<Hand>(hand_entity(s
 const HandBody* Runtime::hand_body(HandSide side) { return world_.find<HandBody>(hand_entity(side)); }
 
 void Runtime::render() {
+  collect_displayed();
+  // When this frame will be shown: the refresh at or after the GPU's recent time per frame from now.
+  const double now = steady_now_s();
+  std::vector<double> gpu(recent_gpu_s_.begin(), recent_gpu_s_.end());
+  std::sort(gpu.begin(), gpu.end());
+  const double gpu_s = gpu.empty() ? 0.0 : gpu[gpu.size() / 2];
+  PendingFrame pending;
+  DisplayedFrame& shown = pending.shown;
+  const TrackingResults& results = tracking_->results();
+  shown.t_s = results.t_s;
+  shown.moments.capture_s = std::isfinite(results.capture_steady_s) ? std::min(results.capture_steady_s, pose_s_) : frame_start_s_;
+  shown.moments.pose_s = pose_s_;
+  shown.predicted_display_s = vsync_ ? vsync_->next_at_or_after(now + gpu_s) : now;
+  shown.horizon_s = settings_.predict ? std::clamp(shown.predicted_display_s - shown.moments.capture_s, 0.0, kMaxPredictionHorizon_s) : 0.0;
+  for (std::size_t h = 0; h < 2; ++h) {
+    const HandInput& in = results.hands[h];
+    shown.seen[h] = in.seen;
+    shown.tracked[h] = in.joints_world;
+    const std::vector<Eigen::Vector3d> ahead = hand_motion_[h].predict(in.joints_world, shown.horizon_s);
+    std::copy(ahead.begin(), ahead.end(), shown.predicted[h].begin());
+  }
+
   std::vector<HandDrawInput> hands;
   world_.view<Hand>().each([&](Entity e, Hand& hand) {
     if (!hand.shown || !hand.tracked.seen) return;
     const HandBody* body = world_.find<HandBody>(e);
     const auto& joints = body && body->active ? body->joints_world : hand.tracked.joints_world;
+    // Moved on as the tracked hand moves, to where it will be when the frame is shown.
+    const auto side = static_cast<std::size_t>(hand.side == HandSide::kLeft ? 0 : 1);
+    const std::vector<Eigen::Vector3d> drawn = hand_motion_[side].predict(joints, shown.horizon_s);
     HandDrawInput h;
     for (std::size_t j = 0; j < kHandJointCount; ++j) {
-      h.joint_world[j] = to_glm(joints[j]);
+      h.joint_world[j] = to_glm(drawn[j]);
       h.radius_m[j] = static_cast<float>(hand.tracked.radius_m[j]);
     }
     if (body && body->holding) h.color = {0.55f, 0.85f, 0.55f, 1.0f};
@@ -128,6 +167,46 @@ void Runtime::render() {
   FrameInput frame = scene_renderer_->build(world_, views_, hands, any_debug ? &debug_ : nullptr);
   if (overlay_ && renderer_->begin_overlay()) overlay_();
   renderer_->render(frame);
+  shown.moments.submit_s = std::max(steady_now_s(), shown.moments.pose_s);
+  pending.renderer_frame = renderer_->frames_submitted() - 1;
+  // A frame drawn while paused shows old poses: it has no latency of its own.
+  if (advancing_) pending_.push_back(std::move(pending));
+  collect_displayed();
+}
+
+void Runtime::collect_displayed() {
+  const std::optional<FrameCompletion>& done = renderer_->last_completed();
+  if (!done) return;
+  while (!pending_.empty() && pending_.front().renderer_frame <= done->frame) {
+    PendingFrame p = std::move(pending_.front());
+    pending_.pop_front();
+    if (p.renderer_frame != done->frame) continue;  // finished before a render() of someone else's: its time is lost
+    recent_gpu_s_.push_back(std::max(0.0, done->done_s - done->submitted_s));
+    if (recent_gpu_s_.size() > 15) recent_gpu_s_.pop_front();
+    if (renderer_->info().gpu_timings) {
+      for (std::size_t e = 0; e < 2; ++e) gpu_eye_ms_[e].push_back(done->gpu_eye_ms[e]);
+    }
+    FrameMoments& m = p.shown.moments;
+    m.display_s = std::max(vsync_ ? vsync_->next_at_or_after(done->done_s) : done->done_s, m.submit_s);
+    latency_.record(m);
+    for (const auto& observer : displayed_observers_) observer(p.shown);
+  }
+}
+
+std::optional<std::array<TimingSummary, 2>> Runtime::gpu_eye_ms() const {
+  if (gpu_eye_ms_[0].empty()) return std::nullopt;
+  std::array<TimingSummary, 2> out;
+  for (std::size_t e = 0; e < 2; ++e) {
+    const std::vector<double>& v = gpu_eye_ms_[e];
+    out[e].count = v.size();
+    out[e].p50_ms = percentile(v, 0.5);
+    out[e].p99_ms = percentile(v, 0.99);
+    out[e].max_ms = *std::max_element(v.begin(), v.end());
+    double sum = 0.0;
+    for (const double x : v) sum += x;
+    out[e].mean_ms = sum / static_cast<double>(v.size());
+  }
+  return out;
 }
 
 void Runtime::fill_debug(DebugDraw& debug) {

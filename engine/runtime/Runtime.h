@@ -17,7 +17,9 @@
 // the cube lies after physics, for example. Stages other than transforms and render run only on
 // frames the clock advances.
 
+#include <array>
 #include <cstdint>
+#include <deque>
 #include <expected>
 #include <filesystem>
 #include <functional>
@@ -32,6 +34,7 @@
 #include "engine/render/DebugDraw.h"
 #include "engine/render/Renderer.h"
 #include "engine/render/SceneRenderer.h"
+#include "engine/runtime/Latency.h"
 #include "engine/scene/SceneDesc.h"
 #include "engine/hand/HandComponents.h"
 #include "engine/tracked/ResultSource.h"
@@ -52,6 +55,22 @@ struct RuntimeSettings {
   std::filesystem::path star_set;  // the marker stars objects are tracked by (required when any is)
   std::filesystem::path record;    // write every frame's hands and tracked objects here (empty: no recording)
   DebugViews debug;
+  // Draw the hands where their tracked motion puts them at the frame's predicted display time
+  // (engine/runtime/Latency.h); false: where they were tracked.
+  bool predict = true;
+};
+
+// A frame the headset has shown, once the GPU has finished it: its moments (Latency.h), and the
+// tracked hands' joints as tracked and as predicted for its display time (what was drawn, before
+// the physics hand's own adjustments), for measuring prediction against a truth.
+struct DisplayedFrame {
+  double t_s = 0.0;  // the runtime's clock of its tracking results
+  FrameMoments moments;
+  double predicted_display_s = 0.0;  // what the prediction aimed at (steady clock)
+  double horizon_s = 0.0;            // how far ahead of capture the hands were moved (0: not predicted)
+  std::array<bool, 2> seen{};        // 0 left, 1 right
+  std::array<std::array<Eigen::Vector3d, kHandJointCount>, 2> tracked{};
+  std::array<std::array<Eigen::Vector3d, kHandJointCount>, 2> predicted{};
 };
 
 class Runtime {
@@ -101,6 +120,16 @@ class Runtime {
   // The debug shapes the views in debug_views() draw for the current state (from components).
   void fill_debug(DebugDraw& debug);
 
+  // Tracking, render and motion-to-photon latency of the frames displayed so far (with a
+  // renderer; frames drawn while paused are not counted).
+  const LatencyStats& latency() const { return latency_; }
+  bool predicting() const { return settings_.predict; }
+  // Adds a function called for each frame once it is displayed (one frame after it is drawn).
+  void add_displayed_observer(std::function<void(const DisplayedFrame&)> observer) { displayed_observers_.push_back(std::move(observer)); }
+  // The GPU's time per eye of the displayed frames (with RendererSettings::gpu_timings): p50 and
+  // p99 over the run; nothing without timings.
+  std::optional<std::array<TimingSummary, 2>> gpu_eye_ms() const;
+
  private:
   struct Stage {
     TrackingStage stage;
@@ -108,8 +137,14 @@ class Runtime {
     bool added = false;   // by the application (add_stage)
   };
   Runtime() = default;
+  struct PendingFrame {
+    std::uint64_t renderer_frame = 0;
+    DisplayedFrame shown;
+  };
   void advance(const FrameContext& f);
   void render();
+  // Frames the renderer has finished since the last call: displayed, measured, observed.
+  void collect_displayed();
   Entity hand_entity(HandSide side);
 
   SceneDesc scene_;
@@ -132,6 +167,16 @@ class Runtime {
   double time_s_ = 0.0;  // of the frame that ran last
   double next_time_s_ = 0.0;
   std::uint64_t frames_ = 0;
+  // Latency (Latency.h): steady-clock moments of the frame running now.
+  double frame_start_s_ = 0.0;
+  double pose_s_ = 0.0;
+  std::optional<VsyncClock> vsync_;
+  std::vector<MotionPredictor> hand_motion_;  // 0 left, 1 right: the tracked joints
+  std::deque<double> recent_gpu_s_;           // submit to done of the last frames
+  std::deque<PendingFrame> pending_;
+  LatencyStats latency_;
+  std::array<std::vector<double>, 2> gpu_eye_ms_;
+  std::vector<std::function<void(const DisplayedFrame&)>> displayed_observers_;
 };
 
 }  // namespace rhot

@@ -54,14 +54,18 @@ DemoWorld::DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& 
   }
 }
 
-WorldSnapshot DemoWorld::at(double t_s) {
-  truth_ = script_.at(t_s);
+SceneTruth DemoWorld::truth_at(double t_s) const {
+  SceneTruth truth = script_.at(t_s);
   if (hands_seed_ != 0) {
     // Users' own hands: each bone of the script's pose scaled (the left hand a different user's
     // hand than the right: its own seed).
-    for (std::size_t h = 0; h < 2; ++h)
-      truth_->hands[h].pose = independent_hand(truth_->hands[h].pose, hands_seed_ + static_cast<unsigned>(h));
+    for (std::size_t h = 0; h < 2; ++h) truth.hands[h].pose = independent_hand(truth.hands[h].pose, hands_seed_ + static_cast<unsigned>(h));
   }
+  return truth;
+}
+
+WorldSnapshot DemoWorld::at(double t_s) {
+  truth_ = truth_at(t_s);
   WorldSnapshot out;
   for (const HandTruth& hand : truth_->hands) {
     for (const Occluder& o : hand_bone_occluders(hand.world_from_hand, hand.pose)) out.occluders.push_back(o);
@@ -203,6 +207,7 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
   rs.star_set = !settings.star_set.empty() ? settings.star_set : settings.asset_dir / "stars" / "seed-case.json";
   rs.record = settings.record;
   rs.debug = settings.debug;
+  rs.predict = settings.predict;
   auto runtime = Runtime::create(scene, renderer, rs, make_tracking);
   if (!runtime) return std::unexpected(runtime.error());
   d->runtime_ = std::move(*runtime);
@@ -220,6 +225,26 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
                               }
                             }});
     }
+    // The drawn hands against the truth at capture and at display time. The simulation's clock
+    // is the runtime's: the display time on it is the capture time plus the measured latency.
+    r.add_displayed_observer([self](const DisplayedFrame& f) {
+      const double latency_s = f.moments.display_s - f.moments.capture_s;
+      const SceneTruth at_capture = self->world_->truth_at(f.t_s);
+      const SceneTruth at_display = self->world_->truth_at(f.t_s + latency_s);
+      PredictionErrors& e = self->prediction_errors_;
+      for (std::size_t h = 0; h < 2; ++h) {
+        if (!f.seen[h]) continue;
+        const HandInput then = hand_input(at_capture.hands[h].world_from_hand, at_capture.hands[h].pose);
+        const HandInput shown = hand_input(at_display.hands[h].world_from_hand, at_display.hands[h].pose);
+        for (std::size_t j = 0; j < kHandJointCount; ++j) {
+          ++e.joints;
+          e.at_capture_sum_m += (f.tracked[h][j] - then.joints_world[j]).norm();
+          e.predicted_at_display_sum_m += (f.predicted[h][j] - shown.joints_world[j]).norm();
+          e.tracked_at_display_sum_m += (f.tracked[h][j] - shown.joints_world[j]).norm();
+          e.horizon_sum_s += f.horizon_s;
+        }
+      }
+    });
     if (!d->script_->right_target().empty()) {
       r.add_stage("physics", {"look", [self](double t_s) {
                                 World& world = self->runtime_->world();

@@ -49,6 +49,7 @@ struct DemoSettings {
   bool perfect_hands = false;    // physics gets the true hands, not the tracked ones
   std::filesystem::path replay;  // play this recording instead of tracking
   double speed = 1.0;            // replay speed (2: twice as fast)
+  bool predict = true;           // RuntimeSettings::predict: draw the hands at the display time
   std::filesystem::path record;  // write every frame's hands and tracked objects here
   // Real cameras instead of the simulated rig: one OpenCV device per rig camera, in rig order (an
   // index such as "0", a video file, or an image sequence such as "cams/cam0_%04d.png").
@@ -79,6 +80,8 @@ class DemoWorld final : public SimulatedWorld {
   DemoWorld(const DemoScript& script, const std::array<HandLayout, 2>& layouts, const TrackedObjects& objects,
             unsigned independent_hands_seed = 0);
   WorldSnapshot at(double t_s) override;
+  // The truth at any moment (the script's, with the users' own hands), touching nothing.
+  SceneTruth truth_at(double t_s) const;
   // What colour cameras photograph of a snapshot at() gave (its markers in its order): the hands
   // of the truth at that moment, each marker with its layout's colour and size, the objects'
   // star markers blue (kStarColour) and 14 mm across.
@@ -122,6 +125,24 @@ struct DemoSimulation {
                                                                                       const StarSet& object_stars,
                                                                                       bool colour_markers = false);
 
+// How well the drawn hands match the true ones (simulated source with a renderer): per joint of a
+// seen hand in each displayed frame, its distance from the truth at the frame's capture time
+// (tracking error), and, at the frame's display time, of the joint as predicted and as tracked.
+struct PredictionErrors {
+  std::uint64_t joints = 0;
+  double at_capture_sum_m = 0.0;
+  double predicted_at_display_sum_m = 0.0;
+  double tracked_at_display_sum_m = 0.0;
+  double horizon_sum_s = 0.0;  // per joint, how far ahead it was predicted
+  double at_capture_mean_m() const { return joints > 0 ? at_capture_sum_m / static_cast<double>(joints) : 0.0; }
+  double predicted_at_display_mean_m() const { return joints > 0 ? predicted_at_display_sum_m / static_cast<double>(joints) : 0.0; }
+  double tracked_at_display_mean_m() const { return joints > 0 ? tracked_at_display_sum_m / static_cast<double>(joints) : 0.0; }
+  // The error at display time over the error at capture time: with prediction (what was drawn),
+  // and without (had the tracked hand been drawn).
+  double ratio() const { return at_capture_sum_m > 0.0 ? predicted_at_display_sum_m / at_capture_sum_m : 0.0; }
+  double ratio_without_prediction() const { return at_capture_sum_m > 0.0 ? tracked_at_display_sum_m / at_capture_sum_m : 0.0; }
+};
+
 class Demo {
  public:
   // Its stages capture it: it stays where it was made.
@@ -142,6 +163,8 @@ class Demo {
   // The simulated world, when the source is the simulated rig.
   const DemoWorld* simulated() const { return world_.get(); }
   const DemoScript& script() const { return *script_; }
+  // The drawn hands against the truth so far (nothing without the simulated source and a renderer).
+  const PredictionErrors& prediction_errors() const { return prediction_errors_; }
 
  private:
   Demo() = default;
@@ -149,6 +172,7 @@ class Demo {
   std::shared_ptr<DemoWorld> world_;
   LiveTracking* live_ = nullptr;
   std::unique_ptr<Runtime> runtime_;
+  PredictionErrors prediction_errors_;
 };
 
 }  // namespace rhot

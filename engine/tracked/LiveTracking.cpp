@@ -1,5 +1,6 @@
 #include "engine/tracked/LiveTracking.h"
 
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -92,8 +93,10 @@ void LiveTracking::read_source(double t_s) {
     spdlog::info("source: the stream has ended after {} frames", frame_.cameras.empty() ? 0 : frame_.index + 1);
     ended_ = true;
   }
+  results_.capture_steady_s = std::numeric_limits<double>::quiet_NaN();
   if (frame && !dropped) {
     frame_ = std::move(*frame);
+    results_.capture_steady_s = frame_.capture_steady_s;
   } else {
     // Nothing to see this frame: one empty CameraFrame per camera.
     frame_.cameras.assign(cameras, CameraFrame{});

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <map>
 #include <vector>
 
@@ -29,6 +30,9 @@ struct TrackingCounts {
 
 struct TrackingResults {
   double t_s = 0.0;
+  // When the frame's images were exposed (steady clock, base/SteadyClock.h), where the source
+  // knows; NaN otherwise (the runtime then counts from the start of the frame).
+  double capture_steady_s = std::numeric_limits<double>::quiet_NaN();
   std::array<HandInput, 2> hands;  // 0 left, 1 right
   // Pinch and grip per hand, where a hand tracker measured them (not in a recording).
   std::array<HandGesture, 2> pinch{};

@@ -3,7 +3,9 @@
 // pairwise (the first two cameras that see each marker), given the true correspondences, which
 // the baseline cannot find by itself. Results: docs/PERFORMANCE.md.
 
+#include <algorithm>
 #include <filesystem>
+#include <map>
 
 #include <benchmark/benchmark.h>
 #include <opencv2/calib3d.hpp>
@@ -40,6 +42,66 @@ void BM_MatchAndTriangulate(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_MatchAndTriangulate)->Unit(benchmark::kMicrosecond);
+
+// How matching scales: a rig (0: room-8, 1: stage-32) and a marker count (args), markers wandering
+// through the rig's volume, 0.3 px noise, 10 % dropout. Counters: per_marker (seconds per marker, shown with an SI prefix; time over
+// markers) and found (matched points over markers seen by two cameras or more).
+struct ScaleData {
+  rhot::CameraRig rig;
+  std::vector<rhot::RigFrame> frames;
+  double seen = 0.0;  // markers seen by >= 2 cameras, mean per frame
+};
+
+const ScaleData& scale_data(int rig, int markers) {
+  static std::map<std::pair<int, int>, ScaleData> cache;
+  auto [it, inserted] = cache.try_emplace({rig, markers});
+  if (!inserted) return it->second;
+  ScaleData& d = it->second;
+  d.rig = rhot::load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / (rig == 0 ? "room-8.yaml" : "stage-32.yaml")).value();
+  const rhot::TrackingVolume volume = d.rig.volume.value();
+  const Eigen::Vector3d lo = volume.centre_m - 0.5 * volume.size_m;
+  const Eigen::Vector3d hi = volume.centre_m + 0.5 * volume.size_m;
+  rhot::SimulatedRigSettings s;
+  s.dropout = 0.1;
+  s.sigma_px = 0.3;
+  rhot::SimulatedRig sim(d.rig, rhot::random_trajectories(markers, lo, hi, 7), s);
+  for (int i = 0; i < 64; ++i) {
+    d.frames.push_back(sim.next());
+    std::vector<int> views(static_cast<std::size_t>(markers), 0);
+    for (const rhot::CameraFrame& c : d.frames.back().cameras) {
+      for (const rhot::Detection& det : c.detections) {
+        if (det.truth_marker >= 0) ++views[static_cast<std::size_t>(det.truth_marker)];
+      }
+    }
+    d.seen += static_cast<double>(std::count_if(views.begin(), views.end(), [](int v) { return v >= 2; })) / 64.0;
+  }
+  return d;
+}
+
+void BM_MatchScaling(benchmark::State& state) {
+  const ScaleData& d = scale_data(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  std::size_t i = 0;
+  double found = 0.0;
+  std::int64_t runs = 0;
+  for (auto _ : state) {
+    const auto points = rhot::match_and_triangulate(d.rig, d.frames[i++ % d.frames.size()]);
+    found += static_cast<double>(points.size());
+    ++runs;
+    benchmark::DoNotOptimize(points.data());
+  }
+  state.counters["found"] = found / static_cast<double>(std::max<std::int64_t>(runs, 1)) / d.seen;
+  state.counters["per_marker"] =
+      benchmark::Counter(static_cast<double>(state.range(1)), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_MatchScaling)
+    ->ArgNames({"rig", "markers"})
+    ->Args({0, 100})
+    ->Args({0, 300})
+    ->Args({0, 1000})
+    ->Args({1, 100})
+    ->Args({1, 300})
+    ->Args({1, 1000})
+    ->Unit(benchmark::kMillisecond);
 
 void BM_PairwiseCvTriangulatePoints(benchmark::State& state) {
   const Data& d = data();

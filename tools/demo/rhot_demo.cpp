@@ -26,6 +26,7 @@
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "engine/runtime/Overlay.h"
+#include "engine/render/PngWriter.h"
 #include "engine/render/Renderer.h"
 #include "engine/render/SceneRenderer.h"
 #include "engine/render/Window.h"
@@ -82,6 +83,7 @@ struct Options {
   rhot::DemoSettings demo;
   std::vector<std::string> debug_views;
   std::string window_capture;
+  std::string prediction = "on";
   bool no_overlay = false;
 };
 
@@ -111,6 +113,10 @@ void add_options(CLI::App& cli, Options& o) {
   cli.add_option("--shading", o.shading, "light per pixel, per vertex, or auto (per vertex on a CPU driver, where it halves the frame)")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
+  cli.add_option("--prediction", o.prediction, "draw the hands where they will be when the frame is shown (on) or where tracked (off)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"on", "off"}));
+  cli.add_flag("--gpu-timings", o.render.gpu_timings, "GPU timestamps around each eye's pass (logged at the end)");
   cli.add_flag("--validation,!--no-validation", o.render.validation,
                "Vulkan validation layer (default: on in debug builds; or set RHOT_VK_VALIDATION=1)");
   o.demo.asset_dir = RHOT_ASSET_DIR;
@@ -209,6 +215,7 @@ bool resolve_options(Options& o) {
   if (o.calib_error_px) world->calib_error_px = *o.calib_error_px;
   o.demo.sigma_px = world->sigma_px;
   o.demo.world = *world;
+  o.demo.predict = o.prediction == "on";
   if (auto checked = o.demo.check(); !checked) {
     spdlog::error("{}", checked.error());
     return false;
@@ -254,19 +261,24 @@ std::unique_ptr<rhot::Window> open_window(Options& o) {
   return nullptr;
 }
 
-// The PNG files --capture writes for one frame.
-std::expected<void, std::string> capture_frame(const Options& o, rhot::Renderer& renderer, std::uint64_t frame_index) {
+// The PNG files --capture writes for one frame, queued for the writer's threads (encoding a
+// full-size frame takes longer than a frame).
+void capture_frame(const Options& o, rhot::Renderer& renderer, rhot::PngWriter& writer, std::uint64_t frame_index) {
   char stem[32];
   std::snprintf(stem, sizeof(stem), "frame_%06llu", static_cast<unsigned long long>(frame_index));
-  const auto eyes = renderer.read_eyes();
+  auto eyes = renderer.read_eyes();
   const std::filesystem::path dir(o.capture_dir);
-  if (o.capture_layout == "side-by-side") return rhot::write_png(rhot::side_by_side(eyes[0], eyes[1]), dir / (std::string(stem) + ".png"));
-  if (auto written = rhot::write_png(eyes[0], dir / (std::string(stem) + "_left.png")); !written) return written;
-  return rhot::write_png(eyes[1], dir / (std::string(stem) + "_right.png"));
+  if (o.capture_layout == "side-by-side") {
+    writer.write(rhot::side_by_side(eyes[0], eyes[1]), dir / (std::string(stem) + ".png"));
+    return;
+  }
+  writer.write(std::move(eyes[0]), dir / (std::string(stem) + "_left.png"));
+  writer.write(std::move(eyes[1]), dir / (std::string(stem) + "_right.png"));
 }
 
 // --window-capture and --stats, after the run. False after logging what failed.
-bool write_outputs(const Options& o, const rhot::Window* window, rhot::Renderer& renderer, const rhot::FrameLoop& frame_loop) {
+bool write_outputs(const Options& o, const rhot::Window* window, rhot::Renderer& renderer, const rhot::FrameLoop& frame_loop,
+                   const rhot::LatencyStats& latency) {
   if (!o.window_capture.empty()) {
     if (!window) {
       spdlog::error("--window-capture: there is no window (headless)");
@@ -287,6 +299,7 @@ bool write_outputs(const Options& o, const rhot::Window* window, rhot::Renderer&
     nlohmann::json j = frame_loop.stats().to_json();
     j["scene"] = o.scene_path;
     j["rate_hz"] = o.loop.rate_hz;
+    j["latency"] = latency.to_json();
     std::ofstream out(o.stats_path);
     out << j.dump(2) << '\n';
     out.close();
@@ -343,12 +356,16 @@ int main(int argc, char** argv) {
                  if (!o.window_capture.empty() && o.frames > 0 && f.frame_index + 1 == o.frames) (void)(*renderer)->capture_window();
                }});
   runtime.add_systems(systems, "window-events");
+  std::optional<rhot::PngWriter> png_writer;
+  if (!o.capture_dir.empty()) png_writer.emplace();
   systems.add({"capture", {"render"}, {}, [&](rhot::World&, const rhot::FrameContext& f) {
-                 if (o.capture_dir.empty() || capture_failed) return;
-                 if (auto written = capture_frame(o, **renderer, f.frame_index); !written) {
-                   spdlog::error("capture stopped: {}", written.error());
+                 if (!png_writer || capture_failed) return;
+                 if (const auto failed = png_writer->error()) {
+                   spdlog::error("capture stopped: {}", *failed);
                    capture_failed = true;
+                   return;
                  }
+                 capture_frame(o, **renderer, *png_writer, f.frame_index);
                }});
   if (const auto built = systems.build(); !built) {
     spdlog::error("cannot order systems: {}", built.error());
@@ -375,6 +392,13 @@ int main(int argc, char** argv) {
   const std::uint64_t ran =
       frame_loop.run(o.frames, [&] { return !g_interrupted.load() && !(window && window->should_close()) && !runtime.tracking().ended(); });
   for (const std::string& line : runtime.tracking().summary()) spdlog::info("{}", line);
+  if (png_writer) {
+    if (const auto failed = png_writer->finish(); failed && !capture_failed) {
+      spdlog::error("capture stopped: {}", *failed);
+      capture_failed = true;
+    }
+    spdlog::info("captured {} PNG file(s) into {}", png_writer->written(), o.capture_dir);
+  }
 
   const rhot::FrameStats& stats = frame_loop.stats();
   const rhot::TimingSummary whole = stats.frame_summary();
@@ -382,7 +406,13 @@ int main(int argc, char** argv) {
       "{} frames ({:.1f} s simulated): frame p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms; {} over the "
       "{:.1f} ms budget",
       ran, frame_loop.time_s(), whole.p50_ms, whole.p99_ms, whole.max_ms, stats.frames_over_budget(), stats.budget_ms());
-  if (!write_outputs(o, window.get(), **renderer, frame_loop)) return EXIT_FAILURE;
+  const rhot::LatencyStats& latency = runtime.latency();
+  if (latency.frames() > 0) {
+    spdlog::info("latency p50 / p99: tracking {:.2f} / {:.2f} ms, render {:.2f} / {:.2f} ms, motion-to-photon {:.2f} / {:.2f} ms",
+                 latency.tracking().p50_ms, latency.tracking().p99_ms, latency.render().p50_ms, latency.render().p99_ms,
+                 latency.motion_to_photon().p50_ms, latency.motion_to_photon().p99_ms);
+  }
+  if (!write_outputs(o, window.get(), **renderer, frame_loop, latency)) return EXIT_FAILURE;
   const std::uint64_t validation = (*renderer)->validation_messages();
   if (validation > 0) spdlog::warn("{} Vulkan validation message(s)", validation);
   return capture_failed ? EXIT_FAILURE : EXIT_SUCCESS;

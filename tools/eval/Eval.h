@@ -122,7 +122,12 @@ struct InteractionsArgs {
 };
 int interactions(const InteractionsArgs& args);
 int demo(const std::string& scene_file, int placements, unsigned seed, const WorldFlags& world, const std::string& hands, int frames);
+struct FrameOptions {
+  std::string prediction = "on";
+  bool gpu_timings = false;
+  bool real_time = false;
+};
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading,
-          const WorldFlags& world);
+          const WorldFlags& world, const FrameOptions& options);
 
 }  // namespace rhot::eval

@@ -1,5 +1,6 @@
 // rhot-eval frame: the demo's whole frame headless, every stage timed (engine/sim/Demo.h).
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -36,7 +37,7 @@ namespace rhot::eval {
 // The demo's whole frame, headless: simulated cameras, tracking, physics and both eyes rendered
 // offscreen, every stage timed (engine/sim/Demo.h).
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, rhot::Shading shading,
-          const WorldFlags& world_flags) {
+          const WorldFlags& world_flags, const FrameOptions& options) {
   // stdout carries the JSON only: the log goes to stderr.
   spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));
   const auto scene = rhot::load_scene_file(scene_file);
@@ -49,6 +50,7 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   render.eye_height_px = scene->settings.headset.eye_height_px;
   render.device = device;
   render.shading = shading;
+  render.gpu_timings = options.gpu_timings;
   if (!eye.empty()) {
     char x = 0, rest = 0;
     if (std::sscanf(eye.c_str(), "%d%c%d%c", &render.eye_width_px, &x, &render.eye_height_px, &rest) != 3 || (x != 'x' && x != 'X') ||
@@ -71,6 +73,7 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   settings.asset_dir = RHOT_ASSET_DIR;
   settings.world = *world;
   settings.sigma_px = world->sigma_px;
+  settings.predict = options.prediction == "on";
   auto demo = rhot::Demo::create(*scene, renderer->get(), settings);
   if (!demo) {
     std::cerr << "rhot-eval: " << demo.error() << "\n";
@@ -85,12 +88,37 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   rhot::FrameLoopSettings loop;
   loop.rate_hz = scene->settings.headset.refresh_hz;
   loop.budget_ms = 1000.0 / loop.rate_hz;
+  loop.real_time = options.real_time;
   rhot::FrameLoop frame_loop((*demo)->world(), systems, loop);
-  for (int f = 0; f < frames; ++f) {
-    frame_loop.step();
-    if ((f + 1) % 90 == 0) std::cerr << "rhot-eval: frame " << (f + 1) << " of " << frames << "\n";
-  }
+  // One run, so that a paced loop keeps one vsync grid.
+  frame_loop.run(static_cast<std::uint64_t>(frames), [&] {
+    const std::uint64_t done = frame_loop.frame_index();
+    if (done > 0 && done % 90 == 0) std::cerr << "rhot-eval: frame " << done << " of " << frames << "\n";
+    return true;
+  });
   nlohmann::json j = frame_loop.stats().to_json();
+  // Latency (engine/runtime/Latency.h) and the drawn hands against the truth (engine/sim/Demo.h).
+  const rhot::Runtime& runtime = (*demo)->runtime();
+  const rhot::LatencyStats& latency = runtime.latency();
+  j["latency"] = latency.to_json();
+  j["tracking_latency_p99_ms"] = latency.tracking().p99_ms;
+  j["motion_to_photon_p50_ms"] = latency.motion_to_photon().p50_ms;
+  j["motion_to_photon_p99_ms"] = latency.motion_to_photon().p99_ms;
+  const rhot::PredictionErrors& errors = (*demo)->prediction_errors();
+  j["prediction"] = options.prediction;
+  j["prediction_error_ratio"] = errors.ratio();
+  j["prediction_errors"] = {{"joint_samples", errors.joints},
+                            {"at_capture_mean_mm", 1e3 * errors.at_capture_mean_m()},
+                            {"at_display_mean_mm", 1e3 * errors.predicted_at_display_mean_m()},
+                            {"at_display_unpredicted_mean_mm", 1e3 * errors.tracked_at_display_mean_m()},
+                            {"ratio_unpredicted", errors.ratio_without_prediction()},
+                            {"horizon_mean_ms", errors.joints > 0 ? 1e3 * errors.horizon_sum_s / static_cast<double>(errors.joints) : 0.0}};
+  if (const auto gpu = runtime.gpu_eye_ms()) {
+    for (std::size_t e = 0; e < 2; ++e) {
+      j["gpu_eye_ms"][e == 0 ? "left" : "right"] = {{"p50", (*gpu)[e].p50_ms}, {"p99", (*gpu)[e].p99_ms}, {"max", (*gpu)[e].max_ms}};
+    }
+  }
+  j["real_time"] = options.real_time;
   j["scene"] = scene_file;
   j["world"] = world_json(*world, world_flags.world);
   j["eye_px"] = {(*renderer)->eye_width_px(), (*renderer)->eye_height_px()};

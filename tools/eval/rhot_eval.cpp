@@ -271,6 +271,15 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
   WorldFlags frame_world;
   add_world_flags(*frame_cmd, frame_world, true);
+  FrameOptions frame_options;
+  frame_cmd
+      ->add_option("--prediction", frame_options.prediction,
+                   "draw the hands where they will be at display time (on) or where tracked (off)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"on", "off"}));
+  frame_cmd->add_flag("--gpu-timings", frame_options.gpu_timings, "GPU timestamps around each eye's pass: the GPU's time per eye");
+  frame_cmd->add_flag("--real-time", frame_options.real_time,
+                      "pace frames to the headset's refresh as a headset would (default: back to back)");
   frame_cmd->add_flag("--json", json, "print JSON (the only output format)");
   DemoArgs demo_args;
   demo_args.scene_file = scene_file;
@@ -311,7 +320,8 @@ int main(int argc, char** argv) {
   if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
   if (demo_cmd->parsed())
     return demo(demo_args.scene_file, demo_args.placements, demo_args.seed, demo_args.world, demo_args.hands, demo_args.frames);
-  if (frame_cmd->parsed()) return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading), frame_world);
+  if (frame_cmd->parsed())
+    return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading), frame_world, frame_options);
   if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
   if (hands_cmd->parsed()) return hands(hands_args);
   if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, world, frames, seed, volume, volume_centre);

@@ -4,6 +4,7 @@
 // and every marker's true position, for evaluation only: the tracker never reads them.
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -31,6 +32,10 @@ struct CameraFrame {
 struct RigFrame {
   std::uint64_t index = 0;
   double time_s = 0.0;
+  // When its images were exposed on this process's steady clock (base/SteadyClock.h), where the
+  // source knows (camera nodes, video devices); NaN where it does not (the simulation, files): the
+  // runtime then counts from the moment the frame was asked for.
+  double capture_steady_s = std::numeric_limits<double>::quiet_NaN();
   std::vector<CameraFrame> cameras;               // one per camera in the rig
   std::vector<Eigen::Vector3d> truth_position_m;  // per marker (simulation only)
   std::vector<int> truth_marker_body;             // per marker: its rigid body, -1 for a loose marker (simulation only)

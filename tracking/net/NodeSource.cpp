@@ -380,6 +380,7 @@ std::vector<AssembledFrame> NodeSource::take_frames(double wait_s) { return impl
 RigFrame NodeSource::to_rig_frame(const AssembledFrame& f) const {
   RigFrame out;
   out.time_s = static_cast<double>(f.capture_ns - impl_->origin_ns) / 1e9;
+  out.capture_steady_s = static_cast<double>(f.capture_ns) / 1e9;  // the nodes' clocks mapped onto this host's steady clock
   out.cameras.resize(impl_->rig.cameras.size());
   for (std::size_t c = 0; c < out.cameras.size(); ++c) {
     out.cameras[c].camera = static_cast<int>(c);

@@ -147,6 +147,17 @@ std::optional<RigFrame> VideoSource::next() {
   RigFrame frame;
   frame.index = s.index++;
   frame.time_s = static_cast<double>(frame.index) / s.settings.rate_hz;
+  // Devices: when their frames were grabbed (OpenCV tells no exposure time), on the steady clock.
+  double grabbed_sum_s = 0.0;
+  int live = 0;
+  for (std::size_t c = 0; c < n; ++c) {
+    if (!s.live[c] || !grabbed[c]) continue;
+    grabbed_sum_s += grab_time_s[c];
+    ++live;
+  }
+  if (live > 0) {
+    frame.capture_steady_s = std::chrono::duration<double>(s.opened.time_since_epoch()).count() + grabbed_sum_s / static_cast<double>(live);
+  }
   frame.cameras.resize(n);
   for (std::size_t c = 0; c < n; ++c) {
     CameraFrame& cf = frame.cameras[c];

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <vector>
 
+#include "base/SteadyClock.h"
 #include "rhot_shaders/shaders.h"
 
 namespace rhot::vk {
@@ -57,7 +58,8 @@ StereoPass::StereoPass(const Context& context, int eye_width_px, int eye_height_
       attachment_format_(vertex_lit ? kColourFormatUnorm : kColourFormat),
       clear_color_(vertex_lit ? glm::vec4(srgb_from_linear(clear_color.r), srgb_from_linear(clear_color.g), srgb_from_linear(clear_color.b),
                                           clear_color.a)
-                              : clear_color) {
+                              : clear_color),
+      watch_(context.device()) {
   RHOT_PRECONDITION(!multiview || context.multiview_supported(), "StereoPass: the device has no multiview");
   create_targets();
   create_render_pass();
@@ -75,8 +77,10 @@ StereoPass::StereoPass(const Context& context, int eye_width_px, int eye_height_
 }
 
 StereoPass::~StereoPass() {
+  finish();  // the fence watch lets go of the fence
   const VkDevice d = ctx_.device();
   vkDeviceWaitIdle(d);
+  if (timestamps_ != VK_NULL_HANDLE) vkDestroyQueryPool(d, timestamps_, nullptr);
   vkDestroyFence(d, fence_, nullptr);
   vkFreeCommandBuffers(d, ctx_.command_pool(), 1, &cmd_);
   for (Buffer* b : {&frame_uniforms_, &instances_, &lines_, &readback_}) ctx_.destroy(*b);
@@ -403,6 +407,10 @@ std::size_t StereoPass::render(const FrameInput& frame, std::span<const GpuMesh>
   const VkViewport viewport{0.0f, 0.0f, static_cast<float>(width_), static_cast<float>(height_), 0.0f, 1.0f};
   const VkRect2D scissor{{0, 0}, {static_cast<std::uint32_t>(width_), static_cast<std::uint32_t>(height_)}};
   const int passes = multiview_ ? 1 : 2;
+  if (timestamps_ != VK_NULL_HANDLE) {
+    vkCmdResetQueryPool(cmd_, timestamps_, 0, 3);
+    vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps_, 0);
+  }
   for (int pass = 0; pass < passes; ++pass) {
     VkRenderPassBeginInfo rbi{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
     rbi.renderPass = render_pass_;
@@ -433,7 +441,14 @@ std::size_t StereoPass::render(const FrameInput& frame, std::span<const GpuMesh>
       vkCmdDraw(cmd_, line_vertices, 1, 0, 0);
     }
     vkCmdEndRenderPass(cmd_);
+    if (timestamps_ != VK_NULL_HANDLE) {
+      // Multiview: both eyes in the first interval, the second empty.
+      const auto query = static_cast<std::uint32_t>(pass + 1);
+      vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, query);
+      if (passes == 1) vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, 2);
+    }
   }
+  timed_in_flight_ = timestamps_ != VK_NULL_HANDLE;
   if (extra) extra(cmd_, colour_.image);
   RHOT_VK_CHECK(vkEndCommandBuffer(cmd_));
 
@@ -450,27 +465,54 @@ std::size_t StereoPass::render(const FrameInput& frame, std::span<const GpuMesh>
     submit.pSignalSemaphores = &sync.signal;
   }
   RHOT_VK_CHECK(vkQueueSubmit(ctx_.queue(), 1, &submit, fence_));
+  submitted_s_ = steady_now_s();
+  watch_.watch(fence_);
   in_flight_ = true;
+  ++submitted_frames_;
   return skipped;
 }
 
 void StereoPass::finish() {
   if (!in_flight_) return;
-  wait_for_fence();
+  FrameCompletion done;
+  done.frame = submitted_frames_ - 1;
+  done.submitted_s = submitted_s_;
+  done.done_s = watch_.wait();
+  // Whatever the watch saw (a lost device too), the fence's own status says what happened.
+  RHOT_VK_CHECK(vkGetFenceStatus(ctx_.device(), fence_));
   RHOT_VK_CHECK(vkResetFences(ctx_.device(), 1, &fence_));
   in_flight_ = false;
+  if (timed_in_flight_) {
+    std::array<std::uint64_t, 3> ticks{};
+    if (vkGetQueryPoolResults(ctx_.device(), timestamps_, 0, 3, sizeof(ticks), ticks.data(), sizeof(std::uint64_t),
+                              VK_QUERY_RESULT_64_BIT) == VK_SUCCESS) {
+      const auto ms = [&](std::uint64_t from, std::uint64_t to) {
+        return to >= from ? static_cast<double>(to - from) * timestamp_period_ns_ * 1e-6 : 0.0;
+      };
+      done.gpu_eye_ms = {ms(ticks[0], ticks[1]), ms(ticks[1], ticks[2])};
+    }
+    timed_in_flight_ = false;
+  }
+  completed_ = done;
 }
 
-void StereoPass::wait_for_fence() {
-  // Waits in short slices rather than one unbounded wait: lavapipe (Mesa 22.3) can oversleep a
-  // fence that signals shortly after the wait begins by up to ~20 ms, which dominated small frames
-  // (measured: 64 x 64 per eye took 20 ms with one wait, 2.5 ms when polling).
-  constexpr std::uint64_t kSliceNs = 200'000;
-  for (;;) {
-    const VkResult r = vkWaitForFences(ctx_.device(), 1, &fence_, VK_TRUE, kSliceNs);
-    if (r == VK_SUCCESS) return;
-    if (r != VK_TIMEOUT) RHOT_VK_CHECK(r);
+bool StereoPass::enable_gpu_timings() {
+  if (timestamps_ != VK_NULL_HANDLE) return true;
+  VkPhysicalDeviceProperties props{};
+  vkGetPhysicalDeviceProperties(ctx_.physical_device(), &props);
+  std::uint32_t families = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(ctx_.physical_device(), &families, nullptr);
+  std::vector<VkQueueFamilyProperties> family(families);
+  vkGetPhysicalDeviceQueueFamilyProperties(ctx_.physical_device(), &families, family.data());
+  if (props.limits.timestampPeriod <= 0.0f || ctx_.queue_family() >= families || family[ctx_.queue_family()].timestampValidBits == 0) {
+    return false;
   }
+  VkQueryPoolCreateInfo qci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+  qci.queryType = VK_QUERY_TYPE_TIMESTAMP;
+  qci.queryCount = 3;
+  if (vkCreateQueryPool(ctx_.device(), &qci, nullptr, &timestamps_) != VK_SUCCESS) return false;
+  timestamp_period_ns_ = static_cast<double>(props.limits.timestampPeriod);
+  return true;
 }
 
 std::array<Image, 2> StereoPass::read_back() {

@@ -10,11 +10,14 @@
 // be read back or blitted to a window.
 
 #include <array>
+#include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 
 #include "engine/render/Image.h"
 #include "engine/render/Renderer.h"
+#include "engine/render/vk/FenceWatch.h"
 #include "engine/render/vk/VulkanContext.h"
 
 namespace rhot::vk {
@@ -43,6 +46,13 @@ class StereoPass {
   // Waits until the frame last submitted has been drawn (and whatever `extra` recorded has run).
   void finish();
 
+  // The last frame finish() waited for (docs/latency.md).
+  const std::optional<FrameCompletion>& last_completed() const { return completed_; }
+  std::uint64_t frames_submitted() const { return submitted_frames_; }
+  // GPU timestamps around each eye's pass from the next frame on; false (and nothing changes)
+  // where the queue has no timestamps.
+  bool enable_gpu_timings();
+
   // Copies both layers to the CPU (finish, then submit and wait).
   std::array<Image, 2> read_back();
 
@@ -58,7 +68,6 @@ class StereoPass {
   void create_pipelines();
   VkPipeline create_pipeline(std::span<const std::uint32_t> vert, std::span<const std::uint32_t> frag, bool lines);
   void ensure_capacity(Buffer& buffer, VkDeviceSize bytes, VkBufferUsageFlags usage);
-  void wait_for_fence();
 
   const Context& ctx_;
   int width_;
@@ -89,6 +98,13 @@ class StereoPass {
   VkCommandBuffer cmd_ = VK_NULL_HANDLE;
   VkFence fence_ = VK_NULL_HANDLE;
   bool in_flight_ = false;  // cmd_ submitted, fence_ not yet waited for
+  FenceWatch watch_;
+  std::uint64_t submitted_frames_ = 0;
+  double submitted_s_ = 0.0;  // of the frame in flight
+  std::optional<FrameCompletion> completed_;
+  VkQueryPool timestamps_ = VK_NULL_HANDLE;  // three per frame: before eye 0, between the eyes, after eye 1
+  double timestamp_period_ns_ = 0.0;
+  bool timed_in_flight_ = false;  // the frame in flight wrote timestamps
 };
 
 }  // namespace rhot::vk

@@ -1,10 +1,12 @@
 #include "engine/render/Image.h"
+#include "engine/render/PngWriter.h"
 #include "tests/support/ImageCompare.h"
 
 #include <array>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
 #include <utility>
 
 #include <gtest/gtest.h>
@@ -98,6 +100,36 @@ TEST(Png, WriteUnderAFileFailsAndNamesTheFile) {
   ASSERT_FALSE(result.has_value());
   const std::string prefix = file.string() + ": cannot write PNG: cannot create folder " + (dir / "plain_file").string();
   EXPECT_EQ(result.error().rfind(prefix, 0), 0u) << result.error();
+}
+
+TEST(PngWriter, WritesEveryQueuedImageOffTheCallersThread) {
+  const auto dir = temp_dir();
+  {
+    PngWriter writer(2, 3);  // a queue shorter than the images: write() waits for room, drops nothing
+    for (int i = 0; i < 12; ++i) writer.write(filled(9, 4, static_cast<std::uint8_t>(20 * i)), dir / ("f" + std::to_string(i) + ".png"));
+    EXPECT_FALSE(writer.finish().has_value());
+    EXPECT_EQ(writer.written(), 12U);
+  }
+  for (int i = 0; i < 12; ++i) {
+    const auto back = read_png(dir / ("f" + std::to_string(i) + ".png"));
+    ASSERT_TRUE(back.has_value()) << back.error();
+    EXPECT_EQ(at(*back, 8, 3),
+              (Rgba{static_cast<std::uint8_t>(20 * i), static_cast<std::uint8_t>(20 * i), static_cast<std::uint8_t>(20 * i), 255}));
+  }
+}
+
+TEST(PngWriter, KeepsTheFirstFailureAndWritesTheRest) {
+  const auto dir = temp_dir();
+  std::filesystem::create_directories(dir / "taken.png");  // a folder where a file should go
+  PngWriter writer(1);
+  writer.write(filled(2, 2, 1), dir / "taken.png");
+  writer.write(filled(2, 2, 1), dir / "fine.png");
+  const auto failed = writer.finish();
+  ASSERT_TRUE(failed.has_value());
+  EXPECT_EQ(failed->rfind((dir / "taken.png").string() + ": cannot write PNG: ", 0), 0U) << *failed;
+  EXPECT_EQ(writer.error(), failed);
+  EXPECT_TRUE(std::filesystem::exists(dir / "fine.png"));
+  EXPECT_EQ(writer.written(), 1U);
 }
 
 TEST(Png, ReadMissingFile) {

@@ -25,6 +25,8 @@ TEST(DemoFrame, CapturedFramesMatchTheGoldenImages) {
   ASSERT_TRUE(renderer.has_value()) << renderer.error();
   DemoSettings options;
   options.asset_dir = RHOT_ASSET_DIR;
+  // The hands as tracked: predicted to the display time they would move with the machine's speed.
+  options.predict = false;
   auto demo = Demo::create(*scene, renderer->get(), options);
   ASSERT_TRUE(demo.has_value()) << demo.error();
   Runtime* runtime = &(*demo)->runtime();
