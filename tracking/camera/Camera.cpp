@@ -38,6 +38,20 @@ bool inside_sensor(const CameraIntrinsics& k, const Eigen::Vector2d& pixel) {
 
 Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy) { return distort(k, xy, nullptr); }
 
+std::optional<Eigen::Vector2d> undistort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& distorted) {
+  if (!distorted.allFinite()) return std::nullopt;
+  Eigen::Vector2d xy = distorted;
+  Eigen::Matrix2d jacobian;
+  for (int step = 0; step < 20; ++step) {
+    const Eigen::Vector2d error = distort(k, xy, &jacobian) - distorted;
+    if (!(jacobian.determinant() > 1e-9 && jacobian(0, 0) > 0.0 && jacobian(1, 1) > 0.0)) return std::nullopt;
+    if (error.squaredNorm() < 1e-28) return xy;
+    xy -= jacobian.inverse() * error;
+    if (!xy.allFinite() || xy.squaredNorm() > 1e6) return std::nullopt;
+  }
+  return std::nullopt;
+}
+
 std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world) const { return CameraProjection(*this).project(p_world); }
 
 std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world, Eigen::Matrix<double, 2, 3>& jacobian) const {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 #include <Eigen/Geometry>
@@ -35,16 +36,25 @@ struct CameraDetections {
       pixel.push_back(d.pixel);
       colour.push_back(d.colour);
     }
+    // Undistorted by Newton's method; OpenCV's iteration for the few it does not converge on.
     normalised.resize(pixel.size());
-    if (!pixel.empty()) {
-      std::vector<cv::Point2d> in;
-      in.reserve(pixel.size());
-      for (const Eigen::Vector2d& p : pixel) in.emplace_back(p.x(), p.y());
+    const CameraIntrinsics& k = camera.intrinsics;
+    std::vector<cv::Point2d> in;
+    std::vector<std::size_t> hard;
+    for (std::size_t i = 0; i < pixel.size(); ++i) {
+      const Eigen::Vector2d distorted((pixel[i].x() - k.cx) / k.fx, (pixel[i].y() - k.cy) / k.fy);
+      if (const auto xy = undistort_normalised(k.distortion, distorted)) {
+        normalised[i] = *xy;
+      } else {
+        in.emplace_back(pixel[i].x(), pixel[i].y());
+        hard.push_back(i);
+      }
+    }
+    if (!in.empty()) {
       std::vector<cv::Point2d> out;
-      const CameraIntrinsics& k = camera.intrinsics;
       cv::undistortPoints(in, out, cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1), cv::Vec<double, 5>(k.distortion.data()),
                           cv::noArray(), cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 1e-12));
-      for (std::size_t i = 0; i < out.size(); ++i) normalised[i] = {out[i].x, out[i].y};
+      for (std::size_t h = 0; h < hard.size(); ++h) normalised[hard[h]] = {out[h].x, out[h].y};
     }
     cols = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.width_px / cell_px)) + 1);
     rows = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.height_px / cell_px)) + 1);
@@ -194,6 +204,12 @@ class Matcher {
       RHOT_PRECONDITION(frame.cameras[c].camera == static_cast<int>(c), "match_and_triangulate: cameras in rig order");
       cams_[c].build(rig.cameras[c], frame.cameras[c]);
     }
+    if (rig.volume && settings.seed_margin >= 0.0) {
+      const Eigen::Vector3d half =
+          0.5 * rig.volume->size_m + settings.seed_margin * rig.volume->size_m + Eigen::Vector3d::Constant(settings.seed_margin_m);
+      seed_lo_ = rig.volume->centre_m - half;
+      seed_hi_ = rig.volume->centre_m + half;
+    }
   }
 
   std::vector<MatchedPoint> run() {
@@ -224,7 +240,8 @@ class Matcher {
         if (explained_by_a_cluster(i, a, j, b)) continue;
         const auto x =
             ray_midpoint(poses_[i].centre_world(), ray_a, poses_[j].centre_world(), poses_[j].ray_direction_world(cams_[j].normalised[b]));
-        if (!x) continue;
+        // Two rays that meet far outside the volume the rig is for: a ghost, almost always.
+        if (!x || (x->array() < seed_lo_.array()).any() || (x->array() > seed_hi_.array()).any()) continue;
         if (grow_seed(i, a, j, b, *x)) break;  // a is explained: no more seeds from it
       }
     }
@@ -416,6 +433,9 @@ class Matcher {
   std::vector<std::pair<int, int>> links_;
   std::vector<Cluster> clusters_;
   std::vector<Observation> grown_;  // scratch for grow_seed
+  // Where seeds may lie (MatchSettings::seed_margin): everywhere without a volume.
+  Eigen::Vector3d seed_lo_ = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+  Eigen::Vector3d seed_hi_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
 };
 
 }  // namespace

@@ -10,7 +10,8 @@
 //    confirm (refined, every residual within `max_residual_px`) explains its detections: they
 //    seed nothing more, which keeps seeding near linear in the markers. A two-view seed that more
 //    than two other cameras should see, and do not, is dropped at once (step 4 would refuse it).
-//    Seeds whose two detections already belong to one cluster are skipped.
+//    Seeds whose two detections already belong to one cluster are skipped, and so are seeds far
+//    outside the rig's tracking volume (MatchSettings::seed_margin).
 // 4. Clusters are refined (Gauss-Newton), grown again from the refined point, and pruned of
 //    observations whose residual exceeds `max_residual_px` (worst first); then accepted greedily,
 //    best supported first, each detection used once, so a ghost built from detections that
@@ -41,6 +42,13 @@ struct MatchSettings {
   double reprojection_tolerance_px = 2.5;
   double max_rms_px = 1.5;
   double max_residual_px = 1.5;  // an observation further than this from its point's reprojection is dropped
+  // Where the rig has a tracking volume (CameraRig::volume), two-view seeds are grown only inside
+  // it widened by seed_margin of its size and seed_margin_m on every side (the default: a box
+  // twice the volume's size plus 25 cm each way). Most ghosts, two rays that happen to pass
+  // close, meet far outside: on a large rig they were most of the matching's work. Negative
+  // seed_margin: seeds anywhere.
+  double seed_margin = 0.5;
+  double seed_margin_m = 0.25;
 };
 
 // Tolerances for detections with sigma_px of noise: the defaults (right up to about 0.4 px), or
