@@ -265,3 +265,41 @@ TEST(Matching, DetectionsOfDifferentColoursNeverPair) {
 
 }  // namespace
 }  // namespace rhot
+
+namespace rhot {
+namespace {
+
+// Seeds are grown only near the rig's tracking volume (MatchSettings::seed_margin): with room-8's
+// volume shrunk to a 0.4 m cube around (0, 1, 0), seeds are grown within 0.65 m of it on each
+// axis. A marker inside that is found; one 1.2 m out (seen by most cameras) only with the margin
+// switched off.
+TEST(Matching, SeedsAreGrownOnlyNearTheTrackingVolume) {
+  CameraRig r = rig("room-8.yaml");
+  r.volume = TrackingVolume{{0.0, 1.0, 0.0}, {0.4, 0.4, 0.4}};
+  Trajectory inside, outside;
+  inside.centre_m = {0.3, 1.4, -0.5};
+  outside.centre_m = {1.2, 1.0, -0.8};
+  SimulatedRigSettings s;
+  s.sigma_px = 0.3;
+  SimulatedRig sim(r, {inside, outside}, s);
+  const RigFrame frame = sim.next();
+  const auto near = [](const std::vector<MatchedPoint>& points, const Eigen::Vector3d& x) {
+    return std::any_of(points.begin(), points.end(), [&](const MatchedPoint& p) { return (p.point.position_world - x).norm() < 0.01; });
+  };
+  int views_outside = 0;
+  for (const CameraFrame& cf : frame.cameras) {
+    for (const Detection& d : cf.detections) views_outside += d.truth_marker == 1 ? 1 : 0;
+  }
+  ASSERT_GE(views_outside, 3) << "the marker outside must be seen to make a point";
+  const auto gated = match_and_triangulate(r, frame);
+  EXPECT_TRUE(near(gated, inside.centre_m));
+  EXPECT_FALSE(near(gated, outside.centre_m));
+  MatchSettings anywhere;
+  anywhere.seed_margin = -1.0;
+  const auto ungated = match_and_triangulate(r, frame, anywhere);
+  EXPECT_TRUE(near(ungated, inside.centre_m));
+  EXPECT_TRUE(near(ungated, outside.centre_m));
+}
+
+}  // namespace
+}  // namespace rhot
