@@ -8,7 +8,7 @@ namespace rhot {
 
 PngWriter::PngWriter(unsigned threads, std::size_t max_queued) : max_queued_(max_queued) {
   RHOT_PRECONDITION(max_queued >= 1, "PngWriter: room for at least one image");
-  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency() - 1);
+  if (threads == 0) threads = std::max(2u, std::thread::hardware_concurrency()) - 1;  // 0 when unknown
   for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { loop(); });
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <nlohmann/json.hpp>
 
@@ -131,6 +132,46 @@ std::vector<Eigen::Vector3d> MotionPredictor::predict(std::span<const Eigen::Vec
   if (!(horizon_s > 0.0)) return out;
   const double h = std::min(horizon_s, kMaxPredictionHorizon_s);
   for (std::size_t i = 0; i < points_; ++i) out[i] += h * velocity_[i];
+  return out;
+}
+
+PoseMotion::PoseMotion(int frames, double max_speed_m_s, double max_turn_rad_s)
+    : origin_(1, frames, max_speed_m_s), max_turn_rad_s_(max_turn_rad_s) {}
+
+void PoseMotion::update(double t_s, const Rigid3d& world_from_object, bool seen) {
+  const bool usable =
+      seen && std::isfinite(t_s) && world_from_object.translation.allFinite() && world_from_object.rotation.coeffs().allFinite();
+  const std::array<Eigen::Vector3d, 1> origin{world_from_object.translation};
+  origin_.update(t_s, origin, usable);
+  angular_velocity_.setZero();
+  if (!usable) {
+    last_rotation_.reset();
+    return;
+  }
+  const Eigen::Quaterniond q = world_from_object.rotation.normalized();
+  const double dt = t_s - last_t_s_;
+  if (last_rotation_ && dt > 0.0) {
+    // The turn from the last orientation to this one, as a world-frame rotation vector.
+    const Eigen::AngleAxisd turn(q * last_rotation_->conjugate());
+    double angle = turn.angle();
+    if (angle > std::numbers::pi) angle -= 2.0 * std::numbers::pi;  // the short way round
+    const Eigen::Vector3d omega = turn.axis() * (angle / dt);
+    if (omega.allFinite() && omega.norm() <= max_turn_rad_s_) angular_velocity_ = omega;
+  }
+  last_rotation_ = q;
+  last_t_s_ = t_s;
+}
+
+Rigid3d PoseMotion::predict(const Rigid3d& world_from_object, double horizon_s) const {
+  if (!(horizon_s > 0.0)) return world_from_object;
+  const double h = std::min(horizon_s, kMaxPredictionHorizon_s);
+  const std::array<Eigen::Vector3d, 1> origin{world_from_object.translation};
+  Rigid3d out = world_from_object;
+  // Slower than the fit's own noise (a still object's star jitters about a millimetre): still.
+  if (origin_.velocity(0).norm() >= kStillSpeed_m_s) out.translation = origin_.predict(origin, h)[0];
+  const double angle = angular_velocity_.norm() >= kStillTurn_rad_s ? angular_velocity_.norm() * h : 0.0;
+  if (angle > 0.0)
+    out.rotation = (Eigen::Quaterniond(Eigen::AngleAxisd(angle, angular_velocity_.normalized())) * out.rotation).normalized();
   return out;
 }
 

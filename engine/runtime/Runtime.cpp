@@ -48,8 +48,17 @@ std::expected<std::unique_ptr<Runtime>, std::string> Runtime::create(const Scene
                            self->pose_s_ = steady_now_s();
                            const TrackingResults& results = self->tracking_->results();
                            apply_tracking_results(self->world_, results, self->objects_);
+                           // Velocities against the capture times where the source knows them
+                           // (real cameras' frames come unevenly), else the runtime's clock (the
+                           // simulation's own: its world moves on it).
+                           const double t = std::isfinite(results.capture_steady_s) ? results.capture_steady_s : results.t_s;
                            for (std::size_t h = 0; h < 2; ++h) {
-                             self->hand_motion_[h].update(results.t_s, results.hands[h].joints_world, results.hands[h].seen);
+                             self->hand_motion_[h].update(t, results.hands[h].joints_world, results.hands[h].seen);
+                           }
+                           for (const TrackedObject& o : self->objects_.objects) {
+                             const auto pose = results.world_from_object.find(o.star_id);
+                             const bool seen = pose != results.world_from_object.end();
+                             self->object_motion_[o.star_id].update(t, seen ? pose->second : Rigid3d{}, seen);
                            }
                          }}});
   r->hand_motion_.assign(2, MotionPredictor(kHandJointCount));
@@ -136,7 +145,9 @@ void Runtime::render() {
   shown.moments.capture_s = std::isfinite(results.capture_steady_s) ? std::min(results.capture_steady_s, pose_s_) : frame_start_s_;
   shown.moments.pose_s = pose_s_;
   shown.predicted_display_s = vsync_ ? vsync_->next_at_or_after(now + gpu_s) : now;
-  shown.horizon_s = settings_.predict ? std::clamp(shown.predicted_display_s - shown.moments.capture_s, 0.0, kMaxPredictionHorizon_s) : 0.0;
+  // Paused, the poses are old and stay put: nothing to predict.
+  shown.horizon_s =
+      settings_.predict && advancing_ ? std::clamp(shown.predicted_display_s - shown.moments.capture_s, 0.0, kMaxPredictionHorizon_s) : 0.0;
   for (std::size_t h = 0; h < 2; ++h) {
     const HandInput& in = results.hands[h];
     shown.seen[h] = in.seen;
@@ -161,10 +172,26 @@ void Runtime::render() {
     if (body && body->holding) h.color = {0.55f, 0.85f, 0.55f, 1.0f};
     hands.push_back(h);
   });
+  // The tracked objects, likewise: drawn moved on to the display time (their WorldTransform for
+  // this frame's drawing only; physics and the next frame see the tracked pose).
+  std::vector<std::pair<Entity, glm::mat4>> restore;
+  for (const TrackedObject& o : objects_.objects) {
+    const auto pose = results.world_from_object.find(o.star_id);
+    const auto motion = object_motion_.find(o.star_id);
+    if (pose == results.world_from_object.end() || motion == object_motion_.end() || !world_.alive(o.entity)) continue;
+    const Rigid3d ahead = motion->second.predict(pose->second, shown.horizon_s);
+    shown.objects[o.star_id] = {pose->second, ahead};
+    WorldTransform* wt = world_.find<WorldTransform>(o.entity);
+    const glm::mat4 moved = to_glm(ahead * pose->second.inverse());
+    if (wt == nullptr || !std::isfinite(moved[3][0] + moved[3][1] + moved[3][2])) continue;
+    restore.emplace_back(o.entity, wt->world_from_local);
+    wt->world_from_local = moved * wt->world_from_local;
+  }
   debug_.clear();
   fill_debug(debug_);
   const bool any_debug = !debug_.lines().empty() || !debug_.points().empty();
   FrameInput frame = scene_renderer_->build(world_, views_, hands, any_debug ? &debug_ : nullptr);
+  for (const auto& [entity, world_from_local] : restore) world_.get<WorldTransform>(entity).world_from_local = world_from_local;
   if (overlay_ && renderer_->begin_overlay()) overlay_();
   renderer_->render(frame);
   shown.moments.submit_s = std::max(steady_now_s(), shown.moments.pose_s);
@@ -175,7 +202,8 @@ void Runtime::render() {
 }
 
 void Runtime::collect_displayed() {
-  const std::optional<FrameCompletion>& done = renderer_->last_completed();
+  // A copy: an observer may read the eyes back, which completes another frame.
+  const std::optional<FrameCompletion> done = renderer_->last_completed();
   if (!done) return;
   while (!pending_.empty() && pending_.front().renderer_frame <= done->frame) {
     PendingFrame p = std::move(pending_.front());
@@ -184,7 +212,10 @@ void Runtime::collect_displayed() {
     recent_gpu_s_.push_back(std::max(0.0, done->done_s - done->submitted_s));
     if (recent_gpu_s_.size() > 15) recent_gpu_s_.pop_front();
     if (renderer_->info().gpu_timings) {
-      for (std::size_t e = 0; e < 2; ++e) gpu_eye_ms_[e].push_back(done->gpu_eye_ms[e]);
+      for (std::size_t e = 0; e < 2; ++e) {
+        gpu_eye_ms_[e].push_back(done->gpu_eye_ms[e]);
+        if (gpu_eye_ms_[e].size() > 65536) gpu_eye_ms_[e].pop_front();  // the same window as the latency's
+      }
     }
     FrameMoments& m = p.shown.moments;
     m.display_s = std::max(vsync_ ? vsync_->next_at_or_after(done->done_s) : done->done_s, m.submit_s);
@@ -197,7 +228,7 @@ std::optional<std::array<TimingSummary, 2>> Runtime::gpu_eye_ms() const {
   if (gpu_eye_ms_[0].empty()) return std::nullopt;
   std::array<TimingSummary, 2> out;
   for (std::size_t e = 0; e < 2; ++e) {
-    const std::vector<double>& v = gpu_eye_ms_[e];
+    const std::vector<double> v(gpu_eye_ms_[e].begin(), gpu_eye_ms_[e].end());
     out[e].count = v.size();
     out[e].p50_ms = percentile(v, 0.5);
     out[e].p99_ms = percentile(v, 0.99);

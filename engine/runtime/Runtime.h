@@ -20,6 +20,7 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <expected>
 #include <filesystem>
 #include <functional>
@@ -71,6 +72,8 @@ struct DisplayedFrame {
   std::array<bool, 2> seen{};        // 0 left, 1 right
   std::array<std::array<Eigen::Vector3d, kHandJointCount>, 2> tracked{};
   std::array<std::array<Eigen::Vector3d, kHandJointCount>, 2> predicted{};
+  // The star-tracked objects seen in the frame, by star id: as tracked and as drawn (predicted).
+  std::map<int, std::pair<Rigid3d, Rigid3d>> objects;
 };
 
 class Runtime {
@@ -172,10 +175,11 @@ class Runtime {
   double pose_s_ = 0.0;
   std::optional<VsyncClock> vsync_;
   std::vector<MotionPredictor> hand_motion_;  // 0 left, 1 right: the tracked joints
+  std::map<int, PoseMotion> object_motion_;   // by star id
   std::deque<double> recent_gpu_s_;           // submit to done of the last frames
   std::deque<PendingFrame> pending_;
   LatencyStats latency_;
-  std::array<std::vector<double>, 2> gpu_eye_ms_;
+  std::array<std::deque<double>, 2> gpu_eye_ms_;  // the last 65536 frames
   std::vector<std::function<void(const DisplayedFrame&)>> displayed_observers_;
 };
 

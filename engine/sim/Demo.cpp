@@ -244,6 +244,15 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
           e.horizon_sum_s += f.horizon_s;
         }
       }
+      for (const auto& [id, poses] : f.objects) {
+        const auto then = at_capture.world_from_object.find(id);
+        const auto shown = at_display.world_from_object.find(id);
+        if (then == at_capture.world_from_object.end() || shown == at_display.world_from_object.end()) continue;
+        ++e.objects;
+        e.object_at_capture_sum_m += (poses.first.translation - then->second.translation).norm();
+        e.object_predicted_at_display_sum_m += (poses.second.translation - shown->second.translation).norm();
+        e.object_tracked_at_display_sum_m += (poses.first.translation - shown->second.translation).norm();
+      }
     });
     if (!d->script_->right_target().empty()) {
       r.add_stage("physics", {"look", [self](double t_s) {

@@ -134,6 +134,11 @@ struct PredictionErrors {
   double predicted_at_display_sum_m = 0.0;
   double tracked_at_display_sum_m = 0.0;
   double horizon_sum_s = 0.0;  // per joint, how far ahead it was predicted
+  // The star-tracked objects' origins likewise, per object per displayed frame.
+  std::uint64_t objects = 0;
+  double object_at_capture_sum_m = 0.0;
+  double object_predicted_at_display_sum_m = 0.0;
+  double object_tracked_at_display_sum_m = 0.0;
   double at_capture_mean_m() const { return joints > 0 ? at_capture_sum_m / static_cast<double>(joints) : 0.0; }
   double predicted_at_display_mean_m() const { return joints > 0 ? predicted_at_display_sum_m / static_cast<double>(joints) : 0.0; }
   double tracked_at_display_mean_m() const { return joints > 0 ? tracked_at_display_sum_m / static_cast<double>(joints) : 0.0; }

@@ -113,6 +113,13 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
                             {"at_display_unpredicted_mean_mm", 1e3 * errors.tracked_at_display_mean_m()},
                             {"ratio_unpredicted", errors.ratio_without_prediction()},
                             {"horizon_mean_ms", errors.joints > 0 ? 1e3 * errors.horizon_sum_s / static_cast<double>(errors.joints) : 0.0}};
+  if (errors.objects > 0) {
+    const auto n = static_cast<double>(errors.objects);
+    j["prediction_errors"]["objects"] = {{"samples", errors.objects},
+                                         {"at_capture_mean_mm", 1e3 * errors.object_at_capture_sum_m / n},
+                                         {"at_display_mean_mm", 1e3 * errors.object_predicted_at_display_sum_m / n},
+                                         {"at_display_unpredicted_mean_mm", 1e3 * errors.object_tracked_at_display_sum_m / n}};
+  }
   if (const auto gpu = runtime.gpu_eye_ms()) {
     for (std::size_t e = 0; e < 2; ++e) {
       j["gpu_eye_ms"][e == 0 ? "left" : "right"] = {{"p50", (*gpu)[e].p50_ms}, {"p99", (*gpu)[e].p99_ms}, {"max", (*gpu)[e].max_ms}};

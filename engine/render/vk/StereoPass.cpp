@@ -77,7 +77,8 @@ StereoPass::StereoPass(const Context& context, int eye_width_px, int eye_height_
 }
 
 StereoPass::~StereoPass() {
-  finish();  // the fence watch lets go of the fence
+  // The fence watch lets go of the fence (whatever became of the frame: no checks while tearing down).
+  if (in_flight_) (void)watch_.wait();
   const VkDevice d = ctx_.device();
   vkDeviceWaitIdle(d);
   if (timestamps_ != VK_NULL_HANDLE) vkDestroyQueryPool(d, timestamps_, nullptr);
