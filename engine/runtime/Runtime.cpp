@@ -19,6 +19,7 @@ std::expected<std::unique_ptr<Runtime>, std::string> Runtime::create(const Scene
   std::unique_ptr<Runtime> r(new Runtime());
   r->scene_ = scene;
   r->settings_ = settings;
+  r->latency_ = LatencyStats(settings.latency_window_frames);
   instantiate(r->scene_, r->world_);
   StarSet set;
   if (r->world_.view<TrackedBy>().size_hint() > 0) {
@@ -214,7 +215,7 @@ void Runtime::collect_displayed() {
     if (renderer_->info().gpu_timings) {
       for (std::size_t e = 0; e < 2; ++e) {
         gpu_eye_ms_[e].push_back(done->gpu_eye_ms[e]);
-        if (gpu_eye_ms_[e].size() > 65536) gpu_eye_ms_[e].pop_front();  // the same window as the latency's
+        if (gpu_eye_ms_[e].size() > settings_.latency_window_frames) gpu_eye_ms_[e].pop_front();  // the latency's window
       }
     }
     FrameMoments& m = p.shown.moments;

@@ -59,6 +59,9 @@ struct RuntimeSettings {
   // Draw the hands where their tracked motion puts them at the frame's predicted display time
   // (engine/runtime/Latency.h); false: where they were tracked.
   bool predict = true;
+  // Latency percentiles (and GPU times) are over this many of the last frames; memory grows with
+  // it, about 40 bytes a frame.
+  std::size_t latency_window_frames = 65536;
 };
 
 // A frame the headset has shown, once the GPU has finished it: its moments (Latency.h), and the
@@ -179,7 +182,7 @@ class Runtime {
   std::deque<double> recent_gpu_s_;           // submit to done of the last frames
   std::deque<PendingFrame> pending_;
   LatencyStats latency_;
-  std::array<std::deque<double>, 2> gpu_eye_ms_;  // the last 65536 frames
+  std::array<std::deque<double>, 2> gpu_eye_ms_;  // the last RuntimeSettings::latency_window_frames
   std::vector<std::function<void(const DisplayedFrame&)>> displayed_observers_;
 };
 

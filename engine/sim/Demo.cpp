@@ -208,6 +208,7 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
   rs.record = settings.record;
   rs.debug = settings.debug;
   rs.predict = settings.predict;
+  rs.latency_window_frames = settings.latency_window_frames;
   auto runtime = Runtime::create(scene, renderer, rs, make_tracking);
   if (!runtime) return std::unexpected(runtime.error());
   d->runtime_ = std::move(*runtime);

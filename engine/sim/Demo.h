@@ -45,12 +45,13 @@ struct DemoSettings {
   double sigma_px = 0.3;            // the simulated cameras' pixel noise (overrides world.sigma_px)
   WorldSettings world;              // the rest of the simulated world (tracking/sim/Realism.h)
   unsigned seed = 1;
-  bool filter_hands = false;     // LiveTrackingSettings::filter_hands
-  bool perfect_hands = false;    // physics gets the true hands, not the tracked ones
-  std::filesystem::path replay;  // play this recording instead of tracking
-  double speed = 1.0;            // replay speed (2: twice as fast)
-  bool predict = true;           // RuntimeSettings::predict: draw the hands at the display time
-  std::filesystem::path record;  // write every frame's hands and tracked objects here
+  bool filter_hands = false;                  // LiveTrackingSettings::filter_hands
+  bool perfect_hands = false;                 // physics gets the true hands, not the tracked ones
+  std::filesystem::path replay;               // play this recording instead of tracking
+  double speed = 1.0;                         // replay speed (2: twice as fast)
+  bool predict = true;                        // RuntimeSettings::predict: draw the hands at the display time
+  std::size_t latency_window_frames = 65536;  // RuntimeSettings::latency_window_frames
+  std::filesystem::path record;               // write every frame's hands and tracked objects here
   // Real cameras instead of the simulated rig: one OpenCV device per rig camera, in rig order (an
   // index such as "0", a video file, or an image sequence such as "cams/cam0_%04d.png").
   std::vector<std::string> video_devices;

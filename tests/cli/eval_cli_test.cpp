@@ -178,6 +178,23 @@ TEST(EvalCli, FramePrintsTheWholeFrameAndEveryStage) {
     EXPECT_GT(j["stages"][stage]["p50_ms"].get<double>(), 0.0) << stage;
     EXPECT_LE(j["stages"][stage]["p50_ms"].get<double>(), j["p99_ms"].get<double>()) << stage;
   }
+  // Latency: every frame but the last displayed, each at a refresh after its capture; the hands
+  // measured against the truth, predicted.
+  EXPECT_EQ(j["latency"]["frames"].get<int>(), 19);
+  EXPECT_GT(j["tracking_latency_p99_ms"].get<double>(), 0.0);
+  EXPECT_LE(j["motion_to_photon_p50_ms"].get<double>(), j["motion_to_photon_p99_ms"].get<double>());
+  EXPECT_GT(j["motion_to_photon_p50_ms"].get<double>(), j["latency"]["tracking_ms"]["p50"].get<double>());
+  EXPECT_EQ(j["prediction"], "on");
+  EXPECT_GT(j["prediction_errors"]["joint_samples"].get<int>(), 0);
+  EXPECT_GT(j["prediction_error_ratio"].get<double>(), 0.0);
+  const EvalRun off = run_eval("frame --eye 64x64 --frames 20 --device cpu --prediction off --json");
+  ASSERT_EQ(off.exit_code, 0) << off.output;
+  const nlohmann::json k = nlohmann::json::parse(off.output);
+  EXPECT_EQ(k["prediction_errors"]["horizon_mean_ms"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(k["prediction_error_ratio"].get<double>(), k["prediction_errors"]["ratio_unpredicted"].get<double>());
+  const auto bad_prediction = rhot::test::run_program("rhot-eval", "frame --prediction maybe --json", "2>&1");
+  EXPECT_NE(bad_prediction.exit_code, 0);
+  EXPECT_NE(bad_prediction.output.find("--prediction"), std::string::npos) << bad_prediction.output;
   const auto bad = rhot::test::run_program("rhot-eval", "frame --eye 64by64 --json", "2>&1");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.output.find("--eye: expected WIDTHxHEIGHT, each 16 to 8192 pixels, such as 1080x1200, got \"64by64\""), std::string::npos)

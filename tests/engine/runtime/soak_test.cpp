@@ -69,6 +69,7 @@ TEST(DemoSoak, RHOT_SOAK_TEST_NAME) {
   ASSERT_TRUE(scene.has_value());
   DemoSettings options;
   options.asset_dir = RHOT_ASSET_DIR;
+  options.latency_window_frames = 200;  // like the frame statistics below: a bounded window, full before the warm-up ends
   std::unique_ptr<Renderer> renderer;
 #ifdef RHOT_SOAK_RENDER
   RendererSettings render;
