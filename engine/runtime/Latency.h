@@ -122,8 +122,8 @@ class MotionPredictor {
 // add to its error (measured: 0.90 -> 0.99 mm in the demo's first two seconds without this).
 class PoseMotion {
  public:
-  static constexpr double kStillSpeed_m_s = 0.05;
-  static constexpr double kStillTurn_rad_s = 0.5;
+  static constexpr double kStillSpeed_m_s = 0.1;
+  static constexpr double kStillTurn_rad_s = 1.0;
 
   explicit PoseMotion(int frames = 5, double max_speed_m_s = 10.0, double max_turn_rad_s = 30.0);
   // This frame's pose at t_s; seen false: lost.
