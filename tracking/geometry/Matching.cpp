@@ -9,6 +9,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "base/Check.h"
+#include "tracking/geometry/EpipolarIndex.h"
 
 namespace rhot {
 
@@ -229,14 +230,29 @@ class Matcher {
     const Rigid3d j_from_i = rig_.cameras[j].cam_from_world * rig_.cameras[i].cam_from_world.inverse();
     const Eigen::Matrix3d e = skew(j_from_i.translation) * j_from_i.rotation.toRotationMatrix();
     const double fj = 0.5 * (rig_.cameras[j].intrinsics.fx + rig_.cameras[j].intrinsics.fy);
+    // Many lines against many detections: index camera j's detections by epipolar line
+    // (EpipolarIndex); few: test every one.
+    const auto open = [](const std::vector<char>& explained) {
+      return static_cast<std::size_t>(std::count(explained.begin(), explained.end(), char{0}));
+    };
+    const bool indexed = open(cams_[i].explained) * open(cams_[j].explained) >= kIndexAbovePairs;
+    if (indexed) index_.build(j_from_i.translation, cams_[j].normalised, cams_[j].explained);
     for (std::size_t a = 0; a < cams_[i].pixel.size(); ++a) {
       if (cams_[i].explained[a] != 0) continue;
       const Eigen::Vector3d line = e * cams_[i].normalised[a].homogeneous();
       const double tolerance = settings_.epipolar_tolerance_px * line.head<2>().norm() / fj;
       const Eigen::Vector3d ray_a = poses_[i].ray_direction_world(cams_[i].normalised[a]);
-      for (std::size_t b = 0; b < cams_[j].pixel.size(); ++b) {
+      candidates_.clear();
+      if (indexed) {
+        index_.query(line, tolerance, candidates_);
+      } else {
+        for (std::size_t b = 0; b < cams_[j].pixel.size(); ++b) {
+          if (std::abs(line.dot(cams_[j].normalised[b].homogeneous())) <= tolerance) candidates_.push_back(static_cast<int>(b));
+        }
+      }
+      for (const int candidate : candidates_) {
+        const auto b = static_cast<std::size_t>(candidate);
         if (cams_[j].explained[b] != 0 || cams_[j].colour[b] != cams_[i].colour[a]) continue;
-        if (std::abs(line.dot(cams_[j].normalised[b].homogeneous())) > tolerance) continue;
         if (explained_by_a_cluster(i, a, j, b)) continue;
         const auto x =
             ray_midpoint(poses_[i].centre_world(), ray_a, poses_[j].centre_world(), poses_[j].ray_direction_world(cams_[j].normalised[b]));
@@ -433,6 +449,10 @@ class Matcher {
   std::vector<std::pair<int, int>> links_;
   std::vector<Cluster> clusters_;
   std::vector<Observation> grown_;  // scratch for grow_seed
+  // seed_pair's: camera j's open detections by epipolar line, and those near one line.
+  static constexpr std::size_t kIndexAbovePairs = 512;
+  EpipolarIndex index_;
+  std::vector<int> candidates_;
   // Where seeds may lie (MatchSettings::seed_margin): everywhere without a volume.
   Eigen::Vector3d seed_lo_ = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
   Eigen::Vector3d seed_hi_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
