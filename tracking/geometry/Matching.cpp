@@ -21,7 +21,7 @@ struct CameraDetections {
   std::vector<Eigen::Vector2d> pixel;
   std::vector<int> colour;  // per detection: its marker colour, -1 for none
   std::vector<Eigen::Vector2d> normalised;
-  double cell_px = 16.0;
+  double cell_px = 16.0;  // set by build
   int cols = 0;
   int rows = 0;
   // The grid as compressed rows: detections of cell c are sorted[cell_start[c] .. cell_start[c + 1]).
@@ -57,6 +57,10 @@ struct CameraDetections {
                           cv::noArray(), cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 1e-12));
       for (std::size_t h = 0; h < hard.size(); ++h) normalised[hard[h]] = {out[h].x, out[h].y};
     }
+    // About one detection a cell: a lookup visits one to four cells holding a detection or two,
+    // and the grid stays small enough to sit in the cache beside the other cameras'.
+    const double area = static_cast<double>(camera.intrinsics.width_px) * camera.intrinsics.height_px;
+    cell_px = std::clamp(std::sqrt(area / static_cast<double>(std::max<std::size_t>(pixel.size(), 1))), 8.0, 256.0);
     cols = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.width_px / cell_px)) + 1);
     rows = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.height_px / cell_px)) + 1);
     cell_start.assign(static_cast<std::size_t>(cols * rows) + 1, 0);
@@ -247,10 +251,18 @@ class Matcher {
         index_.query(line, tolerance, candidates_);
       } else {
         for (std::size_t b = 0; b < cams_[j].pixel.size(); ++b) {
-          if (std::abs(line.dot(cams_[j].normalised[b].homogeneous())) <= tolerance) candidates_.push_back(static_cast<int>(b));
+          if (cams_[j].explained[b] == 0 && std::abs(line.dot(cams_[j].normalised[b].homogeneous())) <= tolerance) {
+            candidates_.push_back(static_cast<int>(b));
+          }
         }
       }
-      for (const int candidate : candidates_) {
+      // Nearest the line first: the true match is, more often than not, and once it is
+      // confirmed the ghosts behind it are never grown.
+      ranked_.clear();
+      for (const int b : candidates_)
+        ranked_.emplace_back(std::abs(line.dot(cams_[j].normalised[static_cast<std::size_t>(b)].homogeneous())), b);
+      std::sort(ranked_.begin(), ranked_.end());
+      for (const auto& [residual, candidate] : ranked_) {
         const auto b = static_cast<std::size_t>(candidate);
         if (cams_[j].explained[b] != 0 || cams_[j].colour[b] != cams_[i].colour[a]) continue;
         if (explained_by_a_cluster(i, a, j, b)) continue;
@@ -300,7 +312,18 @@ class Matcher {
     // detections; a coincidental third detection near a ghost rarely survives refinement.
     bool confirmed = false;
     if (grown_.size() >= 3) {
-      if (const auto refined = refine_point(poses_, grown_, cl.seed_point, 5)) {
+      auto refined = refine_point(poses_, grown_, cl.seed_point, 5);
+      // A neighbouring marker's detection picked up in one or two cameras need not spoil the
+      // others' agreement: the worst goes (never a, b), while three views or more remain.
+      for (int drop = 0; drop < 2 && refined && refined->max_residual_px > settings_.max_residual_px && grown_.size() > 3; ++drop) {
+        const auto worst = static_cast<std::size_t>(refined->worst_observation);
+        const auto camera = static_cast<std::size_t>(grown_[worst].camera);
+        if (camera == i || camera == j) break;
+        cl.detection[camera] = -1;
+        grown_.erase(grown_.begin() + static_cast<std::ptrdiff_t>(worst));
+        refined = refine_point(poses_, grown_, refined->position_world, 5);
+      }
+      if (refined) {
         confirmed = refined->max_residual_px <= settings_.max_residual_px;
         cl.seed_point = refined->position_world;
         // Where two markers project close together in one camera, the refined point picks the
@@ -453,6 +476,7 @@ class Matcher {
   static constexpr std::size_t kIndexAbovePairs = 512;
   EpipolarIndex index_;
   std::vector<int> candidates_;
+  std::vector<std::pair<double, int>> ranked_;  // candidates by distance from the line
   // Where seeds may lie (MatchSettings::seed_margin): everywhere without a volume.
   Eigen::Vector3d seed_lo_ = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
   Eigen::Vector3d seed_hi_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());

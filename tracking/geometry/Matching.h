@@ -4,11 +4,13 @@
 // 1. Every detection is undistorted to normalised image coordinates.
 // 2. Seeds: for every pair of cameras, detection pairs that satisfy the epipolar constraint
 //    within `epipolar_tolerance_px` (measured in the second camera's pixels), triangulated as the
-//    midpoint of the two rays.
+//    midpoint of the two rays. The second camera's detections are found by epipolar line
+//    (EpipolarIndex), not by testing each, and tried nearest the line first.
 // 3. Each seed is grown: every other camera contributes its detection nearest the point's
 //    reprojection, if within `reprojection_tolerance_px`. A seed that three or more cameras
-//    confirm (refined, every residual within `max_residual_px`) explains its detections: they
-//    seed nothing more, which keeps seeding near linear in the markers. A two-view seed that more
+//    confirm (refined, every residual within `max_residual_px`, after dropping up to two
+//    observations that disagree with the rest) explains its detections: they seed nothing more,
+//    which keeps seeding near linear in the markers. A two-view seed that more
 //    than two other cameras should see, and do not, is dropped at once (step 4 would refuse it).
 //    Seeds whose two detections already belong to one cluster are skipped, and so are seeds far
 //    outside the rig's tracking volume (MatchSettings::seed_margin).
