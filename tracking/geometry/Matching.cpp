@@ -120,6 +120,9 @@ struct Cluster {
   int missing = 0;
   TriangulatedPoint point;
   std::vector<Observation> observations;
+  // grow_seed's refinement, kept when it is of exactly the detections the cluster holds (refine
+  // then starts from it instead of computing it again).
+  std::optional<TriangulatedPoint> seed_refined;
 };
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
@@ -328,13 +331,18 @@ class Matcher {
         cl.seed_point = refined->position_world;
         // Where two markers project close together in one camera, the refined point picks the
         // right detection more often than the two-view seed did.
+        bool changed = false;
         for (std::size_t k = 0; k < n_; ++k) {
           if (k == i || k == j || cl.detection[k] < 0) continue;
           if (const auto p = poses_[k].project(cl.seed_point)) {
             const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
-            if (d >= 0) cl.detection[k] = d;
+            if (d >= 0 && d != cl.detection[k]) {
+              cl.detection[k] = d;
+              changed = true;
+            }
           }
         }
+        if (!changed) cl.seed_refined = std::move(refined);
       }
     }
     const int index = static_cast<int>(clusters_.size());
@@ -355,21 +363,30 @@ class Matcher {
       if (cl.detection[k] >= 0) cl.observations.push_back({static_cast<int>(k), cams_[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
     }
     cl.support = static_cast<int>(cl.observations.size());
-    const auto t = refine_point(poses_, cl.observations, cl.seed_point, 5);
-    if (!t) {
-      cl.support = 0;
-      return;
+    if (cl.seed_refined) {
+      cl.point = std::move(*cl.seed_refined);
+    } else {
+      const auto t = refine_point(poses_, cl.observations, cl.seed_point, 5);
+      if (!t) {
+        cl.support = 0;
+        return;
+      }
+      cl.point = *t;
     }
-    cl.point = *t;
     // A two-view seed predicts the other cameras only roughly; with the refined point, look again
-    // for detections the first pass missed.
+    // for detections the first pass missed. The cameras that still see nothing there are missing
+    // unless the point moves (counted again below if it does).
     bool grew = false;
+    int missing = 0;
     for (std::size_t k = 0; k < n_; ++k) {
       if (cl.detection[k] >= 0) continue;
       const auto p = poses_[k].project(cl.point.position_world);
       if (!p || !poses_[k].in_image(*p)) continue;
       const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
-      if (d < 0) continue;
+      if (d < 0) {
+        ++missing;
+        continue;
+      }
       cl.detection[k] = d;
       cl.observations.push_back({static_cast<int>(k), cams_[k].pixel[static_cast<std::size_t>(d)]});
       grew = true;
@@ -386,6 +403,7 @@ class Matcher {
     }
     // Drop, one at a time, observations that disagree with the others: a neighbouring marker's
     // detection picked up while growing.
+    const bool moved = grew || cl.point.max_residual_px > settings_.max_residual_px;
     while (cl.point.max_residual_px > settings_.max_residual_px) {
       const auto worst_at = static_cast<std::size_t>(cl.point.worst_observation);
       if (cl.observations.size() <= 2) {
@@ -403,6 +421,10 @@ class Matcher {
     }
     cl.support = static_cast<int>(cl.observations.size());
     if (cl.support < 2) return;
+    if (!moved) {
+      cl.missing = missing;
+      return;
+    }
     for (std::size_t k = 0; k < n_; ++k) {
       if (cl.detection[k] >= 0) continue;
       const auto p = poses_[k].project(cl.point.position_world);
