@@ -24,9 +24,15 @@ struct CameraDetections {
   double cell_px = 16.0;  // set by build
   int cols = 0;
   int rows = 0;
-  // The grid as compressed rows: detections of cell c are sorted[cell_start[c] .. cell_start[c + 1]).
+  // The grid as compressed rows: detections of cell c are items[cell_start[c] .. cell_start[c + 1]),
+  // each with what a lookup needs, so that a lookup reads one run of memory after cell_start.
+  struct Item {
+    Eigen::Vector2d pixel;
+    int detection = -1;
+    int colour = -1;
+  };
   std::vector<int> cell_start;
-  std::vector<int> sorted;
+  std::vector<Item> items;
   // Per detection: it seeded (or joined) a cluster three or more cameras confirm.
   std::vector<char> explained;
   // Per detection: the first link of its list of clusters (see Membership), -1 for none.
@@ -70,10 +76,11 @@ struct CameraDetections {
       if (cell_of[i] >= 0) ++cell_start[static_cast<std::size_t>(cell_of[i]) + 1];
     }
     for (std::size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
-    sorted.assign(static_cast<std::size_t>(cell_start.back()), -1);
+    items.assign(static_cast<std::size_t>(cell_start.back()), Item{});
     std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
     for (std::size_t i = 0; i < pixel.size(); ++i) {
-      if (cell_of[i] >= 0) sorted[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = static_cast<int>(i);
+      if (cell_of[i] < 0) continue;
+      items[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = {pixel[i], static_cast<int>(i), colour[i]};
     }
     explained.assign(pixel.size(), 0);
     first_link.assign(pixel.size(), -1);
@@ -98,12 +105,12 @@ struct CameraDetections {
       for (int x = x0; x <= x1; ++x) {
         const auto c = static_cast<std::size_t>(y * cols + x);
         for (int s = cell_start[c]; s < cell_start[c + 1]; ++s) {
-          const int i = sorted[static_cast<std::size_t>(s)];
-          if (colour[static_cast<std::size_t>(i)] != of_colour) continue;
-          const double d2 = (pixel[static_cast<std::size_t>(i)] - p).squaredNorm();
+          const Item& item = items[static_cast<std::size_t>(s)];
+          if (item.colour != of_colour) continue;
+          const double d2 = (item.pixel - p).squaredNorm();
           if (d2 <= best_d2) {
             best_d2 = d2;
-            best = i;
+            best = item.detection;
           }
         }
       }
