@@ -17,7 +17,8 @@ def norm(a):
 
 def look_at(position, target):
     z = norm(sub(target, position))
-    x = norm(cross(z, [0.0, 1.0, 0.0]))
+    # Image y down towards the floor; looking straight down, towards world +Z instead.
+    x = norm(cross(z, [0.0, 0.0, 1.0] if abs(z[1]) > 0.999999 else [0.0, 1.0, 0.0]))
     y = cross(z, x)
     rotation = [x, y, z]  # rows of cam_from_world's rotation
     translation = [-sum(rotation[r][c] * position[c] for c in range(3)) for r in range(3)]
@@ -79,6 +80,19 @@ def main():
     for k, (qx, qz) in enumerate([(-2.5, -2.5), (2.5, -2.5), (2.5, 2.5), (-2.5, 2.5)]):
         stage.append(dict(stage_lens, name=f"ceiling-{k}", position=[qx, 6.0, qz], target=[qx * 0.9, 0.0, qz * 0.9 + 0.3]))
     write_rig("assets/rigs/stage-32.yaml", "stage-32", stage, [0.0, 1.0, 0.0], [10.0, 2.0, 10.0])
+    # Seed 000's Wiimote set-ups (chapter 8, "Setup Toolkit"): parallel Wiimotes 1 m apart along
+    # X and Z, looking straight down from 7 m, tracking up to 2 m above the floor. The Wiimote:
+    # 1024 x 768, focal length 1360 px (seed 000's alpha, section 4: about 41 x 31 degrees), no
+    # distortion; the long side of the image along X. 4.6 x 4.6 x 2 m: 10 Wiimotes, 5 along X by 2
+    # along Z; 8 x 8 x 2 m: 54 Wiimotes, 9 by 6.
+    seed_wiimote = dict(width=1024, height=768, f=1360.0, dist=[0.0, 0.0, 0.0, 0.0, 0.0])
+    for name, (nx, nz), side in [("seed-wiimote-10", (5, 2), 4.6), ("seed-wiimote-54", (9, 6), 8.0)]:
+        cams = []
+        for j in range(nz):
+            for i in range(nx):
+                x, z = i - (nx - 1) / 2, j - (nz - 1) / 2
+                cams.append(dict(seed_wiimote, name=f"wiimote-{j * nx + i}", position=[x, 7.0, z], target=[x, 0.0, z]))
+        write_rig(f"assets/rigs/{name}.yaml", name, cams, [0.0, 1.0, 0.0], [side, 2.0, side])
     # Stereo pair: 20 cm baseline above the user's head, looking at the desk volume (Wiimote-like
     # 1024 x 768 infrared cameras, about 45 degrees across).
     wiimote = dict(width=1024, height=768, f=1280.0, dist=[0.0, 0.0, 0.0, 0.0, 0.0])

@@ -23,6 +23,8 @@ packages=(
   xvfb xauth
   # camera nodes
   libzmq3-dev cppzmq-dev
+  # streaming out: OSC (VMC protocol) and an independent receiver for its tests
+  liblo-dev liblo-tools
 )
 
 if [[ ${EUID} -ne 0 ]]; then

@@ -22,7 +22,8 @@ TEST(EvalCli, TriangulationPrintsTheAccuracyJsonForEveryShippedRig) {
     const EvalRun r = run_eval(std::string("triangulation --rig ") + RHOT_ASSET_DIR + "/rigs/" + rig + " --frames 3 --markers 30 --json");
     ASSERT_EQ(r.exit_code, 0) << rig << "\n" << r.output;
     const nlohmann::json j = nlohmann::json::parse(r.output);
-    for (const char* key : {"rms_mm", "crlb_mm", "ratio", "found_fraction", "ghosts", "median_ms", "p99_ms"}) {
+    for (const char* key :
+         {"rms_mm", "crlb_mm", "ratio", "found_fraction", "ghosts", "median_ms", "p99_ms", "error_median_mm", "error_p95_mm"}) {
       EXPECT_TRUE(j.contains(key)) << rig << " lacks " << key;
     }
     EXPECT_GT(j["crlb_mm"].get<double>(), 0.0) << rig;

@@ -48,8 +48,9 @@ std::expected<rhot::WorldSettings, std::string> world_settings(const WorldFlags&
 // The world's settings, for a report.
 nlohmann::json world_json(const rhot::WorldSettings& world, const std::string& name);
 
+// uniform: markers standing still, spread uniformly through the box (else wandering through it).
 int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
-                  const std::vector<double>& volume, const std::vector<double>& volume_centre);
+                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform = false);
 int wand(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout,
          const std::vector<double>& volume, const std::vector<double>& volume_centre);
 int stars(const std::string& rig_file, const std::string& set_file, int bodies, const WorldFlags& world, int frames, unsigned seed,

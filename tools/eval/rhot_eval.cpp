@@ -1,6 +1,6 @@
 // rhot-eval: measurements a user sizing a rig wants, as one JSON object on stdout.
 //
-//   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M]
+//   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M] [--spread wander|uniform]
 //                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
 //   rhot-eval demo [--scene FILE] [--placements N] [--seed S] [--hands tracked|perfect] [world flags] --json
 //   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--calibrate-hand] [world flags] [--frames N] --json
@@ -186,6 +186,12 @@ int main(int argc, char** argv) {
   tri->add_option("--dropout", dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
   const char* volume_help = "size of the box the markers move in, X Y Z metres (default: the rig file's volume_size, else 1 1 1)";
   const char* centre_help = "centre of that box, X Y Z metres (default: the rig file's volume_centre, else where the optical axes meet)";
+  std::string spread = "wander";
+  tri->add_option("--spread", spread,
+                  "how the markers fill the box: wander (moving smoothly, less often near its faces) or uniform (standing still, "
+                  "every place as likely: what rhot-plan predicts over)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"wander", "uniform"}));
   tri->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
   tri->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   tri->add_flag("--json", json, "print JSON (the only output format)");
@@ -322,7 +328,7 @@ int main(int argc, char** argv) {
     return demo(demo_args.scene_file, demo_args.placements, demo_args.seed, demo_args.world, demo_args.hands, demo_args.frames);
   if (frame_cmd->parsed())
     return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading), frame_world, frame_options);
-  if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre);
+  if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre, spread == "uniform");
   if (hands_cmd->parsed()) return hands(hands_args);
   if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, world, frames, seed, volume, volume_centre);
   if (wand_cmd->parsed()) return wand(rig_file, length_mm, sigma, frames, seed, dropout, volume, volume_centre);

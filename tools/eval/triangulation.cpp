@@ -33,7 +33,7 @@
 namespace rhot::eval {
 
 int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
-                  const std::vector<double>& volume, const std::vector<double>& volume_centre) {
+                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform) {
   const auto rig = rhot::load_rig(rig_file);
   if (!rig) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
@@ -54,7 +54,10 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
     std::cerr << "rhot-eval: " << ok.error() << "\n";
     return 1;
   }
-  rhot::SimulatedRig sim(*rig, rhot::random_trajectories(markers, centre - half, centre + half, seed + 1), settings);
+  rhot::SimulatedRig sim(*rig,
+                         uniform ? rhot::scattered_markers(markers, centre - half, centre + half, seed + 1)
+                                 : rhot::random_trajectories(markers, centre - half, centre + half, seed + 1),
+                         settings);
 
   double sum_error2 = 0.0;
   double sum_bound2 = 0.0;
@@ -64,6 +67,7 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   long ghosts = 0;
   long mixed = 0;
   std::vector<double> ms;
+  std::vector<double> errors_mm;  // every found marker's 3D error
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
     const auto start = std::chrono::steady_clock::now();
@@ -89,6 +93,7 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
       const auto cov = rhot::crlb_covariance(*rig, truth, m.point.cameras, sigma);
       if (!cov) continue;
       sum_error2 += (m.point.position_world - truth).squaredNorm();
+      errors_mm.push_back(1000.0 * (m.point.position_world - truth).norm());
       sum_bound2 += cov->trace();
       ++points;
     }
@@ -106,9 +111,13 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   j["seed"] = seed;
   j["volume_centre_m"] = {centre.x(), centre.y(), centre.z()};
   j["volume_size_m"] = {box.size.x(), box.size.y(), box.size.z()};
+  j["spread"] = uniform ? "uniform" : "wander";
   j["rms_mm"] = rms_mm;
   j["crlb_mm"] = crlb_mm;
   j["ratio"] = crlb_mm > 0.0 ? rms_mm / crlb_mm : 0.0;
+  // The error's distribution over the markers found, what rhot-plan predicts (docs/planning.md).
+  j["error_median_mm"] = percentile(errors_mm, 0.5);
+  j["error_p95_mm"] = percentile(errors_mm, 0.95);
   // Markers seen by two or more cameras, per frame: what there was to find.
   j["findable_per_frame"] = static_cast<double>(findable) / static_cast<double>(frames);
   j["found_fraction"] = findable > 0 ? static_cast<double>(found) / static_cast<double>(findable) : 0.0;

@@ -328,6 +328,19 @@ std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& bo
   return out;
 }
 
+std::vector<Trajectory> scattered_markers(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Trajectory> out;
+  for (int i = 0; i < count; ++i) {
+    Trajectory t;
+    for (int a = 0; a < 3; ++a) t.centre_m(a) = box_min_m(a) + (box_max_m(a) - box_min_m(a)) * unit(rng);
+    t.amplitude_m.setZero();
+    out.push_back(t);
+  }
+  return out;
+}
+
 std::vector<Trajectory> wandering_markers(const CameraRig& rig, int count, unsigned seed) {
   Eigen::Vector3d centre = axes_meeting_point(rig), size = Eigen::Vector3d::Ones();
   if (rig.volume) {

@@ -132,13 +132,17 @@ class SimulatedRig final : public FrameSource {
 // each from a random orientation turning by up to 90 degrees about each axis at 0.1 to 0.4 Hz.
 std::vector<RigidMotion> random_motions(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed);
 
-// `count` markers wandering smoothly through an axis-aligned box (random centres, amplitudes up
-// to a quarter of the box, frequencies 0.1 to 0.5 Hz), from a seed.
 // The two ends of a rigid wand of length_m, held level and spinning about the vertical axis while
 // its middle drifts through the box. The two markers stay exactly length_m apart.
 std::array<Trajectory, 2> wand_trajectories(double length_m, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m);
 
+// `count` markers wandering smoothly through an axis-aligned box (random centres, amplitudes up
+// to a quarter of the box, frequencies 0.1 to 0.5 Hz), from a seed. They spend less time near the
+// box's faces than in its middle.
 std::vector<Trajectory> random_trajectories(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed);
+// `count` markers standing still, spread uniformly through the box (every place as likely), from
+// a seed: what a prediction over the whole volume is compared with (rhot-plan).
+std::vector<Trajectory> scattered_markers(int count, const Eigen::Vector3d& box_min_m, const Eigen::Vector3d& box_max_m, unsigned seed);
 // random_trajectories in a rig's tracking volume: its file's volume, else a 1 m cube centred where
 // the cameras' optical axes meet (what rhot-eval's modes and rhot-node's simulated cameras share).
 std::vector<Trajectory> wandering_markers(const CameraRig& rig, int count, unsigned seed);

@@ -1,0 +1,132 @@
+#include "tracking/plan/Placement.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "tracking/camera/RigFile.h"
+
+namespace rhot {
+namespace {
+
+Camera webcam() {
+  Camera c;
+  c.intrinsics = {1280, 720, 900.0, 900.0, 639.5, 359.5, {-0.05, 0.01, 0, 0, 0}};
+  return c;
+}
+
+// Seed 000's Wiimote: 1024 x 768, 1360 px (about 41 x 31 degrees), no distortion.
+Camera wiimote() {
+  Camera c;
+  c.intrinsics = {1024, 768, 1360.0, 1360.0, 511.5, 383.5, {0, 0, 0, 0, 0}};
+  return c;
+}
+
+TEST(Placement, SixWebcamsAroundARoomSeeNearlyAllOfItWithThree) {
+  const TrackingVolume room{{0, 1, 0}, {3, 2, 3}};
+  PlanSettings s;
+  s.cameras = 6;
+  s.ceiling_m = 2.6;
+  const auto plan = plan_rig(webcam(), room, s);
+  ASSERT_TRUE(plan.has_value()) << plan.error();
+  ASSERT_EQ(plan->rig.cameras.size(), 6u);
+  EXPECT_GT(plan->candidates, 100);
+  ASSERT_TRUE(plan->rig.volume.has_value());
+  EXPECT_EQ(plan->rig.volume->size_m, room.size_m);
+  const auto report = evaluate_coverage(plan->rig, room);
+  ASSERT_TRUE(report.has_value()) << report.error();
+  EXPECT_GT(report->coverage_3, 0.95);
+  EXPECT_GT(report->coverage_2, 0.99);
+  // Every camera stays on its mount and sees part of the volume.
+  const std::vector<CameraProjection> cameras = camera_projections(plan->rig);
+  std::vector<int> sees(cameras.size(), 0);
+  for (const int v : report->views) EXPECT_LE(v, 6);
+  for (std::size_t c = 0; c < plan->rig.cameras.size(); ++c) {
+    const Eigen::Vector3d o = plan->rig.cameras[c].centre_world();
+    EXPECT_LE(o.y(), 2.6 + 1e-9) << plan->rig.cameras[c].name;
+    EXPECT_GE(o.y(), 2.0 - 1e-9) << plan->rig.cameras[c].name;
+    EXPECT_FALSE(cameras_seeing(std::span(&cameras[c], 1), room.centre_m).empty() &&
+                 cameras_seeing(std::span(&cameras[c], 1), room.centre_m - Eigen::Vector3d(0, 0.9, 0)).empty() &&
+                 cameras_seeing(std::span(&cameras[c], 1), room.centre_m + Eigen::Vector3d(1.4, -0.9, 1.4)).empty() &&
+                 cameras_seeing(std::span(&cameras[c], 1), room.centre_m + Eigen::Vector3d(-1.4, -0.9, -1.4)).empty())
+        << plan->rig.cameras[c].name << " looks at nothing of the volume";
+  }
+  // The rig file round trip keeps it.
+  const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / "planned-room.yaml";
+  ASSERT_TRUE(save_rig(plan->rig, file).has_value());
+  const auto loaded = load_rig(file);
+  ASSERT_TRUE(loaded.has_value()) << loaded.error();
+  EXPECT_EQ(loaded->cameras.size(), 6u);
+  ASSERT_TRUE(loaded->volume.has_value());
+  EXPECT_LT((loaded->volume->centre_m - room.centre_m).norm(), 1e-12);
+}
+
+// Seed 000's 4.6 x 4.6 x 2 m case: 10 Wiimotes, ceiling at 7 m. The plan sees at least as much of
+// the volume with two and with three cameras as the seed's parallel arrangement (shipped as
+// assets/rigs/seed-wiimote-10.yaml), and its worst predicted error at 0.3 px is at most a
+// quarter of the arrangement's (6.5 against 32 mm when this was written).
+TEST(Placement, TenWiimotesOnTheCeilingCoverTheSeedsVolumeAtLeastAsWellAsItsArrangement) {
+  const auto seed = load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / "seed-wiimote-10.yaml");
+  ASSERT_TRUE(seed.has_value()) << seed.error();
+  ASSERT_TRUE(seed->volume.has_value());
+  PlanSettings s;
+  s.cameras = 10;
+  s.mount = Mount::kCeiling;
+  s.ceiling_m = 7.0;
+  const auto plan = plan_rig(wiimote(), *seed->volume, s);
+  ASSERT_TRUE(plan.has_value()) << plan.error();
+  const auto ours = evaluate_coverage(plan->rig, *seed->volume);
+  const auto theirs = evaluate_coverage(*seed, *seed->volume);
+  ASSERT_TRUE(ours && theirs);
+  EXPECT_GE(ours->coverage_2, theirs->coverage_2);
+  EXPECT_GE(ours->coverage_3, theirs->coverage_3);
+  EXPECT_LT(ours->predicted_max_mm, 0.25 * theirs->predicted_max_mm);
+  for (const Camera& c : plan->rig.cameras) EXPECT_NEAR(c.centre_world().y(), 7.0, 1e-9) << c.name;
+}
+
+TEST(Placement, AnErrorTargetIsMetWithAsFewCamerasAsItTakes) {
+  const TrackingVolume room{{0, 1, 0}, {3, 2, 3}};
+  PlanSettings s;
+  s.max_error_mm = 6.0;
+  s.ceiling_m = 2.6;
+  const auto plan = plan_rig(webcam(), room, s);
+  ASSERT_TRUE(plan.has_value()) << plan.error();
+  const auto report = evaluate_coverage(plan->rig, room, {.sigma_px = 0.3, .grid_step_m = 0.0, .max_points = 20000, .samples_per_point = 1, .seed = 1});
+  ASSERT_TRUE(report.has_value());
+  EXPECT_LE(report->predicted_max_mm, 6.0);
+  const auto seen = static_cast<double>(std::count_if(report->views.begin(), report->views.end(), [](int v) { return v >= 3; }));
+  EXPECT_GE(seen / static_cast<double>(report->views.size()), 0.99);
+  // Six when this was written; eight webcams (room-8's) give 7 mm placed as in room-8.
+  EXPECT_GE(plan->rig.cameras.size(), 4u);
+  EXPECT_LE(plan->rig.cameras.size(), 8u);
+}
+
+TEST(Placement, BadInputIsRefusedWithTheReason) {
+  const TrackingVolume room{{0, 1, 0}, {3, 2, 3}};
+  PlanSettings s;
+  s.cameras = 4;
+  EXPECT_EQ(plan_rig(Camera{}, room, s).error(), "camera model: needs a positive image size and focal length");
+  EXPECT_EQ(plan_rig(webcam(), {{0, 0.5, 0}, {3, 2, 3}}, s).error(), "volume: reaches 0.50 m below the floor (Y = 0)");
+  EXPECT_EQ(plan_rig(webcam(), {{0, 1, 0}, {3, 0, 3}}, s).error(), "volume: every side must be positive and finite");
+  PlanSettings low = s;
+  low.ceiling_m = 1.5;
+  EXPECT_EQ(plan_rig(webcam(), room, low).error(), "ceiling: 1.50 m is not above the volume's top (2.00 m)");
+  PlanSettings neither = s;
+  neither.cameras = 0;
+  EXPECT_EQ(plan_rig(webcam(), room, neither).error(), "give a number of cameras or a maximum error");
+  PlanSettings impossible;
+  impossible.max_error_mm = 0.001;
+  impossible.max_cameras = 8;
+  EXPECT_EQ(plan_rig(webcam(), room, impossible).error().rfind("max error: 0.00 mm cannot be reached with up to 8 cameras of this model", 0), 0u)
+      << plan_rig(webcam(), room, impossible).error();
+  // A camera whose principal point lies far outside its image: it sees only what is nearly
+  // beside it, so no pose looking at the volume sees any of it.
+  Camera pinhole;
+  pinhole.intrinsics = {640, 480, 500.0, 500.0, 1e5, 1e5, {0, 0, 0, 0, 0}};
+  EXPECT_EQ(plan_rig(pinhole, room, s).error(),
+            "volume: no camera position on the chosen mounts sees any of it (camera model or ceiling?)");
+}
+
+}  // namespace
+}  // namespace rhot
