@@ -42,6 +42,16 @@ std::expected<std::unique_ptr<Runtime>, std::string> Runtime::create(const Scene
     if (!recorder) return std::unexpected(recorder.error());
     r->recorder_ = std::move(*recorder);
   }
+  if (!settings.stream.empty()) {
+    const auto target = parse_stream_url(settings.stream);
+    if (!target) return std::unexpected(target.error());
+    auto stream = OscStream::open(*target);
+    if (!stream) return std::unexpected(stream.error());
+    r->stream_ = std::move(*stream);
+    for (const TrackedObject& o : r->objects_.objects) {
+      if (!o.name.empty()) r->stream_names_[o.star_id] = o.name;
+    }
+  }
 
   Runtime* self = r.get();
   for (TrackingStage& s : r->tracking_->stages()) r->stages_.push_back({std::move(s), false});
@@ -64,6 +74,9 @@ std::expected<std::unique_ptr<Runtime>, std::string> Runtime::create(const Scene
                          }}});
   r->hand_motion_.assign(2, MotionPredictor(kHandJointCount));
   if (r->recorder_) r->stages_.push_back({{"record", [self](double) { self->recorder_->record(self->tracking_->results()); }}});
+  if (r->stream_) {
+    r->stages_.push_back({{"stream", [self](double) { self->stream_->send(self->tracking_->results(), self->stream_names_); }}});
+  }
   r->stages_.push_back({{"transforms", [self](double) { update_world_transforms(self->world_); }}, true});
   r->stages_.push_back({{"physics", [self](double) {
                            self->physics_->step(self->world_);
@@ -223,6 +236,11 @@ void Runtime::collect_displayed() {
     latency_.record(m);
     for (const auto& observer : displayed_observers_) observer(p.shown);
   }
+}
+
+std::optional<OscStream::Stats> Runtime::stream_stats() const {
+  if (!stream_) return std::nullopt;
+  return stream_->stats();
 }
 
 std::optional<std::array<TimingSummary, 2>> Runtime::gpu_eye_ms() const {

@@ -9,6 +9,8 @@
 //   tracked     tracking results into components: tracked objects' Transforms, hands' Hand, the
 //               markers (engine/tracked/TrackedObjects.h)
 //   record      with RuntimeSettings::record: the frame's results appended to a recording
+//   stream      with RuntimeSettings::stream: the frame's results handed to the OSC stream
+//               (engine/stream/OscStream.h: sent off the frame thread)
 //   transforms  world transforms of the hierarchy
 //   physics     hand colliders, grasping, Bullet, interactions (reads Hand, writes HandBody)
 //   render      both eyes, drawn from the components (with a renderer)
@@ -41,6 +43,7 @@
 #include "engine/tracked/ResultSource.h"
 #include "engine/tracked/SessionRecorder.h"
 #include "engine/tracked/TrackedObjects.h"
+#include "engine/stream/OscStream.h"
 
 namespace rhot {
 
@@ -55,6 +58,7 @@ struct DebugViews {
 struct RuntimeSettings {
   std::filesystem::path star_set;  // the marker stars objects are tracked by (required when any is)
   std::filesystem::path record;    // write every frame's hands and tracked objects here (empty: no recording)
+  std::string stream;              // send them to osc://HOST:PORT[,vmc] (empty: nowhere; OscStream.h)
   DebugViews debug;
   // Draw the hands where their tracked motion puts them at the frame's predicted display time
   // (engine/runtime/Latency.h); false: where they were tracked.
@@ -132,6 +136,8 @@ class Runtime {
   bool predicting() const { return settings_.predict; }
   // Adds a function called for each frame once it is displayed (one frame after it is drawn).
   void add_displayed_observer(std::function<void(const DisplayedFrame&)> observer) { displayed_observers_.push_back(std::move(observer)); }
+  // The OSC stream's counts (RuntimeSettings::stream); nothing without one.
+  std::optional<OscStream::Stats> stream_stats() const;
   // The GPU's time per eye of the displayed frames (with RendererSettings::gpu_timings): p50 and
   // p99 over the run; nothing without timings.
   std::optional<std::array<TimingSummary, 2>> gpu_eye_ms() const;
@@ -160,6 +166,8 @@ class Runtime {
   std::unique_ptr<ResultSource> tracking_;
   std::unique_ptr<HandPhysics> physics_;
   std::optional<SessionRecorder> recorder_;
+  std::unique_ptr<OscStream> stream_;
+  std::map<int, std::string> stream_names_;  // tracked objects' names by star id
   std::vector<Stage> stages_;
   Renderer* renderer_ = nullptr;
   std::unique_ptr<SceneRenderer> scene_renderer_;

@@ -206,6 +206,7 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
   RuntimeSettings rs;
   rs.star_set = !settings.star_set.empty() ? settings.star_set : settings.asset_dir / "stars" / "seed-case.json";
   rs.record = settings.record;
+  rs.stream = settings.stream;
   rs.debug = settings.debug;
   rs.predict = settings.predict;
   rs.latency_window_frames = settings.latency_window_frames;

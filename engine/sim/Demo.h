@@ -52,6 +52,7 @@ struct DemoSettings {
   bool predict = true;                        // RuntimeSettings::predict: draw the hands at the display time
   std::size_t latency_window_frames = 65536;  // RuntimeSettings::latency_window_frames
   std::filesystem::path record;               // write every frame's hands and tracked objects here
+  std::string stream;                         // send every frame's hands and objects to osc://HOST:PORT[,vmc] (engine/stream)
   // Real cameras instead of the simulated rig: one OpenCV device per rig camera, in rig order (an
   // index such as "0", a video file, or an image sequence such as "cams/cam0_%04d.png").
   std::vector<std::string> video_devices;

@@ -28,8 +28,8 @@ const std::string kAssets = RHOT_ASSET_DIR;
 TEST(PlanCli, HelpNamesEveryOption) {
   auto r = run_program("rhot-plan", "--help", "2>&1");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* option : {"--volume", "--camera", "--cameras", "--max-error-mm", "--min-views", "--mount", "--ceiling-m", "--wall-margin-m",
-                             "--sigma", "--out", "--pictures", "--json", "--floor-only", "evaluate", "joins"}) {
+  for (const char* option : {"--volume", "--camera", "--cameras", "--max-error-mm", "--min-views", "--mount", "--ceiling-m",
+                             "--wall-margin-m", "--sigma", "--out", "--pictures", "--json", "--floor-only", "evaluate", "joins"}) {
     EXPECT_NE(r.output.find(option), std::string::npos) << option;
   }
   r = run_program("rhot-plan", "evaluate --help", "2>&1");
@@ -44,10 +44,9 @@ TEST(PlanCli, HelpNamesEveryOption) {
 TEST(PlanCli, PlansARoomAndEvaluatesTheRigItWrote) {
   const fs::path dir = temp_dir();
   const fs::path out = dir / "room.yaml";
-  const auto plan = run_program("rhot-plan",
-                                "--volume 3x3x2 --camera " + kAssets + "/rigs/room-8.yaml --cameras 6 --ceiling-m 2.6 --out " + out.string() +
-                                    " --json",
-                                "2>/dev/null");
+  const auto plan = run_program(
+      "rhot-plan", "--volume 3x3x2 --camera " + kAssets + "/rigs/room-8.yaml --cameras 6 --ceiling-m 2.6 --out " + out.string() + " --json",
+      "2>/dev/null");
   ASSERT_EQ(plan.exit_code, 0) << plan.output;
   const nlohmann::json p = nlohmann::json::parse(plan.output);
   EXPECT_EQ(p["cameras"], 6);
@@ -84,7 +83,8 @@ TEST(PlanCli, PredictedErrorsAreWhatASimulatedRunOnThePlannedRigMeasures) {
     const auto planned = run_program("rhot-plan", plans[i] + " --out " + rig.string() + " --json", "2>/dev/null");
     ASSERT_EQ(planned.exit_code, 0) << planned.output;
     const nlohmann::json p = nlohmann::json::parse(planned.output);
-    const auto run = run_program("rhot-eval", "triangulation --rig " + rig.string() + " --markers 500 --frames 40 --spread uniform --json", "2>/dev/null");
+    const auto run = run_program("rhot-eval", "triangulation --rig " + rig.string() + " --markers 500 --frames 40 --spread uniform --json",
+                                 "2>/dev/null");
     ASSERT_EQ(run.exit_code, 0) << run.output;
     const nlohmann::json m = nlohmann::json::parse(run.output);
     EXPECT_EQ(m["spread"], "uniform");
@@ -113,9 +113,9 @@ TEST(PlanCli, PlansForTheFloorOnly) {
 
 TEST(PlanCli, EvaluatesTheSeedsArrangementWithPictures) {
   const fs::path dir = temp_dir();
-  const auto r = run_program("rhot-plan",
-                             "evaluate --rig " + kAssets + "/rigs/seed-wiimote-10.yaml --slices-m 0.5,1.5 --pictures " + dir.string() + " --json",
-                             "2>/dev/null");
+  const auto r = run_program(
+      "rhot-plan", "evaluate --rig " + kAssets + "/rigs/seed-wiimote-10.yaml --slices-m 0.5,1.5 --pictures " + dir.string() + " --json",
+      "2>/dev/null");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["cameras"], 10);
@@ -130,7 +130,8 @@ TEST(PlanCli, BadInputGetsOneClearLine) {
   const std::string model = " --camera " + kAssets + "/rigs/room-8.yaml";
   const std::string out = " --out " + (dir / "x.yaml").string();
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"--volume 3x3 --cameras 4" + model + out, "rhot-plan: --volume: expected LxWxH in metres (length along X, width along Z, height), got \"3x3\"\n"},
+      {"--volume 3x3 --cameras 4" + model + out,
+       "rhot-plan: --volume: expected LxWxH in metres (length along X, width along Z, height), got \"3x3\"\n"},
       {"--volume 3x0x2 --cameras 4" + model + out, "rhot-plan: --volume: every side must be positive, got \"3x0x2\"\n"},
       {"--volume 3x3x2" + model + out, "rhot-plan: give one of --cameras and --max-error-mm\n"},
       {"--volume 3x3x2 --cameras 4 --max-error-mm 2" + model + out, "rhot-plan: give one of --cameras and --max-error-mm\n"},
@@ -138,7 +139,8 @@ TEST(PlanCli, BadInputGetsOneClearLine) {
       {"--volume 3x3x2 --cameras 4 --camera /nonexistent.yaml" + out, "rhot-plan: /nonexistent.yaml: rig file not found\n"},
       {"--volume 3 --floor-only --cameras 4" + model + out,
        "rhot-plan: --volume: expected LxW in metres with --floor-only (length along X, width along Z), got \"3\"\n"},
-      {"evaluate --rig " + kAssets + "/rigs/room-8.yaml --volume 1x1", "rhot-plan: --volume: expected LxWxH in metres (length along X, width along Z, height), got \"1x1\"\n"},
+      {"evaluate --rig " + kAssets + "/rigs/room-8.yaml --volume 1x1",
+       "rhot-plan: --volume: expected LxWxH in metres (length along X, width along Z, height), got \"1x1\"\n"},
   };
   for (const auto& [args, message] : cases) {
     const auto r = run_program("rhot-plan", args, "2>&1");
@@ -155,9 +157,9 @@ namespace {
 // Seed 000's four vision systems over its 10 Wiimotes: every camera's error through the cheapest
 // chain of joins; the farthest system carries 1 + 8.5 + 9.5 = 19 mm (the seed: about 20 mm).
 TEST(PlanCli, JoinsGiveEveryCameraItsErrorThroughTheCheapestChain) {
-  const auto r = run_program("rhot-plan",
-                             "joins --joins " + kAssets + "/plan/seed-wiimote-10-joins.json --rig " + kAssets + "/rigs/seed-wiimote-10.yaml --json",
-                             "2>/dev/null");
+  const auto r = run_program(
+      "rhot-plan", "joins --joins " + kAssets + "/plan/seed-wiimote-10-joins.json --rig " + kAssets + "/rigs/seed-wiimote-10.yaml --json",
+      "2>/dev/null");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["max_error_mm"], 19.0);
@@ -174,23 +176,21 @@ TEST(PlanCli, ABadJoinsFileNamesWhereItIsWrong) {
   const fs::path dir = temp_dir();
   const fs::path file = dir / "joins.json";
   {
-    std::ofstream(file) << R"({"reference": "a", "groups": [{"name": "a"}, {"name": "b"}], "joins": [{"a": "a", "b": "b", "error_mm": -2}]})";
+    std::ofstream(file)
+        << R"({"reference": "a", "groups": [{"name": "a"}, {"name": "b"}], "joins": [{"a": "a", "b": "b", "error_mm": -2}]})";
   }
   auto r = run_program("rhot-plan", "joins --joins " + file.string(), "2>&1");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(r.output, "rhot-plan: " + file.string() + ": /joins/0/error_mm: expected an error from 0 to 1e6 mm, got -2\n");
-  {
-    std::ofstream(file) << R"({"reference": "c", "groups": [{"name": "a"}], "joins": []})";
-  }
+  { std::ofstream(file) << R"({"reference": "c", "groups": [{"name": "a"}], "joins": []})"; }
   r = run_program("rhot-plan", "joins --joins " + file.string(), "2>&1");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(r.output, "rhot-plan: " + file.string() + ": reference: \"c\" is not a group\n");
-  {
-    std::ofstream(file) << R"({"reference": "a", "groups": [{"name": "a", "cameras": ["wiimote-0"]}], "joins": []})";
-  }
+  { std::ofstream(file) << R"({"reference": "a", "groups": [{"name": "a", "cameras": ["wiimote-0"]}], "joins": []})"; }
   r = run_program("rhot-plan", "joins --joins " + file.string() + " --rig " + kAssets + "/rigs/seed-wiimote-10.yaml", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(r.output, "rhot-plan: " + file.string() + ": camera \"wiimote-1\" of " + kAssets + "/rigs/seed-wiimote-10.yaml is in no group\n");
+  EXPECT_EQ(r.output,
+            "rhot-plan: " + file.string() + ": camera \"wiimote-1\" of " + kAssets + "/rigs/seed-wiimote-10.yaml is in no group\n");
 }
 
 }  // namespace

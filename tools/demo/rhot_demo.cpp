@@ -148,6 +148,9 @@ void add_options(CLI::App& cli, Options& o) {
       ->check(CLI::Range(0.01, 100.0));
   cli.add_option("--record", o.demo.record,
                  "Record every frame's hands and tracked objects to FILE (JSON Lines, docs/recording-format.md)");
+  cli.add_option("--stream", o.demo.stream,
+                 "Send every frame's hands and tracked objects as OSC to osc://HOST:PORT (rhot's addresses) or osc://HOST:PORT,vmc "
+                 "(the VMC protocol's hand bones and trackers; docs/streaming.md); default: nowhere");
   cli.add_option("--rig", o.demo.rig_file, "Camera rig (OpenCV YAML; default: the scene's, else assets/rigs/seated-4.yaml)")
       ->check(CLI::ExistingFile);
   cli.add_option("--world", o.world,
@@ -411,6 +414,10 @@ int main(int argc, char** argv) {
     spdlog::info("latency p50 / p99: tracking {:.2f} / {:.2f} ms, render {:.2f} / {:.2f} ms, motion-to-photon {:.2f} / {:.2f} ms",
                  latency.tracking().p50_ms, latency.tracking().p99_ms, latency.render().p50_ms, latency.render().p99_ms,
                  latency.motion_to_photon().p50_ms, latency.motion_to_photon().p99_ms);
+  }
+  if (const auto streamed = runtime.stream_stats()) {
+    spdlog::info("stream {}: {} frames, {} sent, {} skipped (the sender was busy), {} failed sends", o.demo.stream, streamed->given,
+                 streamed->sent, streamed->skipped, streamed->errors);
   }
   if (!write_outputs(o, window.get(), **renderer, frame_loop, latency)) return EXIT_FAILURE;
   const std::uint64_t validation = (*renderer)->validation_messages();

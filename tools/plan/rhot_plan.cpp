@@ -55,7 +55,8 @@ std::expected<Eigen::Vector3d, std::string> parse_volume(const std::string& text
       return std::unexpected("--volume: expected LxW in metres with --floor-only (length along X, width along Z), got \"" + text + "\"");
     }
     const Eigen::Vector3d size(std::stod(m[1]), kFloorLayer_m, std::stod(m[2]));
-    if (!(size.minCoeff() > 0.0) || !size.allFinite()) return std::unexpected("--volume: every side must be positive, got \"" + text + "\"");
+    if (!(size.minCoeff() > 0.0) || !size.allFinite())
+      return std::unexpected("--volume: every side must be positive, got \"" + text + "\"");
     return size;
   }
   if (!std::regex_match(text, m, pattern)) {
@@ -90,8 +91,9 @@ nlohmann::json report_json(const rhot::CoverageReport& r) {
 }
 
 void log_report(const rhot::CoverageReport& r) {
-  spdlog::info("seen by 1+ {:.1f} %, 2+ {:.1f} %, 3+ {:.1f} % of the volume; predicted error median {:.3f} mm, p95 {:.3f} mm, worst {:.3f} mm",
-               100.0 * r.coverage_1, 100.0 * r.coverage_2, 100.0 * r.coverage_3, r.predicted_median_mm, r.predicted_p95_mm, r.predicted_max_mm);
+  spdlog::info(
+      "seen by 1+ {:.1f} %, 2+ {:.1f} %, 3+ {:.1f} % of the volume; predicted error median {:.3f} mm, p95 {:.3f} mm, worst {:.3f} mm",
+      100.0 * r.coverage_1, 100.0 * r.coverage_2, 100.0 * r.coverage_3, r.predicted_median_mm, r.predicted_p95_mm, r.predicted_max_mm);
 }
 
 // Slices at the given heights (default: a tenth of the way up, the middle, a tenth from the top),
@@ -101,7 +103,8 @@ std::expected<void, std::string> write_pictures(const std::filesystem::path& dir
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   const double bottom = r.volume.centre_m.y() - 0.5 * r.volume.size_m.y();
-  if (heights.empty()) heights = {bottom + 0.1 * r.volume.size_m.y(), bottom + 0.5 * r.volume.size_m.y(), bottom + 0.9 * r.volume.size_m.y()};
+  if (heights.empty())
+    heights = {bottom + 0.1 * r.volume.size_m.y(), bottom + 0.5 * r.volume.size_m.y(), bottom + 0.9 * r.volume.size_m.y()};
   const double scale = std::isfinite(r.predicted_p95_mm) && r.predicted_p95_mm > 0.0 ? 1.5 * r.predicted_p95_mm : 1.0;
   for (const double h : heights) {
     const std::string tag = fmt::format("{:.2f}m", h);
@@ -141,7 +144,8 @@ int run_joins(const std::string& joins_file, const std::string& rig_file, bool j
     }
     for (const rhot::JsonNode& j : root["joins"].elements()) {
       j.expect_object({"a", "b", "error_mm"});
-      f.joins.push_back({j["a"].non_empty_string(), j["b"].non_empty_string(), j["error_mm"].number_in(0.0, 1e6, "an error from 0 to 1e6 mm")});
+      f.joins.push_back(
+          {j["a"].non_empty_string(), j["b"].non_empty_string(), j["error_mm"].number_in(0.0, 1e6, "an error from 0 to 1e6 mm")});
     }
     return f;
   });
@@ -177,14 +181,17 @@ int run_joins(const std::string& joins_file, const std::string& rig_file, bool j
   double worst = 0.0;
   for (const rhot::GroupError& e : *errors) {
     const bool reached = std::isfinite(e.error_mm);
-    out["groups"].push_back({{"group", e.group}, {"error_mm", reached ? nlohmann::json(e.error_mm) : nlohmann::json(nullptr)}, {"chain", e.chain}});
+    out["groups"].push_back(
+        {{"group", e.group}, {"error_mm", reached ? nlohmann::json(e.error_mm) : nlohmann::json(nullptr)}, {"chain", e.chain}});
     worst = std::max(worst, e.error_mm);
     spdlog::info("group {}: {} ({})", e.group, reached ? fmt::format("{:.2f} mm", e.error_mm) : std::string("no chain of joins reaches it"),
                  nlohmann::json(e.chain).dump());
   }
   for (const std::string& c : camera_order) {
     const rhot::GroupError& e = (*errors)[group_of.at(c)];
-    out["cameras"].push_back({{"camera", c}, {"group", e.group}, {"error_mm", std::isfinite(e.error_mm) ? nlohmann::json(e.error_mm) : nlohmann::json(nullptr)}});
+    out["cameras"].push_back({{"camera", c},
+                              {"group", e.group},
+                              {"error_mm", std::isfinite(e.error_mm) ? nlohmann::json(e.error_mm) : nlohmann::json(nullptr)}});
   }
   out["max_error_mm"] = std::isfinite(worst) ? nlohmann::json(worst) : nlohmann::json(nullptr);
   spdlog::info("worst: {:.2f} mm", worst);
@@ -218,15 +225,20 @@ int main(int argc, char** argv) {
   app.add_option("--volume", volume_text, "volume to track, LxWxH metres (along X, along Z, height)");
   app.add_flag("--floor-only", floor_only,
                "track only on the floor (objects and feet on the ground): --volume LxW, a 5 cm layer standing on the floor");
-  app.add_option("--volume-centre", centre, "centre of the volume, X Y Z metres (default: on the floor at the origin)")->expected(3)->check(finite);
+  app.add_option("--volume-centre", centre, "centre of the volume, X Y Z metres (default: on the floor at the origin)")
+      ->expected(3)
+      ->check(finite);
   app.add_option("--camera", camera_file, "camera model: a rig file whose first camera gives resolution, focal length and distortion");
   app.add_option("--cameras", plan.cameras, "how many cameras to place")->check(CLI::Range(1, 256));
   app.add_option("--max-error-mm", plan.max_error_mm, "instead of --cameras: as few cameras as bring the worst predicted error to this")
       ->check(CLI::PositiveNumber & finite);
   app.add_option("--min-views", plan.min_views, "cameras that must see each place")->capture_default_str()->check(CLI::Range(1, 16));
   app.add_option("--mount", mount, "where cameras may go")->capture_default_str()->check(CLI::IsMember({"ceiling", "walls", "both"}));
-  app.add_option("--ceiling-m", plan.ceiling_m, "height of the ceiling mount (default: the volume's top + 1 m)")->check(CLI::PositiveNumber & finite);
-  app.add_option("--wall-margin-m", plan.wall_margin_m, "how far outside the volume the walls stand")->capture_default_str()->check(CLI::NonNegativeNumber & finite);
+  app.add_option("--ceiling-m", plan.ceiling_m, "height of the ceiling mount (default: the volume's top + 1 m)")
+      ->check(CLI::PositiveNumber & finite);
+  app.add_option("--wall-margin-m", plan.wall_margin_m, "how far outside the volume the walls stand")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber & finite);
   app.add_option("--sigma", plan.sigma_px, "detection noise, pixels per axis")->capture_default_str()->check(CLI::PositiveNumber & finite);
   app.add_option("--out", out_file, "the planned rig (OpenCV YAML)");
   app.add_option("--pictures", pictures, "folder for the pictures (default: the rig's folder)");
@@ -242,8 +254,11 @@ int main(int argc, char** argv) {
   evaluate->add_option("--volume-centre", eval_centre, "centre of that volume, X Y Z metres (default: on the floor at the origin)")
       ->expected(3)
       ->check(finite);
-  evaluate->add_option("--sigma", coverage.sigma_px, "detection noise, pixels per axis")->capture_default_str()->check(CLI::PositiveNumber & finite);
-  evaluate->add_option("--grid-step-m", coverage.grid_step_m, "grid spacing (default: about 20,000 points)")->check(CLI::PositiveNumber & finite);
+  evaluate->add_option("--sigma", coverage.sigma_px, "detection noise, pixels per axis")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber & finite);
+  evaluate->add_option("--grid-step-m", coverage.grid_step_m, "grid spacing (default: about 20,000 points)")
+      ->check(CLI::PositiveNumber & finite);
   evaluate->add_option("--slices-m", slices, "heights of the pictures' slices, metres")->delimiter(',')->check(finite);
   evaluate->add_option("--pictures", eval_pictures, "write the pictures into this folder");
   evaluate->add_flag("--json", eval_json, "print a JSON report on stdout");
@@ -294,7 +309,8 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  if (volume_text.empty() || camera_file.empty() || out_file.empty()) return fail("planning needs --volume, --camera and --out (or: evaluate --rig)");
+  if (volume_text.empty() || camera_file.empty() || out_file.empty())
+    return fail("planning needs --volume, --camera and --out (or: evaluate --rig)");
   if ((plan.cameras > 0) == (plan.max_error_mm > 0.0)) return fail("give one of --cameras and --max-error-mm");
   const auto size = parse_volume(volume_text, floor_only);
   if (!size) return fail(size.error());
@@ -314,7 +330,8 @@ int main(int argc, char** argv) {
   log_report(*report);
   const std::filesystem::path dir =
       !pictures.empty() ? std::filesystem::path(pictures)
-                        : (std::filesystem::path(out_file).parent_path().empty() ? std::filesystem::path(".") : std::filesystem::path(out_file).parent_path());
+                        : (std::filesystem::path(out_file).parent_path().empty() ? std::filesystem::path(".")
+                                                                                 : std::filesystem::path(out_file).parent_path());
   if (auto ok = write_pictures(dir, planned->rig, *report, {}); !ok) return fail(ok.error());
   if (json) {
     nlohmann::json j = report_json(*report);

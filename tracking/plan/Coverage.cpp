@@ -17,7 +17,8 @@ constexpr double kChi3Radius95 = 2.7955;
 
 double quantile(std::vector<double>& values, double q) {
   if (values.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(std::clamp(q * static_cast<double>(values.size() - 1), 0.0, static_cast<double>(values.size() - 1)));
+  const auto k =
+      static_cast<std::size_t>(std::clamp(q * static_cast<double>(values.size() - 1), 0.0, static_cast<double>(values.size() - 1)));
   std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
   return values[k];
 }
@@ -102,7 +103,8 @@ std::expected<CoverageReport, std::string> evaluate_coverage(const CameraRig& ri
         }
         const Eigen::Matrix3d cov_mm = *cov * 1e6;
         out.rms_error_mm[i] = std::sqrt(cov_mm.trace());
-        const double worst = kChi3Radius95 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov_mm, Eigen::EigenvaluesOnly).eigenvalues()(2));
+        const double worst =
+            kChi3Radius95 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov_mm, Eigen::EigenvaluesOnly).eigenvalues()(2));
         if (worst > out.predicted_max_mm) {
           out.predicted_max_mm = worst;
           out.worst_point_m = p;

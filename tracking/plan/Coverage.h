@@ -27,10 +27,10 @@
 namespace rhot {
 
 struct CoverageSettings {
-  double sigma_px = 0.3;           // detection noise per axis
-  double grid_step_m = 0.0;        // spacing of the grid (about); 0: about max_points points in the volume
-  int max_points = 20000;          // the grid's size when grid_step_m is 0
-  int samples_per_point = 16;      // errors drawn at every covered point for the quantiles
+  double sigma_px = 0.3;       // detection noise per axis
+  double grid_step_m = 0.0;    // spacing of the grid (about); 0: about max_points points in the volume
+  int max_points = 20000;      // the grid's size when grid_step_m is 0
+  int samples_per_point = 16;  // errors drawn at every covered point for the quantiles
   std::uint32_t seed = 1;
 };
 
@@ -79,6 +79,6 @@ std::optional<Eigen::Matrix3d> predicted_covariance(std::span<const CameraProjec
 // The rig's coverage of the volume. Errors name what is wrong: no cameras, a volume that is empty
 // or not finite, settings out of range.
 [[nodiscard]] std::expected<CoverageReport, std::string> evaluate_coverage(const CameraRig& rig, const TrackingVolume& volume,
-                                                                            const CoverageSettings& settings = {});
+                                                                           const CoverageSettings& settings = {});
 
 }  // namespace rhot

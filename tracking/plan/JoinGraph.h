@@ -26,14 +26,14 @@ struct GroupJoin {
 
 struct GroupError {
   std::string group;
-  double error_mm = 0.0;            // own error + the chain's; infinite when no chain reaches it
-  std::vector<std::string> chain;   // from the reference to this group; empty when unreachable
+  double error_mm = 0.0;           // own error + the chain's; infinite when no chain reaches it
+  std::vector<std::string> chain;  // from the reference to this group; empty when unreachable
 };
 
 // Per group (in the order given): its error and chain. Errors name what is wrong: a reference or
 // join naming no group, a group named twice, an error that is negative or not finite.
 [[nodiscard]] std::expected<std::vector<GroupError>, std::string> propagate_join_errors(std::span<const CameraGroup> groups,
-                                                                                       std::span<const GroupJoin> joins,
-                                                                                       const std::string& reference);
+                                                                                        std::span<const GroupJoin> joins,
+                                                                                        const std::string& reference);
 
 }  // namespace rhot

@@ -351,7 +351,8 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
       int swapped = 0;
       const std::vector<std::size_t> snapshot = search.chosen();
       for (const std::size_t was : snapshot) {
-        const auto slot = static_cast<std::size_t>(std::find(search.chosen().begin(), search.chosen().end(), was) - search.chosen().begin());
+        const auto slot =
+            static_cast<std::size_t>(std::find(search.chosen().begin(), search.chosen().end(), was) - search.chosen().begin());
         const double keep = -search.delta(was, -1);  // what it adds to the others
         search.remove_at(slot);
         const auto [best, gain] = search.best_addition();
@@ -387,8 +388,8 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
   plan.candidates = considered;
   if (s.cameras > 0) {
     if (static_cast<std::size_t>(s.cameras) > search.places()) {
-      return std::unexpected(fmt::format("cameras: {} asked for, but only {} places on the chosen mounts see the volume", s.cameras,
-                                         search.places()));
+      return std::unexpected(
+          fmt::format("cameras: {} asked for, but only {} places on the chosen mounts see the volume", s.cameras, search.places()));
     }
     for (int n = 0; n < s.cameras; ++n) {
       search.add(search.best_addition().first);
@@ -413,10 +414,12 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
     if (search.worst().k_seen >= need) plan.swaps += lower_worst(std::max(need, search.worst().k_seen - one_percent));
     const auto report = evaluate_coverage(rig_of(), volume, fine);
     if (!report) return std::unexpected(report.error());
-    const double cover = static_cast<double>(std::count_if(report->views.begin(), report->views.end(), [&](int v) { return v >= s.min_views; })) /
-                         static_cast<double>(report->views.size());
-    if (progress) progress(fmt::format("{} cameras: {:.1f} % seen by {} or more, worst predicted error {:.2f} mm", n, 100.0 * cover, s.min_views,
-                                       report->predicted_max_mm));
+    const double cover =
+        static_cast<double>(std::count_if(report->views.begin(), report->views.end(), [&](int v) { return v >= s.min_views; })) /
+        static_cast<double>(report->views.size());
+    if (progress)
+      progress(fmt::format("{} cameras: {:.1f} % seen by {} or more, worst predicted error {:.2f} mm", n, 100.0 * cover, s.min_views,
+                           report->predicted_max_mm));
     if (cover >= 0.99 && report->predicted_max_mm <= s.max_error_mm) {
       plan.rig = rig_of();
       return plan;
@@ -425,8 +428,9 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
     best_cover = std::max(best_cover, cover);
   }
   if (best_cover < 0.99) {
-    return std::unexpected(fmt::format("max error: {:.2f} mm cannot be reached: {} cameras of this model see at most {:.1f} % of the volume with {} views",
-                                       s.max_error_mm, s.max_cameras, 100.0 * best_cover, s.min_views));
+    return std::unexpected(
+        fmt::format("max error: {:.2f} mm cannot be reached: {} cameras of this model see at most {:.1f} % of the volume with {} views",
+                    s.max_error_mm, s.max_cameras, 100.0 * best_cover, s.min_views));
   }
   return std::unexpected(fmt::format("max error: {:.2f} mm cannot be reached with up to {} cameras of this model (the best: {:.2f} mm)",
                                      s.max_error_mm, s.max_cameras, best_error));

@@ -40,16 +40,16 @@ struct PlanSettings {
                               // predicted_max_mm) to reach, with 99 % of the volume seen by min_views
   int min_views = 3;          // K
   double sigma_px = 0.3;
-  double ceiling_m = 0.0;     // the ceiling mount's height; 0: the volume's top plus 1 m
+  double ceiling_m = 0.0;  // the ceiling mount's height; 0: the volume's top plus 1 m
   double wall_margin_m = 0.5;
-  int max_cameras = 64;       // the most max_error_mm may ask for
-  int grid_points = 3000;     // the coarse lattice the search scores on (about)
+  int max_cameras = 64;    // the most max_error_mm may ask for
+  int grid_points = 3000;  // the coarse lattice the search scores on (about)
 };
 
 struct RigPlan {
-  CameraRig rig;           // named "ceiling-N" / "wall-N", with the volume
-  int candidates = 0;      // poses considered
-  int swaps = 0;           // improvements after the greedy pass
+  CameraRig rig;       // named "ceiling-N" / "wall-N", with the volume
+  int candidates = 0;  // poses considered
+  int swaps = 0;       // improvements after the greedy pass
 };
 
 // Progress: a line of text now and then (may be empty).

@@ -39,8 +39,8 @@ cv::Mat slice_picture(const CoverageGrid& g, const std::function<cv::Scalar(std:
     }
   }
   for (std::size_t n = 0; n < lines.size(); ++n) {
-    cv::putText(image, lines[n], {6, g.nz * cell + 20 + 22 * static_cast<int>(n)}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(230, 230, 230), 1,
-                cv::LINE_AA);
+    cv::putText(image, lines[n], {6, g.nz * cell + 20 + 22 * static_cast<int>(n)}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(230, 230, 230),
+                1, cv::LINE_AA);
   }
   return image;
 }
@@ -66,11 +66,11 @@ std::expected<void, std::string> write_coverage_slice(const std::filesystem::pat
     if (v == 2) return cv::Scalar(30, 170, 230);
     return cv::Scalar(40, std::min(255.0, 140.0 + 15.0 * (v - 3)), 40);
   };
-  const cv::Mat image = slice_picture(
-      g, colour, y,
-      {fmt::format("height {:.2f} m: seen by 1+ {:.1f} %, 2+ {:.1f} %, 3+ {:.1f} %", g.origin_m.y() + y * g.step_m.y(), 100.0 * static_cast<double>(seen[1]) / n,
-                   100.0 * static_cast<double>(seen[2]) / n, 100.0 * static_cast<double>(seen[3]) / n),
-       "dark: none, red: 1, amber: 2, green: 3 or more (brighter: more)"});
+  const cv::Mat image = slice_picture(g, colour, y,
+                                      {fmt::format("height {:.2f} m: seen by 1+ {:.1f} %, 2+ {:.1f} %, 3+ {:.1f} %",
+                                                   g.origin_m.y() + y * g.step_m.y(), 100.0 * static_cast<double>(seen[1]) / n,
+                                                   100.0 * static_cast<double>(seen[2]) / n, 100.0 * static_cast<double>(seen[3]) / n),
+                                       "dark: none, red: 1, amber: 2, green: 3 or more (brighter: more)"});
   return write_png(file, image);
 }
 
@@ -86,14 +86,15 @@ std::expected<void, std::string> write_error_slice(const std::filesystem::path& 
     const double t = std::clamp(e / scale_mm, 0.0, 1.0);
     return cv::Scalar(30.0, 210.0 * (1.0 - t) + 30.0, 230.0 * t + 20.0);
   };
-  const cv::Mat image = slice_picture(g, colour, y,
-                                      {fmt::format("height {:.2f} m: predicted RMS 3D error at {:.2f} px", g.origin_m.y() + y * g.step_m.y(),
-                                                   report.sigma_px),
-                                       fmt::format("green 0 mm -> red {:.2f} mm and more; dark: fewer than 2 cameras", scale_mm)});
+  const cv::Mat image = slice_picture(
+      g, colour, y,
+      {fmt::format("height {:.2f} m: predicted RMS 3D error at {:.2f} px", g.origin_m.y() + y * g.step_m.y(), report.sigma_px),
+       fmt::format("green 0 mm -> red {:.2f} mm and more; dark: fewer than 2 cameras", scale_mm)});
   return write_png(file, image);
 }
 
-std::expected<void, std::string> write_plan_top_view(const std::filesystem::path& file, const CameraRig& rig, const TrackingVolume& volume) {
+std::expected<void, std::string> write_plan_top_view(const std::filesystem::path& file, const CameraRig& rig,
+                                                     const TrackingVolume& volume) {
   // The picture spans the cameras and the volume, 40 px a metre or less to stay within 900 px.
   Eigen::Vector2d lo(volume.centre_m.x() - 0.5 * volume.size_m.x(), volume.centre_m.z() - 0.5 * volume.size_m.z());
   Eigen::Vector2d hi(volume.centre_m.x() + 0.5 * volume.size_m.x(), volume.centre_m.z() + 0.5 * volume.size_m.z());
@@ -134,13 +135,17 @@ std::expected<void, std::string> write_plan_top_view(const std::filesystem::path
     if (outline.size() >= 3) cv::polylines(image, outline, true, cv::Scalar(160, 120, 60), 1, cv::LINE_AA);
   }
   cv::rectangle(image, at(volume.centre_m.x() - 0.5 * volume.size_m.x(), volume.centre_m.z() - 0.5 * volume.size_m.z()),
-                at(volume.centre_m.x() + 0.5 * volume.size_m.x(), volume.centre_m.z() + 0.5 * volume.size_m.z()), cv::Scalar(255, 255, 255), 2);
+                at(volume.centre_m.x() + 0.5 * volume.size_m.x(), volume.centre_m.z() + 0.5 * volume.size_m.z()), cv::Scalar(255, 255, 255),
+                2);
   for (const Camera& c : rig.cameras) {
     const Eigen::Vector3d o = c.centre_world();
     cv::circle(image, at(o.x(), o.z()), 4, cv::Scalar(0, 200, 255), cv::FILLED, cv::LINE_AA);
-    cv::putText(image, c.name, at(o.x(), o.z()) + cv::Point2d(6, -4), cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(220, 220, 220), 1, cv::LINE_AA);
+    cv::putText(image, c.name, at(o.x(), o.z()) + cv::Point2d(6, -4), cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(220, 220, 220), 1,
+                cv::LINE_AA);
   }
-  cv::putText(image, fmt::format("{} cameras from above (X right, -Z up); outlines: where each image meets Y = {:.2f} m; grid 1 m", rig.cameras.size(), floor_y),
+  cv::putText(image,
+              fmt::format("{} cameras from above (X right, -Z up); outlines: where each image meets Y = {:.2f} m; grid 1 m",
+                          rig.cameras.size(), floor_y),
               {6, h + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
   return write_png(file, image);
 }

@@ -67,8 +67,10 @@ TEST(JoinGraph, BadInputIsRefusedWithTheReason) {
   const std::vector<CameraGroup> groups = {{"a", 0.0}, {"b", 0.0}};
   EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{}, "c").error(), "reference: \"c\" is not a group");
   EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{{"a", "z", 1.0}}, "a").error(), "joins[0]: \"z\" is not a group");
-  EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{{"a", "b", -1.0}}, "a").error(), "joins[0]: its error must be 0 or more and finite");
-  EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{{"a", "b", NAN}}, "a").error(), "joins[0]: its error must be 0 or more and finite");
+  EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{{"a", "b", -1.0}}, "a").error(),
+            "joins[0]: its error must be 0 or more and finite");
+  EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{{"a", "b", NAN}}, "a").error(),
+            "joins[0]: its error must be 0 or more and finite");
   const std::vector<CameraGroup> twice = {{"a", 0.0}, {"a", 0.0}};
   EXPECT_EQ(propagate_join_errors(twice, std::vector<GroupJoin>{}, "a").error(), "groups: \"a\" is named twice");
 }

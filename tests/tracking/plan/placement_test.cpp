@@ -92,7 +92,8 @@ TEST(Placement, AnErrorTargetIsMetWithAsFewCamerasAsItTakes) {
   s.ceiling_m = 2.6;
   const auto plan = plan_rig(webcam(), room, s);
   ASSERT_TRUE(plan.has_value()) << plan.error();
-  const auto report = evaluate_coverage(plan->rig, room, {.sigma_px = 0.3, .grid_step_m = 0.0, .max_points = 20000, .samples_per_point = 1, .seed = 1});
+  const auto report =
+      evaluate_coverage(plan->rig, room, {.sigma_px = 0.3, .grid_step_m = 0.0, .max_points = 20000, .samples_per_point = 1, .seed = 1});
   ASSERT_TRUE(report.has_value());
   EXPECT_LE(report->predicted_max_mm, 6.0);
   const auto seen = static_cast<double>(std::count_if(report->views.begin(), report->views.end(), [](int v) { return v >= 3; }));
@@ -118,7 +119,8 @@ TEST(Placement, BadInputIsRefusedWithTheReason) {
   PlanSettings impossible;
   impossible.max_error_mm = 0.001;
   impossible.max_cameras = 8;
-  EXPECT_EQ(plan_rig(webcam(), room, impossible).error().rfind("max error: 0.00 mm cannot be reached with up to 8 cameras of this model", 0), 0u)
+  EXPECT_EQ(
+      plan_rig(webcam(), room, impossible).error().rfind("max error: 0.00 mm cannot be reached with up to 8 cameras of this model", 0), 0u)
       << plan_rig(webcam(), room, impossible).error();
   // A camera whose principal point lies far outside its image: it sees only what is nearly
   // beside it, so no pose looking at the volume sees any of it.
