@@ -109,7 +109,8 @@ std::expected<StreamTarget, std::string> parse_stream_url(std::string_view url) 
     rest = rest.substr(0, comma);
   }
   const auto colon = rest.rfind(':');
-  if (colon == std::string_view::npos || colon == 0) return std::unexpected(url_error(url, "expected osc://HOST:PORT or osc://HOST:PORT,vmc"));
+  if (colon == std::string_view::npos || colon == 0)
+    return std::unexpected(url_error(url, "expected osc://HOST:PORT or osc://HOST:PORT,vmc"));
   std::string_view host = rest.substr(0, colon);
   if (host.front() == '[') {
     if (host.size() < 3 || host.back() != ']') return std::unexpected(url_error(url, "an IPv6 host goes in brackets, [::1]"));
@@ -129,23 +130,29 @@ std::expected<StreamTarget, std::string> parse_stream_url(std::string_view url) 
 }
 
 const std::array<HandJoint, 16>& vmc_hand_joints() {
-  static const std::array<HandJoint, 16> kJoints{
-      HandJoint::kWrist,          HandJoint::kThumbMetacarpal,    HandJoint::kThumbProximal,  HandJoint::kThumbDistal,
-      HandJoint::kIndexProximal,  HandJoint::kIndexIntermediate,  HandJoint::kIndexDistal,    HandJoint::kMiddleProximal,
-      HandJoint::kMiddleIntermediate, HandJoint::kMiddleDistal,   HandJoint::kRingProximal,   HandJoint::kRingIntermediate,
-      HandJoint::kRingDistal,     HandJoint::kLittleProximal,     HandJoint::kLittleIntermediate, HandJoint::kLittleDistal};
+  static const std::array<HandJoint, 16> kJoints{HandJoint::kWrist,        HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal,
+                                                 HandJoint::kThumbDistal,  HandJoint::kIndexProximal,   HandJoint::kIndexIntermediate,
+                                                 HandJoint::kIndexDistal,  HandJoint::kMiddleProximal,  HandJoint::kMiddleIntermediate,
+                                                 HandJoint::kMiddleDistal, HandJoint::kRingProximal,    HandJoint::kRingIntermediate,
+                                                 HandJoint::kRingDistal,   HandJoint::kLittleProximal,  HandJoint::kLittleIntermediate,
+                                                 HandJoint::kLittleDistal};
   return kJoints;
 }
 
 std::string vmc_bone_name(HandSide side, HandJoint joint) {
   const std::string prefix = side == HandSide::kLeft ? "Left" : "Right";
   switch (joint) {
-    case HandJoint::kWrist: return prefix + "Hand";
+    case HandJoint::kWrist:
+      return prefix + "Hand";
     // Unity's thumb bones are the metacarpal and the two phalanges.
-    case HandJoint::kThumbMetacarpal: return prefix + "ThumbProximal";
-    case HandJoint::kThumbProximal: return prefix + "ThumbIntermediate";
-    case HandJoint::kThumbDistal: return prefix + "ThumbDistal";
-    default: break;
+    case HandJoint::kThumbMetacarpal:
+      return prefix + "ThumbProximal";
+    case HandJoint::kThumbProximal:
+      return prefix + "ThumbIntermediate";
+    case HandJoint::kThumbDistal:
+      return prefix + "ThumbDistal";
+    default:
+      break;
   }
   const int j = static_cast<int>(joint);
   if (j < static_cast<int>(HandJoint::kIndexMetacarpal)) return {};

@@ -50,8 +50,8 @@ struct StreamTarget {
 
 // One frame as it is sent.
 struct StreamFrame {
-  std::uint64_t frame = 0;  // counts frames handed to the stream, from 0
-  double t_s = 0.0;         // the runtime's clock of the results
+  std::uint64_t frame = 0;                              // counts frames handed to the stream, from 0
+  double t_s = 0.0;                                     // the runtime's clock of the results
   std::array<HandInput, 2> hands;                       // 0 left, 1 right
   std::vector<std::pair<std::string, Rigid3d>> bodies;  // the tracked objects seen, by entity name
 };

@@ -35,7 +35,8 @@ rhot::TrackingResults frame_results() {
 void BM_StreamSendAt90Hz(benchmark::State& state) {
   const bool vmc = state.range(0) != 0;
   lo_server_thread receiver = lo_server_thread_new_with_proto(nullptr, LO_UDP, nullptr);
-  lo_server_thread_add_method(receiver, nullptr, nullptr, [](const char*, const char*, lo_arg**, int, lo_message, void*) { return 0; }, nullptr);
+  lo_server_thread_add_method(
+      receiver, nullptr, nullptr, [](const char*, const char*, lo_arg**, int, lo_message, void*) { return 0; }, nullptr);
   lo_server_thread_start(receiver);
   auto stream = rhot::OscStream::open({"127.0.0.1", std::to_string(lo_server_thread_get_port(receiver)), vmc});
   if (!stream) {

@@ -1,8 +1,17 @@
 // Runs rhot-demo --record and rhot-gltf, and reads the glTF back with tinygltf: the animation's
 // samples are the recording's.
 
+#include <cmath>
 #include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <sstream>
 #include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
 
 #include <gtest/gtest.h>
 #include <tiny_gltf.h>
@@ -66,6 +75,131 @@ TEST(GltfCli, ARecordingBecomesAnAnimatedGltf) {
   const auto bad = rhot::test::run_program("rhot-gltf", rec + ".missing --out " + out, "2>&1");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.output.find("rhot-gltf: " + rec + ".missing: cannot read the recording"), std::string::npos) << bad.output;
+}
+
+// A BVH file read back by a parser of the test's own: the hierarchy, then each frame's channels
+// turned into joint positions by forward kinematics (a joint's translation is its OFFSET plus its
+// position channels; its rotation the product of its rotation channels in the order listed).
+struct BvhNode {
+  std::string name;  // an End Site: its parent's name + "/end"
+  int parent = -1;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  std::vector<std::string> channels;
+};
+
+struct Bvh {
+  std::vector<BvhNode> nodes;
+  double frame_time = 0.0;
+  std::vector<std::vector<double>> frames;
+};
+
+Bvh read_bvh(const std::string& file) {
+  std::ifstream in(file);
+  Bvh b;
+  std::vector<int> stack;
+  std::string word;
+  while (in >> word && word != "MOTION") {
+    if (word == "ROOT" || word == "JOINT") {
+      BvhNode n;
+      in >> n.name;
+      n.parent = stack.empty() ? -1 : stack.back();
+      b.nodes.push_back(n);
+    } else if (word == "End") {
+      in >> word;  // "Site"
+      b.nodes.push_back({b.nodes[static_cast<std::size_t>(stack.back())].name + "/end", stack.back(), Eigen::Vector3d::Zero(), {}});
+    } else if (word == "{") {
+      stack.push_back(static_cast<int>(b.nodes.size()) - 1);
+    } else if (word == "}") {
+      stack.pop_back();
+    } else if (word == "OFFSET") {
+      Eigen::Vector3d& o = b.nodes.back().offset;
+      in >> o.x() >> o.y() >> o.z();
+    } else if (word == "CHANNELS") {
+      int n = 0;
+      in >> n;
+      b.nodes.back().channels.resize(static_cast<std::size_t>(n));
+      for (auto& c : b.nodes.back().channels) in >> c;
+    }
+  }
+  std::size_t count = 0;
+  std::size_t values = 0;
+  for (const BvhNode& n : b.nodes) values += n.channels.size();
+  in >> word >> count >> word >> word >> b.frame_time;  // "Frames:" N "Frame" "Time:" T
+  for (std::size_t f = 0; f < count; ++f) {
+    b.frames.emplace_back(values);
+    for (double& v : b.frames.back()) in >> v;
+  }
+  return b;
+}
+
+// Every node's world position in a frame.
+std::map<std::string, Eigen::Vector3d> forward_kinematics(const Bvh& b, const std::vector<double>& frame) {
+  std::vector<Eigen::Isometry3d> world(b.nodes.size());
+  std::map<std::string, Eigen::Vector3d> out;
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < b.nodes.size(); ++i) {
+    const BvhNode& n = b.nodes[i];
+    Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
+    Eigen::Vector3d t = n.offset;
+    Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+    for (const std::string& c : n.channels) {
+      const double v = frame[k++];
+      const double rad = v * std::numbers::pi / 180.0;
+      if (c == "Xposition") t.x() += v;
+      if (c == "Yposition") t.y() += v;
+      if (c == "Zposition") t.z() += v;
+      if (c == "Xrotation") r = r * Eigen::AngleAxisd(rad, Eigen::Vector3d::UnitX()).toRotationMatrix();
+      if (c == "Yrotation") r = r * Eigen::AngleAxisd(rad, Eigen::Vector3d::UnitY()).toRotationMatrix();
+      if (c == "Zrotation") r = r * Eigen::AngleAxisd(rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    }
+    local.linear() = r;
+    local.translation() = t;
+    world[i] = n.parent < 0 ? local : world[static_cast<std::size_t>(n.parent)] * local;
+    out[n.name] = world[i].translation();
+  }
+  return out;
+}
+
+// The hands of a recording as BVH: the file's hierarchy holds both hands' 26 joints (the tips as
+// End Sites), its frames are the recording's at its rate, and forward kinematics through the
+// file's offsets and rotation channels puts every joint where the recording has it (0.1 mm;
+// frames where the hand was seen).
+TEST(GltfCli, ARecordingsHandsBecomeABvhSkeleton) {
+  const std::string rec = ::testing::TempDir() + "rhot_cli_bvh.jsonl";
+  const std::string out = ::testing::TempDir() + "rhot_cli_hands.bvh";
+  const auto demo = rhot::test::run_program("rhot-demo", "--headless --frames 120 --eye 64x64 --record " + rec, "2>&1");
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  const auto conv = rhot::test::run_program("rhot-gltf", rec + " --format bvh --out " + out, "2>&1");
+  ASSERT_EQ(conv.exit_code, 0) << conv.output;
+  const auto recording = rhot::load_recording(rec);
+  ASSERT_TRUE(recording.has_value()) << recording.error();
+
+  const Bvh bvh = read_bvh(out);
+  ASSERT_EQ(bvh.frames.size(), recording->frames.size());
+  EXPECT_NEAR(bvh.frame_time, 1.0 / recording->rate_hz, 1e-6);
+  int seen_frames = 0;
+  double worst_m = 0.0;
+  for (std::size_t f = 0; f < bvh.frames.size(); ++f) {
+    const auto at = forward_kinematics(bvh, bvh.frames[f]);
+    for (std::size_t h = 0; h < 2; ++h) {
+      const rhot::HandInput& hand = recording->frames[f].hands[h];
+      if (!hand.seen) continue;
+      ++seen_frames;
+      const std::string side = h == 0 ? "left_" : "right_";
+      for (int j = 0; j < rhot::kHandJointCount; ++j) {
+        std::string name = side + std::string(rhot::joint_name(static_cast<rhot::HandJoint>(j)));
+        if (name.ends_with("_tip")) name = name.substr(0, name.size() - 3) + "distal/end";
+        const auto it = at.find(name);
+        ASSERT_NE(it, at.end()) << name;
+        const double error_m = (it->second / 100.0 - hand.joints_world[static_cast<std::size_t>(j)]).norm();
+        worst_m = std::max(worst_m, error_m);
+        EXPECT_LT(error_m, 1e-4) << name << " in frame " << f;
+      }
+    }
+  }
+  EXPECT_GT(seen_frames, 100);
+  EXPECT_GT(worst_m, 0.0);
+  std::cerr << "worst joint " << 1000.0 * worst_m << " mm\n";
 }
 
 }  // namespace

@@ -3,9 +3,11 @@
 // per tracked object (named as in the scene, a small axis-aligned box), one animation with their
 // translations (and the objects' rotations) at the recording's times, linearly interpolated.
 // Frames where a hand was not seen keep its joints where they were last seen.
+// With --format bvh: the hands as a BVH skeleton with rotation channels per joint (Bvh.h).
 
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -19,6 +21,7 @@
 #include <tiny_gltf.h>
 
 #include "engine/tracked/Recording.h"
+#include "tools/gltf/Bvh.h"
 
 namespace {
 
@@ -99,18 +102,41 @@ int add_mesh(tinygltf::Model& m, const std::string& name, float h, bool box) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App cli{"rhot-gltf: a rhot recording as a glTF 2.0 file with animated nodes (hand joints and tracked objects)"};
-  std::string input, output;
+  CLI::App cli{"rhot-gltf: a rhot recording as a glTF 2.0 file with animated nodes (hand joints and tracked objects), or its hands as BVH"};
+  std::string input, output, format = "gltf", bvh_unit = "cm";
   double joint_mm = 8.0;
   cli.add_option("recording", input, "recording (rhot-demo --record FILE)")->required();
-  cli.add_option("--out", output, "glTF file to write (.gltf, buffers embedded)")->required();
-  cli.add_option("--joint-size-mm", joint_mm, "size of each joint's marker shape")->capture_default_str()->check(CLI::Range(0.1, 100.0));
+  cli.add_option("--out", output, "file to write (.gltf with buffers embedded, or .bvh)")->required();
+  cli.add_option("--format", format, "gltf: animated nodes; bvh: the hands as a skeleton with rotation channels")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"gltf", "bvh"}));
+  cli.add_option("--bvh-unit", bvh_unit, "unit of the BVH file's lengths")->capture_default_str()->check(CLI::IsMember({"cm", "m"}));
+  cli.add_option("--joint-size-mm", joint_mm, "size of each joint's marker shape (glTF)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 100.0));
   CLI11_PARSE(cli, argc, argv);
 
   const auto rec = rhot::load_recording(input);
   if (!rec) {
     std::cerr << "rhot-gltf: " << rec.error() << "\n";
     return 1;
+  }
+  if (format == "bvh") {
+    const auto text = rhot::hands_bvh(*rec, {bvh_unit == "cm" ? 100.0 : 1.0});
+    if (!text) {
+      std::cerr << "rhot-gltf: " << input << ": " << text.error() << "\n";
+      return 1;
+    }
+    std::ofstream out(output);
+    out << *text;
+    out.close();
+    if (!out) {
+      std::cerr << "rhot-gltf: cannot write " << output << "\n";
+      return 1;
+    }
+    std::cerr << "rhot-gltf: " << rec->frames.size() << " frames of both hands at " << rec->rate_hz << " Hz written to " << output
+              << " (BVH, " << bvh_unit << ")\n";
+    return 0;
   }
   tinygltf::Model m;
   m.asset.version = "2.0";

@@ -30,7 +30,7 @@ bool is_thumb(HandJoint joint) { return joint >= HandJoint::kThumbMetacarpal && 
 }  // namespace
 
 std::array<Eigen::Quaterniond, kHandJointCount> joint_orientations(const Eigen::Quaterniond& world_from_hand,
-                                                                  const std::array<Eigen::Vector3d, kHandJointCount>& joints_world) {
+                                                                   const std::array<Eigen::Vector3d, kHandJointCount>& joints_world) {
   std::array<Eigen::Quaterniond, kHandJointCount> out;
   const Eigen::Quaterniond hand = world_from_hand.normalized();
   const Eigen::Vector3d hand_x = hand * Eigen::Vector3d::UnitX();

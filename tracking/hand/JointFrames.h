@@ -27,6 +27,6 @@ std::optional<HandJoint> joint_child(HandJoint joint);
 
 // World orientations of the 26 joints (unit quaternions).
 std::array<Eigen::Quaterniond, kHandJointCount> joint_orientations(const Eigen::Quaterniond& world_from_hand,
-                                                                  const std::array<Eigen::Vector3d, kHandJointCount>& joints_world);
+                                                                   const std::array<Eigen::Vector3d, kHandJointCount>& joints_world);
 
 }  // namespace rhot

@@ -144,23 +144,33 @@ TEST(OscStream, UrlsAreReadAndBadOnesNamed) {
   ASSERT_TRUE(vmc.has_value()) << vmc.error();
   EXPECT_EQ(vmc->host, "::1");
   EXPECT_TRUE(vmc->vmc);
-  EXPECT_EQ(parse_stream_url("udp://localhost:9000").error(), "--stream: expected osc://HOST:PORT or osc://HOST:PORT,vmc, got \"udp://localhost:9000\"");
-  EXPECT_EQ(parse_stream_url("osc://localhost").error(), "--stream: expected osc://HOST:PORT or osc://HOST:PORT,vmc, got \"osc://localhost\"");
-  EXPECT_EQ(parse_stream_url("osc://localhost:0").error(), "--stream: the port must be a number from 1 to 65535, got \"osc://localhost:0\"");
-  EXPECT_EQ(parse_stream_url("osc://localhost:70000").error(), "--stream: the port must be a number from 1 to 65535, got \"osc://localhost:70000\"");
+  EXPECT_EQ(parse_stream_url("udp://localhost:9000").error(),
+            "--stream: expected osc://HOST:PORT or osc://HOST:PORT,vmc, got \"udp://localhost:9000\"");
+  EXPECT_EQ(parse_stream_url("osc://localhost").error(),
+            "--stream: expected osc://HOST:PORT or osc://HOST:PORT,vmc, got \"osc://localhost\"");
+  EXPECT_EQ(parse_stream_url("osc://localhost:0").error(),
+            "--stream: the port must be a number from 1 to 65535, got \"osc://localhost:0\"");
+  EXPECT_EQ(parse_stream_url("osc://localhost:70000").error(),
+            "--stream: the port must be a number from 1 to 65535, got \"osc://localhost:70000\"");
   EXPECT_EQ(parse_stream_url("osc://h:9x").error(), "--stream: the port must be a number from 1 to 65535, got \"osc://h:9x\"");
-  EXPECT_EQ(parse_stream_url("osc://h:9000,vnc").error(), "--stream: unknown option \"vnc\" (the one option is vmc), got \"osc://h:9000,vnc\"");
+  EXPECT_EQ(parse_stream_url("osc://h:9000,vnc").error(),
+            "--stream: unknown option \"vnc\" (the one option is vmc), got \"osc://h:9000,vnc\"");
   EXPECT_EQ(parse_stream_url("osc://::1:9000").error(), "--stream: an IPv6 host goes in brackets, [::1], got \"osc://::1:9000\"");
-  EXPECT_EQ(OscStream::open({"no-such-host.invalid", "9000", false}).error().rfind("--stream: host \"no-such-host.invalid\" does not resolve: ", 0), 0u);
+  EXPECT_EQ(OscStream::open({"no-such-host.invalid", "9000", false})
+                .error()
+                .rfind("--stream: host \"no-such-host.invalid\" does not resolve: ", 0),
+            0u);
 }
 
 TEST(OscStream, VmcMapsEveryHumanoidHandBoneOnce) {
   std::vector<std::string> names;
   for (const HandJoint j : vmc_hand_joints()) names.push_back(vmc_bone_name(HandSide::kRight, j));
-  const std::vector<std::string> expected{
-      "RightHand",           "RightThumbProximal",  "RightThumbIntermediate", "RightThumbDistal",      "RightIndexProximal",    "RightIndexIntermediate",
-      "RightIndexDistal",    "RightMiddleProximal", "RightMiddleIntermediate", "RightMiddleDistal",    "RightRingProximal",     "RightRingIntermediate",
-      "RightRingDistal",     "RightLittleProximal", "RightLittleIntermediate", "RightLittleDistal"};
+  const std::vector<std::string> expected{"RightHand",         "RightThumbProximal",  "RightThumbIntermediate",
+                                          "RightThumbDistal",  "RightIndexProximal",  "RightIndexIntermediate",
+                                          "RightIndexDistal",  "RightMiddleProximal", "RightMiddleIntermediate",
+                                          "RightMiddleDistal", "RightRingProximal",   "RightRingIntermediate",
+                                          "RightRingDistal",   "RightLittleProximal", "RightLittleIntermediate",
+                                          "RightLittleDistal"};
   EXPECT_EQ(names, expected);
   EXPECT_EQ(vmc_bone_name(HandSide::kLeft, HandJoint::kIndexMetacarpal), "");
   EXPECT_EQ(vmc_bone_name(HandSide::kLeft, HandJoint::kPalm), "");
@@ -212,15 +222,18 @@ TEST(OscStream, VmcBonesRebuildTheSkeletonSent) {
         position[joint] = position.at(parent) + rotated.at(parent) * p;
         rotated[joint] = rotated.at(parent) * q;
         // Units: a bone's local offset is its length in metres.
-        EXPECT_NEAR(p.norm(), (hand.joints_world[static_cast<std::size_t>(joint)] - hand.joints_world[static_cast<std::size_t>(parent)]).norm(), 1e-6);
+        EXPECT_NEAR(p.norm(),
+                    (hand.joints_world[static_cast<std::size_t>(joint)] - hand.joints_world[static_cast<std::size_t>(parent)]).norm(),
+                    1e-6);
       }
       EXPECT_LT((position[joint] - hand.joints_world[static_cast<std::size_t>(joint)]).norm(), 2e-6) << m.strings[0];
     }
     // The last bone of each finger points at its tip: in the T-pose bones run along -X (left) or
     // +X (right).
     const Eigen::Vector3d rest_along(side == HandSide::kLeft ? -1.0 : 1.0, 0.0, 0.0);
-    for (const auto& [distal, tip] : {std::pair{HandJoint::kIndexDistal, HandJoint::kIndexTip}, std::pair{HandJoint::kLittleDistal, HandJoint::kLittleTip},
-                                     std::pair{HandJoint::kThumbDistal, HandJoint::kThumbTip}}) {
+    for (const auto& [distal, tip] :
+         {std::pair{HandJoint::kIndexDistal, HandJoint::kIndexTip}, std::pair{HandJoint::kLittleDistal, HandJoint::kLittleTip},
+          std::pair{HandJoint::kThumbDistal, HandJoint::kThumbTip}}) {
       const Eigen::Vector3d along =
           (hand.joints_world[static_cast<std::size_t>(tip)] - hand.joints_world[static_cast<std::size_t>(distal)]).normalized();
       EXPECT_LT((rotated.at(distal) * rest_along - along).norm(), 1e-5);
@@ -255,7 +268,8 @@ TEST(OscStream, RhotAddressesCarryTheOpenXrJoints) {
     EXPECT_EQ(m.strings, (std::vector<std::string>{"left", std::string(joint_name(static_cast<HandJoint>(j)))}));
     EXPECT_LT((position_of(m) - left.joints_world[static_cast<std::size_t>(j)]).norm(), 1e-6);
     if (const auto child = joint_child(static_cast<HandJoint>(j))) {
-      const Eigen::Vector3d along = (left.joints_world[static_cast<std::size_t>(*child)] - left.joints_world[static_cast<std::size_t>(j)]).normalized();
+      const Eigen::Vector3d along =
+          (left.joints_world[static_cast<std::size_t>(*child)] - left.joints_world[static_cast<std::size_t>(j)]).normalized();
       EXPECT_LT((rotation_of(m).normalized() * -Eigen::Vector3d::UnitZ() - along).norm(), 1e-5) << joint_name(static_cast<HandJoint>(j));
     }
   }
@@ -283,8 +297,8 @@ TEST(OscStream, AReceiverThatIsNotThereOrGoesAwayIsHarmless) {
     ASSERT_NE(server, nullptr);
     int frames = 0;
     lo_server_add_method(
-        server, "/rhot/frame", "if", [](const char*, const char*, lo_arg**, int, lo_message, void* n) { return ++*static_cast<int*>(n), 0; },
-        &frames);
+        server, "/rhot/frame", "if",
+        [](const char*, const char*, lo_arg**, int, lo_message, void* n) { return ++*static_cast<int*>(n), 0; }, &frames);
     for (int f = 0; f < 5; ++f) {
       stream->send(results, {});
       stream->flush();
@@ -309,8 +323,7 @@ TEST(OscStream, OscdumpReceivesEveryFrame) {
   const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "rhot_oscdump";
   std::filesystem::create_directories(dir);
   const std::filesystem::path out = dir / "dump.txt", pid = dir / "pid";
-  const std::string command =
-      "oscdump -L " + std::to_string(port) + " > " + out.string() + " 2>&1 & echo $! > " + pid.string();
+  const std::string command = "oscdump -L " + std::to_string(port) + " > " + out.string() + " 2>&1 & echo $! > " + pid.string();
   ASSERT_EQ(std::system(command.c_str()), 0);
   for (int wait = 0; wait < 200 && !udp_port_taken(port); ++wait) std::this_thread::sleep_for(10ms);
   ASSERT_TRUE(udp_port_taken(port)) << "oscdump did not start (is liblo-tools installed? tools/setup-deps.sh)";
