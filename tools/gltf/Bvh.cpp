@@ -117,12 +117,14 @@ std::expected<std::string, std::string> hands_bvh(const Recording& recording, co
       }
     }
     for (int j = 0; j < kHandJointCount; ++j) {
-      for (int a = 0; a < 3; ++a) offset[h][static_cast<std::size_t>(j)](a) = median(samples[static_cast<std::size_t>(j)][static_cast<std::size_t>(a)]);
+      for (int a = 0; a < 3; ++a)
+        offset[h][static_cast<std::size_t>(j)](a) = median(samples[static_cast<std::size_t>(j)][static_cast<std::size_t>(a)]);
     }
   }
 
-  std::string out = "HIERARCHY\nROOT hands\n{\n  OFFSET 0.000000 0.000000 0.000000\n"
-                    "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n";
+  std::string out =
+      "HIERARCHY\nROOT hands\n{\n  OFFSET 0.000000 0.000000 0.000000\n"
+      "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n";
   for (std::size_t h = 0; h < 2; ++h) {
     // Write joints depth first; a joint closes after its descendants.
     std::vector<HandJoint> open;
@@ -138,7 +140,8 @@ std::expected<std::string, std::string> hands_bvh(const Recording& recording, co
       out += pad + "JOINT " + prefix[h] + std::string(joint_name(b.joint)) + "\n" + pad + "{\n";
       const Eigen::Vector3d o = b.parent ? offset[h][static_cast<std::size_t>(b.joint)] : Eigen::Vector3d::Zero();
       out += pad + "  OFFSET " + triple(u * o) + "\n";
-      out += pad + (b.parent ? "  CHANNELS 3 Zrotation Xrotation Yrotation\n" : "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n");
+      out += pad + (b.parent ? "  CHANNELS 3 Zrotation Xrotation Yrotation\n"
+                             : "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n");
       open.push_back(b.joint);
       const auto child = joint_child(b.joint);
       if (b.joint == HandJoint::kPalm || (child && !joint_child(*child))) {

@@ -1,0 +1,123 @@
+// rhot-demo --stream: the real demo sends its frames to liblo's server on loopback, live and from
+// a recording; a bad destination is one clear line.
+
+#include <algorithm>
+#include <filesystem>
+#include <lo/lo.h>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "engine/tracked/Recording.h"
+#include "tests/support/RunCommand.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Message {
+  std::string path;
+  std::vector<std::string> strings;
+  std::vector<double> numbers;
+};
+
+// liblo's server on a port the kernel picks; datagrams queue in its socket until drained.
+class Receiver {
+ public:
+  Receiver() {
+    server_ = lo_server_new_with_proto(nullptr, LO_UDP, nullptr);
+    lo_server_add_method(server_, nullptr, nullptr, &Receiver::handle, this);
+  }
+  ~Receiver() { lo_server_free(server_); }
+  std::string url(bool vmc) const { return "osc://127.0.0.1:" + std::to_string(lo_server_get_port(server_)) + (vmc ? ",vmc" : ""); }
+  const std::vector<Message>& drain() {
+    while (lo_server_recv_noblock(server_, 300) > 0) {
+    }
+    return messages_;
+  }
+
+ private:
+  static int handle(const char* path, const char* types, lo_arg** argv, int argc, lo_message, void* self) {
+    Message m{path, {}, {}};
+    for (int i = 0; i < argc; ++i) {
+      if (types[i] == 's') m.strings.emplace_back(&argv[i]->s);
+      if (types[i] == 'f') m.numbers.push_back(static_cast<double>(argv[i]->f));
+      if (types[i] == 'i') m.numbers.push_back(argv[i]->i);
+    }
+    static_cast<Receiver*>(self)->messages_.push_back(std::move(m));
+    return 0;
+  }
+  lo_server server_ = nullptr;
+  std::vector<Message> messages_;
+};
+
+fs::path temp_dir() {
+  const fs::path d = fs::path(::testing::TempDir()) / "rhot_stream_cli" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+// The default demo for 30 frames: 30 bundles, each with its frame counter, the VMC header and
+// 16 bones of each hand seen.
+TEST(StreamCli, TheDemoStreamsEveryFrameAsVmc) {
+  Receiver receiver;
+  const auto demo = rhot::test::run_program("rhot-demo", "--headless --frames 30 --eye 64x64 --stream " + receiver.url(true), "2>&1");
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  EXPECT_NE(demo.output.find(": 30 frames, 30 sent, 0 skipped"), std::string::npos) << demo.output;
+  const std::vector<Message>& got = receiver.drain();
+  std::vector<double> frames;
+  int ok = 0, left_hands = 0, bones = 0;
+  for (const Message& m : got) {
+    if (m.path == "/rhot/frame") frames.push_back(m.numbers[0]);
+    if (m.path == "/VMC/Ext/OK") ++ok;
+    if (m.path == "/VMC/Ext/Bone/Pos") {
+      ++bones;
+      if (m.strings[0] == "LeftHand") ++left_hands;
+    }
+  }
+  ASSERT_EQ(frames.size(), 30u);
+  for (std::size_t f = 0; f < frames.size(); ++f) EXPECT_EQ(frames[f], static_cast<double>(f));
+  EXPECT_EQ(ok, 30);
+  EXPECT_GE(left_hands, 25);
+  EXPECT_EQ(bones % 16, 0);
+}
+
+// A recording replayed with --stream: the joints that arrive are the recording's.
+TEST(StreamCli, AReplayStreamsTheRecordedJoints) {
+  const fs::path dir = temp_dir();
+  const fs::path rec = dir / "session.jsonl";
+  const auto recorded = rhot::test::run_program("rhot-demo", "--headless --frames 40 --eye 64x64 --record " + rec.string(), "2>&1");
+  ASSERT_EQ(recorded.exit_code, 0) << recorded.output;
+  const auto recording = rhot::load_recording(rec);
+  ASSERT_TRUE(recording.has_value()) << recording.error();
+
+  Receiver receiver;
+  const auto replay = rhot::test::run_program(
+      "rhot-demo", "--headless --frames 30 --eye 64x64 --source replay:" + rec.string() + " --stream " + receiver.url(false), "2>&1");
+  ASSERT_EQ(replay.exit_code, 0) << replay.output;
+  int checked = 0;
+  for (const Message& m : receiver.drain()) {
+    if (m.path != "/rhot/hand/joint" || m.strings[0] != "right" || m.strings[1] != "index_tip") continue;
+    const Eigen::Vector3d p(m.numbers[0], m.numbers[1], m.numbers[2]);
+    double nearest = 1e9;
+    for (const rhot::RecordedFrame& f : recording->frames) {
+      if (f.hands[1].seen) nearest = std::min(nearest, (f.hands[1].joints_world[static_cast<std::size_t>(rhot::HandJoint::kIndexTip)] - p).norm());
+    }
+    EXPECT_LT(nearest, 1e-5);
+    ++checked;
+  }
+  EXPECT_GE(checked, 25);
+}
+
+TEST(StreamCli, ABadDestinationIsOneClearLine) {
+  auto r = rhot::test::run_program("rhot-demo", "--headless --frames 3 --eye 64x64 --stream udp://localhost:9000", "2>&1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("--stream: expected osc://HOST:PORT or osc://HOST:PORT,vmc, got \"udp://localhost:9000\""), std::string::npos) << r.output;
+  r = rhot::test::run_program("rhot-demo", "--headless --frames 3 --eye 64x64 --stream osc://no-such-host.invalid:9000", "2>&1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("--stream: host \"no-such-host.invalid\" does not resolve"), std::string::npos) << r.output;
+}
+
+}  // namespace
