@@ -6,6 +6,8 @@
 
 #include <lo/lo.h>
 #include <netdb.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/socket.h>
 
 #include "tracking/hand/JointFrames.h"
@@ -224,84 +226,89 @@ OscStream::OscStream(const StreamTarget& target) : target_(target) {
 }
 
 OscStream::~OscStream() {
-  {
-    const std::lock_guard lock(mutex_);
-    stop_ = true;
-  }
-  wake_.notify_all();
+  stop_.store(true);
+  published_.fetch_add(1);  // wakes the sender to see stop_
+  published_.notify_one();
   if (sender_.joinable()) sender_.join();
   if (address_) lo_address_free(static_cast<lo_address>(address_));
 }
 
 void OscStream::send(const TrackingResults& results, const std::map<int, std::string>& names) {
-  {
-    const std::lock_guard lock(mutex_);
-    if (slot_full_) skipped_.fetch_add(1, std::memory_order_relaxed);
-    slot_.frame = next_frame_++;
-    slot_.t_s = results.t_s;
-    slot_.hands = results.hands;
-    slot_.bodies.resize(results.world_from_object.size());
-    std::size_t n = 0;
-    for (const auto& [id, pose] : results.world_from_object) {
-      auto& [name, to] = slot_.bodies[n++];
-      if (const auto it = names.find(id); it != names.end()) {
-        name.assign(it->second);
-      } else {
-        name.assign("star-");
-        name.append(std::to_string(id));
-      }
-      to = pose;
+  StreamFrame& slot = buffers_[static_cast<std::size_t>(back_)];
+  slot.frame = published_.load(std::memory_order_relaxed);
+  slot.t_s = results.t_s;
+  slot.hands = results.hands;
+  slot.bodies.resize(results.world_from_object.size());
+  std::size_t n = 0;
+  for (const auto& [id, pose] : results.world_from_object) {
+    auto& [name, to] = slot.bodies[n++];
+    if (const auto it = names.find(id); it != names.end()) {
+      name.assign(it->second);
+    } else {
+      name.assign("star-");
+      name.append(std::to_string(id));
     }
-    slot_full_ = true;
+    to = pose;
   }
-  wake_.notify_one();
+  const int previous = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel);
+  back_ = previous & ~kFresh;
+  if (previous & kFresh) skipped_.fetch_add(1, std::memory_order_relaxed);
+  published_.fetch_add(1, std::memory_order_release);
+  published_.notify_one();
 }
 
 void OscStream::run() {
-  StreamFrame work;
+  // Woken every frame, this thread must not take the frame thread's core the moment it is woken
+  // (on two cores it did: the frame waited out the whole send). SCHED_IDLE runs it only on a core
+  // with nothing else to do (SCHED_BATCH, which only drops the wake-up preemption, where that is
+  // refused); the frame thread never waits for it, so its priority cannot hold the frame up.
+  sched_param none{};
+  if (pthread_setschedparam(pthread_self(), SCHED_IDLE, &none) != 0) pthread_setschedparam(pthread_self(), SCHED_BATCH, &none);
+  std::uint64_t seen = 0;
   for (;;) {
-    {
-      std::unique_lock lock(mutex_);
-      wake_.wait(lock, [&] { return stop_ || slot_full_; });
-      if (!slot_full_) return;  // stopping, nothing left
-      std::swap(work, slot_);
-      slot_full_ = false;
-      busy_ = true;
+    published_.wait(seen, std::memory_order_acquire);
+    seen = published_.load(std::memory_order_acquire);
+    if (middle_.load(std::memory_order_acquire) & kFresh) {
+      front_ = middle_.exchange(front_, std::memory_order_acq_rel) & ~kFresh;
+      send_frame(buffers_[static_cast<std::size_t>(front_)]);
     }
-    const std::vector<OscMessage> messages = stream_messages(work, target_.vmc);
-    lo_bundle bundle = lo_bundle_new(LO_TT_IMMEDIATE);
-    for (const OscMessage& m : messages) {
-      lo_message message = lo_message_new();
-      for (const OscArg& a : m.args) {
-        if (const auto* i = std::get_if<std::int32_t>(&a)) {
-          lo_message_add_int32(message, *i);
-        } else if (const auto* f = std::get_if<float>(&a)) {
-          lo_message_add_float(message, *f);
-        } else {
-          lo_message_add_string(message, std::get<std::string>(a).c_str());
-        }
-      }
-      lo_bundle_add_message(bundle, m.address.c_str(), message);
-    }
-    const int bytes = lo_send_bundle(static_cast<lo_address>(address_), bundle);
-    lo_bundle_free_recursive(bundle);
-    (bytes < 0 ? errors_ : sent_).fetch_add(1, std::memory_order_relaxed);
-    {
-      const std::lock_guard lock(mutex_);
-      busy_ = false;
-    }
-    idle_.notify_all();
+    done_.store(seen, std::memory_order_release);
+    done_.notify_all();
+    if (stop_.load()) return;
   }
 }
 
+void OscStream::send_frame(const StreamFrame& frame) {
+  const std::vector<OscMessage> messages = stream_messages(frame, target_.vmc);
+  lo_bundle bundle = lo_bundle_new(LO_TT_IMMEDIATE);
+  for (const OscMessage& m : messages) {
+    lo_message message = lo_message_new();
+    for (const OscArg& a : m.args) {
+      if (const auto* i = std::get_if<std::int32_t>(&a)) {
+        lo_message_add_int32(message, *i);
+      } else if (const auto* f = std::get_if<float>(&a)) {
+        lo_message_add_float(message, *f);
+      } else {
+        lo_message_add_string(message, std::get<std::string>(a).c_str());
+      }
+    }
+    lo_bundle_add_message(bundle, m.address.c_str(), message);
+  }
+  const int bytes = lo_send_bundle(static_cast<lo_address>(address_), bundle);
+  lo_bundle_free_recursive(bundle);
+  (bytes < 0 ? errors_ : sent_).fetch_add(1, std::memory_order_relaxed);
+}
+
 OscStream::Stats OscStream::stats() const {
-  const std::lock_guard lock(mutex_);
-  return {next_frame_, sent_.load(), skipped_.load(), errors_.load()};
+  const std::uint64_t published = published_.load() - (stop_.load() ? 1 : 0);
+  return {published, sent_.load(), skipped_.load(), errors_.load()};
 }
 
 void OscStream::flush() {
-  std::unique_lock lock(mutex_);
-  idle_.wait(lock, [&] { return !slot_full_ && !busy_; });
+  const std::uint64_t target = published_.load(std::memory_order_acquire);
+  for (std::uint64_t d = done_.load(std::memory_order_acquire); d < target; d = done_.load(std::memory_order_acquire)) {
+    done_.wait(d, std::memory_order_acquire);
+  }
 }
 
 }  // namespace rhot

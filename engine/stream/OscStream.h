@@ -12,20 +12,19 @@
 //   positions local to the parent bone; tracked objects as /VMC/Ext/Tra/Pos; plus /rhot/frame.
 // One bundle a frame. Hands not seen this frame are left out (receivers hold their last pose).
 //
-// The frame thread only copies the frame's results into a slot (no allocation once warm, no
-// I/O); a sender thread encodes and sends them. When the sender is still busy with an earlier
-// frame, the slot's frame is replaced by the newer one (counted as skipped): sending never makes
-// the frame wait. UDP needs no receiver: one that is not there, or goes away, costs nothing but
-// a counted send error.
+// The frame thread only copies the frame's results into a buffer of three (triple buffering: no
+// lock, no allocation once warm, no I/O) and wakes a sender thread, which encodes and sends them
+// at idle priority. When the sender is still busy with an earlier frame, the waiting frame is
+// replaced by the newer one (counted as skipped): sending never makes the frame wait, whatever
+// the sender's thread is doing. UDP needs no receiver: one that is not there, or goes away,
+// costs nothing but a counted send error.
 
 #include <array>
 #include <atomic>
-#include <condition_variable>
 #include <cstdint>
 #include <expected>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -80,7 +79,7 @@ class OscStream {
   OscStream(const OscStream&) = delete;
   OscStream& operator=(const OscStream&) = delete;
 
-  // Frame thread: the frame's results, with the names of the tracked objects by star id (objects
+  // Frame thread (one thread only): the frame's results, with the names of the tracked objects by star id (objects
   // without a name are sent as "star-ID").
   void send(const TrackingResults& results, const std::map<int, std::string>& names);
 
@@ -98,17 +97,20 @@ class OscStream {
  private:
   explicit OscStream(const StreamTarget& target);
   void run();
+  void send_frame(const StreamFrame& frame);
 
   StreamTarget target_;
   void* address_ = nullptr;  // lo_address (liblo stays out of this header)
-  mutable std::mutex mutex_;
-  std::condition_variable wake_;
-  std::condition_variable idle_;
-  StreamFrame slot_;
-  bool slot_full_ = false;
-  bool busy_ = false;
-  bool stop_ = false;
-  std::uint64_t next_frame_ = 0;
+  // Triple buffering: the frame thread fills buffers_[back_], the sender reads buffers_[front_],
+  // and middle_ holds the third's index, with kFresh set while it holds a frame not yet taken.
+  static constexpr int kFresh = 4;
+  std::array<StreamFrame, 3> buffers_;
+  int back_ = 0;   // the frame thread's
+  int front_ = 1;  // the sender's
+  std::atomic<int> middle_{2};
+  std::atomic<std::uint64_t> published_{0};  // frames handed over; the sender waits on it
+  std::atomic<std::uint64_t> done_{0};       // the last `published_` the sender has dealt with
+  std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> sent_{0};
   std::atomic<std::uint64_t> skipped_{0};
   std::atomic<std::uint64_t> errors_{0};

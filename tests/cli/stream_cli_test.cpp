@@ -103,7 +103,8 @@ TEST(StreamCli, AReplayStreamsTheRecordedJoints) {
     const Eigen::Vector3d p(m.numbers[0], m.numbers[1], m.numbers[2]);
     double nearest = 1e9;
     for (const rhot::RecordedFrame& f : recording->frames) {
-      if (f.hands[1].seen) nearest = std::min(nearest, (f.hands[1].joints_world[static_cast<std::size_t>(rhot::HandJoint::kIndexTip)] - p).norm());
+      if (f.hands[1].seen)
+        nearest = std::min(nearest, (f.hands[1].joints_world[static_cast<std::size_t>(rhot::HandJoint::kIndexTip)] - p).norm());
     }
     EXPECT_LT(nearest, 1e-5);
     ++checked;
@@ -114,7 +115,8 @@ TEST(StreamCli, AReplayStreamsTheRecordedJoints) {
 TEST(StreamCli, ABadDestinationIsOneClearLine) {
   auto r = rhot::test::run_program("rhot-demo", "--headless --frames 3 --eye 64x64 --stream udp://localhost:9000", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.output.find("--stream: expected osc://HOST:PORT or osc://HOST:PORT,vmc, got \"udp://localhost:9000\""), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--stream: expected osc://HOST:PORT or osc://HOST:PORT,vmc, got \"udp://localhost:9000\""), std::string::npos)
+      << r.output;
   r = rhot::test::run_program("rhot-demo", "--headless --frames 3 --eye 64x64 --stream osc://no-such-host.invalid:9000", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("--stream: host \"no-such-host.invalid\" does not resolve"), std::string::npos) << r.output;
