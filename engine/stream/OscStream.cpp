@@ -259,11 +259,10 @@ void OscStream::send(const TrackingResults& results, const std::map<int, std::st
 
 void OscStream::run() {
   // Woken every frame, this thread must not take the frame thread's core the moment it is woken
-  // (on two cores it did: the frame waited out the whole send). SCHED_IDLE runs it only on a core
-  // with nothing else to do (SCHED_BATCH, which only drops the wake-up preemption, where that is
-  // refused); the frame thread never waits for it, so its priority cannot hold the frame up.
+  // (on two cores it did: the frame waited out the whole send). SCHED_BATCH drops the wake-up
+  // preemption but keeps a normal share of the CPU (SCHED_IDLE starved it on a busy machine).
   sched_param none{};
-  if (pthread_setschedparam(pthread_self(), SCHED_IDLE, &none) != 0) pthread_setschedparam(pthread_self(), SCHED_BATCH, &none);
+  pthread_setschedparam(pthread_self(), SCHED_BATCH, &none);
   std::uint64_t seen = 0;
   for (;;) {
     published_.wait(seen, std::memory_order_acquire);

@@ -14,9 +14,9 @@
 //
 // The frame thread only copies the frame's results into a buffer of three (triple buffering: no
 // lock, no allocation once warm, no I/O) and wakes a sender thread, which encodes and sends them
-// at idle priority. When the sender is still busy with an earlier frame, the waiting frame is
-// replaced by the newer one (counted as skipped): sending never makes the frame wait, whatever
-// the sender's thread is doing. UDP needs no receiver: one that is not there, or goes away,
+// (SCHED_BATCH: woken, it does not preempt the frame thread). When the sender is still busy with
+// an earlier frame, the waiting frame is replaced by the newer one (counted as skipped): sending
+// never makes the frame wait, whatever the sender's thread is doing. UDP needs no receiver: one that is not there, or goes away,
 // costs nothing but a counted send error.
 
 #include <array>

@@ -59,13 +59,21 @@ fs::path temp_dir() {
   return d;
 }
 
-// The default demo for 30 frames: 30 bundles, each with its frame counter, the VMC header and
-// 16 bones of each hand seen.
-TEST(StreamCli, TheDemoStreamsEveryFrameAsVmc) {
+// The default demo for 30 frames: a bundle for every frame the sender took, each with its frame
+// counter, the VMC header and 16 bones of each hand seen. (Headless, the demo runs its frames as
+// fast as it can; on a busy machine the sender may find a newer frame waiting and skip the older
+// one, which the demo reports.)
+TEST(StreamCli, TheDemoStreamsItsFramesAsVmc) {
   Receiver receiver;
   const auto demo = rhot::test::run_program("rhot-demo", "--headless --frames 30 --eye 64x64 --stream " + receiver.url(true), "2>&1");
   ASSERT_EQ(demo.exit_code, 0) << demo.output;
-  EXPECT_NE(demo.output.find(": 30 frames, 30 sent, 0 skipped"), std::string::npos) << demo.output;
+  const auto counts = demo.output.find(": 30 frames, ");
+  ASSERT_NE(counts, std::string::npos) << demo.output;
+  const int sent = std::stoi(demo.output.substr(counts + 13));
+  EXPECT_NE(demo.output.find(std::to_string(sent) + " sent, " + std::to_string(30 - sent) + " skipped (the sender was busy), 0 failed"),
+            std::string::npos)
+      << demo.output;
+  EXPECT_GE(sent, 10);
   const std::vector<Message>& got = receiver.drain();
   std::vector<double> frames;
   int ok = 0, left_hands = 0, bones = 0;
@@ -77,10 +85,12 @@ TEST(StreamCli, TheDemoStreamsEveryFrameAsVmc) {
       if (m.strings[0] == "LeftHand") ++left_hands;
     }
   }
-  ASSERT_EQ(frames.size(), 30u);
-  for (std::size_t f = 0; f < frames.size(); ++f) EXPECT_EQ(frames[f], static_cast<double>(f));
-  EXPECT_EQ(ok, 30);
-  EXPECT_GE(left_hands, 25);
+  ASSERT_EQ(frames.size(), static_cast<std::size_t>(sent));
+  EXPECT_GE(frames.front(), 0.0);
+  for (std::size_t f = 1; f < frames.size(); ++f) EXPECT_GT(frames[f], frames[f - 1]);
+  EXPECT_LE(frames.back(), 29.0);
+  EXPECT_EQ(ok, sent);
+  EXPECT_GE(left_hands, sent - 5);
   EXPECT_EQ(bones % 16, 0);
 }
 
@@ -109,7 +119,7 @@ TEST(StreamCli, AReplayStreamsTheRecordedJoints) {
     EXPECT_LT(nearest, 1e-5);
     ++checked;
   }
-  EXPECT_GE(checked, 25);
+  EXPECT_GE(checked, 10);
 }
 
 TEST(StreamCli, ABadDestinationIsOneClearLine) {

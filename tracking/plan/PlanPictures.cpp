@@ -95,7 +95,8 @@ std::expected<void, std::string> write_error_slice(const std::filesystem::path& 
 
 std::expected<void, std::string> write_plan_top_view(const std::filesystem::path& file, const CameraRig& rig,
                                                      const TrackingVolume& volume) {
-  // The picture spans the cameras and the volume, 40 px a metre or less to stay within 900 px.
+  // The picture spans the cameras and the volume, 100 px a metre or less to stay within 900 px,
+  // and at least 720 px wide for its caption.
   Eigen::Vector2d lo(volume.centre_m.x() - 0.5 * volume.size_m.x(), volume.centre_m.z() - 0.5 * volume.size_m.z());
   Eigen::Vector2d hi(volume.centre_m.x() + 0.5 * volume.size_m.x(), volume.centre_m.z() + 0.5 * volume.size_m.z());
   for (const Camera& c : rig.cameras) {
@@ -106,7 +107,12 @@ std::expected<void, std::string> write_plan_top_view(const std::filesystem::path
   }
   lo -= Eigen::Vector2d::Constant(1.0);
   hi += Eigen::Vector2d::Constant(1.0);
-  const double scale = std::min(40.0, 900.0 / (hi - lo).maxCoeff());
+  const double scale = std::min(100.0, 900.0 / (hi - lo).maxCoeff());
+  if ((hi.x() - lo.x()) * scale < 720.0) {
+    const double widen = 0.5 * (720.0 / scale - (hi.x() - lo.x()));
+    lo.x() -= widen;
+    hi.x() += widen;
+  }
   const int w = static_cast<int>((hi.x() - lo.x()) * scale), h = static_cast<int>((hi.y() - lo.y()) * scale);
   cv::Mat image(h + 30, w, CV_8UC3, cv::Scalar(30, 30, 30));
   const auto at = [&](double x, double z) { return cv::Point2d((x - lo.x()) * scale, (z - lo.y()) * scale); };
@@ -133,6 +139,12 @@ std::expected<void, std::string> write_plan_top_view(const std::filesystem::path
       outline.push_back(at(hit.x(), hit.z()));
     }
     if (outline.size() >= 3) cv::polylines(image, outline, true, cv::Scalar(160, 120, 60), 1, cv::LINE_AA);
+    // Where it looks: its optical axis down to that plane.
+    const Eigen::Vector3d axis = c.ray_world(Eigen::Vector2d(k.cx, k.cy));
+    if (axis.y() < -1e-6 && o.y() > floor_y) {
+      const Eigen::Vector3d hit = o + axis * ((floor_y - o.y()) / axis.y());
+      cv::line(image, at(o.x(), o.z()), at(hit.x(), hit.z()), cv::Scalar(0, 140, 200), 1, cv::LINE_AA);
+    }
   }
   cv::rectangle(image, at(volume.centre_m.x() - 0.5 * volume.size_m.x(), volume.centre_m.z() - 0.5 * volume.size_m.z()),
                 at(volume.centre_m.x() + 0.5 * volume.size_m.x(), volume.centre_m.z() + 0.5 * volume.size_m.z()), cv::Scalar(255, 255, 255),
@@ -144,7 +156,7 @@ std::expected<void, std::string> write_plan_top_view(const std::filesystem::path
                 cv::LINE_AA);
   }
   cv::putText(image,
-              fmt::format("{} cameras from above (X right, -Z up); outlines: where each image meets Y = {:.2f} m; grid 1 m",
+              fmt::format("{} cameras from above (X right, -Z up); lines: optical axes, outlines: images, to Y = {:.2f} m; grid 1 m",
                           rig.cameras.size(), floor_y),
               {6, h + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
   return write_png(file, image);
