@@ -152,13 +152,15 @@ std::expected<void, std::string> write_plan_top_view(const std::filesystem::path
   for (const Camera& c : rig.cameras) {
     const Eigen::Vector3d o = c.centre_world();
     cv::circle(image, at(o.x(), o.z()), 4, cv::Scalar(0, 200, 255), cv::FILLED, cv::LINE_AA);
-    cv::putText(image, c.name, at(o.x(), o.z()) + cv::Point2d(6, -4), cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(220, 220, 220), 1,
-                cv::LINE_AA);
+    cv::putText(image, fmt::format("{} {:.1f} m", c.name, o.y()), at(o.x(), o.z()) + cv::Point2d(6, -4), cv::FONT_HERSHEY_SIMPLEX, 0.35,
+                cv::Scalar(220, 220, 220), 1, cv::LINE_AA);
   }
-  cv::putText(image,
-              fmt::format("{} cameras from above (X right, -Z up); lines: optical axes, outlines: images, to Y = {:.2f} m; grid 1 m",
-                          rig.cameras.size(), floor_y),
-              {6, h + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
+  cv::putText(
+      image,
+      fmt::format(
+          "{} cameras from above (X right, -Z up); each at its height; lines: optical axes, outlines: images, to Y = {:.2f} m; grid 1 m",
+          rig.cameras.size(), floor_y),
+      {6, h + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
   return write_png(file, image);
 }
 
