@@ -240,6 +240,7 @@ void Runtime::collect_displayed() {
 
 std::optional<OscStream::Stats> Runtime::stream_stats() const {
   if (!stream_) return std::nullopt;
+  stream_->flush();
   return stream_->stats();
 }
 

@@ -136,7 +136,8 @@ class Runtime {
   bool predicting() const { return settings_.predict; }
   // Adds a function called for each frame once it is displayed (one frame after it is drawn).
   void add_displayed_observer(std::function<void(const DisplayedFrame&)> observer) { displayed_observers_.push_back(std::move(observer)); }
-  // The OSC stream's counts (RuntimeSettings::stream); nothing without one.
+  // The OSC stream's counts (RuntimeSettings::stream) once the frames handed over so far are sent;
+  // nothing without one.
   std::optional<OscStream::Stats> stream_stats() const;
   // The GPU's time per eye of the displayed frames (with RendererSettings::gpu_timings): p50 and
   // p99 over the run; nothing without timings.

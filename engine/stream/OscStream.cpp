@@ -47,6 +47,8 @@ void add_pose(std::vector<OscArg>& args, const Eigen::Vector3d& p, const Eigen::
   args.emplace_back(static_cast<float>(q.w()));
 }
 
+bool finite_pose(const Rigid3d& p) { return p.translation.allFinite() && p.rotation.coeffs().allFinite(); }
+
 bool finite_hand(const HandInput& h) {
   if (!h.world_from_hand.translation.allFinite() || !h.world_from_hand.rotation.coeffs().allFinite()) return false;
   for (const Eigen::Vector3d& p : h.joints_world) {
@@ -113,12 +115,10 @@ std::expected<StreamTarget, std::string> parse_stream_url(std::string_view url) 
   const auto colon = rest.rfind(':');
   if (colon == std::string_view::npos || colon == 0)
     return std::unexpected(url_error(url, "expected osc://HOST:PORT or osc://HOST:PORT,vmc"));
-  std::string_view host = rest.substr(0, colon);
-  if (host.front() == '[') {
-    if (host.size() < 3 || host.back() != ']') return std::unexpected(url_error(url, "an IPv6 host goes in brackets, [::1]"));
-    host = host.substr(1, host.size() - 2);
-  } else if (host.find(':') != std::string_view::npos) {
-    return std::unexpected(url_error(url, "an IPv6 host goes in brackets, [::1]"));
+  const std::string_view host = rest.substr(0, colon);
+  // Debian's liblo sends over IPv4 only.
+  if (host.front() == '[' || host.find(':') != std::string_view::npos) {
+    return std::unexpected(url_error(url, "IPv6 addresses are not supported (liblo sends over IPv4): give an IPv4 address or a host name"));
   }
   const std::string_view port = rest.substr(colon + 1);
   int number = 0;
@@ -179,6 +179,7 @@ std::vector<OscMessage> stream_messages(const StreamFrame& frame, bool vmc) {
       if (frame.hands[h].seen && finite_hand(frame.hands[h])) add_vmc_hand(out, sides[h], frame.hands[h]);
     }
     for (const auto& [name, pose] : frame.bodies) {
+      if (!finite_pose(pose)) continue;
       OscMessage m{"/VMC/Ext/Tra/Pos", {name}};
       add_pose(m.args, to_unity(pose.translation), to_unity(pose.rotation));
       out.push_back(std::move(m));
@@ -200,6 +201,7 @@ std::vector<OscMessage> stream_messages(const StreamFrame& frame, bool vmc) {
     }
   }
   for (const auto& [name, pose] : frame.bodies) {
+    if (!finite_pose(pose)) continue;
     OscMessage m{"/rhot/body", {name}};
     add_pose(m.args, pose.translation, pose.rotation);
     out.push_back(std::move(m));
@@ -209,6 +211,7 @@ std::vector<OscMessage> stream_messages(const StreamFrame& frame, bool vmc) {
 
 std::expected<std::unique_ptr<OscStream>, std::string> OscStream::open(const StreamTarget& target) {
   addrinfo hints{};
+  hints.ai_family = AF_INET;  // what liblo resolves and sends to
   hints.ai_socktype = SOCK_DGRAM;
   addrinfo* found = nullptr;
   if (const int e = getaddrinfo(target.host.c_str(), target.port.c_str(), &hints, &found); e != 0) {
@@ -226,6 +229,7 @@ OscStream::OscStream(const StreamTarget& target) : target_(target) {
 }
 
 OscStream::~OscStream() {
+  if (sender_.joinable()) flush();  // every frame handed over is sent (or counted) first
   stop_.store(true);
   published_.fetch_add(1);  // wakes the sender to see stop_
   published_.notify_one();

@@ -43,8 +43,8 @@ struct StreamTarget {
   bool vmc = false;
 };
 
-// "osc://HOST:PORT" or "osc://HOST:PORT,vmc" (HOST a name, IPv4 address or [IPv6] address; PORT
-// 1-65535). Errors name what is wrong with the text.
+// "osc://HOST:PORT" or "osc://HOST:PORT,vmc" (HOST a name or an IPv4 address: Debian's liblo sends
+// over IPv4 only; PORT 1-65535). Errors name what is wrong with the text.
 [[nodiscard]] std::expected<StreamTarget, std::string> parse_stream_url(std::string_view url);
 
 // One frame as it is sent.
@@ -73,7 +73,8 @@ const std::array<HandJoint, 16>& vmc_hand_joints();
 
 class OscStream {
  public:
-  // Opens the UDP destination and starts the sender thread. Fails on a host that does not resolve.
+  // Opens the UDP destination and starts the sender thread. Fails on a host that does not resolve
+  // to an IPv4 address. Destroying it sends what was handed over first.
   [[nodiscard]] static std::expected<std::unique_ptr<OscStream>, std::string> open(const StreamTarget& target);
   ~OscStream();
   OscStream(const OscStream&) = delete;

@@ -129,6 +129,7 @@ TEST(PlanCli, BadInputGetsOneClearLine) {
   const fs::path dir = temp_dir();
   const std::string model = " --camera " + kAssets + "/rigs/room-8.yaml";
   const std::string out = " --out " + (dir / "x.yaml").string();
+  const std::string huge = "1" + std::string(400, '0');  // digits beyond a double's range
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"--volume 3x3 --cameras 4" + model + out,
        "rhot-plan: --volume: expected LxWxH in metres (length along X, width along Z, height), got \"3x3\"\n"},
@@ -137,6 +138,10 @@ TEST(PlanCli, BadInputGetsOneClearLine) {
       {"--volume 3x3x2 --cameras 4 --max-error-mm 2" + model + out, "rhot-plan: give one of --cameras and --max-error-mm\n"},
       {"--volume 3x3x2 --cameras 4 --ceiling-m 1" + model + out, "rhot-plan: ceiling: 1.00 m is not above the volume's top (2.00 m)\n"},
       {"--volume 3x3x2 --cameras 4 --camera /nonexistent.yaml" + out, "rhot-plan: /nonexistent.yaml: rig file not found\n"},
+      {"--volume 3x" + huge + "x2 --cameras 4" + model + out,
+       "rhot-plan: --volume: every side must be positive, got \"3x" + huge + "x2\"\n"},
+      {"--volume 3x" + huge + " --floor-only --cameras 4" + model + out,
+       "rhot-plan: --volume: every side must be positive, got \"3x" + huge + "\"\n"},
       {"--volume 3 --floor-only --cameras 4" + model + out,
        "rhot-plan: --volume: expected LxW in metres with --floor-only (length along X, width along Z), got \"3\"\n"},
       {"evaluate --rig " + kAssets + "/rigs/room-8.yaml --volume 1x1",
@@ -146,6 +151,19 @@ TEST(PlanCli, BadInputGetsOneClearLine) {
     const auto r = run_program("rhot-plan", args, "2>&1");
     EXPECT_EQ(r.exit_code, 1) << args;
     EXPECT_EQ(r.output, message) << args;
+  }
+  // Numbers the flags' own checks refuse, each said in words (CLI11 adds its hint to --help).
+  const std::vector<std::pair<std::string, std::string>> numbers = {
+      {"--sigma " + huge, "--sigma: expected a finite number, got " + huge},
+      {"--sigma abc", "--sigma: expected a number, got abc"},
+      {"--sigma 0", "--sigma: expected a number above 0, got 0"},
+      {"--wall-margin-m -1", "--wall-margin-m: expected 0 or more, got -1"},
+      {"--volume-centre 0 nan 0", "--volume-centre: expected a finite number, got nan"},
+  };
+  for (const auto& [flag, message] : numbers) {
+    const auto r = run_program("rhot-plan", "--volume 3x3x2 --cameras 4 " + flag + model + out, "2>&1");
+    EXPECT_NE(r.exit_code, 0) << flag;
+    EXPECT_EQ(r.output, message + "\nRun with --help for more information.\n") << flag;
   }
   EXPECT_FALSE(fs::exists(dir / "x.yaml")) << "a failed plan wrote a rig";
 }

@@ -53,6 +53,11 @@ std::string triple(const Eigen::Vector3d& v) { return number(v.x()) + " " + numb
 Eigen::Vector3d zxy_degrees(const Eigen::Quaterniond& q) {
   const Eigen::Matrix3d r = q.normalized().toRotationMatrix();
   const double x = std::asin(std::clamp(r(2, 1), -1.0, 1.0));
+  if (std::abs(r(2, 1)) > 1.0 - 1e-12) {
+    // cos x = 0: only z + y (or z - y) is defined; y = 0 and z takes it all, from
+    // R(0,0) = cos(z + s y) and R(1,0) = sin(z + s y) with y = 0.
+    return Eigen::Vector3d(std::atan2(r(1, 0), r(0, 0)), x, 0.0) * (180.0 / std::numbers::pi);
+  }
   const double z = std::atan2(-r(0, 1), r(1, 1));
   const double y = std::atan2(-r(2, 0), r(2, 2));
   return Eigen::Vector3d(z, x, y) * (180.0 / std::numbers::pi);

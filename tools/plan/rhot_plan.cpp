@@ -11,6 +11,7 @@
 // origin unless --volume-centre says otherwise. docs/planning.md explains the model and the
 // figures (coverage by 1, 2 and 3 cameras; predicted error from the Cramer-Rao bound).
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -43,6 +44,14 @@ namespace {
 
 using rhot::TrackingVolume;
 
+// A side of the volume: a number from the pattern's digits; nothing where it does not fit a double.
+std::optional<double> side_of(const std::string& digits) {
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+  if (ec != std::errc() || end != digits.data() + digits.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
 // "4.6x4.6x2" -> size X = 4.6, Z = 4.6, Y = 2.
 // With floor_only, "LxW" (or LxWxH, H ignored) -> the floor's layer, kFloorLayer_m high.
 constexpr double kFloorLayer_m = 0.05;
@@ -54,15 +63,16 @@ std::expected<Eigen::Vector3d, std::string> parse_volume(const std::string& text
     if (!std::regex_match(text, m, floor_pattern)) {
       return std::unexpected("--volume: expected LxW in metres with --floor-only (length along X, width along Z), got \"" + text + "\"");
     }
-    const Eigen::Vector3d size(std::stod(m[1]), kFloorLayer_m, std::stod(m[2]));
-    if (!(size.minCoeff() > 0.0) || !size.allFinite())
-      return std::unexpected("--volume: every side must be positive, got \"" + text + "\"");
-    return size;
+    const auto l = side_of(m[1]), w = side_of(m[2]);
+    if (!l || !w || !(*l > 0.0) || !(*w > 0.0)) return std::unexpected("--volume: every side must be positive, got \"" + text + "\"");
+    return Eigen::Vector3d(*l, kFloorLayer_m, *w);
   }
   if (!std::regex_match(text, m, pattern)) {
     return std::unexpected("--volume: expected LxWxH in metres (length along X, width along Z, height), got \"" + text + "\"");
   }
-  const Eigen::Vector3d size(std::stod(m[1]), std::stod(m[3]), std::stod(m[2]));
+  const auto l = side_of(m[1]), w = side_of(m[2]), h = side_of(m[3]);
+  if (!l || !w || !h) return std::unexpected("--volume: every side must be positive, got \"" + text + "\"");
+  const Eigen::Vector3d size(*l, *h, *w);
   if (!(size.minCoeff() > 0.0) || !size.allFinite()) return std::unexpected("--volume: every side must be positive, got \"" + text + "\"");
   return size;
 }
@@ -83,10 +93,13 @@ nlohmann::json report_json(const rhot::CoverageReport& r) {
   j["coverage_1"] = r.coverage_1;
   j["coverage_2"] = r.coverage_2;
   j["coverage_3"] = r.coverage_3;
-  j["predicted_median_mm"] = r.predicted_median_mm;
-  j["predicted_p95_mm"] = r.predicted_p95_mm;
-  j["predicted_max_mm"] = std::isfinite(r.predicted_max_mm) ? nlohmann::json(r.predicted_max_mm) : nlohmann::json(nullptr);
-  j["worst_point_m"] = {r.worst_point_m.x(), r.worst_point_m.y(), r.worst_point_m.z()};
+  // null where nothing is seen by two cameras (or, for the maximum, two see a point along one line)
+  const auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  j["predicted_median_mm"] = number_or_null(r.predicted_median_mm);
+  j["predicted_p95_mm"] = number_or_null(r.predicted_p95_mm);
+  j["predicted_max_mm"] = number_or_null(r.predicted_max_mm);
+  j["worst_point_m"] = r.worst_point_m.allFinite() ? nlohmann::json({r.worst_point_m.x(), r.worst_point_m.y(), r.worst_point_m.z()})
+                                                   : nlohmann::json(nullptr);
   return j;
 }
 
@@ -208,15 +221,24 @@ int main(int argc, char** argv) {
 
   CLI::App app{"rhot-plan: place cameras of one model around a volume to track (coverage and predicted error), or evaluate a rig"};
   app.require_subcommand(0, 1);
-  const auto finite = CLI::Validator(
-      [](std::string& text) -> std::string {
-        try {
-          return std::isfinite(std::stod(text)) ? std::string() : "expected a finite number, got " + text;
-        } catch (const std::exception&) {
+  // Numbers from the command line: the whole text one finite number, above 0 or at least 0 where
+  // the option needs it; each failure said in words.
+  enum class Bound { kAny, kPositive, kNonNegative };
+  const auto number = [](Bound bound) {
+    return CLI::Validator(
+        [bound](std::string& text) -> std::string {
+          double v = 0.0;
+          const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+          if (ec == std::errc::result_out_of_range || (ec == std::errc() && !std::isfinite(v)))
+            return "expected a finite number, got " + text;
+          if (ec != std::errc() || end != text.data() + text.size()) return "expected a number, got " + text;
+          if (bound == Bound::kPositive && !(v > 0.0)) return "expected a number above 0, got " + text;
+          if (bound == Bound::kNonNegative && !(v >= 0.0)) return "expected 0 or more, got " + text;
           return {};
-        }
-      },
-      "");
+        },
+        "");
+  };
+  const CLI::Validator finite = number(Bound::kAny), positive = number(Bound::kPositive), non_negative = number(Bound::kNonNegative);
 
   std::string volume_text, camera_file, out_file, mount = "both", pictures;
   std::vector<double> centre;
@@ -231,15 +253,14 @@ int main(int argc, char** argv) {
   app.add_option("--camera", camera_file, "camera model: a rig file whose first camera gives resolution, focal length and distortion");
   app.add_option("--cameras", plan.cameras, "how many cameras to place")->check(CLI::Range(1, 256));
   app.add_option("--max-error-mm", plan.max_error_mm, "instead of --cameras: as few cameras as bring the worst predicted error to this")
-      ->check(CLI::PositiveNumber & finite);
+      ->check(positive);
   app.add_option("--min-views", plan.min_views, "cameras that must see each place")->capture_default_str()->check(CLI::Range(1, 16));
   app.add_option("--mount", mount, "where cameras may go")->capture_default_str()->check(CLI::IsMember({"ceiling", "walls", "both"}));
-  app.add_option("--ceiling-m", plan.ceiling_m, "height of the ceiling mount (default: the volume's top + 1 m)")
-      ->check(CLI::PositiveNumber & finite);
+  app.add_option("--ceiling-m", plan.ceiling_m, "height of the ceiling mount (default: the volume's top + 1 m)")->check(positive);
   app.add_option("--wall-margin-m", plan.wall_margin_m, "how far outside the volume the walls stand")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber & finite);
-  app.add_option("--sigma", plan.sigma_px, "detection noise, pixels per axis")->capture_default_str()->check(CLI::PositiveNumber & finite);
+      ->check(non_negative);
+  app.add_option("--sigma", plan.sigma_px, "detection noise, pixels per axis")->capture_default_str()->check(positive);
   app.add_option("--out", out_file, "the planned rig (OpenCV YAML)");
   app.add_option("--pictures", pictures, "folder for the pictures (default: the rig's folder)");
   app.add_flag("--json", json, "print a JSON report on stdout");
@@ -254,11 +275,8 @@ int main(int argc, char** argv) {
   evaluate->add_option("--volume-centre", eval_centre, "centre of that volume, X Y Z metres (default: on the floor at the origin)")
       ->expected(3)
       ->check(finite);
-  evaluate->add_option("--sigma", coverage.sigma_px, "detection noise, pixels per axis")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber & finite);
-  evaluate->add_option("--grid-step-m", coverage.grid_step_m, "grid spacing (default: about 20,000 points)")
-      ->check(CLI::PositiveNumber & finite);
+  evaluate->add_option("--sigma", coverage.sigma_px, "detection noise, pixels per axis")->capture_default_str()->check(positive);
+  evaluate->add_option("--grid-step-m", coverage.grid_step_m, "grid spacing (default: about 20,000 points)")->check(positive);
   evaluate->add_option("--slices-m", slices, "heights of the pictures' slices, metres")->delimiter(',')->check(finite);
   evaluate->add_option("--pictures", eval_pictures, "write the pictures into this folder");
   evaluate->add_flag("--json", eval_json, "print a JSON report on stdout");

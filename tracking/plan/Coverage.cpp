@@ -52,9 +52,10 @@ std::optional<Eigen::Matrix3d> predicted_covariance(std::span<const CameraProjec
 std::expected<CoverageReport, std::string> evaluate_coverage(const CameraRig& rig, const TrackingVolume& volume,
                                                              const CoverageSettings& settings) {
   if (rig.cameras.empty()) return std::unexpected(std::string("the rig has no cameras"));
-  if (!volume.centre_m.allFinite() || !volume.size_m.allFinite() || !(volume.size_m.minCoeff() > 0.0)) {
+  if (!volume.size_m.allFinite() || !(volume.size_m.minCoeff() > 0.0)) {
     return std::unexpected(std::string("volume: every side must be positive and finite"));
   }
+  if (!volume.centre_m.allFinite()) return std::unexpected(std::string("volume: its centre must be finite"));
   if (!(settings.sigma_px > 0.0) || !std::isfinite(settings.sigma_px)) return std::unexpected(std::string("sigma: must be positive"));
   if (!(settings.grid_step_m >= 0.0) || !std::isfinite(settings.grid_step_m)) {
     return std::unexpected(std::string("grid step: must be positive (or 0 for automatic)"));
@@ -121,6 +122,12 @@ std::expected<CoverageReport, std::string> evaluate_coverage(const CameraRig& ri
   out.coverage_1 = static_cast<double>(seen[1]) / total;
   out.coverage_2 = static_cast<double>(seen[2]) / total;
   out.coverage_3 = static_cast<double>(seen[3]) / total;
+  if (errors_mm.empty()) {
+    // No point seen by two cameras: no error to predict anywhere.
+    out.predicted_median_mm = out.predicted_p95_mm = out.predicted_max_mm = std::numeric_limits<double>::quiet_NaN();
+    out.worst_point_m.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return out;
+  }
   out.predicted_median_mm = quantile(errors_mm, 0.5);
   out.predicted_p95_mm = quantile(errors_mm, 0.95);
   return out;

@@ -62,6 +62,7 @@ struct CoverageReport {
   // Over the points seen by two or more: the error's median and 95th percentile (see above), and
   // the worst point's 95th percentile bound, 2.796 sqrt(largest eigenvalue of C) (the chi-square
   // 95 % radius for three degrees of freedom along the worst axis: never below the true value).
+  // All three NaN (and the worst point) when no point is seen by two cameras.
   double predicted_median_mm = 0.0;
   double predicted_p95_mm = 0.0;
   double predicted_max_mm = 0.0;

@@ -93,7 +93,8 @@ class Search {
     int k_seen = 0;
     int two_seen = 0;
     double max_mm = 0.0;
-    // Lower, seen by two cameras everywhere it was, and by K at at least `k_floor` points.
+    // Lower, with as many points seen by two cameras (a count, not the same points), and at least
+    // `k_floor` seen by K.
     bool better_than(const Worst& o, int k_floor) const {
       return k_seen >= k_floor && two_seen >= o.two_seen && max_mm < o.max_mm * (1.0 - 1e-6);
     }
@@ -214,10 +215,19 @@ std::vector<Eigen::Vector3d> aim_points(const TrackingVolume& v) {
 
 std::vector<Candidate> candidate_poses(const Camera& model, const TrackingVolume& v, const PlanSettings& s, double ceiling) {
   std::vector<Candidate> out;
-  int place = -1;
+  // Places by position: a wall's top row can meet the ceiling grid's edge, and one place holds one
+  // camera whichever mount offers it.
+  std::vector<Eigen::Vector3d> places;
+  const auto place_of = [&](const Eigen::Vector3d& position) {
+    for (std::size_t p = 0; p < places.size(); ++p) {
+      if ((places[p] - position).norm() < 1e-6) return static_cast<int>(p);
+    }
+    places.push_back(position);
+    return static_cast<int>(places.size()) - 1;
+  };
   const auto add = [&](const Eigen::Vector3d& position, const Eigen::Vector3d& target, bool ceiling_mount) {
     Candidate c;
-    c.place = place;
+    c.place = place_of(position);
     c.camera.intrinsics = model.intrinsics;
     c.camera.cam_from_world = look(position, target);
     c.ceiling = ceiling_mount;
@@ -231,7 +241,6 @@ std::vector<Candidate> candidate_poses(const Camera& model, const TrackingVolume
       for (int j = 0; j < kAcross; ++j) {
         const Eigen::Vector3d at(v.centre_m.x() + half_x * (2.0 * i / (kAcross - 1) - 1.0), ceiling,
                                  v.centre_m.z() + half_z * (2.0 * j / (kAcross - 1) - 1.0));
-        ++place;
         add(at, {at.x(), v.centre_m.y() - 0.5 * v.size_m.y(), at.z()}, true);  // straight down
         for (const Eigen::Vector3d& aim : aims) {
           // Tilted towards an aim point unless that is all but straight down already.
@@ -243,7 +252,7 @@ std::vector<Candidate> candidate_poses(const Camera& model, const TrackingVolume
   if (s.mount != Mount::kCeiling) {
     const double top = v.centre_m.y() + 0.5 * v.size_m.y();
     const double perimeter = 4.0 * (half_x + half_z);
-    const int around = std::clamp(static_cast<int>(perimeter / 0.5), 16, 64);
+    const int around = static_cast<int>(std::clamp(perimeter / 0.5, 16.0, 64.0));
     for (int n = 0; n < around; ++n) {
       // Walk the walls' rectangle at equal steps, corners included.
       double t = perimeter * n / around;
@@ -261,7 +270,6 @@ std::vector<Candidate> candidate_poses(const Camera& model, const TrackingVolume
       at += Eigen::Vector3d(v.centre_m.x(), 0.0, v.centre_m.z());
       for (const double h : {0.5, 1.0}) {
         at.y() = top + h * (ceiling - top);
-        ++place;
         for (const Eigen::Vector3d& aim : aims) add(at, aim, false);
       }
     }
@@ -277,8 +285,12 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
   if (k.width_px <= 0 || k.height_px <= 0 || !(k.fx > 0.0) || !(k.fy > 0.0) || !std::isfinite(k.fx) || !std::isfinite(k.fy)) {
     return std::unexpected(std::string("camera model: needs a positive image size and focal length"));
   }
-  if (!volume.centre_m.allFinite() || !volume.size_m.allFinite() || !(volume.size_m.minCoeff() > 0.0)) {
+  if (!volume.size_m.allFinite() || !(volume.size_m.minCoeff() > 0.0)) {
     return std::unexpected(std::string("volume: every side must be positive and finite"));
+  }
+  if (volume.size_m.maxCoeff() > 1000.0) return std::unexpected(std::string("volume: sides of up to 1000 m"));
+  if (!volume.centre_m.allFinite() || volume.centre_m.cwiseAbs().maxCoeff() > 1e4) {
+    return std::unexpected(std::string("volume: its centre must be finite and within 10 km"));
   }
   const double bottom = volume.centre_m.y() - 0.5 * volume.size_m.y(), top = volume.centre_m.y() + 0.5 * volume.size_m.y();
   if (bottom < -1e-9) return std::unexpected(fmt::format("volume: reaches {:.2f} m below the floor (Y = 0)", -bottom));
@@ -289,7 +301,8 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
   if (s.min_views < 1) return std::unexpected(std::string("min views: at least 1"));
   if (!(s.sigma_px > 0.0) || !std::isfinite(s.sigma_px)) return std::unexpected(std::string("sigma: must be positive"));
   if (!(s.wall_margin_m >= 0.0) || !std::isfinite(s.wall_margin_m)) return std::unexpected(std::string("wall margin: must be 0 or more"));
-  if (s.cameras < 0 || s.cameras > 256) return std::unexpected(std::string("cameras: from 1 to 256"));
+  if (s.cameras < 0 || s.cameras > 256) return std::unexpected(std::string("cameras: at most 256 (0: as few as reach the maximum error)"));
+  if (s.cameras == 0 && s.max_cameras < s.min_views) return std::unexpected(std::string("max cameras: fewer than min views"));
   if (s.cameras == 0 && !(s.max_error_mm > 0.0 && std::isfinite(s.max_error_mm))) {
     return std::unexpected(std::string("give a number of cameras or a maximum error"));
   }
@@ -298,7 +311,11 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
   // and edges included (the worst errors are there), about grid_points points.
   if (s.grid_points < 8 || s.grid_points > 1000000) return std::unexpected(std::string("grid points: from 8 to 1,000,000"));
   const double spacing = std::cbrt(volume.size_m.prod() / s.grid_points);
-  const Eigen::Vector3i cells = (volume.size_m / spacing).array().round().max(1.0).cast<int>();
+  const Eigen::Vector3d cells_d = (volume.size_m / spacing).array().round().max(1.0);
+  if ((cells_d.array() + 1.0).prod() > 4e6) {
+    return std::unexpected(std::string("volume: too thin for its length and width (over 4 million grid points): plan it in parts"));
+  }
+  const Eigen::Vector3i cells = cells_d.cast<int>();
   const Eigen::Vector3d low = volume.centre_m - 0.5 * volume.size_m;
   const Eigen::Vector3d step = volume.size_m.cwiseQuotient(cells.cast<double>());
   std::vector<Eigen::Vector3d> points;
@@ -370,7 +387,7 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
     return swaps;
   };
   // Then the worst point: each camera in turn moved where the largest predicted error falls most,
-  // keeping every point seen by two that was, and at least k_floor points seen by K.
+  // keeping as many points seen by two as before, and at least k_floor points seen by K.
   const auto lower_worst = [&](int k_floor) {
     int moves = 0;
     for (int pass = 0; pass < 6; ++pass) {
@@ -407,7 +424,9 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
   fine.sigma_px = s.sigma_px;
   fine.samples_per_point = 1;
   double best_error = std::numeric_limits<double>::infinity(), best_cover = 0.0;
-  for (int n = 1; n <= std::min<int>(s.max_cameras, static_cast<int>(search.places())); ++n) {
+  const int most = std::min<int>(s.max_cameras, static_cast<int>(search.places()));
+  const int views_needed = std::max(s.min_views, 2);  // an error is predicted only where two see
+  for (int n = 1; n <= most; ++n) {
     search.add(search.best_addition().first);
     if (n < s.min_views) continue;
     const int need = static_cast<int>(std::ceil(0.99 * static_cast<double>(points.size())));
@@ -418,7 +437,7 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
         static_cast<double>(std::count_if(report->views.begin(), report->views.end(), [&](int v) { return v >= s.min_views; })) /
         static_cast<double>(report->views.size());
     if (progress)
-      progress(fmt::format("{} cameras: {:.1f} % seen by {} or more, worst predicted error {:.2f} mm", n, 100.0 * cover, s.min_views,
+      progress(fmt::format("{} cameras: {:.1f} % seen by {} or more, worst predicted error {:.2f} mm", n, 100.0 * cover, views_needed,
                            report->predicted_max_mm));
     if (cover >= 0.99 && report->predicted_max_mm <= s.max_error_mm) {
       plan.rig = rig_of();
@@ -430,10 +449,10 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
   if (best_cover < 0.99) {
     return std::unexpected(
         fmt::format("max error: {:.2f} mm cannot be reached: {} cameras of this model see at most {:.1f} % of the volume with {} views",
-                    s.max_error_mm, s.max_cameras, 100.0 * best_cover, s.min_views));
+                    s.max_error_mm, most, 100.0 * best_cover, views_needed));
   }
   return std::unexpected(fmt::format("max error: {:.2f} mm cannot be reached with up to {} cameras of this model (the best: {:.2f} mm)",
-                                     s.max_error_mm, s.max_cameras, best_error));
+                                     s.max_error_mm, most, best_error));
 }
 
 }  // namespace rhot

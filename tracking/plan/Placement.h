@@ -15,7 +15,7 @@
 // corners and edges included) computed once; cameras added greedily, each the candidate that
 // raises the score most; the set improved by swapping one camera at a time for a better candidate
 // until no swap helps; then each camera moved where the worst point's predicted error falls most,
-// keeping every point seen by two that was and coverage by K within 1 % of the volume. The score
+// keeping as many points seen by two as before and coverage by K within 1 % of the volume. The score
 // over the lattice's points:
 //     min(views, K) / K  +  0.5 [views >= 2]  -  0.1 ln(1 + rms_error / ref)   (last: views >= 2)
 // so coverage by K cameras comes first, coverage by two next, and the predicted error (Cramer-Rao

@@ -116,8 +116,19 @@ std::expected<void, std::string> write_plan_top_view(const std::filesystem::path
   const int w = static_cast<int>((hi.x() - lo.x()) * scale), h = static_cast<int>((hi.y() - lo.y()) * scale);
   cv::Mat image(h + 30, w, CV_8UC3, cv::Scalar(30, 30, 30));
   const auto at = [&](double x, double z) { return cv::Point2d((x - lo.x()) * scale, (z - lo.y()) * scale); };
-  for (double x = std::ceil(lo.x()); x <= hi.x(); x += 1.0) cv::line(image, at(x, lo.y()), at(x, hi.y()), cv::Scalar(50, 50, 50), 1);
-  for (double z = std::ceil(lo.y()); z <= hi.y(); z += 1.0) cv::line(image, at(lo.x(), z), at(hi.x(), z), cv::Scalar(50, 50, 50), 1);
+  // A line a metre, where there are few enough to see (a counted loop: far cameras make huge
+  // coordinates, where adding 1 m changes nothing).
+  const Eigen::Vector2d span = hi - lo;
+  if (span.maxCoeff() < 1000.0) {
+    for (int i = 0; i <= static_cast<int>(span.x()); ++i) {
+      const double x = std::ceil(lo.x()) + i;
+      cv::line(image, at(x, lo.y()), at(x, hi.y()), cv::Scalar(50, 50, 50), 1);
+    }
+    for (int i = 0; i <= static_cast<int>(span.y()); ++i) {
+      const double z = std::ceil(lo.y()) + i;
+      cv::line(image, at(lo.x(), z), at(hi.x(), z), cv::Scalar(50, 50, 50), 1);
+    }
+  }
   const double floor_y = volume.centre_m.y() - 0.5 * volume.size_m.y();
   for (const Camera& c : rig.cameras) {
     // The image's border, sampled, cast onto the plane Y = floor_y.

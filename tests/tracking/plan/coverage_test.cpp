@@ -1,6 +1,7 @@
 #include "tracking/plan/Coverage.h"
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -101,12 +102,25 @@ TEST(Coverage, PredictedErrorQuantilesAreWhatTriangulationMeasures) {
   EXPECT_GT(report->predicted_max_mm, p95);
 }
 
+// One camera: coverage by one, no point triangulated, so no error is predicted (not 0 mm).
+TEST(Coverage, NoPointSeenByTwoPredictsNoError) {
+  CameraRig rig;
+  rig.cameras.push_back(square_camera("a", {0.0, 5.0, 0.0}, {0.0, 0.0, 1e-6}));
+  const auto report = evaluate_coverage(rig, {{0, 0.5, 0}, {2, 1, 2}});
+  ASSERT_TRUE(report.has_value()) << report.error();
+  EXPECT_EQ(report->coverage_1, 1.0);
+  EXPECT_EQ(report->coverage_2, 0.0);
+  EXPECT_TRUE(std::isnan(report->predicted_median_mm));
+  EXPECT_TRUE(std::isnan(report->predicted_p95_mm));
+  EXPECT_TRUE(std::isnan(report->predicted_max_mm));
+}
+
 TEST(Coverage, BadInputIsRefusedWithTheReason) {
   const CameraRig rig = two_ceiling_cameras(1.0);
   const TrackingVolume box{{0, 1, 0}, {1, 1, 1}};
   EXPECT_EQ(evaluate_coverage(CameraRig{}, box).error(), "the rig has no cameras");
   EXPECT_EQ(evaluate_coverage(rig, {{0, 1, 0}, {1, 0, 1}}).error(), "volume: every side must be positive and finite");
-  EXPECT_EQ(evaluate_coverage(rig, {{0, NAN, 0}, {1, 1, 1}}).error(), "volume: every side must be positive and finite");
+  EXPECT_EQ(evaluate_coverage(rig, {{0, NAN, 0}, {1, 1, 1}}).error(), "volume: its centre must be finite");
   CoverageSettings s;
   s.sigma_px = 0.0;
   EXPECT_EQ(evaluate_coverage(rig, box, s).error(), "sigma: must be positive");
