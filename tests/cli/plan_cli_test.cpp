@@ -94,19 +94,19 @@ TEST(PlanCli, PredictedErrorsAreWhatASimulatedRunOnThePlannedRigMeasures) {
   }
 }
 
-// Only the floor: a 5 cm layer on it, every camera above it.
+// Only the floor: a 5 cm layer on it, every camera above it; the rig's folder is made.
 TEST(PlanCli, PlansForTheFloorOnly) {
   const fs::path dir = temp_dir();
   const auto r = run_program("rhot-plan",
                              "--volume 4x3 --floor-only --camera " + kAssets + "/rigs/room-8.yaml --cameras 4 --ceiling-m 2.5 --out " +
-                                 (dir / "floor.yaml").string() + " --json",
+                                 (dir / "new" / "floor.yaml").string() + " --json",
                              "2>/dev/null");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["volume_size_m"], nlohmann::json({4.0, 0.05, 3.0}));
   EXPECT_EQ(j["volume_centre_m"], nlohmann::json({0.0, 0.025, 0.0}));
   EXPECT_GT(j["coverage_3"].get<double>(), 0.95);
-  const auto rig = rhot::load_rig(dir / "floor.yaml");
+  const auto rig = rhot::load_rig(dir / "new" / "floor.yaml");  // its folder made
   ASSERT_TRUE(rig.has_value()) << rig.error();
   for (const rhot::Camera& c : rig->cameras) EXPECT_GT(c.centre_world().y(), 0.05) << c.name;
 }
@@ -151,6 +151,14 @@ TEST(PlanCli, BadInputGetsOneClearLine) {
     const auto r = run_program("rhot-plan", args, "2>&1");
     EXPECT_EQ(r.exit_code, 1) << args;
     EXPECT_EQ(r.output, message) << args;
+  }
+  // A folder for the rig that cannot be made: said before planning.
+  {
+    std::ofstream(dir / "a-file") << "not a folder";
+    const auto r =
+        run_program("rhot-plan", "--volume 3x3x2 --cameras 4" + model + " --out " + (dir / "a-file" / "x.yaml").string(), "2>&1");
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_EQ(r.output, "rhot-plan: --out: cannot make the folder " + (dir / "a-file").string() + ": Not a directory\n");
   }
   // Numbers the flags' own checks refuse, each said in words (CLI11 adds its hint to --help).
   const std::vector<std::pair<std::string, std::string>> numbers = {

@@ -10,47 +10,19 @@
 #include <gtest/gtest.h>
 
 #include "engine/tracked/Recording.h"
+#include "tests/support/OscReceiver.h"
 #include "tests/support/RunCommand.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Message {
-  std::string path;
-  std::vector<std::string> strings;
-  std::vector<double> numbers;
-};
+using Message = rhot::test::OscReceived;
 
-// liblo's server on a port the kernel picks; datagrams queue in its socket until drained.
-class Receiver {
- public:
-  Receiver() {
-    server_ = lo_server_new_with_proto(nullptr, LO_UDP, nullptr);
-    lo_server_add_method(server_, nullptr, nullptr, &Receiver::handle, this);
-  }
-  ~Receiver() { lo_server_free(server_); }
-  std::string url(bool vmc) const { return "osc://127.0.0.1:" + std::to_string(lo_server_get_port(server_)) + (vmc ? ",vmc" : ""); }
-  const std::vector<Message>& drain() {
-    while (lo_server_recv_noblock(server_, 300) > 0) {
-    }
-    return messages_;
-  }
-
- private:
-  static int handle(const char* path, const char* types, lo_arg** argv, int argc, lo_message, void* self) {
-    Message m{path, {}, {}};
-    for (int i = 0; i < argc; ++i) {
-      if (types[i] == 's') m.strings.emplace_back(&argv[i]->s);
-      if (types[i] == 'f') m.numbers.push_back(static_cast<double>(argv[i]->f));
-      if (types[i] == 'i') m.numbers.push_back(argv[i]->i);
-    }
-    static_cast<Receiver*>(self)->messages_.push_back(std::move(m));
-    return 0;
-  }
-  lo_server server_ = nullptr;
-  std::vector<Message> messages_;
-};
+// The demo's destination for a receiver.
+std::string url_of(const rhot::test::OscReceiver& receiver, bool vmc) {
+  return "osc://127.0.0.1:" + std::to_string(receiver.port()) + (vmc ? ",vmc" : "");
+}
 
 fs::path temp_dir() {
   const fs::path d = fs::path(::testing::TempDir()) / "rhot_stream_cli" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
@@ -64,8 +36,8 @@ fs::path temp_dir() {
 // fast as it can; on a busy machine the sender may find a newer frame waiting and skip the older
 // one, which the demo reports.)
 TEST(StreamCli, TheDemoStreamsItsFramesAsVmc) {
-  Receiver receiver;
-  const auto demo = rhot::test::run_program("rhot-demo", "--headless --frames 30 --eye 64x64 --stream " + receiver.url(true), "2>&1");
+  rhot::test::OscReceiver receiver;
+  const auto demo = rhot::test::run_program("rhot-demo", "--headless --frames 30 --eye 64x64 --stream " + url_of(receiver, true), "2>&1");
   ASSERT_EQ(demo.exit_code, 0) << demo.output;
   const auto counts = demo.output.find(": 30 frames, ");
   ASSERT_NE(counts, std::string::npos) << demo.output;
@@ -103,9 +75,9 @@ TEST(StreamCli, AReplayStreamsTheRecordedJoints) {
   const auto recording = rhot::load_recording(rec);
   ASSERT_TRUE(recording.has_value()) << recording.error();
 
-  Receiver receiver;
+  rhot::test::OscReceiver receiver;
   const auto replay = rhot::test::run_program(
-      "rhot-demo", "--headless --frames 30 --eye 64x64 --source replay:" + rec.string() + " --stream " + receiver.url(false), "2>&1");
+      "rhot-demo", "--headless --frames 30 --eye 64x64 --source replay:" + rec.string() + " --stream " + url_of(receiver, false), "2>&1");
   ASSERT_EQ(replay.exit_code, 0) << replay.output;
   int checked = 0;
   for (const Message& m : receiver.drain()) {

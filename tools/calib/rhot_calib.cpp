@@ -21,22 +21,13 @@
 #include <spdlog/spdlog.h>
 
 #include "tools/calib/Calib.h"
+#include "tools/common/NumberChecks.h"
 #include "tracking/camera/RigFile.h"
 
 namespace rhot::calib_tool {
 
 const CLI::Validator& finite_number() {
-  static const CLI::Validator validator(
-      [](std::string& text) -> std::string {
-        double value = 0.0;
-        try {
-          value = std::stod(text);
-        } catch (const std::exception&) {
-          return {};  // not a number at all: CLI11's own conversion says so
-        }
-        return std::isfinite(value) ? std::string() : "expected a finite number, got " + text;
-      },
-      "");
+  static const CLI::Validator validator = number_check(NumberBound::kAny);
   return validator;
 }
 

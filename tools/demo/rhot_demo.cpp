@@ -35,6 +35,7 @@
 #include "tracking/sim/Realism.h"
 #include "tracking/net/NodeSource.h"
 #include "tracking/source/VideoSource.h"
+#include "tools/common/NumberChecks.h"
 
 #ifndef RHOT_ASSET_DIR
 #error "RHOT_ASSET_DIR must name the assets folder"
@@ -95,7 +96,7 @@ void add_options(CLI::App& cli, Options& o) {
   cli.add_option("--rate-hz", o.loop.rate_hz, "Fixed simulation rate")->capture_default_str()->check(CLI::Range(1.0, 10000.0));
   cli.add_option("--budget-ms", o.loop.budget_ms, "Frame budget; slower frames count as misses")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(rhot::number_check(rhot::NumberBound::kPositive));
   cli.add_option("--log-level", o.log_level, "trace, debug, info, warn, error or off")
       ->capture_default_str()
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));

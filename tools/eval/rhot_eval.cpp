@@ -46,6 +46,7 @@
 #include "tracking/sim/SimulatedRig.h"
 
 #include "tools/eval/Eval.h"
+#include "tools/common/NumberChecks.h"
 
 using namespace rhot::eval;  // NOLINT: the subcommands
 
@@ -192,7 +193,7 @@ int main(int argc, char** argv) {
                   "every place as likely: what rhot-plan predicts over)")
       ->capture_default_str()
       ->check(CLI::IsMember({"wander", "uniform"}));
-  tri->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
+  tri->add_option("--volume-m", volume, volume_help)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
   tri->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   tri->add_flag("--json", json, "print JSON (the only output format)");
   auto* wand_cmd = app.add_subcommand("wand", "length of a two-marker wand waved through the volume (mean and RMS error)");
@@ -205,7 +206,7 @@ int main(int argc, char** argv) {
   wand_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
-  wand_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
+  wand_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
   wand_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   wand_cmd->add_flag("--json", json, "print JSON (the only output format)");
   auto* stars_cmd = app.add_subcommand("stars", "marker stars moving through the volume: identification and pose against the truth");
@@ -220,7 +221,7 @@ int main(int argc, char** argv) {
   add_world_flags(*stars_cmd, world, false);
   stars_cmd->add_option("--frames", frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
   stars_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  stars_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(CLI::PositiveNumber);
+  stars_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
   stars_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3);
   stars_cmd->add_flag("--json", json, "print JSON (the only output format)");
   HandsArgs hands_args;

@@ -35,6 +35,7 @@
 
 #include "tracking/camera/RigFile.h"
 #include "base/Json.h"
+#include "tools/common/NumberChecks.h"
 #include "tracking/plan/Coverage.h"
 #include "tracking/plan/JoinGraph.h"
 #include "tracking/plan/PlanPictures.h"
@@ -221,24 +222,9 @@ int main(int argc, char** argv) {
 
   CLI::App app{"rhot-plan: place cameras of one model around a volume to track (coverage and predicted error), or evaluate a rig"};
   app.require_subcommand(0, 1);
-  // Numbers from the command line: the whole text one finite number, above 0 or at least 0 where
-  // the option needs it; each failure said in words.
-  enum class Bound { kAny, kPositive, kNonNegative };
-  const auto number = [](Bound bound) {
-    return CLI::Validator(
-        [bound](std::string& text) -> std::string {
-          double v = 0.0;
-          const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-          if (ec == std::errc::result_out_of_range || (ec == std::errc() && !std::isfinite(v)))
-            return "expected a finite number, got " + text;
-          if (ec != std::errc() || end != text.data() + text.size()) return "expected a number, got " + text;
-          if (bound == Bound::kPositive && !(v > 0.0)) return "expected a number above 0, got " + text;
-          if (bound == Bound::kNonNegative && !(v >= 0.0)) return "expected 0 or more, got " + text;
-          return {};
-        },
-        "");
-  };
-  const CLI::Validator finite = number(Bound::kAny), positive = number(Bound::kPositive), non_negative = number(Bound::kNonNegative);
+  const CLI::Validator finite = rhot::number_check(rhot::NumberBound::kAny);
+  const CLI::Validator positive = rhot::number_check(rhot::NumberBound::kPositive);
+  const CLI::Validator non_negative = rhot::number_check(rhot::NumberBound::kNonNegative);
 
   std::string volume_text, camera_file, out_file, mount = "both", pictures;
   std::vector<double> centre;
@@ -335,6 +321,12 @@ int main(int argc, char** argv) {
   const TrackingVolume volume = volume_of(*size, centre);
   const auto model = rhot::load_rig(camera_file);
   if (!model) return fail(model.error());
+  // The rig's folder is made before planning, so that a path that cannot be written fails first.
+  if (const auto folder = std::filesystem::path(out_file).parent_path(); !folder.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec) return fail("--out: cannot make the folder " + folder.string() + ": " + ec.message());
+  }
   plan.mount = mount == "ceiling" ? rhot::Mount::kCeiling : mount == "walls" ? rhot::Mount::kWalls : rhot::Mount::kBoth;
   const auto planned = rhot::plan_rig(model->cameras.front(), volume, plan, [](const std::string& line) { spdlog::info("{}", line); });
   if (!planned) return fail(planned.error());

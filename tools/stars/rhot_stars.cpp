@@ -29,6 +29,7 @@
 
 #include "tracking/rigid/StarGenerator.h"
 #include "tracking/rigid/StarSet.h"
+#include "tools/common/NumberChecks.h"
 
 namespace {
 
@@ -184,7 +185,7 @@ int main(int argc, char** argv) {
   app.add_option("--seed", settings.seed, "random seed")->capture_default_str();
   app.add_option("--max-stars", settings.max_stars, "stop after this many stars (0: as many as fit)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(rhot::number_check(rhot::NumberBound::kNonNegative));
   app.add_flag("--no-meshes", no_meshes, "write the JSON and the picture only");
   CLI11_PARSE(app, argc, argv);
 

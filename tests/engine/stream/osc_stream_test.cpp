@@ -22,6 +22,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/OscReceiver.h"
 #include "tracking/hand/JointFrames.h"
 
 namespace rhot {
@@ -87,43 +88,8 @@ TrackingResults two_hands(double t_s) {
   return r;
 }
 
-struct Received {
-  std::string path;
-  std::string types;
-  std::vector<std::string> strings;
-  std::vector<double> numbers;  // ints and floats, in order
-};
-
-// liblo's server on a free port, collecting every message.
-class Receiver {
- public:
-  Receiver() {
-    server_ = lo_server_new_with_proto(nullptr, LO_UDP, nullptr);
-    lo_server_add_method(server_, nullptr, nullptr, &Receiver::handle, this);
-  }
-  ~Receiver() { lo_server_free(server_); }
-  int port() const { return lo_server_get_port(server_); }
-  // Receives until `count` messages are in or a second passes without one.
-  const std::vector<Received>& receive(std::size_t count) {
-    while (messages_.size() < count && lo_server_recv_noblock(server_, 1000) > 0) {
-    }
-    return messages_;
-  }
-
- private:
-  static int handle(const char* path, const char* types, lo_arg** argv, int argc, lo_message, void* self) {
-    Received r{path, types, {}, {}};
-    for (int i = 0; i < argc; ++i) {
-      if (types[i] == 's') r.strings.emplace_back(&argv[i]->s);
-      if (types[i] == 'f') r.numbers.push_back(static_cast<double>(argv[i]->f));
-      if (types[i] == 'i') r.numbers.push_back(argv[i]->i);
-    }
-    static_cast<Receiver*>(self)->messages_.push_back(std::move(r));
-    return 0;
-  }
-  lo_server server_ = nullptr;
-  std::vector<Received> messages_;
-};
+using Received = rhot::test::OscReceived;
+using Receiver = rhot::test::OscReceiver;
 
 Eigen::Vector3d position_of(const Received& m) { return {m.numbers[0], m.numbers[1], m.numbers[2]}; }
 Eigen::Quaterniond rotation_of(const Received& m) { return Eigen::Quaterniond(m.numbers[6], m.numbers[3], m.numbers[4], m.numbers[5]); }
