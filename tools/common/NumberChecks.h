@@ -25,13 +25,16 @@ inline CLI::Validator number_check(NumberBound bound) {
       [bound](std::string& text) -> std::string {
         double v = 0.0;
         const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-        if (ec == std::errc::result_out_of_range || (ec == std::errc() && !std::isfinite(v))) return "expected a finite number, got " + text;
+        if (ec == std::errc::result_out_of_range || (ec == std::errc() && !std::isfinite(v)))
+          return "expected a finite number, got " + text;
         if (ec != std::errc() || end != text.data() + text.size()) return "expected a number, got " + text;
         if (bound == NumberBound::kPositive && !(v > 0.0)) return "expected a number above 0, got " + text;
         if (bound == NumberBound::kNonNegative && !(v >= 0.0)) return "expected 0 or more, got " + text;
         return {};
       },
-      bound == NumberBound::kPositive ? "POSITIVE" : bound == NumberBound::kNonNegative ? "NONNEGATIVE" : "");
+      bound == NumberBound::kPositive      ? "POSITIVE"
+      : bound == NumberBound::kNonNegative ? "NONNEGATIVE"
+                                           : "");
 }
 
 }  // namespace rhot
