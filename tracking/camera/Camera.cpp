@@ -136,9 +136,11 @@ Eigen::Vector3d Camera::ray_world(const Eigen::Vector2d& pixel) const {
 }
 
 Rigid3d cam_from_world_look_at(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - position).normalized();                // forward
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitY()).normalized();  // right (world up x forward)
-  const Eigen::Vector3d y = z.cross(x);                                      // down in the image
+  const Eigen::Vector3d z = (target - position).normalized();  // forward
+  // Up in the image is world +Y, or world +Z where the camera looks (nearly) straight down or up.
+  const Eigen::Vector3d reference = std::abs(z.y()) > 0.99 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d x = z.cross(reference).normalized();  // right
+  const Eigen::Vector3d y = z.cross(x);                       // down in the image
   Eigen::Matrix3d world_from_cam_rotation;
   world_from_cam_rotation.col(0) = x;
   world_from_cam_rotation.col(1) = y;

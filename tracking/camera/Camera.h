@@ -95,7 +95,8 @@ Eigen::Vector3d axes_meeting_point(const CameraRig& rig);
 std::vector<CameraProjection> camera_projections(const CameraRig& rig);
 
 // A camera at `position` looking at `target`, with world +Y as "up" in the image (OpenCV frame:
-// image y points away from world up). Precondition: target != position, and not straight up/down.
+// image y points away from world up); looking within about 8 degrees of straight down or up, image
+// up is world +Z instead. Precondition: target != position.
 Rigid3d cam_from_world_look_at(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
 
 }  // namespace rhot

@@ -11,23 +11,6 @@ namespace rhot {
 
 namespace {
 
-// A camera at `position` looking at `target`; image y down towards the world's floor, or, looking
-// (nearly) straight down or up, towards world +Z.
-Rigid3d look(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - position).normalized();
-  const Eigen::Vector3d reference = std::abs(z.y()) > 0.99 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitY();
-  const Eigen::Vector3d x = z.cross(reference).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Eigen::Matrix3d world_from_cam;
-  world_from_cam.col(0) = x;
-  world_from_cam.col(1) = y;
-  world_from_cam.col(2) = z;
-  Rigid3d pose;
-  pose.rotation = Eigen::Quaterniond(world_from_cam).normalized();
-  pose.translation = position;
-  return pose.inverse();
-}
-
 struct Candidate {
   Camera camera;
   bool ceiling = false;
@@ -229,7 +212,7 @@ std::vector<Candidate> candidate_poses(const Camera& model, const TrackingVolume
     Candidate c;
     c.place = place_of(position);
     c.camera.intrinsics = model.intrinsics;
-    c.camera.cam_from_world = look(position, target);
+    c.camera.cam_from_world = cam_from_world_look_at(position, target);
     c.ceiling = ceiling_mount;
     out.push_back(std::move(c));
   };

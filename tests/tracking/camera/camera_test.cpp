@@ -121,5 +121,16 @@ TEST(Camera, LookAtPointsTheOpticalAxisAtTheTarget) {
   EXPECT_LT((cam_from_world * Eigen::Vector3d(0, 2, -1)).y(), 0.0);
 }
 
+// Straight down, where world up is along the optical axis: world +Z is up in the image instead.
+TEST(Camera, LookAtStraightDownKeepsAnUpright) {
+  const Rigid3d cam_from_world = cam_from_world_look_at({1, 5, 2}, {1, 0, 2});
+  ASSERT_TRUE(cam_from_world.rotation.coeffs().allFinite());
+  const Eigen::Vector3d floor_cam = cam_from_world * Eigen::Vector3d(1, 0, 2);
+  EXPECT_NEAR(floor_cam.x(), 0.0, 1e-12);
+  EXPECT_NEAR(floor_cam.y(), 0.0, 1e-12);
+  EXPECT_NEAR(floor_cam.z(), 5.0, 1e-12);
+  EXPECT_NEAR((cam_from_world * Eigen::Vector3d(1, 0, 3)).y(), -1.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace rhot
