@@ -2,10 +2,47 @@
 # The demo on camera nodes: builds the release preset, starts four rhot-node processes on
 # loopback, each simulating one camera of the seated rig photographing the demo's world, and runs
 # rhot-demo on them (--source nodes:...). Stops every node when the demo ends, however it ends.
-# Arguments go to rhot-demo, e.g. tools/nodes-demo.sh --headless --frames 900 --stats stats.json
+#
+#   tools/nodes-demo.sh [--logs DIR] [rhot-demo's arguments...]
+#   e.g. tools/nodes-demo.sh --headless --frames 900 --stats stats.json
+#
+# --logs DIR: the nodes' logs (rhot-node-0.log ... rhot-node-3.log) go into DIR, created if
+#   missing; without it, into a new temporary folder (under $TMPDIR, else /tmp), named when the
+#   nodes start. Every other argument goes to rhot-demo.
+# RHOT_SKIP_SETUP=1: skip the setup and the build. Without it the script first runs
+#   tools/setup-deps.sh, which installs the Debian packages rhot needs (as root, or with sudo),
+#   then configures and builds the release preset's rhot-demo and rhot-node; with it,
+#   build/release/rhot-demo and build/release/rhot-node must be built already.
 # RHOT_NODES_PORT: the first node's port (default 5601; node i publishes on 5601 + 2i, answers
-# requests on the port after it).
+#   requests on the port after it).
 set -euo pipefail
+
+logs=""
+demo_args=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --logs)
+      [[ $# -ge 2 ]] || { echo "nodes-demo: --logs needs a folder: --logs DIR" >&2; exit 1; }
+      logs=$2
+      shift 2
+      ;;
+    --logs=*)
+      logs=${1#--logs=}
+      shift
+      ;;
+    *)
+      demo_args+=("$1")
+      shift
+      ;;
+  esac
+done
+if [[ -n "$logs" ]]; then
+  mkdir -p -- "$logs"
+  logs=$(cd -- "$logs" && pwd)  # absolute: the script moves to the repository's root next
+else
+  logs=$(mktemp -d "${TMPDIR:-/tmp}/rhot-nodes-demo.XXXXXX")
+fi
+
 cd "$(dirname "$0")/.."
 if [[ "${RHOT_SKIP_SETUP:-0}" != 1 ]]; then
   tools/setup-deps.sh
@@ -24,10 +61,10 @@ endpoints=()
 for i in 0 1 2 3; do
   p=$((port + 2 * i))
   build/release/rhot-node --publish "tcp://127.0.0.1:$p" --node-id "$i" --sim-rig "$rig" --sim-camera "$i" --sim-scene "$scene" \
-    --sim-start-ns "$start" >"build/release/rhot-node-$i.log" 2>&1 &
+    --sim-start-ns "$start" >"$logs/rhot-node-$i.log" 2>&1 &
   pids+=($!)
   endpoints+=("tcp://127.0.0.1:$p")
 done
-echo "nodes-demo: four nodes on ports $port-$((port + 7)), logs in build/release/rhot-node-*.log"
+echo "nodes-demo: four nodes on ports $port-$((port + 7)), logs in $logs/rhot-node-*.log"
 sources=$(IFS=,; echo "${endpoints[*]}")
-build/release/rhot-demo --rig "$rig" --scene "$scene" --source "nodes:$sources" "$@"
+build/release/rhot-demo --rig "$rig" --scene "$scene" --source "nodes:$sources" "${demo_args[@]}"

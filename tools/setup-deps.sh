@@ -9,8 +9,8 @@ packages=(
   build-essential cmake ninja-build pkg-config git lld
   # core libraries
   nlohmann-json3-dev libspdlog-dev libfmt-dev libcli11-dev libglm-dev libeigen3-dev
-  # tests and benchmarks
-  libgtest-dev libgmock-dev libbenchmark-dev
+  # tests and benchmarks; the format check (tests/CMakeLists.txt: layout.clang_format)
+  libgtest-dev libgmock-dev libbenchmark-dev clang-format
   # tracking
   libopencv-dev libceres-dev
   # physics

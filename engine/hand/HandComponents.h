@@ -4,7 +4,7 @@
 //
 //   Hand       written by the tracking system (engine/tracked) each frame the runtime advances:
 //              the tracked hand and its gestures
-//   HandBody   written by the physics (engine/physics/HandPhysics.h) after its step: where the
+//   HandBody   written by the physics (engine/interact/HandPhysics.h) after its step: where the
 //              hand's colliders are, and what the hand holds
 //
 // The renderer draws the hand where HandBody has it (the "ghost hand"), the debug views draw both.

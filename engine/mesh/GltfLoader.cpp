@@ -113,6 +113,131 @@ std::string primitive_name(int mesh, std::size_t primitive) {
   return "mesh " + std::to_string(mesh) + " primitive " + std::to_string(primitive);
 }
 
+// A primitive's triangle corners, each an index into its `vertex_count` vertices: its indices
+// accessor's, or 0, 1, 2, ... without one.
+std::vector<std::uint32_t> primitive_corners(const tinygltf::Model& model, const tinygltf::Primitive& prim, std::size_t vertex_count) {
+  std::vector<std::uint32_t> corners;
+  if (prim.indices < 0) {
+    if (vertex_count > std::numeric_limits<std::uint32_t>::max()) throw Failure{"too many vertices"};
+    corners.resize(vertex_count);
+    for (std::size_t i = 0; i < corners.size(); ++i) corners[i] = static_cast<std::uint32_t>(i);
+    return corners;
+  }
+  const tinygltf::Accessor& accessor = at(model.accessors, prim.indices, "accessor");
+  const std::string name = "indices accessor " + std::to_string(prim.indices);
+  std::size_t size = 0;
+  switch (accessor.componentType) {
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      size = 1;
+      break;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+      size = 2;
+      break;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+      size = 4;
+      break;
+    default:
+      throw Failure{name + " is not unsigned byte, short or int"};
+  }
+  if (accessor.type != TINYGLTF_TYPE_SCALAR) throw Failure{name + " is not SCALAR"};
+  const Elements idx = elements(model, prim.indices, size, name);
+  corners.reserve(idx.count);
+  for (std::size_t i = 0; i < idx.count; ++i) {
+    std::uint32_t v = 0;
+    switch (size) {
+      case 1:
+        v = idx.get<std::uint8_t>(i);
+        break;
+      case 2:
+        v = idx.get<std::uint16_t>(i);
+        break;
+      default:
+        v = idx.get<std::uint32_t>(i);
+        break;
+    }
+    if (v >= vertex_count) throw Failure{"index " + std::to_string(v) + " is out of range (" + std::to_string(vertex_count) + " vertices)"};
+    corners.push_back(v);
+  }
+  return corners;
+}
+
+// A primitive's vertices placed by world_from_mesh, their normals (if `normals` has any) turned
+// by normal_from_mesh. Returns whether every vertex has a usable normal (smooth shading); false
+// falls back to face normals.
+bool place_vertices(const Elements& positions, const Elements& normals, const glm::dmat4& world_from_mesh,
+                    const glm::dmat3& normal_from_mesh, std::vector<Vertex>& vertices) {
+  vertices.resize(positions.count);
+  bool smooth = normals.count != 0;
+  for (std::size_t i = 0; i < positions.count; ++i) {
+    const glm::dvec3 local(positions.get<glm::vec3>(i));
+    if (!finite(local)) throw Failure{"POSITION " + std::to_string(i) + " is not finite"};
+    vertices[i].position = glm::vec3(world_from_mesh * glm::dvec4(local, 1.0));
+    if (!finite(vertices[i].position)) {  // also when it only overflows float
+      throw Failure{"POSITION " + std::to_string(i) + " is not finite after the node transforms"};
+    }
+    if (!smooth) continue;
+    const glm::dvec3 n(normals.get<glm::vec3>(i));
+    if (!finite(n)) throw Failure{"NORMAL " + std::to_string(i) + " is not finite"};
+    const glm::dvec3 turned = normal_from_mesh * n;
+    const double length = glm::length(turned);
+    if (length > 0.0 && std::isfinite(length)) {
+      vertices[i].normal = glm::vec3(turned / length);
+    } else {
+      smooth = false;  // a zero normal, or one the transform flattened: fall back to faces
+    }
+  }
+  return smooth;
+}
+
+// The triangles into `out`: sharing the vertices when smooth, else each with its own three.
+void append_triangles(const std::vector<Vertex>& vertices, const std::vector<std::uint32_t>& corners, bool smooth, MeshData& out) {
+  if (out.vertices.size() + (smooth ? vertices.size() : corners.size()) > std::numeric_limits<std::uint32_t>::max()) {
+    throw Failure{"too many vertices"};
+  }
+  const auto base = static_cast<std::uint32_t>(out.vertices.size());
+  if (smooth) {
+    out.vertices.insert(out.vertices.end(), vertices.begin(), vertices.end());
+    for (const std::uint32_t c : corners) out.indices.push_back(base + c);
+    return;
+  }
+  // Flat normals: every triangle gets its own three vertices. A zero-area triangle cannot be
+  // seen; it keeps the default normal.
+  for (std::size_t t = 0; t < corners.size(); t += 3) {
+    const glm::vec3 a = vertices[corners[t]].position;
+    const glm::vec3 b = vertices[corners[t + 1]].position;
+    const glm::vec3 c = vertices[corners[t + 2]].position;
+    const glm::dvec3 face = glm::cross(glm::dvec3(b) - glm::dvec3(a), glm::dvec3(c) - glm::dvec3(a));  // no float overflow
+    const double length = glm::length(face);
+    const glm::vec3 n = length > 0.0 ? glm::vec3(face / length) : Vertex{}.normal;
+    for (const glm::vec3& corner : {a, b, c}) {
+      out.indices.push_back(static_cast<std::uint32_t>(out.vertices.size()));
+      out.vertices.push_back({corner, n});
+    }
+  }
+}
+
+// One triangle primitive into `out` (append_mesh says how it is placed and mirrored).
+void append_primitive(const tinygltf::Model& model, const tinygltf::Primitive& prim, const glm::dmat4& world_from_mesh,
+                      const glm::dmat3& normal_from_mesh, bool mirrored, MeshData& out) {
+  const auto pos_it = prim.attributes.find("POSITION");
+  if (pos_it == prim.attributes.end()) throw Failure{"no POSITION attribute"};
+  const Elements positions = vec3_elements(model, pos_it->second, "POSITION");
+  const auto nrm_it = prim.attributes.find("NORMAL");
+  Elements normals;
+  if (nrm_it != prim.attributes.end()) {
+    normals = vec3_elements(model, nrm_it->second, "NORMAL");
+    if (normals.count != positions.count) throw Failure{"NORMAL and POSITION counts differ"};
+  }
+  std::vector<std::uint32_t> corners = primitive_corners(model, prim, positions.count);
+  if (corners.size() % 3 != 0) throw Failure{std::to_string(corners.size()) + " corners are not whole triangles"};
+  if (mirrored) {
+    for (std::size_t t = 0; t < corners.size(); t += 3) std::swap(corners[t + 1], corners[t + 2]);
+  }
+  std::vector<Vertex> vertices;
+  const bool smooth = place_vertices(positions, normals, world_from_mesh, normal_from_mesh, vertices);
+  append_triangles(vertices, corners, smooth, out);
+}
+
 // Appends the triangle primitives of one mesh, placed by world_from_mesh. A transform with a
 // negative determinant mirrors the mesh; glTF then winds its front faces clockwise, so each
 // triangle's last two corners are swapped to keep them counter-clockwise.
@@ -134,109 +259,7 @@ void append_mesh(const tinygltf::Model& model, int mesh_index, const glm::dmat4&
     if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != -1) continue;  // -1: unset, i.e. triangles
     const std::string where = primitive_name(mesh_index, p) + ": ";
     try {
-      const auto pos_it = prim.attributes.find("POSITION");
-      if (pos_it == prim.attributes.end()) throw Failure{"no POSITION attribute"};
-      const Elements positions = vec3_elements(model, pos_it->second, "POSITION");
-      const auto nrm_it = prim.attributes.find("NORMAL");
-      Elements normals;
-      if (nrm_it != prim.attributes.end()) {
-        normals = vec3_elements(model, nrm_it->second, "NORMAL");
-        if (normals.count != positions.count) throw Failure{"NORMAL and POSITION counts differ"};
-      }
-
-      std::vector<std::uint32_t> corners;
-      if (prim.indices >= 0) {
-        const tinygltf::Accessor& accessor = at(model.accessors, prim.indices, "accessor");
-        const std::string name = "indices accessor " + std::to_string(prim.indices);
-        std::size_t size = 0;
-        switch (accessor.componentType) {
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
-            size = 1;
-            break;
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
-            size = 2;
-            break;
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-            size = 4;
-            break;
-          default:
-            throw Failure{name + " is not unsigned byte, short or int"};
-        }
-        if (accessor.type != TINYGLTF_TYPE_SCALAR) throw Failure{name + " is not SCALAR"};
-        const Elements idx = elements(model, prim.indices, size, name);
-        corners.reserve(idx.count);
-        for (std::size_t i = 0; i < idx.count; ++i) {
-          std::uint32_t v = 0;
-          switch (size) {
-            case 1:
-              v = idx.get<std::uint8_t>(i);
-              break;
-            case 2:
-              v = idx.get<std::uint16_t>(i);
-              break;
-            default:
-              v = idx.get<std::uint32_t>(i);
-              break;
-          }
-          if (v >= positions.count) {
-            throw Failure{"index " + std::to_string(v) + " is out of range (" + std::to_string(positions.count) + " vertices)"};
-          }
-          corners.push_back(v);
-        }
-      } else {
-        if (positions.count > std::numeric_limits<std::uint32_t>::max()) throw Failure{"too many vertices"};
-        corners.resize(positions.count);
-        for (std::size_t i = 0; i < corners.size(); ++i) corners[i] = static_cast<std::uint32_t>(i);
-      }
-      if (corners.size() % 3 != 0) throw Failure{std::to_string(corners.size()) + " corners are not whole triangles"};
-      if (mirrored) {
-        for (std::size_t t = 0; t < corners.size(); t += 3) std::swap(corners[t + 1], corners[t + 2]);
-      }
-
-      std::vector<Vertex> vertices(positions.count);
-      bool smooth = normals.count != 0;
-      for (std::size_t i = 0; i < positions.count; ++i) {
-        const glm::dvec3 local(positions.get<glm::vec3>(i));
-        if (!finite(local)) throw Failure{"POSITION " + std::to_string(i) + " is not finite"};
-        vertices[i].position = glm::vec3(world_from_mesh * glm::dvec4(local, 1.0));
-        if (!finite(vertices[i].position)) {  // also when it only overflows float
-          throw Failure{"POSITION " + std::to_string(i) + " is not finite after the node transforms"};
-        }
-        if (!smooth) continue;
-        const glm::dvec3 n(normals.get<glm::vec3>(i));
-        if (!finite(n)) throw Failure{"NORMAL " + std::to_string(i) + " is not finite"};
-        const glm::dvec3 turned = normal_from_mesh * n;
-        const double length = glm::length(turned);
-        if (length > 0.0 && std::isfinite(length)) {
-          vertices[i].normal = glm::vec3(turned / length);
-        } else {
-          smooth = false;  // a zero normal, or one the transform flattened: fall back to faces
-        }
-      }
-
-      if (out.vertices.size() + (smooth ? vertices.size() : corners.size()) > std::numeric_limits<std::uint32_t>::max()) {
-        throw Failure{"too many vertices"};
-      }
-      const auto base = static_cast<std::uint32_t>(out.vertices.size());
-      if (smooth) {
-        out.vertices.insert(out.vertices.end(), vertices.begin(), vertices.end());
-        for (const std::uint32_t c : corners) out.indices.push_back(base + c);
-        continue;
-      }
-      // Flat normals: every triangle gets its own three vertices. A zero-area triangle cannot be
-      // seen; it keeps the default normal.
-      for (std::size_t t = 0; t < corners.size(); t += 3) {
-        const glm::vec3 a = vertices[corners[t]].position;
-        const glm::vec3 b = vertices[corners[t + 1]].position;
-        const glm::vec3 c = vertices[corners[t + 2]].position;
-        const glm::dvec3 face = glm::cross(glm::dvec3(b) - glm::dvec3(a), glm::dvec3(c) - glm::dvec3(a));  // no float overflow
-        const double length = glm::length(face);
-        const glm::vec3 n = length > 0.0 ? glm::vec3(face / length) : Vertex{}.normal;
-        for (const glm::vec3& corner : {a, b, c}) {
-          out.indices.push_back(static_cast<std::uint32_t>(out.vertices.size()));
-          out.vertices.push_back({corner, n});
-        }
-      }
+      append_primitive(model, prim, world_from_mesh, normal_from_mesh, mirrored, out);
     } catch (const Failure& f) {
       throw Failure{where + f.message};
     }

@@ -33,7 +33,7 @@
 
 #include "engine/core/Systems.h"
 #include "engine/core/World.h"
-#include "engine/physics/HandPhysics.h"
+#include "engine/interact/HandPhysics.h"
 #include "engine/render/DebugDraw.h"
 #include "engine/render/Renderer.h"
 #include "engine/render/SceneRenderer.h"

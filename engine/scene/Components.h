@@ -88,7 +88,7 @@ struct Tags {
 };
 
 // A joint between this entity's dynamic body and another body (or the world), built on Bullet's
-// constraints (engine/physics/Mechanisms.h). Its frame: the anchor and axis in this entity's
+// constraints (engine/interact/Mechanisms.h). Its frame: the anchor and axis in this entity's
 // local frame, where the joint is when the scene starts (its value there is 0).
 enum class JointType { kHinge, kSlider, kFixed, kBall };
 

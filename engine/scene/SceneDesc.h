@@ -36,7 +36,7 @@ struct HeadsetSettings {
   EyeFovDeg right_eye{44.0, 52.0, 50.0, 50.0};
 };
 
-// How hands grasp (engine/physics/GraspSystem.h, docs/grasping.md); the scene file's
+// How hands grasp (engine/interact/GraspSystem.h, docs/grasping.md); the scene file's
 // "settings": {"grasp": {...}} overrides any of these.
 struct GraspSettings {
   double contact_distance_m = 0.003;  // a bone within this of an object touches it

@@ -6,13 +6,10 @@
 #include "engine/core/World.h"
 #include "engine/math/EigenGlm.h"
 #include "engine/scene/SceneLoader.h"
-#include "engine/tracked/ReplaySource.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/sim/Realism.h"
 #include "tracking/sim/SimulatedRig.h"
-#include "tracking/net/NodeSource.h"
 #include "tracking/rigid/StarSet.h"
-#include "tracking/source/VideoSource.h"
 
 namespace rhot {
 
@@ -20,25 +17,15 @@ std::expected<void, std::string> DemoSettings::check() const {
   if (!std::isfinite(sigma_px) || sigma_px < 0.0 || sigma_px > 50.0) {
     return std::unexpected("sigma: the simulated pixel noise must be a number from 0 to 50 pixels, got " + std::to_string(sigma_px));
   }
-  if (!std::isfinite(speed) || !(speed > 0.0)) return std::unexpected(std::string("speed: the replay speed must be a positive number"));
-  if (auto detector_ok = rhot::check(detector); !detector_ok) return std::unexpected("detector: " + detector_ok.error());
+  if (auto launch_ok = LaunchSettings::check(); !launch_ok) return launch_ok;
   if (auto world_ok = world.check(); !world_ok) return std::unexpected("world: " + world_ok.error());
   if (auto cameras_ok = colour_cameras.check(); !cameras_ok) return std::unexpected("colour cameras: " + cameras_ok.error());
-  if (colour_markers && !node_endpoints.empty()) {
-    return std::unexpected(std::string("colour markers through camera nodes: the node protocol (version 1) carries no colour"));
-  }
-  if (!video_devices.empty() && perfect_hands) {
-    return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
-  }
-  if (!video_devices.empty() && !replay.empty()) return std::unexpected(std::string("choose video devices or a replay, not both"));
-  if (!node_endpoints.empty() && (!video_devices.empty() || !replay.empty()))
-    return std::unexpected(std::string("choose camera nodes, video devices or a replay, one of them"));
-  if (!node_endpoints.empty() && perfect_hands)
-    return std::unexpected(std::string("perfect hands need the simulated rig's truth; camera nodes send none"));
-  for (const std::string& e : node_endpoints)
-    if (auto ok = check_endpoint(e); !ok) return std::unexpected("nodes: " + ok.error());
-  if (!replay.empty() && perfect_hands) {
-    return std::unexpected(std::string("perfect hands need the simulated rig's truth; a replay has none"));
+  if (perfect_hands) {
+    if (!video_devices.empty())
+      return std::unexpected(std::string("perfect hands need the simulated rig's truth; video sources have none"));
+    if (!node_endpoints.empty())
+      return std::unexpected(std::string("perfect hands need the simulated rig's truth; camera nodes send none"));
+    if (!replay.empty()) return std::unexpected(std::string("perfect hands need the simulated rig's truth; a replay has none"));
   }
   return {};
 }
@@ -98,23 +85,6 @@ ColourShot DemoWorld::colour_shot(const WorldSnapshot& snapshot) const {
   return shot;
 }
 
-std::expected<std::array<HandLayout, 2>, std::string> demo_hand_layouts(const std::filesystem::path& asset_dir, const StarSet& object_stars,
-                                                                        bool colour_markers) {
-  std::array<HandLayout, 2> layouts;
-  const std::string kind = colour_markers ? "colour" : "low-cost";
-  for (std::size_t h = 0; h < 2; ++h) {
-    auto layout = load_hand_layout(asset_dir / "hands" / (kind + (h == 0 ? "-left.json" : "-right.json")));
-    if (!layout) return std::unexpected(layout.error());
-    layouts[h] = std::move(*layout);
-  }
-  // Hands that could be taken for each other, or for an object, from three markers are refused.
-  if (const auto clashes = check_hand_stars(layouts, object_stars); !clashes.empty()) {
-    return std::unexpected("hand layouts: " + clashes.front() +
-                           (clashes.size() > 1 ? " (and " + std::to_string(clashes.size() - 1) + " more)" : ""));
-  }
-  return layouts;
-}
-
 std::expected<DemoSimulation, std::string> make_demo_simulation(const SceneDesc& scene, const std::filesystem::path& asset_dir,
                                                                 const std::filesystem::path& star_set, unsigned independent_hands_seed,
                                                                 bool colour_markers) {
@@ -125,7 +95,7 @@ std::expected<DemoSimulation, std::string> make_demo_simulation(const SceneDesc&
   instantiate(scene, world);
   auto objects = find_tracked_objects(world, *set, set_file);
   if (!objects) return std::unexpected(objects.error());
-  auto layouts = demo_hand_layouts(asset_dir, objects->stars, colour_markers);
+  auto layouts = default_hand_layouts(asset_dir, objects->stars, colour_markers);
   if (!layouts) return std::unexpected(layouts.error());
   DemoSimulation out;
   out.script = std::make_unique<DemoScript>(scene);
@@ -135,93 +105,62 @@ std::expected<DemoSimulation, std::string> make_demo_simulation(const SceneDesc&
   return out;
 }
 
+namespace {
+
+// The demo's simulated source: the simulated rig photographing the demo's world, or, with colour
+// markers, colour cameras drawn by the renderer.
+std::expected<CustomSource, std::string> simulated_source(const SourceRequest& request, const SceneDesc& scene,
+                                                          const DemoSettings& settings, const DemoScript& script,
+                                                          std::shared_ptr<DemoWorld>& world) {
+  world = std::make_shared<DemoWorld>(script, request.layouts, request.objects, settings.world.independent_hands ? settings.seed : 0u);
+  CustomSource out;
+  if (settings.colour_markers) {
+    ColourCameraSettings cs = settings.colour_cameras;
+    cs.seed = settings.seed;
+    auto cameras = ColourCameras::create(request.rig, scene, cs);
+    if (!cameras) return std::unexpected(cameras.error());
+    std::shared_ptr<DemoWorld> shot_world = world;
+    out.source = std::make_unique<ColourCameraSource>(
+        std::move(*cameras), [shot_world](double t) { return shot_world->colour_shot(shot_world->at(t)); }, request.colours);
+  } else {
+    SimulatedRigSettings sim = settings.world.rig_settings(settings.seed, request.rate_hz);
+    sim.sigma_px = settings.sigma_px;
+    auto rig_source = std::make_unique<SimulatedRig>(request.rig, std::vector<Trajectory>{}, sim);
+    rig_source->set_world(world);
+    out.source = std::move(rig_source);
+  }
+  // With a calibration error the tracker believes a rig a little off the one that took the frames.
+  if (settings.world.calib_error_px > 0.0) out.tracker_rig = perturbed_rig(request.rig, settings.world.calib_error_px, settings.seed);
+  return out;
+}
+
+}  // namespace
+
 std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& scene, Renderer* renderer, DemoSettings settings) {
   if (auto checked = settings.check(); !checked) return std::unexpected(checked.error());
   std::unique_ptr<Demo> d(new Demo());
   d->script_ = std::make_unique<DemoScript>(scene);
   Demo* self = d.get();
-  const bool replay = !settings.replay.empty();
-  const bool video = !settings.video_devices.empty();
-  const auto make_tracking = [&](World&, const TrackedObjects& objects) -> std::expected<std::unique_ptr<ResultSource>, std::string> {
-    if (replay) {
-      auto source = ReplaySource::open(settings.replay, settings.speed, objects);
-      if (!source) return std::unexpected(source.error());
-      return std::unique_ptr<ResultSource>(std::move(*source));
-    }
-    const std::filesystem::path rig_file = !settings.rig_file.empty() ? settings.rig_file
-                                           : settings.colour_markers
-                                               ? settings.asset_dir / "rigs" / "stereo-640.yaml"
-                                               : scene.settings.rig_file.value_or(settings.asset_dir / "rigs" / "seated-4.yaml");
-    auto rig = load_rig(rig_file);
-    if (!rig) return std::unexpected(rig.error());
-    auto loaded_layouts = demo_hand_layouts(settings.asset_dir, objects.stars, settings.colour_markers);
-    if (!loaded_layouts) return std::unexpected(loaded_layouts.error());
-    const std::array<HandLayout, 2>& layouts = *loaded_layouts;
-    const double rate_hz = scene.settings.headset.refresh_hz;
-    ColourModel colour_model = default_colour_model();
-    if (settings.colour_markers && !settings.colours.empty()) {
-      auto loaded = load_colour_model(settings.colours);
-      if (!loaded) return std::unexpected(loaded.error().to_string());
-      colour_model = std::move(*loaded);
-    }
-    std::unique_ptr<FrameSource> source;
-    if (!settings.node_endpoints.empty()) {
-      auto opened = NodeSource::open(*rig, settings.node_endpoints);
-      if (!opened) return std::unexpected(opened.error());
-      source = std::move(*opened);
-    } else if (video) {
-      VideoSourceSettings vs;
-      vs.detector = settings.detector;
-      if (settings.colour_markers) vs.colours = colour_model;
-      vs.rate_hz = rate_hz;
-      auto opened = VideoSource::open(*rig, settings.video_devices, vs);
-      if (!opened) return std::unexpected(rig_file.string() + ": " + opened.error());
-      source = std::make_unique<VideoSource>(std::move(*opened));
-    } else if (settings.colour_markers) {
-      self->world_ = std::make_shared<DemoWorld>(*self->script_, layouts, objects, settings.world.independent_hands ? settings.seed : 0u);
-      ColourCameraSettings cs = settings.colour_cameras;
-      cs.seed = settings.seed;
-      auto cameras = ColourCameras::create(*rig, scene, cs);
-      if (!cameras) return std::unexpected(cameras.error());
-      std::shared_ptr<DemoWorld> world = self->world_;
-      source = std::make_unique<ColourCameraSource>(
-          std::move(*cameras), [world](double t) { return world->colour_shot(world->at(t)); }, colour_model);
-    } else {
-      SimulatedRigSettings sim = settings.world.rig_settings(settings.seed, rate_hz);
-      sim.sigma_px = settings.sigma_px;
-      auto rig_source = std::make_unique<SimulatedRig>(*rig, std::vector<Trajectory>{}, sim);
-      self->world_ = std::make_shared<DemoWorld>(*self->script_, layouts, objects, settings.world.independent_hands ? settings.seed : 0u);
-      rig_source->set_world(self->world_);
-      source = std::move(rig_source);
-    }
-    LiveTrackingSettings live_settings;
-    live_settings.filter_hands = settings.filter_hands;
-    // With a calibration error the tracker believes a rig a little off the one that took the frames.
-    if (!video && settings.node_endpoints.empty() && settings.world.calib_error_px > 0.0)
-      live_settings.tracker_rig = perturbed_rig(*rig, settings.world.calib_error_px, settings.seed);
-    auto live = std::make_unique<LiveTracking>(std::move(source), objects, layouts, live_settings);
-    self->live_ = live.get();
-    return std::unique_ptr<ResultSource>(std::move(live));
+  const SourceFactory simulated = [&](const SourceRequest& request) {
+    return simulated_source(request, scene, settings, *self->script_, self->world_);
   };
-  RuntimeSettings rs;
-  rs.star_set = !settings.star_set.empty() ? settings.star_set : settings.asset_dir / "stars" / "seed-case.json";
-  rs.record = settings.record;
-  rs.stream = settings.stream;
-  rs.debug = settings.debug;
-  rs.predict = settings.predict;
-  rs.latency_window_frames = settings.latency_window_frames;
-  auto runtime = Runtime::create(scene, renderer, rs, make_tracking);
-  if (!runtime) return std::unexpected(runtime.error());
-  d->runtime_ = std::move(*runtime);
+  auto launched = Launch::create(scene, renderer, settings, simulated);
+  if (!launched) return std::unexpected(launched.error());
+  d->launch_ = std::move(*launched);
+  d->add_stages(settings);
+  return d;
+}
 
-  if (d->world_) {
-    Runtime& r = *d->runtime_;
+void Demo::add_stages(const DemoSettings& settings) {
+  Demo* self = this;
+  if (world_) {
+    Runtime& r = runtime();
     if (settings.perfect_hands) {
       // The script's hands at the frame's own time (the simulated world may have been asked for
       // later moments since, by unsynchronised cameras).
       r.add_stage("hands", {"perfect-hands", [self](double t_s) {
                               const SceneTruth truth = self->script_->at(t_s);
-                              TrackingResults& results = self->runtime_->tracking().results();
+                              TrackingResults& results = self->runtime().tracking().results();
                               for (std::size_t h = 0; h < 2; ++h) {
                                 results.hands[h] = hand_input(truth.hands[h].world_from_hand, truth.hands[h].pose);
                               }
@@ -256,9 +195,9 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
         e.object_tracked_at_display_sum_m += (poses.first.translation - shown->second.translation).norm();
       }
     });
-    if (!d->script_->right_target().empty()) {
+    if (!script_->right_target().empty()) {
       r.add_stage("physics", {"look", [self](double t_s) {
-                                World& world = self->runtime_->world();
+                                World& world = self->runtime().world();
                                 const Entity cube = find_named(world, self->script_->right_target());
                                 if (const Transform* t = world.find<Transform>(cube)) {
                                   self->script_->reaim(t_s, to_eigen(t->position));
@@ -266,7 +205,6 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
                               }});
     }
   }
-  return d;
 }
 
 }  // namespace rhot

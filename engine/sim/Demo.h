@@ -1,6 +1,7 @@
 #pragma once
-// The demo: the runtime (engine/runtime/Runtime.h) fed by the source the settings name, and the
-// demo's own stages. Shared by rhot-demo, `rhot-eval frame`, rhot-simvideo and the tests.
+// The demo: the runtime launched (engine/launch/Launch.h) on the source the settings name, with
+// the simulated rig as the source of its own when they name none, and the demo's own stages. Shared by rhot-demo, `rhot-eval frame`,
+// rhot-simvideo and the tests.
 //
 // Sources:
 //   simulated (default)  the simulated camera rig (tracking/sim) photographs the demo script's
@@ -26,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/launch/Launch.h"
 #include "engine/runtime/Runtime.h"
 #include "engine/sim/ColourCameras.h"
 #include "engine/sim/DemoScript.h"
@@ -38,36 +40,16 @@
 
 namespace rhot {
 
-struct DemoSettings {
-  std::filesystem::path asset_dir;  // where the defaults below are found
-  std::filesystem::path rig_file;   // empty: the scene's rig, else assets/rigs/seated-4.yaml
-  std::filesystem::path star_set;   // empty: assets/stars/seed-case.json (the objects' stars)
-  double sigma_px = 0.3;            // the simulated cameras' pixel noise (overrides world.sigma_px)
-  WorldSettings world;              // the rest of the simulated world (tracking/sim/Realism.h)
+// The demo's settings: how to launch the runtime (engine/launch/Launch.h: rig, stars, replay,
+// video devices, camera nodes, recording, streaming) and, for the simulated source, its world.
+struct DemoSettings : LaunchSettings {
+  double sigma_px = 0.3;  // the simulated cameras' pixel noise (overrides world.sigma_px)
+  WorldSettings world;    // the rest of the simulated world (tracking/sim/Realism.h)
   unsigned seed = 1;
-  bool filter_hands = false;                  // LiveTrackingSettings::filter_hands
-  bool perfect_hands = false;                 // physics gets the true hands, not the tracked ones
-  std::filesystem::path replay;               // play this recording instead of tracking
-  double speed = 1.0;                         // replay speed (2: twice as fast)
-  bool predict = true;                        // RuntimeSettings::predict: draw the hands at the display time
-  std::size_t latency_window_frames = 65536;  // RuntimeSettings::latency_window_frames
-  std::filesystem::path record;               // write every frame's hands and tracked objects here
-  std::string stream;                         // send every frame's hands and objects to osc://HOST:PORT[,vmc] (engine/stream)
-  // Real cameras instead of the simulated rig: one OpenCV device per rig camera, in rig order (an
-  // index such as "0", a video file, or an image sequence such as "cams/cam0_%04d.png").
-  std::vector<std::string> video_devices;
-  BlobDetectorSettings detector;  // for video_devices
-  // Coloured markers (seed 002's set-up, tracking/detect/ColourDetector.h): the colour hand layouts
-  // (assets/hands/colour-*.json), the objects' stars in blue, and, simulated, colour cameras drawn
-  // by the renderer (ColourCameras) on the rig (default assets/rigs/stereo-640.yaml); with video
-  // devices, colour images detected with the colour model.
-  bool colour_markers = false;
-  std::filesystem::path colours;  // the colour model (empty: default_colour_model())
+  bool perfect_hands = false;  // physics gets the true hands, not the tracked ones
+  // Simulated colour cameras drawn by the renderer (ColourCameras) with colour_markers, on the
+  // rig (default assets/rigs/stereo-640.yaml).
   ColourCameraSettings colour_cameras;
-  // Camera nodes instead (rhot-node, docs/camera-nodes.md): their publish endpoints. Each node
-  // says which rig cameras its frames are from.
-  std::vector<std::string> node_endpoints;
-  DebugViews debug;
 
   // Every value a user can set checked: "<name>: <what is wrong>" for the first bad one.
   [[nodiscard]] std::expected<void, std::string> check() const;
@@ -121,11 +103,6 @@ struct DemoSimulation {
                                                                               const std::filesystem::path& star_set = {},
                                                                               unsigned independent_hands_seed = 0,
                                                                               bool colour_markers = false);
-// The demo's two hand layouts (assets/hands/low-cost-*.json, or colour-*.json for coloured
-// markers), checked against each other and the objects' stars.
-[[nodiscard]] std::expected<std::array<HandLayout, 2>, std::string> demo_hand_layouts(const std::filesystem::path& asset_dir,
-                                                                                      const StarSet& object_stars,
-                                                                                      bool colour_markers = false);
 
 // How well the drawn hands match the true ones (simulated source with a renderer): per joint of a
 // seen hand in each displayed frame, its distance from the truth at the frame's capture time
@@ -163,10 +140,10 @@ class Demo {
   [[nodiscard]] static std::expected<std::unique_ptr<Demo>, std::string> create(const SceneDesc& scene, Renderer* renderer,
                                                                                 DemoSettings settings);
 
-  Runtime& runtime() { return *runtime_; }
-  World& world() { return runtime_->world(); }
+  Runtime& runtime() { return launch_->runtime(); }
+  World& world() { return launch_->runtime().world(); }
   // Live tracking, unless replaying.
-  LiveTracking* live() { return live_; }
+  LiveTracking* live() { return launch_->live(); }
   // The simulated world, when the source is the simulated rig.
   const DemoWorld* simulated() const { return world_.get(); }
   const DemoScript& script() const { return *script_; }
@@ -175,10 +152,11 @@ class Demo {
 
  private:
   Demo() = default;
+  // With the simulated source: perfect hands, the prediction errors' observer, the look stage.
+  void add_stages(const DemoSettings& settings);
   std::unique_ptr<DemoScript> script_;  // before the runtime: its world reads the script
   std::shared_ptr<DemoWorld> world_;
-  LiveTracking* live_ = nullptr;
-  std::unique_ptr<Runtime> runtime_;
+  std::unique_ptr<Launch> launch_;
   PredictionErrors prediction_errors_;
 };
 

@@ -12,7 +12,7 @@
 #include "engine/core/World.h"
 #include "engine/math/EigenGlm.h"
 #include "engine/physics/BulletMath.h"
-#include "engine/physics/HandPhysics.h"
+#include "engine/interact/HandPhysics.h"
 #include "engine/sim/DemoScript.h"
 #include "engine/sim/ScriptedHands.h"
 #include "engine/tracked/LiveTracking.h"

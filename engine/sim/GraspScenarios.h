@@ -28,7 +28,7 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/physics/GraspSystem.h"
+#include "engine/interact/GraspSystem.h"
 #include "engine/scene/SceneDesc.h"
 #include "tracking/camera/Camera.h"
 #include "tracking/hand/HandLayout.h"

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 
 #include "base/Json.h"
 
@@ -140,6 +141,15 @@ std::expected<Recording, std::string> load_recording(const std::filesystem::path
       rec.rate_hz = header->rate_hz;
       rec.objects = std::move(header->objects);
       continue;
+    }
+    // Every line is written whole, newline last, and flushed: a last line without its newline that
+    // is not even JSON is the frame a crash interrupted. It is left out; anything else is an error.
+    const bool cut_short = in.eof() && !json::accept(line);
+    if (cut_short) {
+      rec.warnings.push_back(where + ": the last line is cut short (was the recording interrupted?); it is left out, the " +
+                             std::to_string(rec.frames.size()) + " frames before it are read");
+      spdlog::warn("{}", rec.warnings.back());
+      break;
     }
     auto frame = parse_json<RecordedFrame>(line, where, read_frame);
     if (!frame) return std::unexpected(frame.error().to_string());

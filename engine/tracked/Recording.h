@@ -36,6 +36,9 @@ struct Recording {
   double rate_hz = 90.0;
   std::vector<std::string> objects;
   std::vector<RecordedFrame> frames;  // increasing t_s
+  // What load_recording read past, one sentence each naming the file and line (also logged as
+  // warnings): a last frame cut short by a crash.
+  std::vector<std::string> warnings;
 
   double duration_s() const { return frames.empty() ? 0.0 : frames.back().t_s - frames.front().t_s; }
   // The state at time t (from the first frame's time): joints and positions interpolated
@@ -43,6 +46,10 @@ struct Recording {
   RecordedFrame at(double t_s) const;
 };
 
+// Every line read and checked; an error names the file, the line and the field. The one exception is
+// a last line cut short, as a crash while a frame is written leaves it (no newline, not JSON): it is
+// left out with a warning (Recording::warnings), so a crash loses at most that frame. A bad line
+// anywhere else, or a last line that is whole JSON but not a frame, is an error.
 [[nodiscard]] std::expected<Recording, std::string> load_recording(const std::filesystem::path& file);
 
 class RecordingWriter {

@@ -1,6 +1,9 @@
 #include "engine/tracked/ReplaySource.h"
 
 #include <cmath>
+#include <cstdio>
+
+#include <spdlog/spdlog.h>
 
 #include "base/Check.h"
 
@@ -11,11 +14,11 @@ std::expected<std::unique_ptr<ReplaySource>, std::string> ReplaySource::open(con
   auto recording = load_recording(file);
   if (!recording) return std::unexpected(recording.error());
   if (!(speed > 0.0) || !std::isfinite(speed)) return std::unexpected(std::string("replay speed must be a positive number"));
-  return std::unique_ptr<ReplaySource>(new ReplaySource(std::move(*recording), speed, objects));
+  return std::unique_ptr<ReplaySource>(new ReplaySource(file.string(), std::move(*recording), speed, objects));
 }
 
-ReplaySource::ReplaySource(Recording recording, double speed, const TrackedObjects& objects)
-    : recording_(std::move(recording)), speed_(speed) {
+ReplaySource::ReplaySource(std::string file, Recording recording, double speed, const TrackedObjects& objects)
+    : file_(std::move(file)), recording_(std::move(recording)), speed_(speed) {
   for (const TrackedObject& o : objects.objects) {
     if (!o.name.empty()) objects_.emplace_back(o.star_id, o.name);
   }
@@ -35,6 +38,15 @@ void ReplaySource::replay(double t_s) {
   clock_s_ = started_ ? clock_s_ + (t_s - last_t_s_) * speed_ : t_s * speed_;
   started_ = true;
   last_t_s_ = t_s;
+  ++frames_played_;
+  // Past the last frame's time (a nanosecond's slack for the clock's sums): said once.
+  if (!end_notice_ && clock_s_ > recording_.duration_s() + 1e-9) {
+    char figures[160];
+    std::snprintf(figures, sizeof figures, " ended at frame %llu of the run (%.3f s): its %zu frames (%.3f s) have played",
+                  static_cast<unsigned long long>(frames_played_), t_s, recording_.frames.size(), recording_.duration_s());
+    end_notice_ = "replay: the recording " + file_ + figures + ", and its last frame is held from here on";
+    spdlog::info("{}", *end_notice_);
+  }
   const RecordedFrame frame = recording_.at(clock_s_);
   results_ = TrackingResults{};
   results_.t_s = t_s;

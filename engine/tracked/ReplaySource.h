@@ -5,9 +5,11 @@
 // matched to the scene's tracked entities by name. A recording has no cameras, points or
 // gestures.
 
+#include <cstdint>
 #include <expected>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "engine/tracked/Recording.h"
@@ -31,11 +33,16 @@ class ReplaySource final : public ResultSource, public Playback {
   void set_speed(double speed) override;
 
   const Recording& recording() const { return recording_; }
-  // The recording's frame taken at t_s.
+  // The recording's frame taken at t_s. Past the recording's end its last frame is held (the run
+  // goes on), and the first frame past it logs end_notice() once, as info.
   void replay(double t_s);
+  // Once the playback has passed the recording's end, the line saying so: the file, the run's frame
+  // and time it ended at, the recording's frames and length. Empty before.
+  const std::optional<std::string>& end_notice() const { return end_notice_; }
 
  private:
-  ReplaySource(Recording recording, double speed, const TrackedObjects& objects);
+  ReplaySource(std::string file, Recording recording, double speed, const TrackedObjects& objects);
+  std::string file_;
   Recording recording_;
   double speed_ = 1.0;
   std::vector<std::pair<int, std::string>> objects_;  // star id, entity name
@@ -43,6 +50,8 @@ class ReplaySource final : public ResultSource, public Playback {
   double clock_s_ = 0.0;
   double last_t_s_ = 0.0;
   bool started_ = false;
+  std::uint64_t frames_played_ = 0;  // replay() calls: the run's frames
+  std::optional<std::string> end_notice_;
 };
 
 }  // namespace rhot

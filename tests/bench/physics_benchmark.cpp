@@ -18,7 +18,7 @@
 
 #include "engine/core/World.h"
 #include "engine/physics/BulletMath.h"
-#include "engine/physics/HandPhysics.h"
+#include "engine/interact/HandPhysics.h"
 #include "engine/sim/DemoScript.h"
 #include "engine/sim/ScriptedHands.h"
 #include "engine/scene/SceneLoader.h"

@@ -8,6 +8,8 @@
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "tests/support/TempDir.h"
 #include <nlohmann/json.hpp>
 
 #include <Eigen/Geometry>
@@ -17,6 +19,7 @@
 #include "tracking/detect/ColourModel.h"
 #include "tracking/sim/SyntheticImages.h"
 
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 namespace {
@@ -27,14 +30,29 @@ rhot::test::CommandRun calib(const std::string& args) { return rhot::test::run_p
 // stdout only: the JSON report.
 rhot::test::CommandRun calib_json(const std::string& args) { return rhot::test::run_program("rhot-calib", args, "2>/dev/null"); }
 
-fs::path temp_dir() {
-  const fs::path d = fs::path(::testing::TempDir()) / "rhot_calib_cli" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path temp_dir() { return rhot::test::fresh_test_dir("rhot_calib_cli"); }
 
 std::string asset(const std::string& path) { return std::string(RHOT_ASSET_DIR) + "/" + path; }
+
+// A rig's cameras as a user's files from `rhot-calib intrinsics`: one file per camera, each at the
+// origin looking along +Z, so that `wand` finds every pose from the wave alone and never starts
+// from the truth it is checked against. Returns the files for --intrinsics, space-separated.
+std::string intrinsics_files(const std::string& rig_file, const fs::path& dir) {
+  const auto rig = rhot::load_rig(rig_file);
+  EXPECT_TRUE(rig) << rig.error();
+  std::string files;
+  if (!rig) return files;
+  for (const rhot::Camera& c : rig->cameras) {
+    rhot::CameraRig one;
+    one.name = c.name;
+    one.cameras.push_back(rhot::Camera{c.name, c.intrinsics, rhot::Rigid3d::identity()});
+    const fs::path file = dir / (c.name + "_intrinsics.yaml");
+    const auto saved = rhot::save_rig(one, file);
+    EXPECT_TRUE(saved) << saved.error();
+    files += (files.empty() ? "" : " ") + file.string();
+  }
+  return files;
+}
 
 TEST(CalibCli, HelpListsTheSubcommands) {
   const auto r = calib("--help");
@@ -54,7 +72,7 @@ TEST(CalibCli, SimulatedWandSessionToAMetricRigAndItsWorld) {
   const std::string truth = asset("rigs/stereo-2.yaml");
   const auto sim = calib("simulate wand --rig " + truth + " --frames 600 --wand-mm 300 --seed 4 --out " + (dir / "wand.csv").string());
   ASSERT_EQ(sim.exit_code, 0) << sim.output;
-  const auto wand = calib_json("wand --intrinsics " + truth + " --detections " + (dir / "wand.csv").string() +
+  const auto wand = calib_json("wand --intrinsics " + intrinsics_files(truth, dir) + " --detections " + (dir / "wand.csv").string() +
                                " --wand-mm 300 --json --out " + (dir / "rig.yaml").string());
   ASSERT_EQ(wand.exit_code, 0) << wand.output;
   const nlohmann::json j = nlohmann::json::parse(wand.output);
@@ -116,7 +134,8 @@ TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
   const auto record = calib("record --rig " + truth + " --source " + source + " --out " + (dir / "recorded.csv").string());
   ASSERT_EQ(record.exit_code, 0) << record.output;
   EXPECT_NE(record.output.find("of 160 frames"), std::string::npos) << record.output;
-  const auto wand = calib_json("wand --intrinsics " + truth + " --detections " + (dir / "recorded.csv").string() + " --json --out " +
+  const std::string intrinsics = intrinsics_files(truth, dir);
+  const auto wand = calib_json("wand --intrinsics " + intrinsics + " --detections " + (dir / "recorded.csv").string() + " --json --out " +
                                (dir / "rig.yaml").string());
   ASSERT_EQ(wand.exit_code, 0) << wand.output;
   const nlohmann::json j = nlohmann::json::parse(wand.output);
@@ -125,8 +144,8 @@ TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
   // The same wave calibrated from the simulation's own detections: the images and the blob
   // detector add little, and both are near the truth up to scale (the second camera's rotation
   // relative to the first; 160 positions of one marker pin it to about 0.1 degrees).
-  const auto direct =
-      calib("wand --intrinsics " + truth + " --detections " + (dir / "truth.csv").string() + " --out " + (dir / "direct.yaml").string());
+  const auto direct = calib("wand --intrinsics " + intrinsics + " --detections " + (dir / "truth.csv").string() + " --out " +
+                            (dir / "direct.yaml").string());
   ASSERT_EQ(direct.exit_code, 0) << direct.output;
   const auto rig = rhot::load_rig(dir / "rig.yaml");
   const auto direct_rig = rhot::load_rig(dir / "direct.yaml");
@@ -233,6 +252,94 @@ TEST(CalibCli, LearnsTheMarkerColoursFromImagesAndDrawsWhatItClassifies) {
   const auto none = calib("colours --out " + out.string());
   EXPECT_EQ(none.exit_code, 1);
   EXPECT_NE(none.output.find("give images, or --source video:DEV to take frames from cameras"), std::string::npos) << none.output;
+}
+
+// The cameras of `rig` written as one intrinsics file: every camera at the origin, as `intrinsics`
+// writes each camera, gathered into one file by hand (docs/calibration.md: "or one rig file
+// holding every camera").
+void write_cameras_at_origin(const rhot::CameraRig& rig, const fs::path& file) {
+  cv::FileStorage fs(file.string(), cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+  fs << "rig_name"
+     << "intrinsics"
+     << "cameras"
+     << "[";
+  for (const rhot::Camera& c : rig.cameras) {
+    const rhot::CameraIntrinsics& k = c.intrinsics;
+    fs << "{"
+       << "name" << c.name << "image_width" << k.width_px << "image_height" << k.height_px << "camera_matrix"
+       << cv::Mat(cv::Matx33d(k.fx, 0.0, k.cx, 0.0, k.fy, k.cy, 0.0, 0.0, 1.0)) << "distortion_coefficients"
+       << cv::Mat(cv::Matx<double, 1, 5>(k.distortion[0], k.distortion[1], k.distortion[2], k.distortion[3], k.distortion[4])) << "rotation"
+       << cv::Mat(cv::Matx33d::eye()) << "translation" << cv::Mat(cv::Matx31d(0.0, 0.0, 0.0)) << "}";
+  }
+  fs << "]";
+}
+
+// `wand --intrinsics` reads only the cameras' intrinsics: one file of every camera at the origin
+// used to be refused ("cameras[1] (\"right\").translation: same position as cameras[0]").
+TEST(CalibCli, WandTakesOneFileOfEveryCamerasIntrinsicsWhateverItsPoses) {
+  const fs::path dir = temp_dir();
+  const std::string truth = asset("rigs/stereo-2.yaml");
+  const auto truth_rig = rhot::load_rig(truth);
+  ASSERT_TRUE(truth_rig) << truth_rig.error();
+  const fs::path intrinsics = dir / "intrinsics.yaml";
+  write_cameras_at_origin(*truth_rig, intrinsics);
+  ASSERT_EQ(rhot::load_rig(intrinsics).error(),
+            intrinsics.string() + ": cameras[1] (\"right\").translation: same position as cameras[0] (\"left\")")
+      << "not a rig to track with";
+  const auto sim = calib("simulate wand --rig " + truth + " --frames 600 --wand-mm 300 --seed 4 --out " + (dir / "wand.csv").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  const auto wand = calib("wand --intrinsics " + intrinsics.string() + " --detections " + (dir / "wand.csv").string() +
+                          " --wand-mm 300 --out " + (dir / "rig.yaml").string());
+  ASSERT_EQ(wand.exit_code, 0) << wand.output;
+  const auto rig = rhot::load_rig(dir / "rig.yaml");
+  ASSERT_TRUE(rig) << rig.error();
+  ASSERT_EQ(rig->cameras.size(), 2u);
+  EXPECT_EQ(rig->cameras[0].name, "left");
+  EXPECT_EQ(rig->cameras[1].name, "right");
+}
+
+// docs/calibration.md's walk-through on two cameras: each camera's intrinsics from its board
+// pictures, the files `intrinsics` writes read by `wand`, and the world from an L-frame on a stand
+// 0.9 m up with --height-mm 900, which keeps Y = 0 on the floor: every camera at the truth's height.
+// Without it the stand is taken for the floor and every camera comes out 0.9 m too low above it.
+TEST(CalibCli, TheWalkThroughChainsIntrinsicsIntoWandAndKeepsTheFloor) {
+  const fs::path dir = temp_dir();
+  const std::string truth = asset("rigs/stereo-2.yaml");  // 1024 x 768, fx 1280 px, no distortion
+  std::string cameras;
+  for (int i = 0; i < 2; ++i) {
+    const std::string boards = (dir / ("boards/cam" + std::to_string(i))).string();
+    const std::string cam = (dir / ("calib/cam" + std::to_string(i) + ".yaml")).string();
+    const auto board = calib("simulate board --size 1024x768 --fx 1280 --k1 0 --k2 0 --p1 0 --p2 0 --views 10 --seed " +
+                             std::to_string(i + 1) + " --out " + boards);
+    ASSERT_EQ(board.exit_code, 0) << board.output;
+    const auto found = calib("intrinsics --board chess:9x6:25 " + boards + " --out " + cam + " --no-leave-one-out");
+    ASSERT_EQ(found.exit_code, 0) << found.output;
+    cameras += " " + cam;
+  }
+  const auto sim = calib("simulate wand --rig " + truth + " --frames 600 --wand-mm 300 --seed 4 --out " + (dir / "wand.csv").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  const auto wand = calib("wand --intrinsics" + cameras + " --detections " + (dir / "wand.csv").string() + " --wand-mm 300 --out " +
+                          (dir / "rig.yaml").string());
+  ASSERT_EQ(wand.exit_code, 0) << wand.output;
+  const auto frame = calib("simulate lframe --rig " + truth + " --lframe-mm 400,250 --at-m -0.12,0.9,-0.25 --seed 5 --out " +
+                           (dir / "lframe.csv").string());
+  ASSERT_EQ(frame.exit_code, 0) << frame.output;
+  const auto truth_rig = rhot::load_rig(truth);
+  ASSERT_TRUE(truth_rig) << truth_rig.error();
+  for (const double height_mm : {900.0, 0.0}) {
+    const fs::path out = dir / (height_mm > 0.0 ? "world.yaml" : "world_on_the_stand.yaml");
+    const auto world = calib("world --lframe --lframe-mm 400,250 --height-mm " + std::to_string(height_mm) + " --rig " +
+                             (dir / "rig.yaml").string() + " --detections " + (dir / "lframe.csv").string() + " --out " + out.string());
+    ASSERT_EQ(world.exit_code, 0) << world.output;
+    const auto placed = rhot::load_rig(out);
+    ASSERT_TRUE(placed) << placed.error();
+    ASSERT_EQ(placed->cameras.size(), 2u);
+    EXPECT_EQ(placed->cameras[0].name, "cam0");
+    for (std::size_t c = 0; c < 2; ++c) {
+      EXPECT_NEAR(placed->cameras[c].centre_world().y(), truth_rig->cameras[c].centre_world().y() - (0.9 - height_mm / 1000.0), 0.012)
+          << "camera " << c << " with --height-mm " << height_mm;
+    }
+  }
 }
 
 }  // namespace

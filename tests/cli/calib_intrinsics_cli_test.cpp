@@ -7,6 +7,8 @@
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "tests/support/TempDir.h"
 #include <nlohmann/json.hpp>
 
 #include "tests/support/RunCommand.h"
@@ -17,13 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 using rhot::test::run_program;
 
-fs::path temp_dir() {
-  const fs::path d =
-      fs::path(::testing::TempDir()) / "rhot_calib_intrinsics_cli" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path intrinsics_dir() { return rhot::test::fresh_test_dir("rhot_calib_intrinsics_cli"); }
 
 std::string read(const fs::path& file) {
   std::ifstream in(file);
@@ -48,7 +44,7 @@ TEST(CalibIntrinsicsCli, HelpNamesEveryOption) {
 }
 
 TEST(CalibIntrinsicsCli, SimulatedBoardPicturesGiveBackTheCamera) {
-  const fs::path dir = temp_dir();
+  const fs::path dir = intrinsics_dir();
   auto r = run_program(
       "rhot-calib",
       "simulate board --out " + (dir / "pictures").string() + " --views 12 --size 960x540 --fx 760 --cx 486.5 --cy 265 --k1 -0.12", "2>&1");
@@ -96,8 +92,27 @@ TEST(CalibIntrinsicsCli, SimulatedBoardPicturesGiveBackTheCamera) {
   EXPECT_TRUE(fs::exists(dir / "out" / "cam0_intrinsics.png"));
 }
 
+// Pictures of a 9 x 6 board with --board chess:10x7:25 (the squares counted, not the inner corners):
+// the reason comes after the first three pictures, not after a long search through every one.
+TEST(CalibIntrinsicsCli, AWrongBoardSizeIsSaidAfterTheFirstPictures) {
+  const fs::path dir = intrinsics_dir();
+  auto r = run_program("rhot-calib", "simulate board --out " + (dir / "pictures").string() + " --views 5 --size 960x540 --fx 760", "2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_program("rhot-calib", "intrinsics --board chess:10x7:25 " + (dir / "pictures").string() + " --out " + (dir / "cam.yaml").string(),
+                  "2>&1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("detecting corners 3/5: board_02.png\n"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("detecting corners 4/5"), std::string::npos) << r.output;
+  const std::string error =
+      "rhot-calib: error: board chess:10x7:25 not found in any of the first 3 of 5 images, so the others were not searched; is the "
+      "board's size right? chess COLSxROWS counts inner corners (a board of 10 x 7 squares is chess:9x6)\n";
+  ASSERT_GE(r.output.size(), error.size());
+  EXPECT_EQ(r.output.substr(r.output.size() - error.size()), error) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "cam.yaml"));
+}
+
 TEST(CalibIntrinsicsCli, BadInputIsRefusedWithTheReason) {
-  const fs::path dir = temp_dir();
+  const fs::path dir = intrinsics_dir();
   auto r = run_program("rhot-calib", "intrinsics --board chess:9x6 x.png --out " + (dir / "cam.yaml").string(), "2>&1");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(r.output, "rhot-calib: error: board \"chess:9x6\": expected chess:COLSxROWS:SQUARE_MM (e.g. chess:9x6:25)\n");

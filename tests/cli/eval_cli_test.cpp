@@ -1,6 +1,7 @@
 // Runs the real rhot-eval and checks its JSON.
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -28,7 +29,12 @@ TEST(EvalCli, TriangulationPrintsTheAccuracyJsonForEveryShippedRig) {
     }
     EXPECT_GT(j["crlb_mm"].get<double>(), 0.0) << rig;
     EXPECT_GT(j["found_fraction"].get<double>(), 0.9) << rig;
-    EXPECT_LT(j["ratio"].get<double>(), 1.5) << rig;
+    // RMS error over the Cramer-Rao bound: 1.00 over 200 frames (docs/PERFORMANCE.md, the target
+    // at most 1.10); these 90 points pin it to about 4 % and give 1.06 (seated-4), 1.15 (room-8) and
+    // 0.94 (stereo-2). Far above 1, the triangulation wastes accuracy; far below, the bound or the
+    // noise is wrong.
+    EXPECT_LT(j["ratio"].get<double>(), 1.25) << rig;
+    EXPECT_GT(j["ratio"].get<double>(), 0.8) << rig;
     // Nearly every marker in the rig's volume is seen by two cameras or more.
     EXPECT_GT(j["findable_per_frame"].get<double>(), 20.0) << rig;
   }
@@ -48,11 +54,16 @@ TEST(EvalCli, WandLengthIsMeasuredToAboutAMillimetre) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["frames_measured"], 40);
-  // Sigma 0.3 px on the seated rig locates each end to about 0.5 mm (see the triangulation
-  // numbers), so the length is off by well under 2 mm RMS; a wrong scale or a swapped end is not.
-  EXPECT_LT(j["rms_error_mm"].get<double>(), 2.0);
-  EXPECT_GT(j["rms_error_mm"].get<double>(), 0.05) << "noise-free results would mean the noise is not applied";
-  EXPECT_LE(j["mean_error_mm"].get<double>(), j["rms_error_mm"].get<double>());
+  // Sigma 0.3 px on the seated rig: the true rig measures a wand's length to 0.38 mm RMS over
+  // 1,000 frames (docs/PERFORMANCE.md; these 40 give 0.34 mm). At most twice that: a wrong scale
+  // or a swapped end is far beyond.
+  const double rms = j["rms_error_mm"].get<double>();
+  EXPECT_LT(rms, 0.8);
+  EXPECT_GT(rms, 0.05) << "noise-free results would mean the noise is not applied";
+  // mean_error_mm is the mean absolute error: sqrt(2 / pi) = 0.80 of the RMS for Gaussian errors
+  // (these 40 frames: 0.82). A bias, such as a scale off, would bring it to the RMS; a signed mean
+  // would be near 0.
+  EXPECT_NEAR(j["mean_error_mm"].get<double>() / rms, std::sqrt(2.0 / M_PI), 0.1);
 }
 
 TEST(EvalCli, BadRigIsReported) {
@@ -177,13 +188,25 @@ TEST(EvalCli, FramePrintsTheWholeFrameAndEveryStage) {
   for (const char* stage : {"source", "matching", "stars", "hands", "transforms", "physics", "render"}) {
     ASSERT_TRUE(j["stages"].contains(stage)) << stage;
     EXPECT_GT(j["stages"][stage]["p50_ms"].get<double>(), 0.0) << stage;
-    EXPECT_LE(j["stages"][stage]["p50_ms"].get<double>(), j["p99_ms"].get<double>()) << stage;
+    // A stage is timed inside its frame: never longer than the frame.
+    EXPECT_LE(j["stages"][stage]["max_ms"].get<double>(), j["max_ms"].get<double>()) << stage;
   }
+  // The stages are the frame: their mean times add up to the frame's, less only the few
+  // microseconds between them (measured: 99.996 %).
+  double stages_ms = 0.0;
+  for (const auto& stage : j["stages"]) stages_ms += stage["mean_ms"].get<double>();
+  EXPECT_LE(stages_ms, j["mean_ms"].get<double>());
+  EXPECT_GT(stages_ms, 0.9 * j["mean_ms"].get<double>());
   // Latency: every frame but the last displayed, each at a refresh after its capture; the hands
   // measured against the truth, predicted.
   EXPECT_EQ(j["latency"]["frames"].get<int>(), 19);
   EXPECT_GT(j["tracking_latency_p99_ms"].get<double>(), 0.0);
-  EXPECT_LE(j["motion_to_photon_p50_ms"].get<double>(), j["motion_to_photon_p99_ms"].get<double>());
+  // Motion-to-photon is tracking, then rendering, then waiting for the GPU and the refresh: in the
+  // mean (means add up, percentiles do not) at least the first two together.
+  const nlohmann::json& latency = j["latency"];
+  EXPECT_GE(latency["motion_to_photon_ms"]["mean"].get<double>(),
+            latency["tracking_ms"]["mean"].get<double>() + latency["render_ms"]["mean"].get<double>());
+  EXPECT_DOUBLE_EQ(j["motion_to_photon_p99_ms"].get<double>(), latency["motion_to_photon_ms"]["p99"].get<double>());
   EXPECT_GT(j["motion_to_photon_p50_ms"].get<double>(), j["latency"]["tracking_ms"]["p50"].get<double>());
   EXPECT_EQ(j["prediction"], "on");
   EXPECT_GT(j["prediction_errors"]["joint_samples"].get<int>(), 0);

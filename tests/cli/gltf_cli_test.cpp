@@ -2,6 +2,7 @@
 // samples are the recording's.
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -200,6 +201,60 @@ TEST(GltfCli, ARecordingsHandsBecomeABvhSkeleton) {
   EXPECT_GT(seen_frames, 100);
   EXPECT_GT(worst_m, 0.0);
   std::cerr << "worst joint " << 1000.0 * worst_m << " mm\n";
+}
+
+// A recording of three frames, written as rhot-demo --record writes it; `cut` keeps only the first
+// 30 bytes of the third frame's line, without its newline, as a crash while it was written would.
+std::string small_recording(const std::string& name, bool cut) {
+  const std::string file = ::testing::TempDir() + name;
+  {
+    auto writer = rhot::RecordingWriter::open(file, 90.0, {});
+    EXPECT_TRUE(writer.has_value()) << writer.error();
+    for (int f = 0; f < 3; ++f) {
+      rhot::RecordedFrame frame;
+      frame.t_s = f / 90.0;
+      frame.hands[1].seen = true;
+      for (auto& p : frame.hands[1].joints_world) p = Eigen::Vector3d(0.01 * f, 1.0, -0.4);
+      EXPECT_TRUE(writer->write(frame).has_value());
+    }
+  }
+  if (!cut) return file;
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string whole = text.str();
+  const std::size_t last_line = whole.rfind('\n', whole.size() - 2) + 1;
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << whole.substr(0, last_line + 30);
+  return file;
+}
+
+// CLI11's range check lets nan through (every comparison with it is false): it reached the mesh.
+TEST(GltfCli, AJointSizeThatIsNotAFiniteNumberIsRefused) {
+  const std::string rec = small_recording("rhot_cli_small.jsonl", false);
+  const std::string out = ::testing::TempDir() + "rhot_cli_nan.gltf";
+  std::remove(out.c_str());
+  for (const char* size : {"nan", "inf"}) {
+    const auto r = rhot::test::run_program("rhot-gltf", rec + " --joint-size-mm " + size + " --out " + out, "2>&1");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(std::string("--joint-size-mm: expected a finite number, got ") + size), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(std::ifstream(out).good()) << "nothing written";
+  const auto fine = rhot::test::run_program("rhot-gltf", rec + " --joint-size-mm 5 --out " + out, "2>&1");
+  EXPECT_EQ(fine.exit_code, 0) << fine.output;
+}
+
+// A recording a crash cut short converts: every whole frame, and one warning naming the line left out.
+TEST(GltfCli, ARecordingCutShortByACrashConvertsWithAWarning) {
+  const std::string rec = small_recording("rhot_cli_cut.jsonl", true);
+  const std::string out = ::testing::TempDir() + "rhot_cli_cut.gltf";
+  const auto r = rhot::test::run_program("rhot-gltf", rec + " --out " + out, "2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string warning =
+      rec + ":4: the last line is cut short (was the recording interrupted?); it is left out, the 2 frames before it are read";
+  const std::size_t at = r.output.find(warning);
+  EXPECT_NE(at, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(warning, at + 1), std::string::npos) << "one warning:\n" << r.output;
+  EXPECT_NE(r.output.find("2 frames, 52 animated nodes"), std::string::npos) << r.output;
 }
 
 }  // namespace

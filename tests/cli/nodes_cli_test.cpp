@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <regex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -153,6 +154,21 @@ TEST(NodesCli, BadFlagsGetOneClearLine) {
   r = rhot::test::run_program("rhot-eval", "nodes --nodes 9 --json", "2>&1");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("--nodes 9: "), std::string::npos) << r.output;
+}
+
+// CLI::Range lets "nan" through (every comparison with it is false), and a node told to stop
+// after nan seconds never stopped. Refused, as are infinity and negative times; `timeout` ends the
+// node should one run anyway.
+TEST(NodesCli, SecondsThatAreNotAFiniteTimeAreRefused) {
+  const std::string node = "--publish tcp://127.0.0.1:5601 --sim-rig " + std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml --sim-camera 0";
+  for (const auto& [seconds, message] :
+       std::vector<std::pair<std::string, std::string>>{{"nan", "--seconds: expected a finite number, got nan"},
+                                                        {"inf", "--seconds: expected a finite number, got inf"},
+                                                        {"-2", "--seconds: expected 0 or more, got -2"}}) {
+    const auto r = rhot::test::run_program("rhot-node", node + " --seconds " + seconds, "2>&1", "timeout 20");
+    EXPECT_EQ(r.exit_code, 1) << seconds << ":\n" << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << r.output;
+  }
 }
 
 }  // namespace

@@ -89,10 +89,12 @@ TEST(EvalStarsCli, ReportsIdentificationAndPoseAgainstTheTruth) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j["wrong_id_count"], 0);
-  EXPECT_GT(j["correct_id_fraction"].get<double>(), 0.9);
-  EXPECT_LT(j["position_rms_mm"].get<double>(), 2.0);
+  EXPECT_GT(j["correct_id_fraction"].get<double>(), 0.98);  // 0.990-0.993 over 10,000 frames; these: 0.998
+  // At most twice the figures of docs/PERFORMANCE.md (25 stars, 10,000 frames: 0.44-0.47 mm and
+  // 1.83-2.01 degrees RMS); these 10 stars over 60 frames give 0.48 mm and 1.60 degrees.
+  EXPECT_LT(j["position_rms_mm"].get<double>(), 1.0);
   EXPECT_GT(j["position_rms_mm"].get<double>(), 0.01) << "noise-free results would mean the noise is not applied";
-  EXPECT_LT(j["rotation_rms_deg"].get<double>(), 10.0);
+  EXPECT_LT(j["rotation_rms_deg"].get<double>(), 4.0);
 }
 
 TEST(EvalStarsCli, MoreBodiesThanStarsIsRefused) {

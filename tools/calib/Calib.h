@@ -20,6 +20,7 @@
 #include <CLI/CLI.hpp>
 #pragma GCC diagnostic pop
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 
 #include "tracking/camera/Camera.h"
 
@@ -52,5 +53,11 @@ void make_parent_folder(const std::string& file);
 
 // Prints a report as indented JSON on stdout.
 void print_json(const nlohmann::json& report);
+
+// Logs `message` as an error; returns the exit status for it (1).
+inline int fail(const std::string& message) {
+  spdlog::error("{}", message);
+  return 1;
+}
 
 }  // namespace rhot::calib_tool

@@ -64,11 +64,6 @@ std::vector<fs::path> expand(const std::vector<std::string>& arguments) {
   return files;
 }
 
-int fail(const std::string& message) {
-  spdlog::error("{}", message);
-  return 1;
-}
-
 nlohmann::json round_to(double value, double step) { return std::round(value / step) * step; }
 
 int run_intrinsics(const IntrinsicsOptions& o) {

@@ -21,6 +21,7 @@
 #include <spdlog/spdlog.h>
 
 #include "tools/calib/Calib.h"
+#include "tools/common/CliExit.h"
 #include "tools/common/NumberChecks.h"
 #include "tracking/camera/RigFile.h"
 
@@ -85,7 +86,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return rhot::cli_exit_status(app, e);
   }
   return exit_code;
 }

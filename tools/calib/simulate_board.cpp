@@ -44,11 +44,6 @@ struct SimulateBoardOptions {
   bool json = false;
 };
 
-int fail(const std::string& message) {
-  spdlog::error("{}", message);
-  return 1;
-}
-
 std::optional<std::pair<int, int>> parse_size(const std::string& text) {
   const std::size_t x = text.find('x');
   if (x == std::string::npos) return std::nullopt;

@@ -3,6 +3,7 @@
 // grasping) -> both eyes rendered to a window or PNG files; reports frame statistics per stage.
 
 #include <atomic>
+#include <charconv>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -20,6 +21,7 @@
 #include <CLI/CLI.hpp>
 #pragma GCC diagnostic pop
 #include <nlohmann/json.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include "engine/app/FrameLoop.h"
@@ -35,6 +37,7 @@
 #include "tracking/sim/Realism.h"
 #include "tracking/net/NodeSource.h"
 #include "tracking/source/VideoSource.h"
+#include "tools/common/CliExit.h"
 #include "tools/common/NumberChecks.h"
 
 #ifndef RHOT_ASSET_DIR
@@ -59,6 +62,24 @@ bool parse_size(const std::string& text, int& w, int& h) {
   char x = 0;
   char rest = 0;
   return std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &rest) == 3 && (x == 'x' || x == 'X') && w > 0 && h > 0;
+}
+
+// The most frames --frames may ask for: 100 million, 13 days at 90 Hz. CLI11 alone would read "-1"
+// as the largest 64-bit number and saturate 99999999999999999999999 to it: a run that never ends.
+constexpr std::uint64_t kMaxFrames = 100'000'000;
+
+// --frames: a whole number from 0 to kMaxFrames, checked on the text before CLI11 converts it.
+CLI::Validator frame_count_check() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        std::uint64_t frames = 0;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), frames);
+        if (ec != std::errc() || end != text.data() + text.size() || frames > kMaxFrames) {
+          return "expected a whole number of frames from 0 to " + std::to_string(kMaxFrames) + " (0: until closed), got " + text;
+        }
+        return {};
+      },
+      "0.." + std::to_string(kMaxFrames));
 }
 
 // Everything the command line says.
@@ -91,7 +112,8 @@ struct Options {
 void add_options(CLI::App& cli, Options& o) {
   cli.add_option("--scene", o.scene_path, "Scene file (JSON, see docs/scene-format.md)")->capture_default_str();
   cli.add_flag("--headless", o.headless, "Run without a window (also chosen when there is no display)");
-  cli.add_option("--frames", o.frames, "Stop after N frames (0: until closed; headless default 900, 10 s at 90 Hz)");
+  cli.add_option("--frames", o.frames, "Stop after N frames, 0 to 100000000 (0: until closed; headless default 900, 10 s at 90 Hz)")
+      ->check(frame_count_check());
   cli.add_option("--stats", o.stats_path, "Write frame statistics (p50, p99, max per stage and frame) as JSON");
   cli.add_option("--rate-hz", o.loop.rate_hz, "Fixed simulation rate")->capture_default_str()->check(CLI::Range(1.0, 10000.0));
   cli.add_option("--budget-ms", o.loop.budget_ms, "Frame budget; slower frames count as misses")
@@ -174,8 +196,32 @@ void add_options(CLI::App& cli, Options& o) {
   cli.add_flag("--no-overlay", o.no_overlay, "No Dear ImGui overlay in the window");
 }
 
-// What the options mean beyond their own checks: the source, the debug views, the eye size.
-// False after logging what is wrong.
+// --stats FILE is written after the run, so whether it can be written is checked before: a long run
+// must not end in "cannot write". The file is opened for appending (one that exists is left as it
+// is) and, where the check made it, removed again. False after logging why it cannot be written.
+bool stats_file_writable(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    spdlog::error("--stats: cannot write {}: it is a folder", path);
+    return false;
+  }
+  const fs::path folder = fs::path(path).parent_path();
+  if (!folder.empty() && !fs::is_directory(folder, ec)) {
+    spdlog::error("--stats: cannot write {}: the folder {} does not exist", path, folder.string());
+    return false;
+  }
+  const bool existed = fs::exists(path, ec);
+  if (!std::ofstream(path, std::ios::app)) {
+    spdlog::error("--stats: cannot write {}: it cannot be opened for writing", path);
+    return false;
+  }
+  if (!existed) fs::remove(path, ec);
+  return true;
+}
+
+// What the options mean beyond their own checks: the source, the debug views, the eye size, where
+// --stats goes. False after logging what is wrong.
 bool resolve_options(Options& o) {
   for (const std::string& v : o.debug_views) {
     if (v == "markers") o.demo.debug.markers = true;
@@ -249,7 +295,7 @@ bool resolve_options(Options& o) {
       return false;
     }
   }
-  return true;
+  return o.stats_path.empty() || stats_file_writable(o.stats_path);
 }
 
 // Both eyes side by side, scaled to fit a desktop; headless (null) when no window opens.
@@ -316,6 +362,43 @@ bool write_outputs(const Options& o, const rhot::Window* window, rhot::Renderer&
   return true;
 }
 
+// The window's overlay (frame times, stages, tracking state), drawn by the runtime every frame;
+// none headless or with --no-overlay.
+std::unique_ptr<rhot::Overlay> make_overlay(const Options& o, const rhot::Window* window, rhot::Renderer& renderer, rhot::Runtime& runtime,
+                                            const rhot::FrameLoop& frame_loop) {
+  if (!window || o.no_overlay) return nullptr;
+  if (const auto enabled = renderer.enable_overlay(); !enabled) {
+    spdlog::warn("no overlay: {}", enabled.error());
+    return nullptr;
+  }
+  auto overlay = std::make_unique<rhot::Overlay>(
+      runtime, frame_loop.stats(),
+      rhot::OverlayInfo{o.scene_path, o.source, renderer.info().device_name + ", lit per " + rhot::to_string(renderer.info().shading),
+                        o.render.eye_width_px, o.render.eye_height_px});
+  runtime.set_overlay([drawn = overlay.get()] { drawn->build(); });
+  return overlay;
+}
+
+// The run's figures, after it: frame times, latency, the stream's counts.
+void log_run(const Options& o, std::uint64_t ran, const rhot::FrameLoop& frame_loop, rhot::Runtime& runtime) {
+  const rhot::FrameStats& stats = frame_loop.stats();
+  const rhot::TimingSummary whole = stats.frame_summary();
+  spdlog::info(
+      "{} frames ({:.1f} s simulated): frame p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms; {} over the "
+      "{:.1f} ms budget",
+      ran, frame_loop.time_s(), whole.p50_ms, whole.p99_ms, whole.max_ms, stats.frames_over_budget(), stats.budget_ms());
+  const rhot::LatencyStats& latency = runtime.latency();
+  if (latency.frames() > 0) {
+    spdlog::info("latency p50 / p99: tracking {:.2f} / {:.2f} ms, render {:.2f} / {:.2f} ms, motion-to-photon {:.2f} / {:.2f} ms",
+                 latency.tracking().p50_ms, latency.tracking().p99_ms, latency.render().p50_ms, latency.render().p99_ms,
+                 latency.motion_to_photon().p50_ms, latency.motion_to_photon().p99_ms);
+  }
+  if (const auto streamed = runtime.stream_stats()) {
+    spdlog::info("stream {}: {} frames, {} sent, {} skipped (the sender was busy), {} failed sends", o.demo.stream, streamed->given,
+                 streamed->sent, streamed->skipped, streamed->errors);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -324,7 +407,13 @@ int main(int argc, char** argv) {
       "With no arguments it runs the default scene; with no display it runs headless."};
   Options o;
   add_options(cli, o);
-  CLI11_PARSE(cli, argc, argv);
+  // Everything on stderr, progress and figures as well as errors, as rhot's other tools do.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-demo"));
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return rhot::cli_exit_status(cli, e);
+  }
   if (!resolve_options(o)) return EXIT_FAILURE;
 
   const auto scene = rhot::load_scene_file(o.scene_path);
@@ -380,19 +469,7 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   o.loop.real_time = !o.headless;
   rhot::FrameLoop frame_loop(runtime.world(), systems, o.loop);
-  std::unique_ptr<rhot::Overlay> overlay;
-  if (window && !o.no_overlay) {
-    if (const auto enabled = (*renderer)->enable_overlay(); enabled) {
-      overlay = std::make_unique<rhot::Overlay>(
-          runtime, frame_loop.stats(),
-          rhot::OverlayInfo{o.scene_path, o.source,
-                            (*renderer)->info().device_name + ", lit per " + rhot::to_string((*renderer)->info().shading),
-                            o.render.eye_width_px, o.render.eye_height_px});
-      runtime.set_overlay([&overlay] { overlay->build(); });
-    } else {
-      spdlog::warn("no overlay: {}", enabled.error());
-    }
-  }
+  const std::unique_ptr<rhot::Overlay> overlay = make_overlay(o, window.get(), **renderer, runtime, frame_loop);
   const std::uint64_t ran =
       frame_loop.run(o.frames, [&] { return !g_interrupted.load() && !(window && window->should_close()) && !runtime.tracking().ended(); });
   for (const std::string& line : runtime.tracking().summary()) spdlog::info("{}", line);
@@ -404,23 +481,8 @@ int main(int argc, char** argv) {
     spdlog::info("captured {} PNG file(s) into {}", png_writer->written(), o.capture_dir);
   }
 
-  const rhot::FrameStats& stats = frame_loop.stats();
-  const rhot::TimingSummary whole = stats.frame_summary();
-  spdlog::info(
-      "{} frames ({:.1f} s simulated): frame p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms; {} over the "
-      "{:.1f} ms budget",
-      ran, frame_loop.time_s(), whole.p50_ms, whole.p99_ms, whole.max_ms, stats.frames_over_budget(), stats.budget_ms());
-  const rhot::LatencyStats& latency = runtime.latency();
-  if (latency.frames() > 0) {
-    spdlog::info("latency p50 / p99: tracking {:.2f} / {:.2f} ms, render {:.2f} / {:.2f} ms, motion-to-photon {:.2f} / {:.2f} ms",
-                 latency.tracking().p50_ms, latency.tracking().p99_ms, latency.render().p50_ms, latency.render().p99_ms,
-                 latency.motion_to_photon().p50_ms, latency.motion_to_photon().p99_ms);
-  }
-  if (const auto streamed = runtime.stream_stats()) {
-    spdlog::info("stream {}: {} frames, {} sent, {} skipped (the sender was busy), {} failed sends", o.demo.stream, streamed->given,
-                 streamed->sent, streamed->skipped, streamed->errors);
-  }
-  if (!write_outputs(o, window.get(), **renderer, frame_loop, latency)) return EXIT_FAILURE;
+  log_run(o, ran, frame_loop, runtime);
+  if (!write_outputs(o, window.get(), **renderer, frame_loop, runtime.latency())) return EXIT_FAILURE;
   const std::uint64_t validation = (*renderer)->validation_messages();
   if (validation > 0) spdlog::warn("{} Vulkan validation message(s)", validation);
   return capture_failed ? EXIT_FAILURE : EXIT_SUCCESS;

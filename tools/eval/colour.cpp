@@ -65,6 +65,170 @@ struct Counts {
   }
 };
 
+// What the frames count.
+struct ColourTally {
+  Counts all;
+  std::map<int, Counts> per_colour;
+  std::vector<double> detect_ms, detect_full_ms;
+  double tip_sum_m = 0.0;
+  long tips = 0, hand_frames = 0, hands_seen = 0;
+  long images = 0;
+};
+
+// --colours' model, or the default one without it: false after saying what was wrong.
+bool load_model(const ColourArgs& a, ColourModel& model) {
+  model = default_colour_model();
+  if (!a.colours_file.empty()) {
+    auto loaded = load_colour_model(a.colours_file);
+    if (!loaded) {
+      std::cerr << "rhot-eval: " << loaded.error().to_string() << "\n";
+      return false;
+    }
+    model = std::move(*loaded);
+  }
+  return true;
+}
+
+// The default model's white reference as a user's rhot-calib colours would take it: the scene
+// under daylight (6500 K), its first frame's images. False after saying what was wrong.
+bool take_daylight_white(const ColourArgs& a, const CameraRig& rig, const SceneDesc& scene, const ColourCameraSettings& cs,
+                         const DemoSimulation& sim, ColourModel& model) {
+  auto daylight = ColourCameras::create(rig, scene, cs);
+  if (!daylight) {
+    std::cerr << "rhot-eval: " << daylight.error() << "\n";
+    return false;
+  }
+  const auto images = (*daylight)->render(sim.world->colour_shot(sim.world->at(a.start_s)), 0);
+  std::array<double, 3> sum{};
+  for (const cv::Mat& image : images) {
+    const auto m = median_colour(image);
+    for (std::size_t ch = 0; ch < 3; ++ch) sum[ch] += m[ch] / static_cast<double>(images.size());
+  }
+  model.white_reference = sum;
+  return true;
+}
+
+// --pictures: each camera's image with its detections circled, and what the model classifies in
+// it. False after saying what could not be written.
+bool write_pictures(const ColourArgs& a, const RigFrame& frame, const ColourCameraSource& src, const ColourModel& model) {
+  std::filesystem::create_directories(a.pictures_dir);
+  for (std::size_t c = 0; c < frame.cameras.size(); ++c) {
+    const std::string base = a.pictures_dir + "/cam" + std::to_string(c);
+    cv::Mat annotated = src.last_images()[c].clone();
+    for (const Detection& d : frame.cameras[c].detections) {
+      cv::circle(annotated, cv::Point(static_cast<int>(std::lround(d.pixel.x())), static_cast<int>(std::lround(d.pixel.y()))), 9,
+                 cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    }
+    if (!cv::imwrite(base + ".png", annotated) ||
+        !cv::imwrite(base + "_colours.png", classification_picture(ColourTable(model), src.last_images()[c]))) {
+      std::cerr << "rhot-eval: cannot write " << base << ".png\n";
+      return false;
+    }
+  }
+  return true;
+}
+
+// The markers of one image visible by 20 pixels or more: found when a detection of their colour
+// lies within their projected radius + 1 px; `used` marks the detections that found one.
+void count_found(const ColourShot& shot, const std::vector<MarkerView>& v, const std::vector<Detection>& dets, std::vector<bool>& used,
+                 ColourTally& tally) {
+  for (std::size_t m = 0; m < shot.markers.size(); ++m) {
+    if (!v[m].in_front || v[m].visible_px < 20) continue;
+    const int colour_index = shot.markers[m].colour;
+    Counts& pc = tally.per_colour[colour_index];
+    ++tally.all.visible;
+    ++pc.visible;
+    const double reach = std::sqrt(v[m].disc_px / 3.14159265358979) + 1.0;
+    int best = -1;
+    double best_d = reach;
+    for (std::size_t d = 0; d < dets.size(); ++d) {
+      const double dist = (dets[d].pixel - v[m].pixel).norm();
+      if (dets[d].colour == colour_index && dist < best_d) best_d = dist, best = static_cast<int>(d);
+    }
+    if (best < 0) continue;
+    used[static_cast<std::size_t>(best)] = true;
+    ++tally.all.found;
+    ++pc.found;
+    if (v[m].visible_px >= 0.9 * v[m].disc_px) {
+      tally.all.centroid_sum2 += best_d * best_d;
+      pc.centroid_sum2 += best_d * best_d;
+      ++tally.all.centroid_n;
+      ++pc.centroid_n;
+    }
+  }
+}
+
+// A detection near no visible marker of its colour (any visible pixel at all) is false.
+void count_false(const ColourShot& shot, const std::vector<MarkerView>& v, const std::vector<Detection>& dets,
+                 const std::vector<bool>& used, ColourTally& tally) {
+  for (std::size_t d = 0; d < dets.size(); ++d) {
+    if (used[d]) continue;
+    bool near = false;
+    for (std::size_t m = 0; m < shot.markers.size() && !near; ++m) {
+      if (!v[m].in_front || v[m].visible_px == 0 || shot.markers[m].colour != dets[d].colour) continue;
+      near = (dets[d].pixel - v[m].pixel).norm() < std::sqrt(v[m].disc_px / 3.14159265358979) + 2.0;
+    }
+    if (!near) {
+      ++tally.all.false_detections;
+      ++tally.per_colour[dets[d].colour].false_detections;
+    }
+  }
+}
+
+// Each camera's image of the frame: timed through a whole-image search, and its detections
+// against the markers the identity render shows.
+void count_detections(const RigFrame& frame, const ColourShot& shot, const std::vector<std::vector<MarkerView>>& views,
+                      const ColourCameraSource& src, ColourDetector& full_detector, ColourTally& tally) {
+  for (std::size_t c = 0; c < frame.cameras.size(); ++c) {
+    ++tally.images;
+    const auto start = std::chrono::steady_clock::now();
+    (void)full_detector.detect(src.last_images()[c]);
+    tally.detect_full_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    const auto& dets = frame.cameras[c].detections;
+    std::vector<bool> used(dets.size(), false);
+    count_found(shot, views[c], dets, used, tally);
+    count_false(shot, views[c], dets, used, tally);
+  }
+}
+
+// The tracked fingertips against the true ones, for the hands seen.
+void count_fingertips(LiveTracking& live, const DemoWorld& world, ColourTally& tally) {
+  const auto truth = world.truth();
+  for (std::size_t h = 0; h < 2 && truth; ++h) {
+    ++tally.hand_frames;
+    const TrackedHand& hand = live.tracked_hand(h == 0 ? HandSide::kLeft : HandSide::kRight);
+    if (!hand.hand_seen) continue;
+    ++tally.hands_seen;
+    for (int k = 0; k < kFingerCount; ++k) {
+      const auto tip = static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3]);
+      tally.tip_sum_m += (hand.joints_world[tip] - truth->hands[h].world_from_hand * truth->hands[h].pose.position_m[tip]).norm();
+      ++tally.tips;
+    }
+  }
+}
+
+// The JSON rhot-eval colour prints, in this order.
+nlohmann::ordered_json report(const ColourArgs& a, const std::string& device_name, const ColourTally& tally) {
+  nlohmann::ordered_json j;
+  j["rig"] = a.rig_file;
+  j["frames"] = a.frames;
+  j["images"] = tally.images;
+  j["device"] = device_name;
+  j["noise"] = a.noise;
+  j["white_balance_k"] = a.kelvin;
+  j["clutter"] = a.clutter;
+  const nlohmann::ordered_json overall = tally.all.json(tally.images);
+  for (auto it = overall.begin(); it != overall.end(); ++it) j[it.key()] = it.value();
+  j["fingertip_mean_mm"] = tally.tips > 0 ? 1000.0 * tally.tip_sum_m / static_cast<double>(tally.tips) : 0.0;
+  j["hand_seen_fraction"] = tally.hand_frames > 0 ? static_cast<double>(tally.hands_seen) / static_cast<double>(tally.hand_frames) : 0.0;
+  j["detect_median_ms"] = median(tally.detect_ms);
+  j["detect_full_median_ms"] = median(tally.detect_full_ms);
+  nlohmann::ordered_json colours;
+  for (const auto& [c, counts] : tally.per_colour) colours[std::string(marker_colour_name(c))] = counts.json(tally.images);
+  j["per_colour"] = colours;
+  return j;
+}
+
 }  // namespace
 
 int colour(const ColourArgs& a) {
@@ -79,15 +243,8 @@ int colour(const ColourArgs& a) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
     return 1;
   }
-  ColourModel model = default_colour_model();
-  if (!a.colours_file.empty()) {
-    auto loaded = load_colour_model(a.colours_file);
-    if (!loaded) {
-      std::cerr << "rhot-eval: " << loaded.error().to_string() << "\n";
-      return 1;
-    }
-    model = std::move(*loaded);
-  }
+  ColourModel model;
+  if (!load_model(a, model)) return 1;
   auto sim = make_demo_simulation(*scene, RHOT_ASSET_DIR, {}, 0, true);
   if (!sim) {
     std::cerr << "rhot-eval: " << sim.error() << "\n";
@@ -98,22 +255,7 @@ int colour(const ColourArgs& a) {
   cs.clutter = a.clutter;
   cs.device = a.device;
   cs.seed = a.seed;
-  if (a.colours_file.empty()) {
-    // The default model's white reference as a user's rhot-calib colours would take it: the scene
-    // under daylight (6500 K), its first frame's images.
-    auto daylight = ColourCameras::create(*rig, *scene, cs);
-    if (!daylight) {
-      std::cerr << "rhot-eval: " << daylight.error() << "\n";
-      return 1;
-    }
-    const auto images = (*daylight)->render(sim->world->colour_shot(sim->world->at(a.start_s)), 0);
-    std::array<double, 3> sum{};
-    for (const cv::Mat& image : images) {
-      const auto m = median_colour(image);
-      for (std::size_t ch = 0; ch < 3; ++ch) sum[ch] += m[ch] / static_cast<double>(images.size());
-    }
-    model.white_reference = sum;
-  }
+  if (a.colours_file.empty() && !take_daylight_white(a, *rig, *scene, cs, *sim, model)) return 1;
   cs.kelvin = a.kelvin;
   auto cameras = ColourCameras::create(*rig, *scene, cs);
   if (!cameras) {
@@ -128,12 +270,7 @@ int colour(const ColourArgs& a) {
   LiveTracking live(std::move(source), sim->objects, sim->layouts);
   ColourDetector full_detector(model);
 
-  Counts all;
-  std::map<int, Counts> per_colour;
-  std::vector<double> detect_ms, detect_full_ms;
-  double tip_sum_m = 0.0;
-  long tips = 0, hand_frames = 0, hands_seen = 0;
-  long images = 0;
+  ColourTally tally;
   const double rate_hz = scene->settings.headset.refresh_hz;
   for (int f = 0; f < a.frames; ++f) {
     const double t = a.start_s + f / rate_hz;
@@ -144,101 +281,13 @@ int colour(const ColourArgs& a) {
     const ColourShot& shot = src->last_shot();
     const auto views = cams->marker_visibility(shot);
     const RigFrame& frame = live.frame();
-    if (f == 0 && !a.pictures_dir.empty()) {
-      std::filesystem::create_directories(a.pictures_dir);
-      for (std::size_t c = 0; c < frame.cameras.size(); ++c) {
-        const std::string base = a.pictures_dir + "/cam" + std::to_string(c);
-        cv::Mat annotated = src->last_images()[c].clone();
-        for (const Detection& d : frame.cameras[c].detections) {
-          cv::circle(annotated, cv::Point(static_cast<int>(std::lround(d.pixel.x())), static_cast<int>(std::lround(d.pixel.y()))), 9,
-                     cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
-        }
-        if (!cv::imwrite(base + ".png", annotated) ||
-            !cv::imwrite(base + "_colours.png", classification_picture(ColourTable(model), src->last_images()[c]))) {
-          std::cerr << "rhot-eval: cannot write " << base << ".png\n";
-          return 1;
-        }
-      }
-    }
-    detect_ms.push_back(src->last_detect_ms() / static_cast<double>(frame.cameras.size()));
-    for (std::size_t c = 0; c < frame.cameras.size(); ++c) {
-      ++images;
-      const auto start = std::chrono::steady_clock::now();
-      (void)full_detector.detect(src->last_images()[c]);
-      detect_full_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-      const auto& dets = frame.cameras[c].detections;
-      const auto& v = views[c];
-      std::vector<bool> used(dets.size(), false);
-      for (std::size_t m = 0; m < shot.markers.size(); ++m) {
-        if (!v[m].in_front || v[m].visible_px < 20) continue;
-        const int colour_index = shot.markers[m].colour;
-        Counts& pc = per_colour[colour_index];
-        ++all.visible;
-        ++pc.visible;
-        const double reach = std::sqrt(v[m].disc_px / 3.14159265358979) + 1.0;
-        int best = -1;
-        double best_d = reach;
-        for (std::size_t d = 0; d < dets.size(); ++d) {
-          const double dist = (dets[d].pixel - v[m].pixel).norm();
-          if (dets[d].colour == colour_index && dist < best_d) best_d = dist, best = static_cast<int>(d);
-        }
-        if (best < 0) continue;
-        used[static_cast<std::size_t>(best)] = true;
-        ++all.found;
-        ++pc.found;
-        if (v[m].visible_px >= 0.9 * v[m].disc_px) {
-          all.centroid_sum2 += best_d * best_d;
-          pc.centroid_sum2 += best_d * best_d;
-          ++all.centroid_n;
-          ++pc.centroid_n;
-        }
-      }
-      // A detection near no visible marker of its colour (any visible pixel at all) is false.
-      for (std::size_t d = 0; d < dets.size(); ++d) {
-        if (used[d]) continue;
-        bool near = false;
-        for (std::size_t m = 0; m < shot.markers.size() && !near; ++m) {
-          if (!v[m].in_front || v[m].visible_px == 0 || shot.markers[m].colour != dets[d].colour) continue;
-          near = (dets[d].pixel - v[m].pixel).norm() < std::sqrt(v[m].disc_px / 3.14159265358979) + 2.0;
-        }
-        if (!near) {
-          ++all.false_detections;
-          ++per_colour[dets[d].colour].false_detections;
-        }
-      }
-    }
-    const auto truth = world->truth();
-    for (std::size_t h = 0; h < 2 && truth; ++h) {
-      ++hand_frames;
-      const TrackedHand& hand = live.tracked_hand(h == 0 ? HandSide::kLeft : HandSide::kRight);
-      if (!hand.hand_seen) continue;
-      ++hands_seen;
-      for (int k = 0; k < kFingerCount; ++k) {
-        const auto tip = static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3]);
-        tip_sum_m += (hand.joints_world[tip] - truth->hands[h].world_from_hand * truth->hands[h].pose.position_m[tip]).norm();
-        ++tips;
-      }
-    }
+    if (f == 0 && !a.pictures_dir.empty() && !write_pictures(a, frame, *src, model)) return 1;
+    tally.detect_ms.push_back(src->last_detect_ms() / static_cast<double>(frame.cameras.size()));
+    count_detections(frame, shot, views, *src, full_detector, tally);
+    count_fingertips(live, *world, tally);
     if ((f + 1) % 30 == 0 || f + 1 == a.frames) std::cerr << "rhot-eval colour: " << (f + 1) << "/" << a.frames << " frames\n";
   }
-  nlohmann::ordered_json j;
-  j["rig"] = a.rig_file;
-  j["frames"] = a.frames;
-  j["images"] = images;
-  j["device"] = cams->renderer_info().device_name;
-  j["noise"] = a.noise;
-  j["white_balance_k"] = a.kelvin;
-  j["clutter"] = a.clutter;
-  const nlohmann::ordered_json overall = all.json(images);
-  for (auto it = overall.begin(); it != overall.end(); ++it) j[it.key()] = it.value();
-  j["fingertip_mean_mm"] = tips > 0 ? 1000.0 * tip_sum_m / static_cast<double>(tips) : 0.0;
-  j["hand_seen_fraction"] = hand_frames > 0 ? static_cast<double>(hands_seen) / static_cast<double>(hand_frames) : 0.0;
-  j["detect_median_ms"] = median(detect_ms);
-  j["detect_full_median_ms"] = median(detect_full_ms);
-  nlohmann::ordered_json colours;
-  for (const auto& [c, counts] : per_colour) colours[std::string(marker_colour_name(c))] = counts.json(images);
-  j["per_colour"] = colours;
-  std::cout << j.dump(2) << "\n";
+  std::cout << report(a, cams->renderer_info().device_name, tally).dump(2) << "\n";
   return 0;
 }
 

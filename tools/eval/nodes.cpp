@@ -92,6 +92,302 @@ struct HandComparison {
   double seen_fraction() const { return hand_frames > 0 ? static_cast<double>(seen) / static_cast<double>(hand_frames) : 0.0; }
 };
 
+// A run's first checks, after the rig loaded: false after saying what was wrong.
+bool check_args(const NodesArgs& a, const CameraRig& rig) {
+  if (a.nodes > static_cast<int>(rig.cameras.size())) {
+    std::cerr << "rhot-eval: --nodes " << a.nodes << ": " << a.rig_file << " has only " << rig.cameras.size() << " cameras\n";
+    return false;
+  }
+  if (a.restart_at && (!a.kill_at || *a.restart_at <= *a.kill_at)) {
+    std::cerr << "rhot-eval: --restart-node-at needs --kill-node-at before it\n";
+    return false;
+  }
+  return true;
+}
+
+// The demo's world of --scene into `demo` (left empty without --scene): false after saying what
+// was wrong.
+bool load_demo(const NodesArgs& a, std::optional<DemoSimulation>& demo) {
+  if (a.scene_file.empty()) return true;
+  const auto scene = load_scene_file(a.scene_file);
+  if (!scene) {
+    std::cerr << "rhot-eval: " << scene.error().to_string() << "\n";
+    return false;
+  }
+  auto made = make_demo_simulation(*scene, RHOT_ASSET_DIR);
+  if (!made) {
+    std::cerr << "rhot-eval: " << a.scene_file << ": " << made.error() << "\n";
+    return false;
+  }
+  demo = std::move(*made);
+  return true;
+}
+
+// The command line of node n, which publishes on `endpoint` and simulates `cameras`; the world's
+// time 0 is start_ns of the shared steady clock.
+std::vector<std::string> node_argv(const NodesArgs& a, int n, const std::filesystem::path& node_program, const std::string& endpoint,
+                                   const std::vector<int>& cameras, std::int64_t start_ns) {
+  std::string list;
+  for (int c : cameras) list += (list.empty() ? "" : ",") + std::to_string(c);
+  std::vector<std::string> argv = {node_program.string(),
+                                   "--publish",
+                                   endpoint,
+                                   "--node-id",
+                                   std::to_string(n),
+                                   "--sim-rig",
+                                   a.rig_file,
+                                   "--sim-camera",
+                                   list,
+                                   "--sim-markers",
+                                   std::to_string(a.markers),
+                                   "--seed",
+                                   std::to_string(a.seed),
+                                   "--sigma",
+                                   std::to_string(a.sigma),
+                                   "--rate-hz",
+                                   std::to_string(a.rate_hz),
+                                   "--sim-start-ns",
+                                   std::to_string(start_ns)};
+  if (!a.scene_file.empty()) argv.insert(argv.end(), {"--sim-scene", a.scene_file});
+  // Node 0 is the odd one: its clock and its link, as the flags say.
+  if (n == 0) {
+    argv.insert(argv.end(), {"--clock-offset-ms", std::to_string(a.clock_offset_ms), "--clock-drift-ppm", std::to_string(a.clock_drift_ppm),
+                             "--delay-ms", std::to_string(a.delay_ms)});
+  }
+  return argv;
+}
+
+// Node n serves the cameras c with c % N == n and publishes on the n-th of `ports`.
+std::vector<NodePlan> plan_nodes(const NodesArgs& a, std::size_t camera_count, const std::filesystem::path& node_program,
+                                 const std::vector<int>& ports, std::int64_t start_ns) {
+  std::vector<NodePlan> plans(static_cast<std::size_t>(a.nodes));
+  for (int n = 0; n < a.nodes; ++n) {
+    NodePlan& p = plans[static_cast<std::size_t>(n)];
+    for (int c = n; c < static_cast<int>(camera_count); c += a.nodes) p.cameras.push_back(c);
+    const int port = ports[static_cast<std::size_t>(n)];
+    p.endpoint = "tcp://127.0.0.1:" + std::to_string(port);
+    p.argv = node_argv(a, n, node_program, p.endpoint, p.cameras, start_ns);
+  }
+  return plans;
+}
+
+// Starts every node, its output to `log`: false after saying which could not start (the ones
+// already started are in `children`).
+bool spawn_nodes(const std::vector<NodePlan>& plans, const std::filesystem::path& log, std::vector<ChildProcess>& children) {
+  for (const NodePlan& p : plans) {
+    auto child = ChildProcess::spawn(p.argv, log);
+    if (!child) {
+      std::cerr << "rhot-eval: " << child.error() << "\n";
+      return false;
+    }
+    children.push_back(std::move(*child));
+  }
+  return true;
+}
+
+NodeSourceSettings source_settings(const NodesArgs& a, std::int64_t start_ns) {
+  NodeSourceSettings settings;
+  settings.assembly.deadline_ns = static_cast<std::int64_t>(a.deadline_ms * 1e6);
+  settings.time_origin_ns = start_ns;
+  settings.assembly.tolerance_ns = std::min<std::int64_t>(settings.assembly.deadline_ns, static_cast<std::int64_t>(0.4e9 / a.rate_hz));
+  return settings;
+}
+
+// With the demo's world: the hands tracked from the nodes' frames and, at the same moments, from
+// an in-process simulated rig of the same world (its own noise: the same seed gives other
+// draws than the nodes', which each seed their own cameras).
+struct DemoHands {
+  std::unique_ptr<LiveTracking> from_nodes, in_process;
+  HeldFrames* held = nullptr;
+  HandComparison nodes_hands, local_hands;
+};
+
+void set_up_demo_hands(const NodesArgs& a, const CameraRig& rig, const DemoSimulation& demo, DemoHands& hands) {
+  auto frames = std::make_unique<HeldFrames>(rig);
+  hands.held = frames.get();
+  hands.from_nodes = std::make_unique<LiveTracking>(std::move(frames), demo.objects, demo.layouts);
+  SimulatedRigSettings local;
+  local.sigma_px = a.sigma;
+  local.rate_hz = a.rate_hz;
+  local.seed = a.seed;
+  auto local_rig = std::make_unique<SimulatedRig>(rig, std::vector<Trajectory>{}, local);
+  local_rig->set_world(demo.world);
+  hands.in_process = std::make_unique<LiveTracking>(std::move(local_rig), demo.objects, demo.layouts);
+  hands.nodes_hands.live = hands.from_nodes.get();
+  hands.local_hands.live = hands.in_process.get();
+}
+
+// What the master's loop reads and drives once the nodes run.
+struct NodesRun {
+  const NodesArgs& a;
+  const CameraRig& rig;
+  const std::optional<DemoSimulation>& demo;
+  const std::vector<NodePlan>& plans;
+  const std::filesystem::path& log;
+  std::vector<ChildProcess>& children;
+  NodeSource& source;
+  const NodeSourceSettings& settings;
+  const std::vector<Trajectory>& markers;  // without the demo's world
+  DemoHands& hands;                        // with it
+  MatchSettings match;
+  std::int64_t start_ns;
+  std::int64_t period_ns;
+  std::int64_t frames_expected;
+  int victim;  // the node killed and restarted
+};
+
+// What the master's loop counts.
+struct NodesTally {
+  std::set<std::int64_t> assembled;
+  std::vector<double> assembly_ms, latency_ms;
+  long found = 0, truth_total = 0, found_down = 0, truth_down = 0;
+  bool killed = false, restarted = false, rejoined = false;
+  std::int64_t complete = 0;
+};
+
+// Kills the victim node at --kill-node-at and starts it again at --restart-node-at, t_now seconds
+// into the run.
+void kill_or_restart_victim(const NodesRun& run, double t_now, NodesTally& tally) {
+  const NodesArgs& a = run.a;
+  if (a.kill_at && !tally.killed && t_now >= *a.kill_at) {
+    run.children[static_cast<std::size_t>(run.victim)].kill();
+    tally.killed = true;
+  }
+  if (a.restart_at && tally.killed && !tally.restarted && t_now >= *a.restart_at) {
+    auto child = ChildProcess::spawn(run.plans[static_cast<std::size_t>(run.victim)].argv, run.log);
+    if (child) run.children[static_cast<std::size_t>(run.victim)] = std::move(*child);
+    tally.restarted = true;
+  }
+}
+
+// Counts one frame the node source closed: its assembly, its cameras' latency and, from its
+// points or its hands, what was tracked.
+void tally_frame(const NodesRun& run, const AssembledFrame& f, NodesTally& tally) {
+  const NodesArgs& a = run.a;
+  const std::int64_t k = (f.capture_ns - run.start_ns + run.period_ns / 2) / run.period_ns;
+  if (f.capture_ns < run.start_ns - run.period_ns / 2 || k >= run.frames_expected) return;
+  const double t = static_cast<double>(k) / a.rate_hz;
+  tally.assembled.insert(k);
+  double cost_ns = static_cast<double>(f.close_cpu_ns);
+  bool all = true;
+  for (const auto& cam : f.cameras) {
+    if (!cam) {
+      all = false;
+      continue;
+    }
+    cost_ns += static_cast<double>(cam->decode_ns);
+    tally.latency_ms.push_back(static_cast<double>(cam->arrival_ns - cam->capture_ns) / 1e6);
+  }
+  tally.complete += all ? 1 : 0;
+  tally.assembly_ms.push_back(cost_ns / 1e6);
+  if (tally.restarted && t > *a.restart_at) {
+    for (int c : run.plans[static_cast<std::size_t>(run.victim)].cameras)
+      if (f.cameras[static_cast<std::size_t>(c)]) tally.rejoined = true;
+  }
+  RigFrame frame = run.source.to_rig_frame(f);
+  if (run.demo) {
+    const SceneTruth truth = run.demo->script->at(t);
+    run.hands.held->hold(frame);
+    run.hands.nodes_hands.step(t, truth);
+    run.hands.local_hands.step(t, truth);
+    return;
+  }
+  const std::vector<MatchedPoint> points = match_and_triangulate(run.rig, frame, run.match);
+  std::vector<Eigen::Vector3d> truth;
+  for (const Trajectory& m : run.markers) truth.push_back(m.at(t));
+  const int got = markers_found(truth, points);
+  tally.found += got;
+  tally.truth_total += static_cast<long>(truth.size());
+  if (a.kill_at && t >= *a.kill_at + run.settings.lost_after_s && (!a.restart_at || t < *a.restart_at)) {
+    tally.found_down += got;
+    tally.truth_down += static_cast<long>(truth.size());
+  }
+}
+
+// The master's loop: until the run's end, and then until every frame closed by then is read (a
+// slow master, such as a sanitizer build, reads behind real time).
+void run_master(const NodesRun& run, NodesTally& tally) {
+  const NodesArgs& a = run.a;
+  const std::int64_t end_ns = run.start_ns + static_cast<std::int64_t>(a.seconds * 1e9) + run.settings.assembly.deadline_ns + 50'000'000;
+  double next_progress_s = 1.0;
+  bool more = true;
+  while (steady_now_ns() < end_ns || more) {
+    const double t_now = static_cast<double>(steady_now_ns() - run.start_ns) / 1e9;
+    kill_or_restart_victim(run, t_now, tally);
+    if (t_now >= next_progress_s) {
+      spdlog::info("{:.0f} of {:.0f} s", next_progress_s, a.seconds);
+      next_progress_s += 1.0;
+    }
+    for (const std::string& w : run.source.take_warnings()) spdlog::warn("{}", w);
+    const std::vector<AssembledFrame> closed = run.source.take_frames(0.01);
+    more = !closed.empty();
+    for (const AssembledFrame& f : closed) tally_frame(run, f, tally);
+  }
+}
+
+nlohmann::json per_node_report(const NodesArgs& a, const NodeSourceStats& stats) {
+  nlohmann::json per_node = nlohmann::json::array();
+  for (const NodeStats& n : stats.nodes) {
+    per_node.push_back({{"endpoint", n.endpoint},
+                        {"frames", n.frames},
+                        {"bytes_per_second", static_cast<double>(n.bytes) / a.seconds},
+                        {"clock_offset_ms", n.clock_offset_ms},
+                        {"clock_drift_ppm", n.clock_drift_ppm},
+                        {"clock_residual_us", n.clock_residual_us},
+                        {"min_rtt_us", n.min_rtt_us},
+                        {"lost", n.lost},
+                        {"rejoined", n.rejoined},
+                        {"node_detect_ms", n.node_detect_ms},
+                        {"node_dropped", n.node_dropped}});
+  }
+  return per_node;
+}
+
+// The JSON rhot-eval nodes prints.
+nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSourceStats& stats) {
+  const NodesArgs& a = run.a;
+  nlohmann::json j;
+  j["rig"] = a.rig_file;
+  j["nodes"] = a.nodes;
+  j["markers"] = a.markers;
+  j["rate_hz"] = a.rate_hz;
+  j["seconds"] = a.seconds;
+  j["deadline_ms"] = a.deadline_ms;
+  j["frames_expected"] = run.frames_expected;
+  j["frames_assembled"] = static_cast<std::int64_t>(tally.assembled.size());
+  j["frames_lost"] = run.frames_expected - static_cast<std::int64_t>(tally.assembled.size());
+  j["frames_complete"] = tally.complete;
+  j["assembly_p50_ms"] = percentile(tally.assembly_ms, 0.5);
+  j["assembly_p99_ms"] = percentile(tally.assembly_ms, 0.99);
+  j["latency_p50_ms"] = percentile(tally.latency_ms, 0.5);
+  j["latency_p99_ms"] = percentile(tally.latency_ms, 0.99);
+  double residual = 0.0;
+  for (const NodeStats& n : stats.nodes) residual = std::max(residual, n.clock_residual_us);
+  j["clock_residual_us"] = residual;
+  // Node 0's clock is start-relative: true offset = offset + drift * (t - start).
+  const double true_offset_ms = a.clock_offset_ms + a.clock_drift_ppm * 1e-6 * (a.seconds * 1e3);
+  j["clock_offset_error_us"] = stats.nodes.empty() ? 0.0 : std::abs(stats.nodes[0].clock_offset_ms - true_offset_ms) * 1e3;
+  j["found_fraction"] = tally.truth_total > 0 ? static_cast<double>(tally.found) / static_cast<double>(tally.truth_total) : 0.0;
+  if (a.kill_at)
+    j["found_fraction_while_node_down"] =
+        tally.truth_down > 0 ? static_cast<double>(tally.found_down) / static_cast<double>(tally.truth_down) : 0.0;
+  if (a.restart_at) j["rejoined"] = tally.rejoined;
+  if (run.demo) {
+    j["scene"] = a.scene_file;
+    j["hand_joint_mean_mm"] = run.hands.nodes_hands.mean_mm();
+    j["hands_seen_fraction"] = run.hands.nodes_hands.seen_fraction();
+    j["in_process_hand_joint_mean_mm"] = run.hands.local_hands.mean_mm();
+    j["in_process_hands_seen_fraction"] = run.hands.local_hands.seen_fraction();
+  }
+  j["late"] = stats.assembly.late;
+  j["duplicates"] = stats.assembly.duplicates;
+  j["out_of_order"] = stats.assembly.out_of_order;
+  j["deadline_frames"] = stats.assembly.deadline_frames;
+  j["bad_messages"] = stats.bad_messages;
+  j["per_node"] = per_node_report(a, stats);
+  return j;
+}
+
 }  // namespace
 
 int nodes(const NodesArgs& a) {
@@ -101,28 +397,9 @@ int nodes(const NodesArgs& a) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
     return 1;
   }
-  if (a.nodes > static_cast<int>(rig->cameras.size())) {
-    std::cerr << "rhot-eval: --nodes " << a.nodes << ": " << a.rig_file << " has only " << rig->cameras.size() << " cameras\n";
-    return 1;
-  }
-  if (a.restart_at && (!a.kill_at || *a.restart_at <= *a.kill_at)) {
-    std::cerr << "rhot-eval: --restart-node-at needs --kill-node-at before it\n";
-    return 1;
-  }
+  if (!check_args(a, *rig)) return 1;
   std::optional<DemoSimulation> demo;
-  if (!a.scene_file.empty()) {
-    const auto scene = load_scene_file(a.scene_file);
-    if (!scene) {
-      std::cerr << "rhot-eval: " << scene.error().to_string() << "\n";
-      return 1;
-    }
-    auto made = make_demo_simulation(*scene, RHOT_ASSET_DIR);
-    if (!made) {
-      std::cerr << "rhot-eval: " << a.scene_file << ": " << made.error() << "\n";
-      return 1;
-    }
-    demo = std::move(*made);
-  }
+  if (!load_demo(a, demo)) return 1;
   const std::filesystem::path node_program = this_program_dir() / "rhot-node";
   if (!std::filesystem::exists(node_program)) {
     std::cerr << "rhot-eval: " << node_program.string() << " not found (build the rhot-node target)\n";
@@ -137,212 +414,41 @@ int nodes(const NodesArgs& a) {
   // ahead for the nodes to start and subscribe (a sanitizer build on a busy 2-core machine takes
   // over a second to start four processes).
   const std::int64_t start_ns = steady_now_ns() + 3'000'000'000;
-  std::vector<NodePlan> plans(static_cast<std::size_t>(a.nodes));
-  for (int n = 0; n < a.nodes; ++n) {
-    NodePlan& p = plans[static_cast<std::size_t>(n)];
-    for (int c = n; c < static_cast<int>(rig->cameras.size()); c += a.nodes) p.cameras.push_back(c);
-    const int port = (*ports)[static_cast<std::size_t>(n)];
-    p.endpoint = "tcp://127.0.0.1:" + std::to_string(port);
-    std::string list;
-    for (int c : p.cameras) list += (list.empty() ? "" : ",") + std::to_string(c);
-    p.argv = {node_program.string(),
-              "--publish",
-              p.endpoint,
-              "--node-id",
-              std::to_string(n),
-              "--sim-rig",
-              a.rig_file,
-              "--sim-camera",
-              list,
-              "--sim-markers",
-              std::to_string(a.markers),
-              "--seed",
-              std::to_string(a.seed),
-              "--sigma",
-              std::to_string(a.sigma),
-              "--rate-hz",
-              std::to_string(a.rate_hz),
-              "--sim-start-ns",
-              std::to_string(start_ns)};
-    if (!a.scene_file.empty()) p.argv.insert(p.argv.end(), {"--sim-scene", a.scene_file});
-    // Node 0 is the odd one: its clock and its link, as the flags say.
-    if (n == 0) {
-      p.argv.insert(p.argv.end(), {"--clock-offset-ms", std::to_string(a.clock_offset_ms), "--clock-drift-ppm",
-                                   std::to_string(a.clock_drift_ppm), "--delay-ms", std::to_string(a.delay_ms)});
-    }
-  }
+  const std::vector<NodePlan> plans = plan_nodes(a, rig->cameras.size(), node_program, *ports, start_ns);
   const std::filesystem::path log = std::filesystem::temp_directory_path() / ("rhot-eval-nodes-" + std::to_string(::getpid()) + ".log");
   std::vector<ChildProcess> children;
-  for (const NodePlan& p : plans) {
-    auto child = ChildProcess::spawn(p.argv, log);
-    if (!child) {
-      std::cerr << "rhot-eval: " << child.error() << "\n";
-      return 1;
-    }
-    children.push_back(std::move(*child));
-  }
+  if (!spawn_nodes(plans, log, children)) return 1;
   std::vector<std::string> endpoints;
   for (const NodePlan& p : plans) endpoints.push_back(p.endpoint);
-  NodeSourceSettings settings;
-  settings.assembly.deadline_ns = static_cast<std::int64_t>(a.deadline_ms * 1e6);
-  settings.time_origin_ns = start_ns;
-  settings.assembly.tolerance_ns = std::min<std::int64_t>(settings.assembly.deadline_ns, static_cast<std::int64_t>(0.4e9 / a.rate_hz));
+  const NodeSourceSettings settings = source_settings(a, start_ns);
   auto source = NodeSource::open(*rig, endpoints, settings);
   if (!source) {
     std::cerr << "rhot-eval: " << source.error() << "\n";
     return 1;
   }
   const std::vector<Trajectory> markers = demo ? std::vector<Trajectory>{} : wandering_markers(*rig, a.markers, a.seed);
-  // With the demo's world: the hands tracked from the nodes' frames and, at the same moments, from
-  // an in-process simulated rig of the same world (its own noise: the same seed gives other
-  // draws than the nodes', which each seed their own cameras).
-  std::unique_ptr<LiveTracking> from_nodes, in_process;
-  HeldFrames* held = nullptr;
-  HandComparison nodes_hands, local_hands;
-  if (demo) {
-    auto frames = std::make_unique<HeldFrames>(*rig);
-    held = frames.get();
-    from_nodes = std::make_unique<LiveTracking>(std::move(frames), demo->objects, demo->layouts);
-    SimulatedRigSettings local;
-    local.sigma_px = a.sigma;
-    local.rate_hz = a.rate_hz;
-    local.seed = a.seed;
-    auto local_rig = std::make_unique<SimulatedRig>(*rig, std::vector<Trajectory>{}, local);
-    local_rig->set_world(demo->world);
-    in_process = std::make_unique<LiveTracking>(std::move(local_rig), demo->objects, demo->layouts);
-    nodes_hands.live = from_nodes.get();
-    local_hands.live = in_process.get();
-  }
-  const MatchSettings match = match_settings_for(a.sigma);
-  const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / a.rate_hz));
-  const auto frames_expected = static_cast<std::int64_t>(std::floor(a.seconds * a.rate_hz));
-  std::set<std::int64_t> assembled;
-  std::vector<double> assembly_ms, latency_ms;
-  long found = 0, truth_total = 0, found_down = 0, truth_down = 0;
-  bool killed = false, restarted = false, rejoined = false;
-  std::int64_t complete = 0;
-  const int victim = a.nodes - 1;  // the node killed and restarted
-  const double lost_after_s = settings.lost_after_s;
-  const std::int64_t end_ns = start_ns + static_cast<std::int64_t>(a.seconds * 1e9) + settings.assembly.deadline_ns + 50'000'000;
-  double next_progress_s = 1.0;
-  // Until the run's end, and then until every frame closed by then is read (a slow master, such
-  // as a sanitizer build, reads behind real time).
-  bool more = true;
-  while (steady_now_ns() < end_ns || more) {
-    const double t_now = static_cast<double>(steady_now_ns() - start_ns) / 1e9;
-    if (a.kill_at && !killed && t_now >= *a.kill_at) {
-      children[static_cast<std::size_t>(victim)].kill();
-      killed = true;
-    }
-    if (a.restart_at && killed && !restarted && t_now >= *a.restart_at) {
-      auto child = ChildProcess::spawn(plans[static_cast<std::size_t>(victim)].argv, log);
-      if (child) children[static_cast<std::size_t>(victim)] = std::move(*child);
-      restarted = true;
-    }
-    if (t_now >= next_progress_s) {
-      spdlog::info("{:.0f} of {:.0f} s", next_progress_s, a.seconds);
-      next_progress_s += 1.0;
-    }
-    for (const std::string& w : (*source)->take_warnings()) spdlog::warn("{}", w);
-    const std::vector<AssembledFrame> closed = (*source)->take_frames(0.01);
-    more = !closed.empty();
-    for (const AssembledFrame& f : closed) {
-      const std::int64_t k = (f.capture_ns - start_ns + period_ns / 2) / period_ns;
-      if (f.capture_ns < start_ns - period_ns / 2 || k >= frames_expected) continue;
-      const double t = static_cast<double>(k) / a.rate_hz;
-      assembled.insert(k);
-      double cost_ns = static_cast<double>(f.close_cpu_ns);
-      bool all = true;
-      for (const auto& cam : f.cameras) {
-        if (!cam) {
-          all = false;
-          continue;
-        }
-        cost_ns += static_cast<double>(cam->decode_ns);
-        latency_ms.push_back(static_cast<double>(cam->arrival_ns - cam->capture_ns) / 1e6);
-      }
-      complete += all ? 1 : 0;
-      assembly_ms.push_back(cost_ns / 1e6);
-      if (restarted && t > *a.restart_at) {
-        for (int c : plans[static_cast<std::size_t>(victim)].cameras)
-          if (f.cameras[static_cast<std::size_t>(c)]) rejoined = true;
-      }
-      RigFrame frame = (*source)->to_rig_frame(f);
-      if (demo) {
-        const SceneTruth truth = demo->script->at(t);
-        held->hold(frame);
-        nodes_hands.step(t, truth);
-        local_hands.step(t, truth);
-        continue;
-      }
-      const std::vector<MatchedPoint> points = match_and_triangulate(*rig, frame, match);
-      std::vector<Eigen::Vector3d> truth;
-      for (const Trajectory& m : markers) truth.push_back(m.at(t));
-      const int got = markers_found(truth, points);
-      found += got;
-      truth_total += static_cast<long>(truth.size());
-      if (a.kill_at && t >= *a.kill_at + lost_after_s && (!a.restart_at || t < *a.restart_at)) {
-        found_down += got;
-        truth_down += static_cast<long>(truth.size());
-      }
-    }
-  }
+  DemoHands hands;
+  if (demo) set_up_demo_hands(a, *rig, *demo, hands);
+  const NodesRun run{.a = a,
+                     .rig = *rig,
+                     .demo = demo,
+                     .plans = plans,
+                     .log = log,
+                     .children = children,
+                     .source = **source,
+                     .settings = settings,
+                     .markers = markers,
+                     .hands = hands,
+                     .match = match_settings_for(a.sigma),
+                     .start_ns = start_ns,
+                     .period_ns = static_cast<std::int64_t>(std::llround(1e9 / a.rate_hz)),
+                     .frames_expected = static_cast<std::int64_t>(std::floor(a.seconds * a.rate_hz)),
+                     .victim = a.nodes - 1};
+  NodesTally tally;
+  run_master(run, tally);
   const NodeSourceStats stats = (*source)->stats();
   for (ChildProcess& c : children) c.stop(2.0);
-
-  nlohmann::json j;
-  j["rig"] = a.rig_file;
-  j["nodes"] = a.nodes;
-  j["markers"] = a.markers;
-  j["rate_hz"] = a.rate_hz;
-  j["seconds"] = a.seconds;
-  j["deadline_ms"] = a.deadline_ms;
-  j["frames_expected"] = frames_expected;
-  j["frames_assembled"] = static_cast<std::int64_t>(assembled.size());
-  j["frames_lost"] = frames_expected - static_cast<std::int64_t>(assembled.size());
-  j["frames_complete"] = complete;
-  j["assembly_p50_ms"] = percentile(assembly_ms, 0.5);
-  j["assembly_p99_ms"] = percentile(assembly_ms, 0.99);
-  j["latency_p50_ms"] = percentile(latency_ms, 0.5);
-  j["latency_p99_ms"] = percentile(latency_ms, 0.99);
-  double residual = 0.0;
-  nlohmann::json per_node = nlohmann::json::array();
-  for (const NodeStats& n : stats.nodes) {
-    residual = std::max(residual, n.clock_residual_us);
-    per_node.push_back({{"endpoint", n.endpoint},
-                        {"frames", n.frames},
-                        {"bytes_per_second", static_cast<double>(n.bytes) / a.seconds},
-                        {"clock_offset_ms", n.clock_offset_ms},
-                        {"clock_drift_ppm", n.clock_drift_ppm},
-                        {"clock_residual_us", n.clock_residual_us},
-                        {"min_rtt_us", n.min_rtt_us},
-                        {"lost", n.lost},
-                        {"rejoined", n.rejoined},
-                        {"node_detect_ms", n.node_detect_ms},
-                        {"node_dropped", n.node_dropped}});
-  }
-  j["clock_residual_us"] = residual;
-  // Node 0's clock is start-relative: true offset = offset + drift * (t - start).
-  const double true_offset_ms = a.clock_offset_ms + a.clock_drift_ppm * 1e-6 * (a.seconds * 1e3);
-  j["clock_offset_error_us"] = stats.nodes.empty() ? 0.0 : std::abs(stats.nodes[0].clock_offset_ms - true_offset_ms) * 1e3;
-  j["found_fraction"] = truth_total > 0 ? static_cast<double>(found) / static_cast<double>(truth_total) : 0.0;
-  if (a.kill_at)
-    j["found_fraction_while_node_down"] = truth_down > 0 ? static_cast<double>(found_down) / static_cast<double>(truth_down) : 0.0;
-  if (a.restart_at) j["rejoined"] = rejoined;
-  if (demo) {
-    j["scene"] = a.scene_file;
-    j["hand_joint_mean_mm"] = nodes_hands.mean_mm();
-    j["hands_seen_fraction"] = nodes_hands.seen_fraction();
-    j["in_process_hand_joint_mean_mm"] = local_hands.mean_mm();
-    j["in_process_hands_seen_fraction"] = local_hands.seen_fraction();
-  }
-  j["late"] = stats.assembly.late;
-  j["duplicates"] = stats.assembly.duplicates;
-  j["out_of_order"] = stats.assembly.out_of_order;
-  j["deadline_frames"] = stats.assembly.deadline_frames;
-  j["bad_messages"] = stats.bad_messages;
-  j["per_node"] = per_node;
-  std::cout << j.dump(2) << std::endl;
+  std::cout << report(run, tally, stats).dump(2) << std::endl;
   std::error_code ec;
   std::filesystem::remove(log, ec);
   return 0;

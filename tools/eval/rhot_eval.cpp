@@ -46,6 +46,7 @@
 #include "tracking/sim/SimulatedRig.h"
 
 #include "tools/eval/Eval.h"
+#include "tools/common/CliExit.h"
 #include "tools/common/NumberChecks.h"
 
 using namespace rhot::eval;  // NOLINT: the subcommands
@@ -165,66 +166,175 @@ CLI::App* add_nodes_command(CLI::App& app, NodesArgs& a, bool& json) {
   return cmd;
 }
 
+// The flags triangulation, wand, stars and calibration share (one subcommand runs).
+struct SharedArgs {
+  std::string rig_file;
+  double sigma = 0.3;
+  int frames = 100;
+  unsigned seed = 1;
+  double dropout = 0.0;
+  std::vector<double> volume;
+  std::vector<double> volume_centre;
+};
+
+constexpr const char* kVolumeHelp = "size of the box the markers move in, X Y Z metres (default: the rig file's volume_size, else 1 1 1)";
+constexpr const char* kCentreHelp =
+    "centre of that box, X Y Z metres (default: the rig file's volume_centre, else where the optical axes meet)";
+
+// `rhot-eval triangulation`'s own flags.
+struct TriangulationArgs {
+  int markers = 100;
+  std::string spread = "wander";
+};
+
+// `rhot-eval stars`' own flags.
+struct StarsArgs {
+  std::string set_file;
+  int bodies = 25;
+  WorldFlags world;
+};
+
+// `rhot-eval frame`'s flags.
+struct FrameArgs {
+  std::string scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
+  std::string eye;
+  int frame_count = 900;
+  std::string device = "auto";
+  std::string shading = "auto";
+  WorldFlags world;
+  FrameOptions options;
+};
+
+// `rhot-eval calibration`'s own flags.
+struct CalibrationArgs {
+  int frames = 2000;
+  double wand_mm = 500.0;
+};
+
+CLI::App* add_triangulation_command(CLI::App& app, SharedArgs& s, TriangulationArgs& a, bool& json) {
+  auto* tri = app.add_subcommand("triangulation", "matching and triangulation accuracy against the Cramer-Rao bound");
+  tri->add_option("--rig", s.rig_file, "camera rig (OpenCV YAML)")->required();
+  tri->add_option("--sigma", s.sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
+  tri->add_option("--frames", s.frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
+  tri->add_option("--seed", s.seed, "random seed")->capture_default_str();
+  tri->add_option("--markers", a.markers, "markers in the volume")->capture_default_str()->check(CLI::Range(1, 10000));
+  tri->add_option("--dropout", s.dropout, "probability a camera misses a visible marker")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  tri->add_option("--spread", a.spread,
+                  "how the markers fill the box: wander (moving smoothly, less often near its faces) or uniform (standing still, "
+                  "every place as likely: what rhot-plan predicts over)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"wander", "uniform"}));
+  tri->add_option("--volume-m", s.volume, kVolumeHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
+  tri->add_option("--volume-centre-m", s.volume_centre, kCentreHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kAny));
+  tri->add_flag("--json", json, "print JSON (the only output format)");
+  return tri;
+}
+
+CLI::App* add_wand_command(CLI::App& app, SharedArgs& s, double& length_mm, bool& json) {
+  auto* cmd = app.add_subcommand("wand", "length of a two-marker wand waved through the volume (mean and RMS error)");
+  cmd->add_option("--rig", s.rig_file, "camera rig (OpenCV YAML)")->required();
+  cmd->add_option("--length-mm", length_mm, "true wand length")->capture_default_str()->check(CLI::Range(1.0, 5000.0));
+  cmd->add_option("--sigma", s.sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
+  cmd->add_option("--frames", s.frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cmd->add_option("--seed", s.seed, "random seed")->capture_default_str();
+  cmd->add_option("--dropout", s.dropout, "probability a camera misses a visible marker")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--volume-m", s.volume, kVolumeHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
+  cmd->add_option("--volume-centre-m", s.volume_centre, kCentreHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kAny));
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
+CLI::App* add_stars_command(CLI::App& app, SharedArgs& s, StarsArgs& a, bool& json) {
+  auto* cmd = app.add_subcommand("stars", "marker stars moving through the volume: identification and pose against the truth");
+  cmd->add_option("--rig", s.rig_file, "camera rig (OpenCV YAML)")->required();
+  cmd->add_option("--set", a.set_file, "marker star set (JSON, from rhot-stars)")->required();
+  cmd->add_option("--bodies", a.bodies, "stars moving at once (the set's first ones)")->capture_default_str()->check(CLI::Range(1, 10000));
+  add_world_flags(*cmd, a.world, false);
+  cmd->add_option("--frames", s.frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cmd->add_option("--seed", s.seed, "random seed")->capture_default_str();
+  cmd->add_option("--volume-m", s.volume, kVolumeHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
+  cmd->add_option("--volume-centre-m", s.volume_centre, kCentreHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kAny));
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
+// --clutter's text ("on" or "off") goes to `clutter`, for main to turn into a ColourArgs::clutter.
+CLI::App* add_colour_command(CLI::App& app, ColourArgs& a, std::string& clutter, bool& json) {
+  CLI::App* cmd = app.add_subcommand(
+      "colour", "coloured markers on simulated colour cameras drawn by the renderer: detection against the truth, fingertips end to end");
+  a.rig_file = std::string(RHOT_ASSET_DIR) + "/rigs/stereo-640.yaml";
+  a.scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
+  cmd->add_option("--rig", a.rig_file, "camera rig (every camera one image size)")->capture_default_str()->check(CLI::ExistingFile);
+  cmd->add_option("--scene", a.scene_file, "scene: its script's hands, its objects as clutter")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--colours", a.colours_file, "colour model (default: rhot's six colours)")->check(CLI::ExistingFile);
+  cmd->add_option("--frames", a.frames, "frames (90 per second of the script)")->capture_default_str()->check(CLI::Range(1, 100000));
+  cmd->add_option("--start-s", a.start_s, "where in the script to start")->capture_default_str()->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--seed", a.seed, "seed of the image noise")->capture_default_str();
+  cmd->add_option("--noise", a.noise, "image noise, levels per channel")->capture_default_str()->check(CLI::Range(0.0, 50.0));
+  cmd->add_option("--white-balance-k", a.kelvin, "the light's colour temperature; the cameras stay balanced for 6500 K")
+      ->capture_default_str()
+      ->check(CLI::Range(1500.0, 15000.0));
+  cmd->add_option("--clutter", clutter, "the scene's objects in view")->capture_default_str()->check(CLI::IsMember({"on", "off"}));
+  cmd->add_option("--device", a.device, "Vulkan device: auto, gpu, cpu, an index or part of its name")->capture_default_str();
+  cmd->add_option("--pictures", a.pictures_dir,
+                  "write the first frame's images (cam<i>.png) and what the colour model takes in them (cam<i>_colours.png) here");
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
+CLI::App* add_frame_command(CLI::App& app, FrameArgs& a, bool& json) {
+  auto* cmd = app.add_subcommand(
+      "frame", "the demo's whole frame headless (cameras, tracking, physics, both eyes): p50, p99, budget misses, per stage");
+  cmd->add_option("--scene", a.scene_file, "scene file (JSON)")->capture_default_str();
+  cmd->add_option("--eye", a.eye, "pixels per eye, WxH (default: the scene's headset, 1080x1200)");
+  cmd->add_option("--frames", a.frame_count, "frames to run")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cmd->add_option("--device", a.device, "Vulkan device: auto, gpu, cpu, an index or part of its name")->capture_default_str();
+  cmd->add_option("--shading", a.shading, "light per pixel, per vertex, or auto (per vertex on a CPU driver)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
+  add_world_flags(*cmd, a.world, true);
+  cmd->add_option("--prediction", a.options.prediction, "draw the hands where they will be at display time (on) or where tracked (off)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"on", "off"}));
+  cmd->add_flag("--gpu-timings", a.options.gpu_timings, "GPU timestamps around each eye's pass: the GPU's time per eye");
+  cmd->add_flag("--real-time", a.options.real_time, "pace frames to the headset's refresh as a headset would (default: back to back)");
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
+CLI::App* add_calibration_command(CLI::App& app, SharedArgs& s, CalibrationArgs& a, bool& json) {
+  auto* cmd = app.add_subcommand("calibration", "a simulated wand session calibrated from unknown extrinsics, against the true rig");
+  cmd->add_option("--rig", s.rig_file, "the true rig (OpenCV YAML); its intrinsics are given to the calibration")->required();
+  cmd->add_option("--wand-mm", a.wand_mm, "wand length")->capture_default_str()->check(CLI::Range(10.0, 5000.0));
+  cmd->add_option("--sigma", s.sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
+  cmd->add_option("--frames", a.frames, "frames of the wave")->capture_default_str()->check(CLI::Range(10, 1000000));
+  cmd->add_option("--seed", s.seed, "random seed")->capture_default_str();
+  cmd->add_option("--dropout", s.dropout, "probability a camera misses a visible marker")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"rhot-eval: accuracy and speed of rhot's tracking on simulated data, as JSON"};
   app.require_subcommand(1);
-  auto* tri = app.add_subcommand("triangulation", "matching and triangulation accuracy against the Cramer-Rao bound");
-  std::string rig_file;
-  double sigma = 0.3;
-  int frames = 100;
-  unsigned seed = 1;
-  int markers = 100;
-  double dropout = 0.0;
-  std::vector<double> volume;
-  std::vector<double> volume_centre;
   bool json = false;
-  tri->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
-  tri->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
-  tri->add_option("--frames", frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
-  tri->add_option("--seed", seed, "random seed")->capture_default_str();
-  tri->add_option("--markers", markers, "markers in the volume")->capture_default_str()->check(CLI::Range(1, 10000));
-  tri->add_option("--dropout", dropout, "probability a camera misses a visible marker")->capture_default_str()->check(CLI::Range(0.0, 1.0));
-  const char* volume_help = "size of the box the markers move in, X Y Z metres (default: the rig file's volume_size, else 1 1 1)";
-  const char* centre_help = "centre of that box, X Y Z metres (default: the rig file's volume_centre, else where the optical axes meet)";
-  std::string spread = "wander";
-  tri->add_option("--spread", spread,
-                  "how the markers fill the box: wander (moving smoothly, less often near its faces) or uniform (standing still, "
-                  "every place as likely: what rhot-plan predicts over)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"wander", "uniform"}));
-  tri->add_option("--volume-m", volume, volume_help)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
-  tri->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3)->check(rhot::number_check(rhot::NumberBound::kAny));
-  tri->add_flag("--json", json, "print JSON (the only output format)");
-  auto* wand_cmd = app.add_subcommand("wand", "length of a two-marker wand waved through the volume (mean and RMS error)");
+  SharedArgs shared;
+  TriangulationArgs tri_args;
+  CLI::App* tri = add_triangulation_command(app, shared, tri_args, json);
   double length_mm = 195.0;
-  wand_cmd->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
-  wand_cmd->add_option("--length-mm", length_mm, "true wand length")->capture_default_str()->check(CLI::Range(1.0, 5000.0));
-  wand_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
-  wand_cmd->add_option("--frames", frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
-  wand_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  wand_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
-  wand_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
-  wand_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3)->check(rhot::number_check(rhot::NumberBound::kAny));
-  wand_cmd->add_flag("--json", json, "print JSON (the only output format)");
-  auto* stars_cmd = app.add_subcommand("stars", "marker stars moving through the volume: identification and pose against the truth");
-  std::string set_file;
-  int bodies = 25;
-  stars_cmd->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
-  stars_cmd->add_option("--set", set_file, "marker star set (JSON, from rhot-stars)")->required();
-  stars_cmd->add_option("--bodies", bodies, "stars moving at once (the set's first ones)")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 10000));
-  WorldFlags world;
-  add_world_flags(*stars_cmd, world, false);
-  stars_cmd->add_option("--frames", frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
-  stars_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  stars_cmd->add_option("--volume-m", volume, volume_help)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
-  stars_cmd->add_option("--volume-centre-m", volume_centre, centre_help)->expected(3)->check(rhot::number_check(rhot::NumberBound::kAny));
-  stars_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  CLI::App* wand_cmd = add_wand_command(app, shared, length_mm, json);
+  StarsArgs stars_args;
+  CLI::App* stars_cmd = add_stars_command(app, shared, stars_args, json);
   HandsArgs hands_args;
   CLI::App* hands_cmd = add_hands_command(app, hands_args, json);
   GraspArgs grasp_args;
@@ -232,81 +342,23 @@ int main(int argc, char** argv) {
   NodesArgs nodes_args;
   CLI::App* nodes_cmd = add_nodes_command(app, nodes_args, json);
   ColourArgs colour_args;
-  CLI::App* colour_cmd = app.add_subcommand(
-      "colour", "coloured markers on simulated colour cameras drawn by the renderer: detection against the truth, fingertips end to end");
-  colour_args.rig_file = std::string(RHOT_ASSET_DIR) + "/rigs/stereo-640.yaml";
-  colour_args.scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
   std::string clutter = "on";
-  colour_cmd->add_option("--rig", colour_args.rig_file, "camera rig (every camera one image size)")
-      ->capture_default_str()
-      ->check(CLI::ExistingFile);
-  colour_cmd->add_option("--scene", colour_args.scene_file, "scene: its script's hands, its objects as clutter")
-      ->capture_default_str()
-      ->check(CLI::ExistingFile);
-  colour_cmd->add_option("--colours", colour_args.colours_file, "colour model (default: rhot's six colours)")->check(CLI::ExistingFile);
-  colour_cmd->add_option("--frames", colour_args.frames, "frames (90 per second of the script)")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 100000));
-  colour_cmd->add_option("--start-s", colour_args.start_s, "where in the script to start")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1e6));
-  colour_cmd->add_option("--seed", colour_args.seed, "seed of the image noise")->capture_default_str();
-  colour_cmd->add_option("--noise", colour_args.noise, "image noise, levels per channel")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 50.0));
-  colour_cmd->add_option("--white-balance-k", colour_args.kelvin, "the light's colour temperature; the cameras stay balanced for 6500 K")
-      ->capture_default_str()
-      ->check(CLI::Range(1500.0, 15000.0));
-  colour_cmd->add_option("--clutter", clutter, "the scene's objects in view")->capture_default_str()->check(CLI::IsMember({"on", "off"}));
-  colour_cmd->add_option("--device", colour_args.device, "Vulkan device: auto, gpu, cpu, an index or part of its name")
-      ->capture_default_str();
-  colour_cmd->add_option("--pictures", colour_args.pictures_dir,
-                         "write the first frame's images (cam<i>.png) and what the colour model takes in them (cam<i>_colours.png) here");
-  colour_cmd->add_flag("--json", json, "print JSON (the only output format)");
-  auto* frame_cmd = app.add_subcommand(
-      "frame", "the demo's whole frame headless (cameras, tracking, physics, both eyes): p50, p99, budget misses, per stage");
-  std::string scene_file = std::string(RHOT_ASSET_DIR) + "/scenes/default.json";
-  std::string eye;
-  int frame_count = 900;
-  std::string device = "auto";
-  frame_cmd->add_option("--scene", scene_file, "scene file (JSON)")->capture_default_str();
-  frame_cmd->add_option("--eye", eye, "pixels per eye, WxH (default: the scene's headset, 1080x1200)");
-  frame_cmd->add_option("--frames", frame_count, "frames to run")->capture_default_str()->check(CLI::Range(1, 1000000));
-  frame_cmd->add_option("--device", device, "Vulkan device: auto, gpu, cpu, an index or part of its name")->capture_default_str();
-  std::string shading = "auto";
-  frame_cmd->add_option("--shading", shading, "light per pixel, per vertex, or auto (per vertex on a CPU driver)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"auto", "pixel", "vertex"}));
-  WorldFlags frame_world;
-  add_world_flags(*frame_cmd, frame_world, true);
-  FrameOptions frame_options;
-  frame_cmd
-      ->add_option("--prediction", frame_options.prediction,
-                   "draw the hands where they will be at display time (on) or where tracked (off)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"on", "off"}));
-  frame_cmd->add_flag("--gpu-timings", frame_options.gpu_timings, "GPU timestamps around each eye's pass: the GPU's time per eye");
-  frame_cmd->add_flag("--real-time", frame_options.real_time,
-                      "pace frames to the headset's refresh as a headset would (default: back to back)");
-  frame_cmd->add_flag("--json", json, "print JSON (the only output format)");
+  CLI::App* colour_cmd = add_colour_command(app, colour_args, clutter, json);
+  FrameArgs frame_args;
+  CLI::App* frame_cmd = add_frame_command(app, frame_args, json);
   DemoArgs demo_args;
-  demo_args.scene_file = scene_file;
+  demo_args.scene_file = frame_args.scene_file;
   CLI::App* demo_cmd = add_demo_command(app, demo_args, json);
   InteractionsArgs inter_args;
   CLI::App* inter_cmd = add_interactions_command(app, inter_args, json);
-  auto* calib_cmd = app.add_subcommand("calibration", "a simulated wand session calibrated from unknown extrinsics, against the true rig");
-  int calib_frames = 2000;
-  double calib_wand_mm = 500.0;
-  calib_cmd->add_option("--rig", rig_file, "the true rig (OpenCV YAML); its intrinsics are given to the calibration")->required();
-  calib_cmd->add_option("--wand-mm", calib_wand_mm, "wand length")->capture_default_str()->check(CLI::Range(10.0, 5000.0));
-  calib_cmd->add_option("--sigma", sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(1e-6, 50.0));
-  calib_cmd->add_option("--frames", calib_frames, "frames of the wave")->capture_default_str()->check(CLI::Range(10, 1000000));
-  calib_cmd->add_option("--seed", seed, "random seed")->capture_default_str();
-  calib_cmd->add_option("--dropout", dropout, "probability a camera misses a visible marker")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
-  calib_cmd->add_flag("--json", json, "print JSON (the only output format)");
-  CLI11_PARSE(app, argc, argv);
+  CalibrationArgs calib_args;
+  CLI::App* calib_cmd = add_calibration_command(app, shared, calib_args, json);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return rhot::cli_exit_status(app, e);
+  }
+  const SharedArgs& s = shared;
   if (grasp_cmd->parsed()) return grasp(grasp_args);
   if (inter_cmd->parsed()) return interactions(inter_args);
   if (nodes_cmd->parsed()) return nodes(nodes_args);
@@ -314,14 +366,19 @@ int main(int argc, char** argv) {
     colour_args.clutter = clutter == "on";
     return colour(colour_args);
   }
-  if (calib_cmd->parsed()) return calibration(rig_file, calib_wand_mm, sigma, calib_frames, seed, dropout);
+  if (calib_cmd->parsed()) return calibration(s.rig_file, calib_args.wand_mm, s.sigma, calib_args.frames, s.seed, s.dropout);
   if (demo_cmd->parsed())
     return demo(demo_args.scene_file, demo_args.placements, demo_args.seed, demo_args.world, demo_args.hands, demo_args.frames);
-  if (frame_cmd->parsed())
-    return frame(scene_file, eye, frame_count, device, *rhot::shading_from_string(shading), frame_world, frame_options);
-  if (tri->parsed()) return triangulation(rig_file, sigma, frames, seed, markers, dropout, volume, volume_centre, spread == "uniform");
+  if (frame_cmd->parsed()) {
+    return frame(frame_args.scene_file, frame_args.eye, frame_args.frame_count, frame_args.device,
+                 *rhot::shading_from_string(frame_args.shading), frame_args.world, frame_args.options);
+  }
+  if (tri->parsed())
+    return triangulation(s.rig_file, s.sigma, s.frames, s.seed, tri_args.markers, s.dropout, s.volume, s.volume_centre,
+                         tri_args.spread == "uniform");
   if (hands_cmd->parsed()) return hands(hands_args);
-  if (stars_cmd->parsed()) return stars(rig_file, set_file, bodies, world, frames, seed, volume, volume_centre);
-  if (wand_cmd->parsed()) return wand(rig_file, length_mm, sigma, frames, seed, dropout, volume, volume_centre);
+  if (stars_cmd->parsed())
+    return stars(s.rig_file, stars_args.set_file, stars_args.bodies, stars_args.world, s.frames, s.seed, s.volume, s.volume_centre);
+  if (wand_cmd->parsed()) return wand(s.rig_file, length_mm, s.sigma, s.frames, s.seed, s.dropout, s.volume, s.volume_centre);
   return 1;
 }

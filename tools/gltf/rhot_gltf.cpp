@@ -22,6 +22,8 @@
 
 #include "engine/tracked/Recording.h"
 #include "tools/gltf/Bvh.h"
+#include "tools/common/CliExit.h"
+#include "tools/common/NumberChecks.h"
 
 namespace {
 
@@ -99,6 +101,125 @@ int add_mesh(tinygltf::Model& m, const std::string& name, float h, bool box) {
   return static_cast<int>(m.meshes.size()) - 1;
 }
 
+// The recording's hands as BVH in `output`: the exit status, after saying what went wrong.
+int write_bvh(const rhot::Recording& rec, const std::string& input, const std::string& output, const std::string& bvh_unit) {
+  const auto text = rhot::hands_bvh(rec, {bvh_unit == "cm" ? 100.0 : 1.0});
+  if (!text) {
+    std::cerr << "rhot-gltf: " << input << ": " << text.error() << "\n";
+    return 1;
+  }
+  std::ofstream out(output);
+  out << *text;
+  out.close();
+  if (!out) {
+    std::cerr << "rhot-gltf: cannot write " << output << "\n";
+    return 1;
+  }
+  std::cerr << "rhot-gltf: " << rec.frames.size() << " frames of both hands at " << rec.rate_hz << " Hz written to " << output << " (BVH, "
+            << bvh_unit << ")\n";
+  return 0;
+}
+
+// The animation of a glTF file being built: one sampler and channel per animated property, all
+// keyed at the recording's frame times.
+struct Animating {
+  tinygltf::Model& m;
+  tinygltf::Scene& scene;
+  tinygltf::Animation& animation;
+  int time_accessor;
+
+  // A new node of the scene showing `mesh`: its index.
+  int add_node(const std::string& name, int mesh) {
+    tinygltf::Node node;
+    node.name = name;
+    node.mesh = mesh;
+    m.nodes.push_back(node);
+    const int index = static_cast<int>(m.nodes.size()) - 1;
+    scene.nodes.push_back(index);
+    return index;
+  }
+  // path: "translation" (3 components per frame) or "rotation" (4: x, y, z, w).
+  void animate(int node, const std::string& path, const std::vector<float>& values, int components) {
+    tinygltf::AnimationSampler sampler;
+    sampler.input = time_accessor;
+    sampler.output = add_floats(m, values, components, false);
+    sampler.interpolation = "LINEAR";
+    animation.samplers.push_back(sampler);
+    tinygltf::AnimationChannel channel;
+    channel.sampler = static_cast<int>(animation.samplers.size()) - 1;
+    channel.target_node = node;
+    channel.target_path = path;
+    animation.channels.push_back(channel);
+  }
+};
+
+// A node per joint of both hands, where it was last seen.
+void add_hand_nodes(Animating& gltf, const rhot::Recording& rec, int joint_mesh) {
+  for (std::size_t h = 0; h < 2; ++h) {
+    for (int j = 0; j < rhot::kHandJointCount; ++j) {
+      const int index = gltf.add_node(
+          std::string(h == 0 ? "left_" : "right_") + std::string(rhot::joint_name(static_cast<rhot::HandJoint>(j))), joint_mesh);
+      std::vector<float> t;
+      Eigen::Vector3d last = Eigen::Vector3d::Zero();
+      for (const auto& f : rec.frames) {
+        if (f.hands[h].seen) last = f.hands[h].joints_world[static_cast<std::size_t>(j)];
+        t.insert(t.end(), {static_cast<float>(last.x()), static_cast<float>(last.y()), static_cast<float>(last.z())});
+      }
+      gltf.animate(index, "translation", t, 3);
+    }
+  }
+}
+
+// A node per tracked object, where it was last tracked.
+void add_object_nodes(Animating& gltf, const rhot::Recording& rec, int object_mesh) {
+  for (const std::string& name : rec.objects) {
+    const int index = gltf.add_node(name, object_mesh);
+    std::vector<float> t, r;
+    rhot::Rigid3d last;
+    for (const auto& f : rec.frames) {
+      if (const auto it = f.objects.find(name); it != f.objects.end()) last = it->second;
+      t.insert(t.end(), {static_cast<float>(last.translation.x()), static_cast<float>(last.translation.y()),
+                         static_cast<float>(last.translation.z())});
+      r.insert(r.end(), {static_cast<float>(last.rotation.x()), static_cast<float>(last.rotation.y()),
+                         static_cast<float>(last.rotation.z()), static_cast<float>(last.rotation.w())});
+    }
+    gltf.animate(index, "translation", t, 3);
+    gltf.animate(index, "rotation", r, 4);
+  }
+}
+
+// The recording as glTF with animated nodes in `output`: the exit status, after saying what went
+// wrong.
+int write_gltf(const rhot::Recording& rec, const std::string& output, double joint_mm) {
+  tinygltf::Model m;
+  m.asset.version = "2.0";
+  m.asset.generator = "rhot-gltf";
+  m.buffers.emplace_back();
+  tinygltf::Scene scene;
+  scene.name = "recording";
+  const int joint_mesh = add_mesh(m, "joint", static_cast<float>(0.5e-3 * joint_mm), false);
+  const int object_mesh = add_mesh(m, "object", 0.02f, true);
+
+  std::vector<float> times;
+  for (const auto& f : rec.frames) times.push_back(static_cast<float>(f.t_s - rec.frames.front().t_s));
+  const int time_accessor = add_floats(m, times, 1, true);
+  tinygltf::Animation animation;
+  animation.name = "recording";
+  Animating gltf{m, scene, animation, time_accessor};
+  add_hand_nodes(gltf, rec, joint_mesh);
+  add_object_nodes(gltf, rec, object_mesh);
+  m.animations.push_back(animation);
+  m.scenes.push_back(scene);
+  m.defaultScene = 0;
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToFile(&m, output, true, true, true, false)) {
+    std::cerr << "rhot-gltf: cannot write " << output << "\n";
+    return 1;
+  }
+  std::cerr << "rhot-gltf: " << rec.frames.size() << " frames, " << scene.nodes.size() << " animated nodes written to " << output << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -113,101 +234,19 @@ int main(int argc, char** argv) {
   cli.add_option("--bvh-unit", bvh_unit, "unit of the BVH file's lengths")->capture_default_str()->check(CLI::IsMember({"cm", "m"}));
   cli.add_option("--joint-size-mm", joint_mm, "size of each joint's marker shape (glTF)")
       ->capture_default_str()
+      ->check(rhot::number_check(rhot::NumberBound::kPositive))  // CLI::Range lets nan through, into the mesh
       ->check(CLI::Range(0.1, 100.0));
-  CLI11_PARSE(cli, argc, argv);
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return rhot::cli_exit_status(cli, e);
+  }
 
   const auto rec = rhot::load_recording(input);
   if (!rec) {
     std::cerr << "rhot-gltf: " << rec.error() << "\n";
     return 1;
   }
-  if (format == "bvh") {
-    const auto text = rhot::hands_bvh(*rec, {bvh_unit == "cm" ? 100.0 : 1.0});
-    if (!text) {
-      std::cerr << "rhot-gltf: " << input << ": " << text.error() << "\n";
-      return 1;
-    }
-    std::ofstream out(output);
-    out << *text;
-    out.close();
-    if (!out) {
-      std::cerr << "rhot-gltf: cannot write " << output << "\n";
-      return 1;
-    }
-    std::cerr << "rhot-gltf: " << rec->frames.size() << " frames of both hands at " << rec->rate_hz << " Hz written to " << output
-              << " (BVH, " << bvh_unit << ")\n";
-    return 0;
-  }
-  tinygltf::Model m;
-  m.asset.version = "2.0";
-  m.asset.generator = "rhot-gltf";
-  m.buffers.emplace_back();
-  tinygltf::Scene scene;
-  scene.name = "recording";
-  const int joint_mesh = add_mesh(m, "joint", static_cast<float>(0.5e-3 * joint_mm), false);
-  const int object_mesh = add_mesh(m, "object", 0.02f, true);
-
-  std::vector<float> times;
-  for (const auto& f : rec->frames) times.push_back(static_cast<float>(f.t_s - rec->frames.front().t_s));
-  const int time_accessor = add_floats(m, times, 1, true);
-  tinygltf::Animation animation;
-  animation.name = "recording";
-  const auto animate = [&](int node, const std::string& path, const std::vector<float>& values, int components) {
-    tinygltf::AnimationSampler sampler;
-    sampler.input = time_accessor;
-    sampler.output = add_floats(m, values, components, false);
-    sampler.interpolation = "LINEAR";
-    animation.samplers.push_back(sampler);
-    tinygltf::AnimationChannel channel;
-    channel.sampler = static_cast<int>(animation.samplers.size()) - 1;
-    channel.target_node = node;
-    channel.target_path = path;
-    animation.channels.push_back(channel);
-  };
-  for (std::size_t h = 0; h < 2; ++h) {
-    for (int j = 0; j < rhot::kHandJointCount; ++j) {
-      tinygltf::Node node;
-      node.name = std::string(h == 0 ? "left_" : "right_") + std::string(rhot::joint_name(static_cast<rhot::HandJoint>(j)));
-      node.mesh = joint_mesh;
-      m.nodes.push_back(node);
-      const int index = static_cast<int>(m.nodes.size()) - 1;
-      scene.nodes.push_back(index);
-      std::vector<float> t;
-      Eigen::Vector3d last = Eigen::Vector3d::Zero();
-      for (const auto& f : rec->frames) {
-        if (f.hands[h].seen) last = f.hands[h].joints_world[static_cast<std::size_t>(j)];
-        t.insert(t.end(), {static_cast<float>(last.x()), static_cast<float>(last.y()), static_cast<float>(last.z())});
-      }
-      animate(index, "translation", t, 3);
-    }
-  }
-  for (const std::string& name : rec->objects) {
-    tinygltf::Node node;
-    node.name = name;
-    node.mesh = object_mesh;
-    m.nodes.push_back(node);
-    const int index = static_cast<int>(m.nodes.size()) - 1;
-    scene.nodes.push_back(index);
-    std::vector<float> t, r;
-    rhot::Rigid3d last;
-    for (const auto& f : rec->frames) {
-      if (const auto it = f.objects.find(name); it != f.objects.end()) last = it->second;
-      t.insert(t.end(), {static_cast<float>(last.translation.x()), static_cast<float>(last.translation.y()),
-                         static_cast<float>(last.translation.z())});
-      r.insert(r.end(), {static_cast<float>(last.rotation.x()), static_cast<float>(last.rotation.y()),
-                         static_cast<float>(last.rotation.z()), static_cast<float>(last.rotation.w())});
-    }
-    animate(index, "translation", t, 3);
-    animate(index, "rotation", r, 4);
-  }
-  m.animations.push_back(animation);
-  m.scenes.push_back(scene);
-  m.defaultScene = 0;
-  tinygltf::TinyGLTF writer;
-  if (!writer.WriteGltfSceneToFile(&m, output, true, true, true, false)) {
-    std::cerr << "rhot-gltf: cannot write " << output << "\n";
-    return 1;
-  }
-  std::cerr << "rhot-gltf: " << rec->frames.size() << " frames, " << scene.nodes.size() << " animated nodes written to " << output << "\n";
-  return 0;
+  if (format == "bvh") return write_bvh(*rec, input, output, bvh_unit);
+  return write_gltf(*rec, output, joint_mm);
 }

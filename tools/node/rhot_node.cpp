@@ -24,6 +24,8 @@
 #include "tracking/net/NodeSource.h"
 #include "tracking/sim/SimulatedRig.h"
 #include "tracking/source/VideoSource.h"
+#include "tools/common/CliExit.h"
+#include "tools/common/NumberChecks.h"
 
 namespace {
 
@@ -289,8 +291,15 @@ int main(int argc, char** argv) {
   cli.add_option("--delay-ms", o.delay_ms, "Hold every frame this long before sending it (a slow link)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 10000.0));
-  cli.add_option("--seconds", o.seconds, "Stop after this long (0: until stopped)")->capture_default_str()->check(CLI::Range(0.0, 1e7));
-  CLI11_PARSE(cli, argc, argv);
+  cli.add_option("--seconds", o.seconds, "Stop after this long (0: until stopped)")
+      ->capture_default_str()
+      ->check(rhot::number_check(rhot::NumberBound::kNonNegative))  // CLI::Range lets nan through: a node that never stops
+      ->check(CLI::Range(0.0, 1e7));
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return rhot::cli_exit_status(cli, e);
+  }
   if (print_clock) {
     std::printf("%lld\n", static_cast<long long>(rhot::steady_now_ns()));
     return 0;

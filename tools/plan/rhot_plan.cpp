@@ -35,6 +35,7 @@
 
 #include "tracking/camera/RigFile.h"
 #include "base/Json.h"
+#include "tools/common/CliExit.h"
 #include "tools/common/NumberChecks.h"
 #include "tracking/plan/Coverage.h"
 #include "tracking/plan/JoinGraph.h"
@@ -130,13 +131,15 @@ std::expected<void, std::string> write_pictures(const std::filesystem::path& dir
   return {};
 }
 
+// "rhot-plan: MESSAGE" on stderr; the exit status 1.
+int fail(const std::string& message) {
+  std::fprintf(stderr, "rhot-plan: %s\n", message.c_str());
+  return 1;
+}
+
 // A joins file: {"reference": NAME, "groups": [{"name", "error_mm"?, "cameras"?: [...]}],
 // "joins": [{"a", "b", "error_mm"}]} -> the groups' errors, per camera where groups list them.
 int run_joins(const std::string& joins_file, const std::string& rig_file, bool json) {
-  const auto fail = [](const std::string& message) {
-    std::fprintf(stderr, "rhot-plan: %s\n", message.c_str());
-    return 1;
-  };
   struct JoinsFile {
     std::string reference;
     std::vector<rhot::CameraGroup> groups;
@@ -213,6 +216,153 @@ int run_joins(const std::string& joins_file, const std::string& rig_file, bool j
   return 0;
 }
 
+// The flags of planning (no subcommand).
+struct PlanArgs {
+  std::string volume_text, camera_file, out_file, mount = "both", pictures;
+  std::vector<double> centre;
+  rhot::PlanSettings plan;
+  bool json = false, floor_only = false;
+};
+
+// `rhot-plan evaluate`'s flags.
+struct EvaluateArgs {
+  std::string rig_file, volume_text, pictures;
+  std::vector<double> centre, slices;
+  rhot::CoverageSettings coverage;
+  bool json = false;
+};
+
+// `rhot-plan joins`' flags.
+struct JoinsArgs {
+  std::string joins_file, rig_file;
+  bool json = false;
+};
+
+void add_plan_options(CLI::App& app, PlanArgs& a) {
+  const CLI::Validator finite = rhot::number_check(rhot::NumberBound::kAny);
+  const CLI::Validator positive = rhot::number_check(rhot::NumberBound::kPositive);
+  const CLI::Validator non_negative = rhot::number_check(rhot::NumberBound::kNonNegative);
+  app.add_option("--volume", a.volume_text, "volume to track, LxWxH metres (along X, along Z, height)");
+  app.add_flag("--floor-only", a.floor_only,
+               "track only on the floor (objects and feet on the ground): --volume LxW, a 5 cm layer standing on the floor");
+  app.add_option("--volume-centre", a.centre, "centre of the volume, X Y Z metres (default: on the floor at the origin)")
+      ->expected(3)
+      ->check(finite);
+  app.add_option("--camera", a.camera_file, "camera model: a rig file whose first camera gives resolution, focal length and distortion");
+  app.add_option("--cameras", a.plan.cameras, "how many cameras to place")->check(CLI::Range(1, 256));
+  app.add_option("--max-error-mm", a.plan.max_error_mm, "instead of --cameras: as few cameras as bring the worst predicted error to this")
+      ->check(positive);
+  app.add_option("--min-views", a.plan.min_views, "cameras that must see each place")->capture_default_str()->check(CLI::Range(1, 16));
+  app.add_option("--mount", a.mount, "where cameras may go")->capture_default_str()->check(CLI::IsMember({"ceiling", "walls", "both"}));
+  app.add_option("--ceiling-m", a.plan.ceiling_m, "height of the ceiling mount (default: the volume's top + 1 m)")->check(positive);
+  app.add_option("--wall-margin-m", a.plan.wall_margin_m, "how far outside the volume the walls stand")
+      ->capture_default_str()
+      ->check(non_negative);
+  app.add_option("--sigma", a.plan.sigma_px, "detection noise, pixels per axis")->capture_default_str()->check(positive);
+  app.add_option("--out", a.out_file, "the planned rig (OpenCV YAML)");
+  app.add_option("--pictures", a.pictures, "folder for the pictures (default: the rig's folder)");
+  app.add_flag("--json", a.json, "print a JSON report on stdout");
+}
+
+CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& a) {
+  const CLI::Validator finite = rhot::number_check(rhot::NumberBound::kAny);
+  const CLI::Validator positive = rhot::number_check(rhot::NumberBound::kPositive);
+  CLI::App* evaluate = app.add_subcommand("evaluate", "coverage and predicted error of a rig over a volume, with pictures");
+  evaluate->add_option("--rig", a.rig_file, "camera rig (OpenCV YAML)")->required();
+  evaluate->add_option("--volume", a.volume_text, "volume, LxWxH metres (default: the rig file's volume)");
+  evaluate->add_option("--volume-centre", a.centre, "centre of that volume, X Y Z metres (default: on the floor at the origin)")
+      ->expected(3)
+      ->check(finite);
+  evaluate->add_option("--sigma", a.coverage.sigma_px, "detection noise, pixels per axis")->capture_default_str()->check(positive);
+  evaluate->add_option("--grid-step-m", a.coverage.grid_step_m, "grid spacing (default: about 20,000 points)")->check(positive);
+  evaluate->add_option("--slices-m", a.slices, "heights of the pictures' slices, metres")->delimiter(',')->check(finite);
+  evaluate->add_option("--pictures", a.pictures, "write the pictures into this folder");
+  evaluate->add_flag("--json", a.json, "print a JSON report on stdout");
+  return evaluate;
+}
+
+CLI::App* add_joins_command(CLI::App& app, JoinsArgs& a) {
+  CLI::App* joins = app.add_subcommand("joins", "the error each group of cameras calibrated apart carries through its chain of joins");
+  joins->add_option("--joins", a.joins_file, "the groups and their measured joins (JSON, docs/planning.md)")->required();
+  joins->add_option("--rig", a.rig_file, "check that every camera of this rig is in a group, and report them in its order");
+  joins->add_flag("--json", a.json, "print a JSON report on stdout");
+  return joins;
+}
+
+// rhot-plan evaluate: a rig's coverage and predicted error over --volume or the rig file's own.
+int run_evaluate(const EvaluateArgs& a) {
+  const auto rig = rhot::load_rig(a.rig_file);
+  if (!rig) return fail(rig.error());
+  TrackingVolume volume;
+  if (!a.volume_text.empty()) {
+    const auto size = parse_volume(a.volume_text);
+    if (!size) return fail(size.error());
+    volume = volume_of(*size, a.centre);
+  } else if (rig->volume) {
+    volume = *rig->volume;
+  } else {
+    return fail(a.rig_file + ": the rig file has no volume (volume_centre, volume_size): give --volume");
+  }
+  const auto report = rhot::evaluate_coverage(*rig, volume, a.coverage);
+  if (!report) return fail(report.error());
+  log_report(*report);
+  if (!a.pictures.empty()) {
+    if (auto ok = write_pictures(a.pictures, *rig, *report, a.slices); !ok) return fail(ok.error());
+  }
+  if (a.json) {
+    nlohmann::json j = report_json(*report);
+    j["rig"] = a.rig_file;
+    j["cameras"] = rig->cameras.size();
+    std::cout << j.dump(2) << "\n";
+  }
+  return 0;
+}
+
+// rhot-plan without a subcommand: cameras placed around the volume, the rig written to --out,
+// its coverage reported and drawn.
+int run_plan(const PlanArgs& a) {
+  if (a.volume_text.empty() || a.camera_file.empty() || a.out_file.empty())
+    return fail("planning needs --volume, --camera and --out (or: evaluate --rig)");
+  if ((a.plan.cameras > 0) == (a.plan.max_error_mm > 0.0)) return fail("give one of --cameras and --max-error-mm");
+  const auto size = parse_volume(a.volume_text, a.floor_only);
+  if (!size) return fail(size.error());
+  const TrackingVolume volume = volume_of(*size, a.centre);
+  const auto model = rhot::load_rig(a.camera_file);
+  if (!model) return fail(model.error());
+  // The rig's folder is made before planning, so that a path that cannot be written fails first.
+  if (const auto folder = std::filesystem::path(a.out_file).parent_path(); !folder.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec) return fail("--out: cannot make the folder " + folder.string() + ": " + ec.message());
+  }
+  rhot::PlanSettings plan = a.plan;
+  plan.mount = a.mount == "ceiling" ? rhot::Mount::kCeiling : a.mount == "walls" ? rhot::Mount::kWalls : rhot::Mount::kBoth;
+  const auto planned = rhot::plan_rig(model->cameras.front(), volume, plan, [](const std::string& line) { spdlog::info("{}", line); });
+  if (!planned) return fail(planned.error());
+  if (auto saved = rhot::save_rig(planned->rig, a.out_file); !saved) return fail(saved.error());
+  rhot::CoverageSettings evaluation;
+  evaluation.sigma_px = plan.sigma_px;
+  const auto report = rhot::evaluate_coverage(planned->rig, volume, evaluation);
+  if (!report) return fail(report.error());
+  spdlog::info("{} cameras placed ({} poses considered, {} swaps), written to {}", planned->rig.cameras.size(), planned->candidates,
+               planned->swaps, a.out_file);
+  log_report(*report);
+  const std::filesystem::path dir =
+      !a.pictures.empty() ? std::filesystem::path(a.pictures)
+                          : (std::filesystem::path(a.out_file).parent_path().empty() ? std::filesystem::path(".")
+                                                                                     : std::filesystem::path(a.out_file).parent_path());
+  if (auto ok = write_pictures(dir, planned->rig, *report, {}); !ok) return fail(ok.error());
+  if (a.json) {
+    nlohmann::json j = report_json(*report);
+    j["rig"] = a.out_file;
+    j["cameras"] = planned->rig.cameras.size();
+    j["candidates"] = planned->candidates;
+    j["swaps"] = planned->swaps;
+    std::cout << j.dump(2) << "\n";
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -222,134 +372,18 @@ int main(int argc, char** argv) {
 
   CLI::App app{"rhot-plan: place cameras of one model around a volume to track (coverage and predicted error), or evaluate a rig"};
   app.require_subcommand(0, 1);
-  const CLI::Validator finite = rhot::number_check(rhot::NumberBound::kAny);
-  const CLI::Validator positive = rhot::number_check(rhot::NumberBound::kPositive);
-  const CLI::Validator non_negative = rhot::number_check(rhot::NumberBound::kNonNegative);
-
-  std::string volume_text, camera_file, out_file, mount = "both", pictures;
-  std::vector<double> centre;
-  rhot::PlanSettings plan;
-  bool json = false, floor_only = false;
-  app.add_option("--volume", volume_text, "volume to track, LxWxH metres (along X, along Z, height)");
-  app.add_flag("--floor-only", floor_only,
-               "track only on the floor (objects and feet on the ground): --volume LxW, a 5 cm layer standing on the floor");
-  app.add_option("--volume-centre", centre, "centre of the volume, X Y Z metres (default: on the floor at the origin)")
-      ->expected(3)
-      ->check(finite);
-  app.add_option("--camera", camera_file, "camera model: a rig file whose first camera gives resolution, focal length and distortion");
-  app.add_option("--cameras", plan.cameras, "how many cameras to place")->check(CLI::Range(1, 256));
-  app.add_option("--max-error-mm", plan.max_error_mm, "instead of --cameras: as few cameras as bring the worst predicted error to this")
-      ->check(positive);
-  app.add_option("--min-views", plan.min_views, "cameras that must see each place")->capture_default_str()->check(CLI::Range(1, 16));
-  app.add_option("--mount", mount, "where cameras may go")->capture_default_str()->check(CLI::IsMember({"ceiling", "walls", "both"}));
-  app.add_option("--ceiling-m", plan.ceiling_m, "height of the ceiling mount (default: the volume's top + 1 m)")->check(positive);
-  app.add_option("--wall-margin-m", plan.wall_margin_m, "how far outside the volume the walls stand")
-      ->capture_default_str()
-      ->check(non_negative);
-  app.add_option("--sigma", plan.sigma_px, "detection noise, pixels per axis")->capture_default_str()->check(positive);
-  app.add_option("--out", out_file, "the planned rig (OpenCV YAML)");
-  app.add_option("--pictures", pictures, "folder for the pictures (default: the rig's folder)");
-  app.add_flag("--json", json, "print a JSON report on stdout");
-
-  CLI::App* evaluate = app.add_subcommand("evaluate", "coverage and predicted error of a rig over a volume, with pictures");
-  std::string rig_file, eval_volume_text, eval_pictures;
-  std::vector<double> eval_centre, slices;
-  rhot::CoverageSettings coverage;
-  bool eval_json = false;
-  evaluate->add_option("--rig", rig_file, "camera rig (OpenCV YAML)")->required();
-  evaluate->add_option("--volume", eval_volume_text, "volume, LxWxH metres (default: the rig file's volume)");
-  evaluate->add_option("--volume-centre", eval_centre, "centre of that volume, X Y Z metres (default: on the floor at the origin)")
-      ->expected(3)
-      ->check(finite);
-  evaluate->add_option("--sigma", coverage.sigma_px, "detection noise, pixels per axis")->capture_default_str()->check(positive);
-  evaluate->add_option("--grid-step-m", coverage.grid_step_m, "grid spacing (default: about 20,000 points)")->check(positive);
-  evaluate->add_option("--slices-m", slices, "heights of the pictures' slices, metres")->delimiter(',')->check(finite);
-  evaluate->add_option("--pictures", eval_pictures, "write the pictures into this folder");
-  evaluate->add_flag("--json", eval_json, "print a JSON report on stdout");
-
-  CLI::App* joins = app.add_subcommand("joins", "the error each group of cameras calibrated apart carries through its chain of joins");
-  std::string joins_file, joins_rig;
-  bool joins_json = false;
-  joins->add_option("--joins", joins_file, "the groups and their measured joins (JSON, docs/planning.md)")->required();
-  joins->add_option("--rig", joins_rig, "check that every camera of this rig is in a group, and report them in its order");
-  joins->add_flag("--json", joins_json, "print a JSON report on stdout");
-
+  PlanArgs plan_args;
+  add_plan_options(app, plan_args);
+  EvaluateArgs evaluate_args;
+  CLI::App* evaluate = add_evaluate_command(app, evaluate_args);
+  JoinsArgs joins_args;
+  CLI::App* joins = add_joins_command(app, joins_args);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return rhot::cli_exit_status(app, e);
   }
-  const auto fail = [](const std::string& message) {
-    std::fprintf(stderr, "rhot-plan: %s\n", message.c_str());
-    return 1;
-  };
-
-  if (*joins) return run_joins(joins_file, joins_rig, joins_json);
-  if (*evaluate) {
-    const auto rig = rhot::load_rig(rig_file);
-    if (!rig) return fail(rig.error());
-    TrackingVolume volume;
-    if (!eval_volume_text.empty()) {
-      const auto size = parse_volume(eval_volume_text);
-      if (!size) return fail(size.error());
-      volume = volume_of(*size, eval_centre);
-    } else if (rig->volume) {
-      volume = *rig->volume;
-    } else {
-      return fail(rig_file + ": the rig file has no volume (volume_centre, volume_size): give --volume");
-    }
-    const auto report = rhot::evaluate_coverage(*rig, volume, coverage);
-    if (!report) return fail(report.error());
-    log_report(*report);
-    if (!eval_pictures.empty()) {
-      if (auto ok = write_pictures(eval_pictures, *rig, *report, slices); !ok) return fail(ok.error());
-    }
-    if (eval_json) {
-      nlohmann::json j = report_json(*report);
-      j["rig"] = rig_file;
-      j["cameras"] = rig->cameras.size();
-      std::cout << j.dump(2) << "\n";
-    }
-    return 0;
-  }
-
-  if (volume_text.empty() || camera_file.empty() || out_file.empty())
-    return fail("planning needs --volume, --camera and --out (or: evaluate --rig)");
-  if ((plan.cameras > 0) == (plan.max_error_mm > 0.0)) return fail("give one of --cameras and --max-error-mm");
-  const auto size = parse_volume(volume_text, floor_only);
-  if (!size) return fail(size.error());
-  const TrackingVolume volume = volume_of(*size, centre);
-  const auto model = rhot::load_rig(camera_file);
-  if (!model) return fail(model.error());
-  // The rig's folder is made before planning, so that a path that cannot be written fails first.
-  if (const auto folder = std::filesystem::path(out_file).parent_path(); !folder.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(folder, ec);
-    if (ec) return fail("--out: cannot make the folder " + folder.string() + ": " + ec.message());
-  }
-  plan.mount = mount == "ceiling" ? rhot::Mount::kCeiling : mount == "walls" ? rhot::Mount::kWalls : rhot::Mount::kBoth;
-  const auto planned = rhot::plan_rig(model->cameras.front(), volume, plan, [](const std::string& line) { spdlog::info("{}", line); });
-  if (!planned) return fail(planned.error());
-  if (auto saved = rhot::save_rig(planned->rig, out_file); !saved) return fail(saved.error());
-  rhot::CoverageSettings evaluation;
-  evaluation.sigma_px = plan.sigma_px;
-  const auto report = rhot::evaluate_coverage(planned->rig, volume, evaluation);
-  if (!report) return fail(report.error());
-  spdlog::info("{} cameras placed ({} poses considered, {} swaps), written to {}", planned->rig.cameras.size(), planned->candidates,
-               planned->swaps, out_file);
-  log_report(*report);
-  const std::filesystem::path dir =
-      !pictures.empty() ? std::filesystem::path(pictures)
-                        : (std::filesystem::path(out_file).parent_path().empty() ? std::filesystem::path(".")
-                                                                                 : std::filesystem::path(out_file).parent_path());
-  if (auto ok = write_pictures(dir, planned->rig, *report, {}); !ok) return fail(ok.error());
-  if (json) {
-    nlohmann::json j = report_json(*report);
-    j["rig"] = out_file;
-    j["cameras"] = planned->rig.cameras.size();
-    j["candidates"] = planned->candidates;
-    j["swaps"] = planned->swaps;
-    std::cout << j.dump(2) << "\n";
-  }
-  return 0;
+  if (*joins) return run_joins(joins_args.joins_file, joins_args.rig_file, joins_args.json);
+  if (*evaluate) return run_evaluate(evaluate_args);
+  return run_plan(plan_args);
 }

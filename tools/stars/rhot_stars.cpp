@@ -29,6 +29,7 @@
 
 #include "tracking/rigid/StarGenerator.h"
 #include "tracking/rigid/StarSet.h"
+#include "tools/common/CliExit.h"
 #include "tools/common/NumberChecks.h"
 
 namespace {
@@ -187,7 +188,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(rhot::number_check(rhot::NumberBound::kNonNegative));
   app.add_flag("--no-meshes", no_meshes, "write the JSON and the picture only");
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return rhot::cli_exit_status(app, e);
+  }
 
   settings.rules.marker_diameter_mm = diameter;
   settings.rules.box_mm = {box[0], box[1], box[2]};

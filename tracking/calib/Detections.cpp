@@ -18,7 +18,7 @@ std::string trim(const std::string& s) {
   return s.substr(a, b - a + 1);
 }
 
-std::vector<std::string> split(const std::string& line, char sep) {
+std::vector<std::string> split_trimmed(const std::string& line, char sep) {
   std::vector<std::string> out;
   std::string field;
   std::istringstream in(line);
@@ -94,7 +94,7 @@ std::expected<Detections, std::string> read_detections_csv(const std::filesystem
       first = false;
       if (t.rfind("frame", 0) == 0) continue;  // the header
     }
-    const std::vector<std::string> f = split(t, ',');
+    const std::vector<std::string> f = split_trimmed(t, ',');
     if (f.size() != 4 && f.size() != 5) {
       return std::unexpected(where + "expected 4 or 5 comma-separated fields (frame,camera,x,y[,marker]), got " + std::to_string(f.size()));
     }

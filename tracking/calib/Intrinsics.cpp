@@ -537,12 +537,14 @@ std::expected<BoardView, std::string> detect_board(const std::filesystem::path& 
     switch (board.kind) {
       case BoardKind::chess: {
         // The classic detector first (milliseconds), the sector-based one where it fails (robust to
-        // blur, tilt and distortion, but near a second a picture); then refine_corners, which on
-        // rendered pictures places corners 5 times closer to the truth than the sector-based
-        // detector's own refinement.
+        // blur, tilt, distortion and uneven light, but near a second a picture); then
+        // refine_corners, which on rendered pictures places corners 5 times closer to the truth
+        // than the sector-based detector's own refinement. The classic detector runs without
+        // CALIB_CB_ADAPTIVE_THRESH: on a picture of a board with other counts of corners it then
+        // searched for 20 to 40 s (its quad linking explodes), and on every rendered picture it
+        // found nothing the plain one did not.
         const cv::Size pattern(board.cols, board.rows);
-        bool found = cv::findChessboardCorners(grey, pattern, corners,
-                                               cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK);
+        bool found = cv::findChessboardCorners(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK);
         if (!found) found = cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE);
         if (found) {
           std::vector<int> grid_ids(corners.size());
@@ -622,6 +624,13 @@ std::expected<std::vector<BoardView>, std::string> detect_boards(const std::vect
     }
     found += view->found() ? 1 : 0;
     views.push_back(std::move(*view));
+    // A board in none of the first pictures is most often a spec that counts differently from the
+    // printed board: said now, not after every picture has been searched in vain.
+    if (found == 0 && views.size() == static_cast<std::size_t>(kBoardSearchGiveUpViews) && images.size() > views.size()) {
+      return std::unexpected("board " + board.to_string() + " not found in any of the first " + std::to_string(views.size()) + " of " +
+                             std::to_string(images.size()) + " images, so the others were not searched; is the board's size right? " +
+                             counting(board.kind));
+    }
   }
   if (found == 0) {
     return std::unexpected("board " + board.to_string() + " not found in any of the " + std::to_string(images.size()) + " images; " +
@@ -686,13 +695,9 @@ std::vector<Eigen::Vector2d> residuals(const std::vector<cv::Point3f>& object, c
 
 const cv::TermCriteria kCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 200, 1e-12);
 
-}  // namespace
-
-std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vector<BoardView>& views, const IntrinsicsSettings& settings) {
-  if (auto ok = settings.check(); !ok) return std::unexpected("intrinsics settings: " + ok.error());
-  if (views.empty()) return std::unexpected("no images: give the pictures of the board (files, or folders of them)");
-  IntrinsicsReport report;
-  report.k3_fixed = settings.fix_k3;
+// The views calibration uses (the board found, with at least 4 points), in input order; the others'
+// names go to report.skipped. Errors: views of different sizes, fewer than 3 usable views.
+std::expected<std::vector<const BoardView*>, std::string> usable_views(const std::vector<BoardView>& views, IntrinsicsReport& report) {
   std::vector<const BoardView*> used;
   for (const BoardView& v : views) {
     if (auto ok = same_size(views.front(), v); !ok) return std::unexpected(ok.error());
@@ -707,28 +712,42 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
                            " images; Zhang's method needs at least 3 views, and 10 to 20 with the board tilted differently give intrinsics "
                            "worth trusting");
   }
-  const int width = views.front().width_px, height = views.front().height_px;
-  const cv::Size size(width, height);
-  const CvViews cv_views = to_cv(used);
-  const int flags = settings.fix_k3 ? cv::CALIB_FIX_K3 : 0;
+  return used;
+}
 
-  cv::Mat k = cv::Mat::eye(3, 3, CV_64F), dist = cv::Mat::zeros(5, 1, CV_64F);
+// Zhang's method over every used view, as OpenCV solves it: the camera matrix, the distortion and
+// each view's pose (rvec, tvec), for the leave-one-out and per-view phases to start from.
+struct ZhangFit {
+  cv::Size size;
+  int flags = 0;
+  cv::Mat k, dist;
   std::vector<cv::Mat> rvecs, tvecs;
+};
+
+// The fit, its intrinsics and their uncertainties into the report. Errors: OpenCV fails, or gives
+// non-finite values, focal lengths that are not positive or a principal point off the image.
+std::expected<ZhangFit, std::string> fit_intrinsics(const CvViews& cv_views, cv::Size size, const IntrinsicsSettings& settings,
+                                                    IntrinsicsReport& report) {
+  ZhangFit fit;
+  fit.size = size;
+  fit.flags = settings.fix_k3 ? cv::CALIB_FIX_K3 : 0;
+  fit.k = cv::Mat::eye(3, 3, CV_64F);
+  fit.dist = cv::Mat::zeros(5, 1, CV_64F);
   cv::Mat sigma_intrinsics, sigma_extrinsics, per_view;
   try {
-    cv::calibrateCamera(cv_views.object, cv_views.image, size, k, dist, rvecs, tvecs, sigma_intrinsics, sigma_extrinsics, per_view, flags,
-                        kCriteria);
+    cv::calibrateCamera(cv_views.object, cv_views.image, size, fit.k, fit.dist, fit.rvecs, fit.tvecs, sigma_intrinsics, sigma_extrinsics,
+                        per_view, fit.flags, kCriteria);
   } catch (const cv::Exception& e) {
     return std::unexpected("calibration failed (OpenCV: " + e.msg + "); check the board spec and the pictures");
   }
   CameraIntrinsics& intr = report.intrinsics;
-  intr.width_px = width;
-  intr.height_px = height;
-  intr.fx = k.at<double>(0, 0);
-  intr.fy = k.at<double>(1, 1);
-  intr.cx = k.at<double>(0, 2);
-  intr.cy = k.at<double>(1, 2);
-  for (int i = 0; i < 5; ++i) intr.distortion[static_cast<std::size_t>(i)] = dist.at<double>(i);
+  intr.width_px = size.width;
+  intr.height_px = size.height;
+  intr.fx = fit.k.at<double>(0, 0);
+  intr.fy = fit.k.at<double>(1, 1);
+  intr.cx = fit.k.at<double>(0, 2);
+  intr.cy = fit.k.at<double>(1, 2);
+  for (int i = 0; i < 5; ++i) intr.distortion[static_cast<std::size_t>(i)] = fit.dist.at<double>(i);
   const bool finite = std::isfinite(intr.fx) && std::isfinite(intr.fy) && std::isfinite(intr.cx) && std::isfinite(intr.cy) &&
                       std::all_of(intr.distortion.begin(), intr.distortion.end(), [](double d) { return std::isfinite(d); });
   if (!finite) return std::unexpected("calibration failed: it gave non-finite values; check the board spec and the pictures");
@@ -736,9 +755,10 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
     return std::unexpected("calibration failed: focal length " + format("%.6g", intr.fx) + " x " + format("%.6g", intr.fy) +
                            " px is not positive; check the board spec and the pictures");
   }
-  if (intr.cx < 0.0 || intr.cx >= width || intr.cy < 0.0 || intr.cy >= height) {
+  if (intr.cx < 0.0 || intr.cx >= size.width || intr.cy < 0.0 || intr.cy >= size.height) {
     return std::unexpected("calibration failed: principal point (" + format("%.1f", intr.cx) + ", " + format("%.1f", intr.cy) +
-                           ") px lies outside the " + size_text(width, height) + " image; the views do not constrain it: add tilted views");
+                           ") px lies outside the " + size_text(size.width, size.height) +
+                           " image; the views do not constrain it: add tilted views");
   }
   if (sigma_intrinsics.total() >= 9) {
     const auto sigma = [&](int i) {
@@ -751,8 +771,13 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
     report.cy_sigma = sigma(3);
     for (int i = 0; i < 5; ++i) report.distortion_sigma[static_cast<std::size_t>(i)] = sigma(4 + i);
   }
+  return fit;
+}
 
-  // Per view: residuals, pose, tilt.
+// Per view its residuals, pose and tilt; over all of them the RMS, the image's coverage, the range
+// of tilts and the spread of the board's orientations. Error: a reprojection error that is not finite.
+std::expected<void, std::string> measure_views(const std::vector<const BoardView*>& used, const CvViews& cv_views, const ZhangFit& fit,
+                                               IntrinsicsReport& report) {
   double sum_sq = 0.0;
   std::size_t points = 0;
   std::vector<Eigen::Vector3d> normals;
@@ -761,15 +786,16 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
     ViewResult result;
     result.name = used[v]->name;
     result.corners_px = used[v]->corners_px;
-    result.residuals_px = residuals(cv_views.object[v], cv_views.image[v], rvecs[v], tvecs[v], k, dist, result.rms_px);
+    result.residuals_px = residuals(cv_views.object[v], cv_views.image[v], fit.rvecs[v], fit.tvecs[v], fit.k, fit.dist, result.rms_px);
     for (const Eigen::Vector2d& r : result.residuals_px) sum_sq += r.squaredNorm();
     points += result.residuals_px.size();
     cv::Mat rotation;
-    cv::Rodrigues(rvecs[v], rotation);
+    cv::Rodrigues(fit.rvecs[v], rotation);
     Eigen::Matrix3d r;
     for (int i = 0; i < 9; ++i) r(i / 3, i % 3) = rotation.at<double>(i / 3, i % 3);
     result.camera_from_board.rotation = Eigen::Quaterniond(r).normalized();
-    result.camera_from_board.translation = Eigen::Vector3d(tvecs[v].at<double>(0), tvecs[v].at<double>(1), tvecs[v].at<double>(2));
+    result.camera_from_board.translation =
+        Eigen::Vector3d(fit.tvecs[v].at<double>(0), fit.tvecs[v].at<double>(1), fit.tvecs[v].at<double>(2));
     Eigen::Vector3d normal = r.col(2);
     if (normal.z() < 0) normal = -normal;  // a plane's orientation, whichever side faces the camera
     normals.push_back(normal);
@@ -779,7 +805,7 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
   }
   report.rms_px = std::sqrt(sum_sq / static_cast<double>(std::max<std::size_t>(points, 1)));
   if (!std::isfinite(report.rms_px)) return std::unexpected("calibration failed: the reprojection error is not finite");
-  report.coverage = image_coverage(width, height, all_corners);
+  report.coverage = image_coverage(fit.size.width, fit.size.height, all_corners);
   report.tilt_min_deg = 180.0;
   for (std::size_t a = 0; a < normals.size(); ++a) {
     report.tilt_min_deg = std::min(report.tilt_min_deg, report.views[a].tilt_deg);
@@ -789,40 +815,45 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
           std::max(report.orientation_spread_deg, std::acos(std::clamp(normals[a].dot(normals[b]), -1.0, 1.0)) * kDeg);
     }
   }
+  return {};
+}
 
-  // Leave one out: calibrate without view v (from the full answer, so it converges quickly), solve
-  // v's pose with those intrinsics, and measure v's error.
-  if (settings.leave_one_out && used.size() >= 4) {
-    double held_sum_sq = 0.0;
-    std::size_t held_points = 0;
-    for (std::size_t v = 0; v < used.size(); ++v) {
-      CvViews rest;
-      for (std::size_t o = 0; o < used.size(); ++o) {
-        if (o == v) continue;
-        rest.object.push_back(cv_views.object[o]);
-        rest.image.push_back(cv_views.image[o]);
-      }
-      cv::Mat k_rest = k.clone(), dist_rest = dist.clone();
-      try {
-        std::vector<cv::Mat> r_rest, t_rest;
-        cv::calibrateCamera(rest.object, rest.image, size, k_rest, dist_rest, r_rest, t_rest, flags | cv::CALIB_USE_INTRINSIC_GUESS,
-                            kCriteria);
-        cv::Mat rvec = rvecs[v].clone(), tvec = tvecs[v].clone();
-        if (!cv::solvePnP(cv_views.object[v], cv_views.image[v], k_rest, dist_rest, rvec, tvec, true, cv::SOLVEPNP_ITERATIVE)) continue;
-        double rms = 0.0;
-        const std::vector<Eigen::Vector2d> r = residuals(cv_views.object[v], cv_views.image[v], rvec, tvec, k_rest, dist_rest, rms);
-        if (!std::isfinite(rms)) continue;
-        report.views[v].held_out_rms_px = rms;
-        for (const Eigen::Vector2d& e : r) held_sum_sq += e.squaredNorm();
-        held_points += r.size();
-      } catch (const cv::Exception&) {
-        continue;  // this view stays without a held-out error
-      }
+// Leave one out: calibrate without view v (from the full answer, so it converges quickly), solve
+// v's pose with those intrinsics, and measure v's error. A view whose calibration or pose fails
+// stays without a held-out error.
+void leave_one_out(const CvViews& cv_views, const ZhangFit& fit, IntrinsicsReport& report) {
+  const std::size_t count = cv_views.object.size();
+  double held_sum_sq = 0.0;
+  std::size_t held_points = 0;
+  for (std::size_t v = 0; v < count; ++v) {
+    CvViews rest;
+    for (std::size_t o = 0; o < count; ++o) {
+      if (o == v) continue;
+      rest.object.push_back(cv_views.object[o]);
+      rest.image.push_back(cv_views.image[o]);
     }
-    if (held_points > 0) report.leave_one_out_rms_px = std::sqrt(held_sum_sq / static_cast<double>(held_points));
+    cv::Mat k_rest = fit.k.clone(), dist_rest = fit.dist.clone();
+    try {
+      std::vector<cv::Mat> r_rest, t_rest;
+      cv::calibrateCamera(rest.object, rest.image, fit.size, k_rest, dist_rest, r_rest, t_rest, fit.flags | cv::CALIB_USE_INTRINSIC_GUESS,
+                          kCriteria);
+      cv::Mat rvec = fit.rvecs[v].clone(), tvec = fit.tvecs[v].clone();
+      if (!cv::solvePnP(cv_views.object[v], cv_views.image[v], k_rest, dist_rest, rvec, tvec, true, cv::SOLVEPNP_ITERATIVE)) continue;
+      double rms = 0.0;
+      const std::vector<Eigen::Vector2d> r = residuals(cv_views.object[v], cv_views.image[v], rvec, tvec, k_rest, dist_rest, rms);
+      if (!std::isfinite(rms)) continue;
+      report.views[v].held_out_rms_px = rms;
+      for (const Eigen::Vector2d& e : r) held_sum_sq += e.squaredNorm();
+      held_points += r.size();
+    } catch (const cv::Exception&) {
+      continue;  // this view stays without a held-out error
+    }
   }
+  if (held_points > 0) report.leave_one_out_rms_px = std::sqrt(held_sum_sq / static_cast<double>(held_points));
+}
 
-  // The worst views, and the warnings.
+// The worst views, highest RMS first, and the warnings: what to fix before trusting the result.
+void add_worst_views_and_warnings(std::size_t image_count, const IntrinsicsSettings& settings, IntrinsicsReport& report) {
   std::vector<std::size_t> order(report.views.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(),
@@ -835,8 +866,8 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
     std::string names;
     for (std::size_t i = 0; i < report.skipped.size() && i < 5; ++i) names += (i == 0 ? "" : ", ") + report.skipped[i];
     if (report.skipped.size() > 5) names += ", ...";
-    report.warnings.push_back("the board was not found in " + std::to_string(report.skipped.size()) + " of " +
-                              std::to_string(views.size()) + " images (" + names + "); they were left out");
+    report.warnings.push_back("the board was not found in " + std::to_string(report.skipped.size()) + " of " + std::to_string(image_count) +
+                              " images (" + names + "); they were left out");
   }
   if (static_cast<int>(report.views.size()) < settings.recommended_views) {
     report.warnings.push_back("only " + views_text + " views found the board; " + std::to_string(settings.recommended_views) +
@@ -868,6 +899,23 @@ std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vec
                               format("%.2f", report.rms_px) + " px): the intrinsics follow these views too closely; add views" +
                               (settings.fix_k3 ? "" : ", or fix k3"));
   }
+}
+
+}  // namespace
+
+std::expected<IntrinsicsReport, std::string> calibrate_intrinsics(const std::vector<BoardView>& views, const IntrinsicsSettings& settings) {
+  if (auto ok = settings.check(); !ok) return std::unexpected("intrinsics settings: " + ok.error());
+  if (views.empty()) return std::unexpected("no images: give the pictures of the board (files, or folders of them)");
+  IntrinsicsReport report;
+  report.k3_fixed = settings.fix_k3;
+  const auto used = usable_views(views, report);
+  if (!used) return std::unexpected(used.error());
+  const CvViews cv_views = to_cv(*used);
+  const auto fit = fit_intrinsics(cv_views, cv::Size(views.front().width_px, views.front().height_px), settings, report);
+  if (!fit) return std::unexpected(fit.error());
+  if (auto measured = measure_views(*used, cv_views, *fit, report); !measured) return std::unexpected(measured.error());
+  if (settings.leave_one_out && used->size() >= 4) leave_one_out(cv_views, *fit, report);
+  add_worst_views_and_warnings(views.size(), settings, report);
   return report;
 }
 

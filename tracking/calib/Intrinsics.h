@@ -85,15 +85,22 @@ struct BoardView {
 // Finds the board in one picture (read as grey). Errors: no such file ("<file>: no such file"), or
 // not an image ("<file>: cannot read the image ..."). A picture without the whole board (for ChArUco: without
 // at least 6 corners off one line) gives a view with no corners: the board was not found. Cost:
-// tens of milliseconds for 1280 x 720, more where the board is missing.
+// tens of milliseconds for 1280 x 720; about a second where the chessboard's classic detector
+// fails and the sector-based one is tried (a tilted or blurred board, or none, or another count of
+// corners).
 [[nodiscard]] std::expected<BoardView, std::string> detect_board(const std::filesystem::path& image, const BoardSpec& board);
 
 // Called before each picture is read: index from 1, the count, and the picture's file name.
 using DetectProgress = std::function<void(int index, int count, const std::string& name)>;
 
+// detect_boards stops when the board is in none of this many first pictures (and more follow).
+inline constexpr int kBoardSearchGiveUpViews = 3;
+
 // detect_board over pictures of one camera. Errors: no pictures; a picture that cannot be read;
 // a picture of another size than the first (naming both files and sizes); the board found in none
-// of them (quoting the spec and how its numbers count).
+// of them (quoting the spec and how its numbers count), said after the first
+// kBoardSearchGiveUpViews pictures when none of them shows it (the others are not searched, nor
+// checked but for being files).
 [[nodiscard]] std::expected<std::vector<BoardView>, std::string> detect_boards(const std::vector<std::filesystem::path>& images,
                                                                                const BoardSpec& board, const DetectProgress& progress = {});
 

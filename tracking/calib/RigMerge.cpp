@@ -8,6 +8,7 @@
 
 #include "tracking/calib/BundleAdjustment.h"
 #include "tracking/geometry/Triangulation.h"
+#include "tracking/core/Solvers.h"
 
 namespace rhot {
 
@@ -17,10 +18,10 @@ namespace {
 Eigen::Matrix3d mean_rotation(const std::vector<Eigen::Matrix3d>& rotations) {
   Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
   for (const auto& r : rotations) sum += r;
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Svd3 decomposed = svd(sum);
   Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
-  return svd.matrixU() * d * svd.matrixV().transpose();
+  d(2, 2) = (decomposed.u * decomposed.v.transpose()).determinant() < 0 ? -1.0 : 1.0;
+  return decomposed.u * d * decomposed.v.transpose();
 }
 
 bool same_intrinsics(const CameraIntrinsics& x, const CameraIntrinsics& y) {

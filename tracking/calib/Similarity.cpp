@@ -1,9 +1,9 @@
 #include "tracking/calib/Similarity.h"
+#include "tracking/core/Solvers.h"
 
 #include <cmath>
 
 #include <Eigen/Geometry>
-#include <Eigen/Eigenvalues>
 
 namespace rhot {
 
@@ -27,8 +27,7 @@ std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& fr
   }
   // Collinear points leave the rotation about their line free: their spread's second axis is nil.
   const Eigen::Matrix3Xd centred = a.colwise() - a.rowwise().mean();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> spread(centred * centred.transpose());
-  const Eigen::Vector3d ev = spread.eigenvalues();  // ascending: squared singular values
+  const Eigen::Vector3d ev = symmetric_eigenvalues(centred * centred.transpose());  // ascending: squared singular values
   if (!(ev[1] > 1e-18 * std::max(ev[2], 1e-300))) return std::nullopt;
   const Eigen::Matrix4d m = Eigen::umeyama(a, b, with_scale);
   if (!m.allFinite()) return std::nullopt;

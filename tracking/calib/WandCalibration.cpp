@@ -13,6 +13,7 @@
 
 #include "tracking/calib/BundleAdjustment.h"
 #include "tracking/calib/Similarity.h"
+#include "tracking/core/Solvers.h"
 
 namespace rhot {
 
@@ -79,8 +80,7 @@ std::optional<Eigen::Vector3d> triangulate(const State& s, const Track& t, doubl
     rows += 2;
   }
   if (rows < 4) return std::nullopt;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(normal);
-  const Eigen::Vector4d h = eig.eigenvectors().col(0);
+  const Eigen::Vector4d h = symmetric_eigen(normal).vectors.col(0);
   if (std::abs(h[3]) < 1e-12) return std::nullopt;
   const Eigen::Vector3d x = h.head<3>() / h[3];
   if (!x.allFinite()) return std::nullopt;
@@ -327,8 +327,8 @@ double thinness(const State& s) {
   mean /= static_cast<double>(points.size());
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (const auto& p : points) cov += (p - mean) * (p - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  return std::sqrt(std::max(eig.eigenvalues()[0], 0.0) / std::max(eig.eigenvalues()[2], 1e-300));
+  const Eigen::Vector3d values = symmetric_eigenvalues(cov);
+  return std::sqrt(std::max(values[0], 0.0) / std::max(values[2], 1e-300));
 }
 
 struct Solved {

@@ -9,12 +9,13 @@
 #include <Eigen/Dense>
 
 #include "tracking/geometry/Matching.h"
+#include "tracking/core/Solvers.h"
 
 namespace rhot {
 
 namespace {
 
-std::string fmt(double v, int digits = 1) {
+std::string to_fixed(double v, int digits = 1) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", digits, v);
   return buf;
@@ -47,7 +48,7 @@ std::vector<Eigen::Vector3d> LFrame::markers_world() const {
 std::expected<void, std::string> LFrame::check() const {
   if (!(std::isfinite(long_m) && std::isfinite(short_m) && short_m >= 0.05 && long_m > short_m * 1.05 && long_m <= 5.0)) {
     return std::unexpected("L-frame: expected arms of 5 cm to 5 m with the long arm at least 5 % longer than the short one, got " +
-                           fmt(long_m * 1000) + " mm and " + fmt(short_m * 1000) + " mm");
+                           to_fixed(long_m * 1000) + " mm and " + to_fixed(short_m * 1000) + " mm");
   }
   if (middle_m && !(std::isfinite(*middle_m) && *middle_m > 0.02 && *middle_m < long_m - 0.02 && std::abs(*middle_m - short_m) > 0.02)) {
     return std::unexpected(
@@ -198,8 +199,8 @@ std::expected<WorldFrameResult, std::string> world_from_lframe(const CameraRig& 
     static const char* const kNames[] = {"the corner", "the long arm's end", "the short arm's end", "the middle marker"};
     const auto worst =
         static_cast<std::size_t>(std::max_element(r.marker_residual_mm.begin(), r.marker_residual_mm.end()) - r.marker_residual_mm.begin());
-    return std::unexpected("the points found do not fit the L-frame: " + std::string(kNames[worst]) + " lies " + fmt(r.max_mm) +
-                           " mm from its place (tolerance " + fmt(tolerance_m * 1000.0) + " mm); check the frame's dimensions" +
+    return std::unexpected("the points found do not fit the L-frame: " + std::string(kNames[worst]) + " lies " + to_fixed(r.max_mm) +
+                           " mm from its place (tolerance " + to_fixed(tolerance_m * 1000.0) + " mm); check the frame's dimensions" +
                            (rescale ? "" : ", or whether the rig is metric"));
   }
   // Three or four markers in one plane fit their mirror image as well as themselves: a frame laid
@@ -230,10 +231,10 @@ std::expected<WorldFrameResult, std::string> world_from_floor_points(const Camer
   mean /= static_cast<double>(found.size());
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (const auto& p : found) cov += (p.position - mean) * (p.position - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  if (!(eig.eigenvalues()[1] > 1e-4))
+  const SymmetricEigen3 eig = symmetric_eigen(cov);
+  if (!(eig.values[1] > 1e-4))
     return std::unexpected("floor points: the places lie on one line; touch the floor at three corners of a wide triangle");
-  Eigen::Vector3d up = eig.eigenvectors().col(0).normalized();
+  Eigen::Vector3d up = eig.vectors.col(0).normalized();
   // Up is the side the cameras are on.
   Eigen::Vector3d cameras_mean = Eigen::Vector3d::Zero();
   for (const Camera& c : rig.cameras) cameras_mean += c.centre_world();

@@ -54,10 +54,45 @@ int read_int(const cv::FileNode& parent, const char* key, const std::string& whe
   return static_cast<int>(node);
 }
 
-}  // namespace
+std::string too_many_cameras(std::size_t count) {
+  return "cameras: a rig may have at most " + std::to_string(kMaxRigCameras) + " cameras, got " + std::to_string(count);
+}
 
-std::expected<void, std::string> check_rig(const CameraRig& rig) {
+// Camera i of the file's sequence; its pose read where `poses` says, else left at the identity.
+Camera read_camera(const cv::FileNode& node, std::size_t i, bool poses) {
+  std::string where = camera_label(i, "");
+  if (!node.isMap()) throw Failure{where + ": expected a map with name, image_width, image_height, camera_matrix, ..."};
+  Camera c;
+  const cv::FileNode n = node["name"];
+  if (n.empty() || !n.isString()) throw Failure{where + ".name: missing or not a string"};
+  c.name = static_cast<std::string>(n);
+  where = camera_label(i, c.name);
+  c.intrinsics.width_px = read_int(node, "image_width", where);
+  c.intrinsics.height_px = read_int(node, "image_height", where);
+  const Eigen::MatrixXd k = read_matrix(node, "camera_matrix", 3, 3, where);
+  if (k(0, 1) != 0.0 || k(1, 0) != 0.0 || k(2, 0) != 0.0 || k(2, 1) != 0.0 || k(2, 2) != 1.0) {
+    throw Failure{where + ".camera_matrix: expected [fx 0 cx; 0 fy cy; 0 0 1] (no skew)"};
+  }
+  c.intrinsics.fx = k(0, 0);
+  c.intrinsics.fy = k(1, 1);
+  c.intrinsics.cx = k(0, 2);
+  c.intrinsics.cy = k(1, 2);
+  const Eigen::MatrixXd d = read_matrix(node, "distortion_coefficients", 1, 5, where);
+  for (int j = 0; j < 5; ++j) c.intrinsics.distortion[static_cast<std::size_t>(j)] = d(j);
+  if (!poses) return c;
+  const Eigen::Matrix3d r = read_matrix(node, "rotation", 3, 3, where);
+  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > 1e-6 || r.determinant() < 0.0) {
+    throw Failure{where + ".rotation: not a rotation matrix (expected orthonormal with determinant +1)"};
+  }
+  c.cam_from_world.rotation = Eigen::Quaterniond(r).normalized();
+  c.cam_from_world.translation = read_matrix(node, "translation", 3, 1, where);
+  return c;
+}
+
+// check_rig, and check_rig_intrinsics where `poses` is false.
+std::expected<void, std::string> check(const CameraRig& rig, bool poses) {
   if (rig.cameras.empty()) return std::unexpected(std::string("cameras: a rig needs at least one camera"));
+  if (rig.cameras.size() > kMaxRigCameras) return std::unexpected(too_many_cameras(rig.cameras.size()));
   if (rig.volume) {
     if (!rig.volume->centre_m.allFinite()) return std::unexpected(std::string("volume_centre: contains a value that is not finite"));
     if (!rig.volume->size_m.allFinite() || !(rig.volume->size_m.minCoeff() > 0.0)) {
@@ -86,8 +121,11 @@ std::expected<void, std::string> check_rig(const CameraRig& rig) {
       return std::unexpected(where + ".camera_matrix: the principal point (" + std::to_string(k.cx) + ", " + std::to_string(k.cy) +
                              ") lies outside the " + std::to_string(k.width_px) + "x" + std::to_string(k.height_px) + " image");
     }
-    if (!c.cam_from_world.is_finite()) return std::unexpected(where + ".rotation/translation: contains a value that is not finite");
+    if (poses && !c.cam_from_world.is_finite()) {
+      return std::unexpected(where + ".rotation/translation: contains a value that is not finite");
+    }
   }
+  if (!poses) return {};
   for (std::size_t i = 0; i < rig.cameras.size(); ++i) {
     for (std::size_t j = i + 1; j < rig.cameras.size(); ++j) {
       if ((rig.cameras[i].centre_world() - rig.cameras[j].centre_world()).norm() < 1e-6) {
@@ -99,7 +137,8 @@ std::expected<void, std::string> check_rig(const CameraRig& rig) {
   return {};
 }
 
-std::expected<CameraRig, std::string> load_rig(const std::filesystem::path& file) {
+// load_rig, and load_rig_intrinsics where `poses` is false.
+std::expected<CameraRig, std::string> load(const std::filesystem::path& file, bool poses) {
   const std::string path = file.string();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(file, ec)) return std::unexpected(path + ": rig file not found");
@@ -116,35 +155,8 @@ std::expected<CameraRig, std::string> load_rig(const std::filesystem::path& file
     const cv::FileNode cameras = fs["cameras"];
     if (cameras.empty()) throw Failure{"cameras: missing"};
     if (!cameras.isSeq()) throw Failure{"cameras: expected a sequence of cameras"};
-    for (std::size_t i = 0; i < cameras.size(); ++i) {
-      const cv::FileNode node = cameras[static_cast<int>(i)];
-      std::string where = camera_label(i, "");
-      if (!node.isMap()) throw Failure{where + ": expected a map with name, image_width, image_height, camera_matrix, ..."};
-      Camera c;
-      const cv::FileNode n = node["name"];
-      if (n.empty() || !n.isString()) throw Failure{where + ".name: missing or not a string"};
-      c.name = static_cast<std::string>(n);
-      where = camera_label(i, c.name);
-      c.intrinsics.width_px = read_int(node, "image_width", where);
-      c.intrinsics.height_px = read_int(node, "image_height", where);
-      const Eigen::MatrixXd k = read_matrix(node, "camera_matrix", 3, 3, where);
-      if (k(0, 1) != 0.0 || k(1, 0) != 0.0 || k(2, 0) != 0.0 || k(2, 1) != 0.0 || k(2, 2) != 1.0) {
-        throw Failure{where + ".camera_matrix: expected [fx 0 cx; 0 fy cy; 0 0 1] (no skew)"};
-      }
-      c.intrinsics.fx = k(0, 0);
-      c.intrinsics.fy = k(1, 1);
-      c.intrinsics.cx = k(0, 2);
-      c.intrinsics.cy = k(1, 2);
-      const Eigen::MatrixXd d = read_matrix(node, "distortion_coefficients", 1, 5, where);
-      for (int j = 0; j < 5; ++j) c.intrinsics.distortion[static_cast<std::size_t>(j)] = d(j);
-      const Eigen::Matrix3d r = read_matrix(node, "rotation", 3, 3, where);
-      if ((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > 1e-6 || r.determinant() < 0.0) {
-        throw Failure{where + ".rotation: not a rotation matrix (expected orthonormal with determinant +1)"};
-      }
-      c.cam_from_world.rotation = Eigen::Quaterniond(r).normalized();
-      c.cam_from_world.translation = read_matrix(node, "translation", 3, 1, where);
-      rig.cameras.push_back(std::move(c));
-    }
+    if (cameras.size() > kMaxRigCameras) throw Failure{too_many_cameras(cameras.size())};  // before reading them all
+    for (std::size_t i = 0; i < cameras.size(); ++i) rig.cameras.push_back(read_camera(cameras[static_cast<int>(i)], i, poses));
     const bool has_centre = !fs["volume_centre"].empty();
     const bool has_size = !fs["volume_size"].empty();
     if (has_centre != has_size)
@@ -158,9 +170,19 @@ std::expected<CameraRig, std::string> load_rig(const std::filesystem::path& file
   } catch (const cv::Exception& e) {
     return std::unexpected(path + ": " + e.msg);
   }
-  if (auto ok = check_rig(rig); !ok) return std::unexpected(path + ": " + ok.error());
+  if (auto ok = check(rig, poses); !ok) return std::unexpected(path + ": " + ok.error());
   return rig;
 }
+
+}  // namespace
+
+std::expected<void, std::string> check_rig(const CameraRig& rig) { return check(rig, true); }
+
+std::expected<void, std::string> check_rig_intrinsics(const CameraRig& rig) { return check(rig, false); }
+
+std::expected<CameraRig, std::string> load_rig(const std::filesystem::path& file) { return load(file, true); }
+
+std::expected<CameraRig, std::string> load_rig_intrinsics(const std::filesystem::path& file) { return load(file, false); }
 
 std::expected<void, std::string> save_rig(const CameraRig& rig, const std::filesystem::path& file) {
   if (auto ok = check_rig(rig); !ok) return std::unexpected(file.string() + ": not saved: " + ok.error());

@@ -175,35 +175,106 @@ void ColourDetector::scan(const cv::Mat& bgr, const cv::Rect& rect) {
   }
 }
 
-std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::vector<cv::Rect>& rects) {
-  runs_.clear();
-  last_pixels_ = 0;
-  std::vector<std::size_t> rect_of_run_begin;
-  for (const cv::Rect& r : rects) {
-    rect_of_run_begin.push_back(runs_.size());
-    scan(bgr, r);
-    last_pixels_ += static_cast<std::int64_t>(r.area());
-  }
-  std::vector<int> parent(runs_.size());
-  for (std::size_t i = 0; i < runs_.size(); ++i) parent[i] = runs_[i].parent;
+namespace {
 
-  struct Moments {
-    double n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
-    double w = 0, wx = 0, wy = 0, value = 0;
-    int klass = 0;
-    bool clipped = false;  // touches a region's edge inside the image: part of it may lie outside
-  };
-  std::vector<int> slot(runs_.size(), -1);
-  std::vector<int> blob_of_run(runs_.size(), -1);
-  std::vector<Moments> blobs;
-  const std::uint8_t* membership = table_.memberships();
+// A blob's pixel moments, plain and weighted by the pixels' colour membership.
+struct Moments {
+  double n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  double w = 0, wx = 0, wy = 0, value = 0;
+  int klass = 0;
+  bool clipped = false;  // touches a region's edge inside the image: part of it may lie outside
+};
+
+// A blob's shape from its unweighted second moments.
+struct Shape {
+  double elongation = 1e9, fill = 0.0, angle = 0.0;
+};
+
+Shape shape_of(const Moments& m) {
+  Shape sh;
+  const double mx = m.sx / m.n, my = m.sy / m.n;
+  // Pixel squares: each adds 1/12 to its own variance.
+  const double cxx = m.sxx / m.n - mx * mx + 1.0 / 12.0, cyy = m.syy / m.n - my * my + 1.0 / 12.0, cxy = m.sxy / m.n - mx * my;
+  const double half_trace = 0.5 * (cxx + cyy);
+  const double root = std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
+  const double major = half_trace + root, minor = half_trace - root;
+  if (!(minor > 0.0)) return sh;
+  sh.elongation = std::sqrt(major / minor);
+  sh.fill = m.n / (4.0 * std::numbers::pi * std::sqrt(major * minor));
+  sh.angle = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
+  return sh;
+}
+
+// The blobs of one scan, from its runs to detections. Run: ColourDetector's run of one colour
+// along a row (y, x0, x1, klass, parent), after scan() joined the runs that touch.
+template <typename Run>
+class BlobMeasure {
+ public:
+  BlobMeasure(const std::vector<Run>& runs, const cv::Mat& bgr, const ColourTable& table, const ColourDetectorSettings& settings)
+      : runs_(runs), bgr_(bgr), membership_(table.memberships()), model_(table.model()), settings_(settings) {}
+
+  // Each run into its blob's moments; rect_of_run_begin: the first run of each of the rects
+  // scanned, in order.
+  void gather(const std::vector<cv::Rect>& rects, const std::vector<std::size_t>& rect_of_run_begin) {
+    std::vector<int> parent(runs_.size());
+    for (std::size_t i = 0; i < runs_.size(); ++i) parent[i] = runs_[i].parent;
+    std::vector<int> slot(runs_.size(), -1);
+    blob_of_run_.assign(runs_.size(), -1);
+    std::size_t rect_index = 0;
+    for (std::size_t i = 0; i < runs_.size(); ++i) {
+      while (rect_index + 1 < rects.size() && i >= rect_of_run_begin[rect_index + 1]) ++rect_index;
+      const cv::Rect& rect = rects[rect_index];
+      const Run& run = runs_[i];
+      const int root = find_root(parent, static_cast<int>(i));
+      int& s = slot[static_cast<std::size_t>(root)];
+      if (s < 0) {
+        s = static_cast<int>(blobs_.size());
+        blobs_.push_back({});
+        blobs_.back().klass = run.klass;
+      }
+      blob_of_run_[i] = s;
+      Moments& m = blobs_[static_cast<std::size_t>(s)];
+      if ((run.x0 == rect.x && rect.x > 0) || (run.x1 == rect.x + rect.width && run.x1 < bgr_.cols) || (run.y == rect.y && rect.y > 0) ||
+          (run.y == rect.y + rect.height - 1 && run.y < bgr_.rows - 1)) {
+        m.clipped = true;
+      }
+      if (m.n > settings_.max_area_px) continue;  // refused anyway: stop measuring a wall
+      add_run(m, run, [](int, int) { return true; });
+    }
+  }
+
+  // The gathered blobs that pass as markers: whole, two touching, or one partly hidden.
+  std::vector<Detection> detections() {
+    for (std::size_t b = 0; b < blobs_.size(); ++b) {
+      const Moments& m = blobs_[b];
+      if (m.clipped || m.n < settings_.min_area_px || m.n > settings_.max_area_px || m.w <= 0.0) continue;
+      if (m.w / m.n < settings_.min_confidence) continue;
+      const Shape sh = shape_of(m);
+      if (sh.fill >= settings_.min_fill && sh.elongation > kPairFrom && sh.elongation <= kPairElongation && split(b, m, sh)) continue;
+      if (sh.fill >= settings_.min_fill && sh.elongation <= settings_.max_elongation) {
+        // Round enough to be a marker; one not quite round may be a partly hidden one, whose
+        // visible part's centroid leans away from the bite by up to a pixel or two.
+        const auto circle = sh.elongation > kRoundAt ? circle_of(b, m.n) : std::nullopt;
+        if (circle)
+          emit_at(m, *circle);
+        else
+          emit(m);
+        continue;
+      }
+      if (const auto circle = circle_of(b, m.n)) emit_at(m, *circle);
+    }
+    return std::move(out_);
+  }
+
+ private:
   // A run's pixels (those `keep` accepts) into a blob's moments.
-  const auto add_run = [&](Moments& m, const Run& run, const auto& keep) {
-    const std::uint8_t* p = bgr.ptr<std::uint8_t>(run.y) + 3 * run.x0;
+  template <typename Keep>
+  void add_run(Moments& m, const Run& run, const Keep& keep) const {
+    const std::uint8_t* p = bgr_.ptr<std::uint8_t>(run.y) + 3 * run.x0;
     const double y = run.y;
     for (int x = run.x0; x < run.x1; ++x, p += 3) {
       if (!keep(x, run.y)) continue;
-      const double w = membership[ColourTable::cell(p[0], p[1], p[2])] / 255.0;
+      const double w = membership_[ColourTable::cell(p[0], p[1], p[2])] / 255.0;
       m.n += 1.0;
       m.sx += x;
       m.sy += y;
@@ -215,68 +286,36 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
       m.wy += w * y;
       m.value += std::max({p[0], p[1], p[2]});
     }
-  };
-  std::size_t rect_index = 0;
-  for (std::size_t i = 0; i < runs_.size(); ++i) {
-    while (rect_index + 1 < rects.size() && i >= rect_of_run_begin[rect_index + 1]) ++rect_index;
-    const cv::Rect& rect = rects[rect_index];
-    const Run& run = runs_[i];
-    const int root = find_root(parent, static_cast<int>(i));
-    int& s = slot[static_cast<std::size_t>(root)];
-    if (s < 0) {
-      s = static_cast<int>(blobs.size());
-      blobs.push_back({});
-      blobs.back().klass = run.klass;
-    }
-    blob_of_run[i] = s;
-    Moments& m = blobs[static_cast<std::size_t>(s)];
-    if ((run.x0 == rect.x && rect.x > 0) || (run.x1 == rect.x + rect.width && run.x1 < bgr.cols) || (run.y == rect.y && rect.y > 0) ||
-        (run.y == rect.y + rect.height - 1 && run.y < bgr.rows - 1)) {
-      m.clipped = true;
-    }
-    if (m.n > settings_.max_area_px) continue;  // refused anyway: stop measuring a wall
-    add_run(m, run, [](int, int) { return true; });
   }
-  // A blob's shape from its unweighted second moments.
-  struct Shape {
-    double elongation = 1e9, fill = 0.0, angle = 0.0;
-  };
-  const auto shape_of = [](const Moments& m) {
-    Shape sh;
-    const double mx = m.sx / m.n, my = m.sy / m.n;
-    // Pixel squares: each adds 1/12 to its own variance.
-    const double cxx = m.sxx / m.n - mx * mx + 1.0 / 12.0, cyy = m.syy / m.n - my * my + 1.0 / 12.0, cxy = m.sxy / m.n - mx * my;
-    const double half_trace = 0.5 * (cxx + cyy);
-    const double root = std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
-    const double major = half_trace + root, minor = half_trace - root;
-    if (!(minor > 0.0)) return sh;
-    sh.elongation = std::sqrt(major / minor);
-    sh.fill = m.n / (4.0 * std::numbers::pi * std::sqrt(major * minor));
-    sh.angle = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
-    return sh;
-  };
-  std::vector<Detection> out;
-  const auto emit = [&](const Moments& m) {
+
+  void emit(const Moments& m) {
     Detection d;
     d.pixel = Eigen::Vector2d(m.wx / m.w, m.wy / m.w);
     d.area_px = static_cast<float>(m.n);
     d.intensity = static_cast<float>(m.value / m.n);
-    d.colour = static_cast<std::int8_t>(table_.model().classes[static_cast<std::size_t>(m.klass - 1)].colour);
+    d.colour = static_cast<std::int8_t>(model_.classes[static_cast<std::size_t>(m.klass - 1)].colour);
     d.confidence = static_cast<float>(m.w / m.n);
-    out.push_back(d);
-  };
+    out_.push_back(d);
+  }
+
+  // A marker at a circle's centre, measured otherwise as m.
+  void emit_at(Moments m, const Eigen::Vector3d& circle) {
+    m.wx = circle.x() * m.w, m.wy = circle.y() * m.w;
+    emit(m);
+  }
+
   // The circle of a partly hidden marker (kPartial* above) from blob b's n pixels, as (centre x,
   // centre y, radius), or nothing. Its edge pixels: pixels with a 4-neighbour outside it.
-  const auto circle_of = [&](std::size_t b, double n) -> std::optional<Eigen::Vector3d> {
+  std::optional<Eigen::Vector3d> circle_of(std::size_t b, double n) const {
     if (n < kPartialMinArea) return std::nullopt;
-    int x0 = bgr.cols, x1 = 0, y0 = bgr.rows, y1 = 0;
+    int x0 = bgr_.cols, x1 = 0, y0 = bgr_.rows, y1 = 0;
     for (std::size_t i = 0; i < runs_.size(); ++i) {
-      if (blob_of_run[i] != static_cast<int>(b)) continue;
+      if (blob_of_run_[i] != static_cast<int>(b)) continue;
       x0 = std::min(x0, runs_[i].x0), x1 = std::max(x1, runs_[i].x1), y0 = std::min(y0, runs_[i].y), y1 = std::max(y1, runs_[i].y + 1);
     }
     cv::Mat1b mask(y1 - y0 + 2, x1 - x0 + 2, std::uint8_t{0});
     for (std::size_t i = 0; i < runs_.size(); ++i) {
-      if (blob_of_run[i] != static_cast<int>(b)) continue;
+      if (blob_of_run_[i] != static_cast<int>(b)) continue;
       for (int x = runs_[i].x0; x < runs_[i].x1; ++x) mask(runs_[i].y - y0 + 1, x - x0 + 1) = 1;
     }
     std::vector<Eigen::Vector2d> edge;
@@ -287,20 +326,16 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
       }
     }
     return partial_circle(edge, n, std::sqrt(settings_.max_area_px / std::numbers::pi) + 1.0);
-  };
-  // A marker at a circle's centre, measured otherwise as m.
-  const auto emit_at = [&](Moments m, const Eigen::Vector3d& circle) {
-    m.wx = circle.x() * m.w, m.wy = circle.y() * m.w;
-    emit(m);
-  };
+  }
+
   // Two markers of one colour whose images touch: cut across the major axis at the centroid; both
-  // halves must come out round, full and of similar size, with a waist between them.
-  const auto split = [&](std::size_t b, const Moments& m, const Shape& sh) -> bool {
+  // halves must come out round, full and of similar size, with a waist between them. Emits both.
+  bool split(std::size_t b, const Moments& m, const Shape& sh) {
     const double mx = m.sx / m.n, my = m.sy / m.n, ux = std::cos(sh.angle), uy = std::sin(sh.angle);
     Moments half[2];
     half[0].klass = half[1].klass = m.klass;
     for (std::size_t i = 0; i < runs_.size(); ++i) {
-      if (blob_of_run[i] != static_cast<int>(b)) continue;
+      if (blob_of_run_[i] != static_cast<int>(b)) continue;
       for (int side = 0; side < 2; ++side) {
         add_run(half[side], runs_[i], [&](int x, int y) { return ((x - mx) * ux + (y - my) * uy > 0.0) == (side == 1); });
       }
@@ -310,14 +345,21 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
     if (half[0].w <= 0.0 || half[1].w <= 0.0) return false;
     const Shape a = shape_of(half[0]), c = shape_of(half[1]);
     if (a.elongation > kHalfElongation || c.elongation > kHalfElongation || a.fill < kHalfFill || c.fill < kHalfFill) return false;
-    // And a waist: two discs are narrow where they touch; a stub of cable or the corner of a box
-    // cut in two is not. Pixels in a one-pixel strip across the cut against strips through each
-    // half's centroid.
+    if (!has_waist(b, mx, my, ux, uy, half)) return false;
+    emit(half[0]);
+    emit(half[1]);
+    return true;
+  }
+
+  // Whether blob b, cut at (mx, my) across the axis (ux, uy) into `half`, has a waist: two discs
+  // are narrow where they touch; a stub of cable or the corner of a box cut in two is not. Pixels
+  // in a one-pixel strip across the cut against strips through each half's centroid.
+  bool has_waist(std::size_t b, double mx, double my, double ux, double uy, const Moments (&half)[2]) const {
     const auto along = [&](const Moments& h) { return (h.sx / h.n - mx) * ux + (h.sy / h.n - my) * uy; };
     const double at0 = along(half[0]), at1 = along(half[1]);
     int waist = 0, body0 = 0, body1 = 0;
     for (std::size_t i = 0; i < runs_.size(); ++i) {
-      if (blob_of_run[i] != static_cast<int>(b)) continue;
+      if (blob_of_run_[i] != static_cast<int>(b)) continue;
       for (int x = runs_[i].x0; x < runs_[i].x1; ++x) {
         const double t = (x - mx) * ux + (runs_[i].y - my) * uy;
         waist += std::abs(t) < 0.5 ? 1 : 0;
@@ -325,29 +367,33 @@ std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::ve
         body1 += std::abs(t - at1) < 0.5 ? 1 : 0;
       }
     }
-    if (waist > kWaist * std::min(body0, body1)) return false;
-    emit(half[0]);
-    emit(half[1]);
-    return true;
-  };
-  for (std::size_t b = 0; b < blobs.size(); ++b) {
-    const Moments& m = blobs[b];
-    if (m.clipped || m.n < settings_.min_area_px || m.n > settings_.max_area_px || m.w <= 0.0) continue;
-    if (m.w / m.n < settings_.min_confidence) continue;
-    const Shape sh = shape_of(m);
-    if (sh.fill >= settings_.min_fill && sh.elongation > kPairFrom && sh.elongation <= kPairElongation && split(b, m, sh)) continue;
-    if (sh.fill >= settings_.min_fill && sh.elongation <= settings_.max_elongation) {
-      // Round enough to be a marker; one not quite round may be a partly hidden one, whose
-      // visible part's centroid leans away from the bite by up to a pixel or two.
-      const auto circle = sh.elongation > kRoundAt ? circle_of(b, m.n) : std::nullopt;
-      if (circle)
-        emit_at(m, *circle);
-      else
-        emit(m);
-      continue;
-    }
-    if (const auto circle = circle_of(b, m.n)) emit_at(m, *circle);
+    return !(waist > kWaist * std::min(body0, body1));
   }
+
+  const std::vector<Run>& runs_;
+  const cv::Mat& bgr_;
+  const std::uint8_t* membership_;
+  const ColourModel& model_;
+  const ColourDetectorSettings& settings_;
+  std::vector<int> blob_of_run_;  // per run: its blob, an index into blobs_
+  std::vector<Moments> blobs_;
+  std::vector<Detection> out_;
+};
+
+}  // namespace
+
+std::vector<Detection> ColourDetector::measure(const cv::Mat& bgr, const std::vector<cv::Rect>& rects) {
+  runs_.clear();
+  last_pixels_ = 0;
+  std::vector<std::size_t> rect_of_run_begin;
+  for (const cv::Rect& r : rects) {
+    rect_of_run_begin.push_back(runs_.size());
+    scan(bgr, r);
+    last_pixels_ += static_cast<std::int64_t>(r.area());
+  }
+  BlobMeasure<Run> blobs(runs_, bgr, table_, settings_);
+  blobs.gather(rects, rect_of_run_begin);
+  std::vector<Detection> out = blobs.detections();
   if (static_cast<int>(out.size()) > settings_.max_blobs) {
     std::nth_element(out.begin(), out.begin() + settings_.max_blobs, out.end(),
                      [](const Detection& a, const Detection& b) { return a.area_px > b.area_px; });

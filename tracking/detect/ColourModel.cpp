@@ -246,83 +246,88 @@ struct Sample {
 // mostly edge pixels mixed with the background, and skin and wood reach 0.5 under daylight.
 constexpr double kLearnedSaturationFloor = 0.55;
 
-}  // namespace
+// An image's pixels as hue, saturation and value (CV_32FC3) into `hsv`; returned: 255 where a pixel
+// is saturated and bright enough to be paint (and the mask, if any, is non-zero), else 0.
+cv::Mat candidate_pixels(const cv::Mat& image, const cv::Mat* mask, const ColourLearnSettings& settings, cv::Mat& hsv) {
+  cv::Mat candidate(image.size(), CV_8UC1, cv::Scalar(0));
+  hsv.create(image.size(), CV_32FC3);
+  for (int y = 0; y < image.rows; ++y) {
+    const auto* p = image.ptr<cv::Vec3b>(y);
+    auto* h = hsv.ptr<cv::Vec3f>(y);
+    auto* c = candidate.ptr<std::uint8_t>(y);
+    const auto* m = mask ? mask->ptr<std::uint8_t>(y) : nullptr;
+    for (int x = 0; x < image.cols; ++x) {
+      const Hsv v = hsv_from_rgb(p[x][2], p[x][1], p[x][0]);
+      h[x] = cv::Vec3f(static_cast<float>(v.hue_deg), static_cast<float>(v.saturation), static_cast<float>(v.value));
+      c[x] = (v.saturation >= settings.min_saturation && v.value >= settings.min_value && (!m || m[x] != 0)) ? 255 : 0;
+    }
+  }
+  return candidate;
+}
 
-std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vector<cv::Mat>& images, const std::vector<cv::Mat>& masks,
-                                                                 const ColourLearnSettings& settings) {
-  if (images.empty()) return std::unexpected("no images to learn colours from");
-  if (!masks.empty() && masks.size() != images.size()) {
-    return std::unexpected("expected one mask per image (" + std::to_string(images.size()) + "), got " + std::to_string(masks.size()));
-  }
-  std::vector<Sample> samples;
-  ColourLearnReport report;
-  for (std::size_t i = 0; i < images.size(); ++i) {
-    const cv::Mat& image = images[i];
-    if (image.empty() || image.type() != CV_8UC3) return std::unexpected("image " + std::to_string(i) + ": expected an 8-bit BGR image");
-    const cv::Mat* mask = masks.empty() ? nullptr : &masks[i];
-    if (mask && (mask->type() != CV_8UC1 || mask->size() != image.size())) {
-      return std::unexpected("mask " + std::to_string(i) + ": expected an 8-bit single-channel image of the image's size");
-    }
-    cv::Mat candidate(image.size(), CV_8UC1, cv::Scalar(0));
-    cv::Mat hsv(image.size(), CV_32FC3);
-    for (int y = 0; y < image.rows; ++y) {
-      const auto* p = image.ptr<cv::Vec3b>(y);
-      auto* h = hsv.ptr<cv::Vec3f>(y);
-      auto* c = candidate.ptr<std::uint8_t>(y);
-      const auto* m = mask ? mask->ptr<std::uint8_t>(y) : nullptr;
-      for (int x = 0; x < image.cols; ++x) {
-        const Hsv v = hsv_from_rgb(p[x][2], p[x][1], p[x][0]);
-        h[x] = cv::Vec3f(static_cast<float>(v.hue_deg), static_cast<float>(v.saturation), static_cast<float>(v.value));
-        c[x] = (v.saturation >= settings.min_saturation && v.value >= settings.min_value && (!m || m[x] != 0)) ? 255 : 0;
-      }
-    }
-    cv::Mat labels, stats, centroids;
-    const int n = cv::connectedComponentsWithStats(candidate, labels, stats, centroids, 8, CV_32S);
-    // Each component's mean saturation (paint is more saturated than skin under any light) and
-    // shape (a marker is round: a wood grain's stripe or a cable is not).
-    struct Stats {
-      double n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, saturation = 0;
-    };
-    std::vector<Stats> stat(static_cast<std::size_t>(n));
-    for (int y = 0; y < image.rows; ++y) {
-      const auto* lab = labels.ptr<int>(y);
-      const auto* h = hsv.ptr<cv::Vec3f>(y);
-      for (int x = 0; x < image.cols; ++x) {
-        Stats& s = stat[static_cast<std::size_t>(lab[x])];
-        s.n += 1.0;
-        s.sx += x;
-        s.sy += y;
-        s.sxx += static_cast<double>(x) * x;
-        s.syy += static_cast<double>(y) * y;
-        s.sxy += static_cast<double>(x) * y;
-        s.saturation += static_cast<double>(h[x][1]);
-      }
-    }
-    std::vector<char> keep(static_cast<std::size_t>(n), 0);
-    for (int l = 1; l < n; ++l) {
-      const Stats& s = stat[static_cast<std::size_t>(l)];
-      if (s.n < settings.min_area_px || s.n > settings.max_area_px || s.saturation / s.n < settings.min_blob_saturation) continue;
-      const double mx = s.sx / s.n, my = s.sy / s.n;
-      const double cxx = s.sxx / s.n - mx * mx + 1.0 / 12.0, cyy = s.syy / s.n - my * my + 1.0 / 12.0, cxy = s.sxy / s.n - mx * my;
-      const double det = cxx * cyy - cxy * cxy;
-      const double half_trace = 0.5 * (cxx + cyy), root = std::sqrt(std::max(0.0, half_trace * half_trace - det));
-      if (!(det > 0.0) || (half_trace + root) > 4.0 * (half_trace - root)) continue;  // elongation over 2
-      if (s.n / (4.0 * std::numbers::pi * std::sqrt(det)) < settings.min_fill) continue;
-      keep[static_cast<std::size_t>(l)] = 1;
-      ++report.blobs;
-    }
-    for (int y = 0; y < image.rows; ++y) {
-      const auto* lab = labels.ptr<int>(y);
-      const auto* h = hsv.ptr<cv::Vec3f>(y);
-      for (int x = 0; x < image.cols; ++x) {
-        if (keep[static_cast<std::size_t>(lab[x])]) samples.push_back({h[x][0], h[x][1], h[x][2]});
-      }
+// A connected component's pixel moments and summed saturation.
+struct BlobStats {
+  double n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, saturation = 0;
+};
+
+std::vector<BlobStats> blob_stats(const cv::Mat& labels, int count, const cv::Mat& hsv) {
+  std::vector<BlobStats> stat(static_cast<std::size_t>(count));
+  for (int y = 0; y < labels.rows; ++y) {
+    const auto* lab = labels.ptr<int>(y);
+    const auto* h = hsv.ptr<cv::Vec3f>(y);
+    for (int x = 0; x < labels.cols; ++x) {
+      BlobStats& s = stat[static_cast<std::size_t>(lab[x])];
+      s.n += 1.0;
+      s.sx += x;
+      s.sy += y;
+      s.sxx += static_cast<double>(x) * x;
+      s.syy += static_cast<double>(y) * y;
+      s.sxy += static_cast<double>(x) * y;
+      s.saturation += static_cast<double>(h[x][1]);
     }
   }
-  if (samples.empty()) {
-    return std::unexpected("no compact saturated blobs in the images: hold the markers up to the camera, nearer or in better light");
+  return stat;
+}
+
+// Whether a component could be a marker: its size, its mean saturation (paint is more saturated
+// than skin under any light) and its shape (a marker is round: a wood grain's stripe or a cable is
+// not).
+bool is_marker_blob(const BlobStats& s, const ColourLearnSettings& settings) {
+  if (s.n < settings.min_area_px || s.n > settings.max_area_px || s.saturation / s.n < settings.min_blob_saturation) return false;
+  const double mx = s.sx / s.n, my = s.sy / s.n;
+  const double cxx = s.sxx / s.n - mx * mx + 1.0 / 12.0, cyy = s.syy / s.n - my * my + 1.0 / 12.0, cxy = s.sxy / s.n - mx * my;
+  const double det = cxx * cyy - cxy * cxy;
+  const double half_trace = 0.5 * (cxx + cyy), root = std::sqrt(std::max(0.0, half_trace * half_trace - det));
+  if (!(det > 0.0) || (half_trace + root) > 4.0 * (half_trace - root)) return false;  // elongation over 2
+  return !(s.n / (4.0 * std::numbers::pi * std::sqrt(det)) < settings.min_fill);
+}
+
+// The pixels of an image's compact saturated blobs appended to `samples`; `blobs` counts the blobs.
+void add_blob_samples(const cv::Mat& image, const cv::Mat* mask, const ColourLearnSettings& settings, std::vector<Sample>& samples,
+                      int& blobs) {
+  cv::Mat hsv;
+  const cv::Mat candidate = candidate_pixels(image, mask, settings, hsv);
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(candidate, labels, stats, centroids, 8, CV_32S);
+  const std::vector<BlobStats> stat = blob_stats(labels, n, hsv);
+  std::vector<char> keep(static_cast<std::size_t>(n), 0);
+  for (int l = 1; l < n; ++l) {
+    if (!is_marker_blob(stat[static_cast<std::size_t>(l)], settings)) continue;
+    keep[static_cast<std::size_t>(l)] = 1;
+    ++blobs;
   }
-  // Hue histogram (1 degree bins), smoothed over +-5 degrees, its peaks at least 20 degrees apart.
+  for (int y = 0; y < image.rows; ++y) {
+    const auto* lab = labels.ptr<int>(y);
+    const auto* h = hsv.ptr<cv::Vec3f>(y);
+    for (int x = 0; x < image.cols; ++x) {
+      if (keep[static_cast<std::size_t>(lab[x])]) samples.push_back({h[x][0], h[x][1], h[x][2]});
+    }
+  }
+}
+
+// The hue histogram's peaks (1 degree bins, smoothed over +-5 degrees), at least 20 degrees apart
+// and holding at least min_share of the samples.
+std::vector<int> hue_peaks(const std::vector<Sample>& samples, const ColourLearnSettings& settings) {
   std::array<double, 360> hist{}, smooth{};
   for (const Sample& s : samples) hist[static_cast<std::size_t>(std::min(359.0, s.hue))] += 1.0;
   for (int i = 0; i < 360; ++i) {
@@ -340,13 +345,20 @@ std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vect
     }
     if (is_max) peaks.push_back(i);
   }
-  // Each peak's samples: within half the distance to its nearest neighbouring peak (at most 30).
-  struct Peak {
-    double hue;
-    double half_gap;
-    std::vector<Sample> samples;
-    int colour = -1;
-  };
+  return peaks;
+}
+
+struct Peak {
+  double hue;
+  double half_gap;
+  std::vector<Sample> samples;
+  int colour = -1;
+};
+
+// Each peak's samples: within half the distance to its nearest neighbouring peak (at most 30).
+// Its hue: their circular mean. Left out: a peak with too few samples, and one whose nearest colour
+// of the vocabulary is not one of those expected (skin, a table, a colour not asked for).
+std::vector<Peak> named_peaks(const std::vector<int>& peaks, const std::vector<Sample>& samples, const ColourLearnSettings& settings) {
   std::vector<Peak> found;
   for (const int p : peaks) {
     double gap = 360.0;
@@ -364,8 +376,6 @@ std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vect
       sy += std::sin(s.hue * std::numbers::pi / 180.0);
     }
     peak.hue = std::fmod(std::atan2(sy, sx) * 180.0 / std::numbers::pi + 360.0, 360.0);
-    // Named by the nearest colour of the vocabulary; a peak whose nearest colour is not one of
-    // those expected (skin, a table, a colour not asked for) is left out.
     double best = 1e9;
     for (int c = 0; c < kMarkerColourCount; ++c) {
       const double d = hue_distance_deg(peak.hue, kMarkerColours[static_cast<std::size_t>(c)].hue_deg);
@@ -377,7 +387,11 @@ std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vect
     }
     found.push_back(std::move(peak));
   }
-  std::sort(found.begin(), found.end(), [](const Peak& a, const Peak& b) { return a.samples.size() > b.samples.size(); });
+  return found;
+}
+
+// Fails when two peaks have one name, an expected colour has no peak, or there is no peak at all.
+std::expected<void, std::string> check_peaks(const std::vector<Peak>& found, const ColourLearnSettings& settings) {
   for (std::size_t i = 0; i < found.size(); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
       if (found[i].colour == found[j].colour) {
@@ -393,38 +407,74 @@ std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vect
     }
   }
   if (found.empty()) return std::unexpected("no hue holds enough of the blobs' pixels to be a marker colour");
+  return {};
+}
+
+// A peak's window: tolerance 3 standard deviations plus 6 degrees (at most halfway to the next of
+// `found`, at most 30), minimum saturation 80 % of its 10th percentile, value half its 5th.
+ColourClass learned_class(const Peak& p, const std::vector<Peak>& found) {
+  double var = 0.0;
+  std::vector<double> sat, val;
+  for (const Sample& s : p.samples) {
+    const double d = hue_distance_deg(s.hue, p.hue);
+    var += d * d;
+    sat.push_back(s.saturation);
+    val.push_back(s.value);
+  }
+  const double sd = std::sqrt(var / static_cast<double>(p.samples.size()));
+  double half_gap = 30.0;
+  for (const Peak& q : found) {
+    if (&q != &p) half_gap = std::min(half_gap, hue_distance_deg(p.hue, q.hue) / 2.0 - 0.5);
+  }
+  ColourClass c;
+  c.colour = p.colour;
+  c.hue_deg = p.hue >= 359.9995 ? 0.0 : p.hue;
+  c.hue_tolerance_deg = std::clamp(3.0 * sd + 6.0, 1.0, std::max(1.0, half_gap));
+  c.min_saturation = std::clamp(0.8 * percentile(sat, 0.1), kLearnedSaturationFloor, 1.0);
+  c.min_value = std::clamp(0.5 * percentile(val, 0.05), 0.0, 1.0);
+  return c;
+}
+
+// The images' median colours, channel by channel.
+std::array<double, 3> median_white_reference(const std::vector<cv::Mat>& images) {
+  std::array<std::vector<double>, 3> medians;
+  for (const cv::Mat& image : images) {
+    const auto c = median_colour(image);
+    for (std::size_t ch = 0; ch < 3; ++ch) medians[ch].push_back(c[ch]);
+  }
+  return {percentile(medians[0], 0.5), percentile(medians[1], 0.5), percentile(medians[2], 0.5)};
+}
+
+}  // namespace
+
+std::expected<ColourLearnReport, std::string> learn_colour_model(const std::vector<cv::Mat>& images, const std::vector<cv::Mat>& masks,
+                                                                 const ColourLearnSettings& settings) {
+  if (images.empty()) return std::unexpected("no images to learn colours from");
+  if (!masks.empty() && masks.size() != images.size()) {
+    return std::unexpected("expected one mask per image (" + std::to_string(images.size()) + "), got " + std::to_string(masks.size()));
+  }
+  std::vector<Sample> samples;
+  ColourLearnReport report;
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const cv::Mat& image = images[i];
+    if (image.empty() || image.type() != CV_8UC3) return std::unexpected("image " + std::to_string(i) + ": expected an 8-bit BGR image");
+    const cv::Mat* mask = masks.empty() ? nullptr : &masks[i];
+    if (mask && (mask->type() != CV_8UC1 || mask->size() != image.size())) {
+      return std::unexpected("mask " + std::to_string(i) + ": expected an 8-bit single-channel image of the image's size");
+    }
+    add_blob_samples(image, mask, settings, samples, report.blobs);
+  }
+  if (samples.empty()) {
+    return std::unexpected("no compact saturated blobs in the images: hold the markers up to the camera, nearer or in better light");
+  }
+  std::vector<Peak> found = named_peaks(hue_peaks(samples, settings), samples, settings);
+  std::sort(found.begin(), found.end(), [](const Peak& a, const Peak& b) { return a.samples.size() > b.samples.size(); });
+  if (const auto ok = check_peaks(found, settings); !ok) return std::unexpected(ok.error());
   for (const Peak& p : found) {
-    double var = 0.0;
-    std::vector<double> sat, val;
-    for (const Sample& s : p.samples) {
-      const double d = hue_distance_deg(s.hue, p.hue);
-      var += d * d;
-      sat.push_back(s.saturation);
-      val.push_back(s.value);
-    }
-    const double sd = std::sqrt(var / static_cast<double>(p.samples.size()));
-    double half_gap = 30.0;
-    for (const Peak& q : found) {
-      if (&q != &p) half_gap = std::min(half_gap, hue_distance_deg(p.hue, q.hue) / 2.0 - 0.5);
-    }
-    ColourClass c;
-    c.colour = p.colour;
-    c.hue_deg = p.hue >= 359.9995 ? 0.0 : p.hue;
-    c.hue_tolerance_deg = std::clamp(3.0 * sd + 6.0, 1.0, std::max(1.0, half_gap));
-    c.min_saturation = std::clamp(0.8 * percentile(sat, 0.1), kLearnedSaturationFloor, 1.0);
-    c.min_value = std::clamp(0.5 * percentile(val, 0.05), 0.0, 1.0);
-    report.model.classes.push_back(c);
+    report.model.classes.push_back(learned_class(p, found));
     report.pixels_per_class.push_back(static_cast<int>(p.samples.size()));
   }
-  {
-    std::array<std::vector<double>, 3> medians;
-    for (const cv::Mat& image : images) {
-      const auto c = median_colour(image);
-      for (std::size_t ch = 0; ch < 3; ++ch) medians[ch].push_back(c[ch]);
-    }
-    report.model.white_reference =
-        std::array<double, 3>{percentile(medians[0], 0.5), percentile(medians[1], 0.5), percentile(medians[2], 0.5)};
-  }
+  report.model.white_reference = median_white_reference(images);
   report.model.description = "learned from " + std::to_string(images.size()) + " image(s), " + std::to_string(report.blobs) + " blobs";
   if (const auto ok = report.model.check(); !ok) return std::unexpected("the learned model is not usable: " + ok.error());
   return report;

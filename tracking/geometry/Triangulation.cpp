@@ -1,10 +1,10 @@
 #include "tracking/geometry/Triangulation.h"
+#include "tracking/core/Solvers.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include <Eigen/LU>
-#include <Eigen/Eigenvalues>
 
 namespace rhot {
 
@@ -24,10 +24,10 @@ std::optional<Eigen::Vector3d> triangulate_linear_normalised(const CameraRig& ri
     // Rows normalised so every camera weighs alike whatever its distance.
     ata += r1.transpose() * r1 / r1.squaredNorm() + r2.transpose() * r2 / r2.squaredNorm();
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> solver(ata);
-  const Eigen::Vector4d h = solver.eigenvectors().col(0);
+  const SymmetricEigen4 solver = symmetric_eigen(ata);
+  const Eigen::Vector4d h = solver.vectors.col(0);
   // Degenerate: the two smallest eigenvalues are (nearly) equal, or the point is at infinity.
-  if (solver.eigenvalues()(1) < 1e-12 * solver.eigenvalues()(3) || std::abs(h.w()) < 1e-12) return std::nullopt;
+  if (solver.values(1) < 1e-12 * solver.values(3) || std::abs(h.w()) < 1e-12) return std::nullopt;
   const Eigen::Vector3d x = h.head<3>() / h.w();
   for (const int c : cameras) {
     if (!((rig.cameras[static_cast<std::size_t>(c)].cam_from_world * x).z() > 0.0)) return std::nullopt;
@@ -110,8 +110,8 @@ std::optional<Eigen::Matrix3d> crlb_covariance(const CameraRig& rig, const Eigen
     fisher += j.transpose() * j;
   }
   fisher /= sigma_px * sigma_px;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(fisher);
-  if (solver.eigenvalues()(0) <= 1e-12 * solver.eigenvalues()(2)) return std::nullopt;
+  const Eigen::Vector3d values = symmetric_eigenvalues(fisher);
+  if (values(0) <= 1e-12 * values(2)) return std::nullopt;
   return fisher.inverse();
 }
 

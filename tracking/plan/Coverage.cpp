@@ -1,4 +1,5 @@
 #include "tracking/plan/Coverage.h"
+#include "tracking/core/Solvers.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +7,6 @@
 #include <random>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 namespace rhot {
 
@@ -44,9 +44,9 @@ std::optional<Eigen::Matrix3d> predicted_covariance(std::span<const CameraProjec
     fisher += j.transpose() * j;
   }
   fisher /= sigma_px * sigma_px;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(fisher);
-  if (!(solver.eigenvalues()(0) > 1e-12 * solver.eigenvalues()(2))) return std::nullopt;
-  return solver.eigenvectors() * solver.eigenvalues().cwiseInverse().asDiagonal() * solver.eigenvectors().transpose();
+  const SymmetricEigen3 solver = symmetric_eigen(fisher);
+  if (!(solver.values(0) > 1e-12 * solver.values(2))) return std::nullopt;
+  return solver.vectors * solver.values.cwiseInverse().asDiagonal() * solver.vectors.transpose();
 }
 
 std::expected<CoverageReport, std::string> evaluate_coverage(const CameraRig& rig, const TrackingVolume& volume,
@@ -104,8 +104,7 @@ std::expected<CoverageReport, std::string> evaluate_coverage(const CameraRig& ri
         }
         const Eigen::Matrix3d cov_mm = *cov * 1e6;
         out.rms_error_mm[i] = std::sqrt(cov_mm.trace());
-        const double worst =
-            kChi3Radius95 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov_mm, Eigen::EigenvaluesOnly).eigenvalues()(2));
+        const double worst = kChi3Radius95 * std::sqrt(symmetric_eigenvalues(cov_mm)(2));
         if (worst > out.predicted_max_mm) {
           out.predicted_max_mm = worst;
           out.worst_point_m = p;

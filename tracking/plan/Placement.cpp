@@ -1,10 +1,10 @@
 #include "tracking/plan/Placement.h"
+#include "tracking/core/Solvers.h"
 
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
 
-#include <Eigen/Eigenvalues>
 #include <limits>
 
 namespace rhot {
@@ -160,10 +160,9 @@ class Search {
     const auto& f = s.info;
     Eigen::Matrix3d m;
     m << f[0], f[1], f[2], f[1], f[3], f[4], f[2], f[4], f[5];
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
-    solver.computeDirect(m, Eigen::EigenvaluesOnly);
-    const double smallest = solver.eigenvalues()(0);
-    if (!(smallest > 1e-12 * solver.eigenvalues()(2))) return std::numeric_limits<double>::infinity();
+    const Eigen::Vector3d values = symmetric_eigenvalues_direct(m);
+    const double smallest = values(0);
+    if (!(smallest > 1e-12 * values(2))) return std::numeric_limits<double>::infinity();
     return 2.7955 * 1000.0 * sigma_px_ / std::sqrt(smallest);
   }
   double score(const PointState& s) const {
@@ -260,10 +259,8 @@ std::vector<Candidate> candidate_poses(const Camera& model, const TrackingVolume
   return out;
 }
 
-}  // namespace
-
-std::expected<RigPlan, std::string> plan_rig(const Camera& model, const TrackingVolume& volume, const PlanSettings& s,
-                                             const PlanProgress& progress) {
+// The settings, camera model and volume checked: the ceiling mount's height, or what is wrong.
+std::expected<double, std::string> checked_ceiling(const Camera& model, const TrackingVolume& volume, const PlanSettings& s) {
   const CameraIntrinsics& k = model.intrinsics;
   if (k.width_px <= 0 || k.height_px <= 0 || !(k.fx > 0.0) || !(k.fy > 0.0) || !std::isfinite(k.fx) || !std::isfinite(k.fy)) {
     return std::unexpected(std::string("camera model: needs a positive image size and focal length"));
@@ -289,11 +286,14 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
   if (s.cameras == 0 && !(s.max_error_mm > 0.0 && std::isfinite(s.max_error_mm))) {
     return std::unexpected(std::string("give a number of cameras or a maximum error"));
   }
+  return ceiling;
+}
 
-  // The coarse grid the search scores on: a lattice from face to face of the volume, its corners
-  // and edges included (the worst errors are there), about grid_points points.
-  if (s.grid_points < 8 || s.grid_points > 1000000) return std::unexpected(std::string("grid points: from 8 to 1,000,000"));
-  const double spacing = std::cbrt(volume.size_m.prod() / s.grid_points);
+// The coarse grid the search scores on: a lattice from face to face of the volume, its corners
+// and edges included (the worst errors are there), about grid_points points.
+std::expected<std::vector<Eigen::Vector3d>, std::string> coarse_grid(const TrackingVolume& volume, int grid_points) {
+  if (grid_points < 8 || grid_points > 1000000) return std::unexpected(std::string("grid points: from 8 to 1,000,000"));
+  const double spacing = std::cbrt(volume.size_m.prod() / grid_points);
   const Eigen::Vector3d cells_d = (volume.size_m / spacing).array().round().max(1.0);
   if ((cells_d.array() + 1.0).prod() > 4e6) {
     return std::unexpected(std::string("volume: too thin for its length and width (over 4 million grid points): plan it in parts"));
@@ -307,9 +307,11 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
       for (int x = 0; x <= cells.x(); ++x) points.push_back(low + step.cwiseProduct(Eigen::Vector3d(x, y, z)));
     }
   }
+  return points;
+}
 
-  std::vector<Candidate> candidates = candidate_poses(model, volume, s, ceiling);
-  const auto considered = static_cast<int>(candidates.size());
+// Each candidate's grid points in its image, and its Fisher information at each.
+void add_views(std::vector<Candidate>& candidates, const std::vector<Eigen::Vector3d>& points) {
   Eigen::Matrix<double, 2, 3> j;
   for (Candidate& c : candidates) {
     const CameraProjection projection(c.camera);
@@ -321,88 +323,87 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
       c.info.push_back({f(0, 0), f(0, 1), f(0, 2), f(1, 1), f(1, 2), f(2, 2)});
     }
   }
-  std::erase_if(candidates, [](const Candidate& c) { return c.points.empty(); });
-  if (candidates.empty()) {
-    return std::unexpected(std::string("volume: no camera position on the chosen mounts sees any of it (camera model or ceiling?)"));
+}
+
+// The chosen cameras as a rig, named "ceiling-N" / "wall-N", with the volume.
+CameraRig rig_of(const Search& search, const TrackingVolume& volume) {
+  CameraRig rig;
+  rig.name = "planned";
+  rig.volume = volume;
+  int ceiling_n = 0, wall_n = 0;
+  for (const std::size_t c : search.chosen()) {
+    Camera cam = search.candidate(c).camera;
+    cam.name = search.candidate(c).ceiling ? fmt::format("ceiling-{}", ceiling_n++) : fmt::format("wall-{}", wall_n++);
+    rig.cameras.push_back(std::move(cam));
   }
-  if (progress) progress(fmt::format("{} camera poses that see the volume, {} grid points", candidates.size(), points.size()));
+  return rig;
+}
 
-  // The error scale: one pixel's noise at the volume's size, seen by one camera.
-  const double ref_mm = 1000.0 * s.sigma_px * volume.size_m.norm() / (0.5 * (k.fx + k.fy));
-  Search search(std::move(candidates), points.size(), s.min_views, s.sigma_px, ref_mm);
-
-  const auto rig_of = [&]() {
-    CameraRig rig;
-    rig.name = "planned";
-    rig.volume = volume;
-    int ceiling_n = 0, wall_n = 0;
-    for (const std::size_t c : search.chosen()) {
-      Camera cam = search.candidate(c).camera;
-      cam.name = search.candidate(c).ceiling ? fmt::format("ceiling-{}", ceiling_n++) : fmt::format("wall-{}", wall_n++);
-      rig.cameras.push_back(std::move(cam));
-    }
-    return rig;
-  };
-  // Each chosen camera in turn swapped for the candidate that adds most to the score without it,
-  // while that is more than it adds; passes until none is swapped.
-  const auto improve_score = [&]() {
-    int swaps = 0;
-    for (int pass = 0; pass < 6; ++pass) {
-      int swapped = 0;
-      const std::vector<std::size_t> snapshot = search.chosen();
-      for (const std::size_t was : snapshot) {
-        const auto slot =
-            static_cast<std::size_t>(std::find(search.chosen().begin(), search.chosen().end(), was) - search.chosen().begin());
-        const double keep = -search.delta(was, -1);  // what it adds to the others
-        search.remove_at(slot);
-        const auto [best, gain] = search.best_addition();
-        if (best < search.size() && best != was && gain > keep + 1e-9) {
-          search.add(best);
-          ++swapped;
-        } else {
-          search.add(was);
-        }
+// Each chosen camera in turn swapped for the candidate that adds most to the score without it,
+// while that is more than it adds; passes until none is swapped. Returns the swaps.
+int improve_score(Search& search, const PlanProgress& progress) {
+  int swaps = 0;
+  for (int pass = 0; pass < 6; ++pass) {
+    int swapped = 0;
+    const std::vector<std::size_t> snapshot = search.chosen();
+    for (const std::size_t was : snapshot) {
+      const auto slot = static_cast<std::size_t>(std::find(search.chosen().begin(), search.chosen().end(), was) - search.chosen().begin());
+      const double keep = -search.delta(was, -1);  // what it adds to the others
+      search.remove_at(slot);
+      const auto [best, gain] = search.best_addition();
+      if (best < search.size() && best != was && gain > keep + 1e-9) {
+        search.add(best);
+        ++swapped;
+      } else {
+        search.add(was);
       }
-      swaps += swapped;
-      if (progress) progress(fmt::format("improving: pass {}, {} swaps", pass + 1, swapped));
-      if (swapped == 0) break;
     }
-    return swaps;
-  };
-  // Then the worst point: each camera in turn moved where the largest predicted error falls most,
-  // keeping as many points seen by two as before, and at least k_floor points seen by K.
-  const auto lower_worst = [&](int k_floor) {
-    int moves = 0;
-    for (int pass = 0; pass < 6; ++pass) {
-      int moved = 0;
-      for (std::size_t slot = 0; slot < search.chosen().size(); ++slot) moved += search.lower_worst(slot, k_floor) ? 1 : 0;
-      moves += moved;
-      if (progress) progress(fmt::format("lowering the worst error: pass {}, {} moves, {:.2f} mm", pass + 1, moved, search.worst().max_mm));
-      if (moved == 0) break;
-    }
-    return moves;
-  };
-  const int one_percent = static_cast<int>(0.01 * static_cast<double>(points.size()));
-
-  RigPlan plan;
-  plan.candidates = considered;
-  if (s.cameras > 0) {
-    if (static_cast<std::size_t>(s.cameras) > search.places()) {
-      return std::unexpected(
-          fmt::format("cameras: {} asked for, but only {} places on the chosen mounts see the volume", s.cameras, search.places()));
-    }
-    for (int n = 0; n < s.cameras; ++n) {
-      search.add(search.best_addition().first);
-      if (progress) progress(fmt::format("placed {} of {} cameras", n + 1, s.cameras));
-    }
-    plan.swaps = improve_score();
-    // Coverage by K may fall by at most 1 % of the volume for a lower worst error.
-    plan.swaps += lower_worst(search.worst().k_seen - one_percent);
-    plan.rig = rig_of();
-    return plan;
+    swaps += swapped;
+    if (progress) progress(fmt::format("improving: pass {}, {} swaps", pass + 1, swapped));
+    if (swapped == 0) break;
   }
-  // As few as reach the target: at each count, the cameras improved as above (keeping 99 % of
-  // the volume seen by K once it is), then the rig evaluated on the fine grid.
+  return swaps;
+}
+
+// Then the worst point: each camera in turn moved where the largest predicted error falls most,
+// keeping as many points seen by two as before, and at least k_floor points seen by K. Returns
+// the moves.
+int lower_worst_error(Search& search, int k_floor, const PlanProgress& progress) {
+  int moves = 0;
+  for (int pass = 0; pass < 6; ++pass) {
+    int moved = 0;
+    for (std::size_t slot = 0; slot < search.chosen().size(); ++slot) moved += search.lower_worst(slot, k_floor) ? 1 : 0;
+    moves += moved;
+    if (progress) progress(fmt::format("lowering the worst error: pass {}, {} moves, {:.2f} mm", pass + 1, moved, search.worst().max_mm));
+    if (moved == 0) break;
+  }
+  return moves;
+}
+
+// PlanSettings::cameras cameras: placed greedily, then improved.
+std::expected<RigPlan, std::string> place_cameras(Search& search, const TrackingVolume& volume, const PlanSettings& s,
+                                                  std::size_t grid_size, const PlanProgress& progress, RigPlan plan) {
+  if (static_cast<std::size_t>(s.cameras) > search.places()) {
+    return std::unexpected(
+        fmt::format("cameras: {} asked for, but only {} places on the chosen mounts see the volume", s.cameras, search.places()));
+  }
+  for (int n = 0; n < s.cameras; ++n) {
+    search.add(search.best_addition().first);
+    if (progress) progress(fmt::format("placed {} of {} cameras", n + 1, s.cameras));
+  }
+  plan.swaps = improve_score(search, progress);
+  // Coverage by K may fall by at most 1 % of the volume for a lower worst error.
+  const int one_percent = static_cast<int>(0.01 * static_cast<double>(grid_size));
+  plan.swaps += lower_worst_error(search, search.worst().k_seen - one_percent, progress);
+  plan.rig = rig_of(search, volume);
+  return plan;
+}
+
+// As few as reach the target: at each count, the cameras improved as above (keeping 99 % of
+// the volume seen by K once it is), then the rig evaluated on the fine grid.
+std::expected<RigPlan, std::string> place_for_error(Search& search, const TrackingVolume& volume, const PlanSettings& s,
+                                                    std::size_t grid_size, const PlanProgress& progress, RigPlan plan) {
+  const int one_percent = static_cast<int>(0.01 * static_cast<double>(grid_size));
   CoverageSettings fine;
   fine.sigma_px = s.sigma_px;
   fine.samples_per_point = 1;
@@ -412,9 +413,10 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
   for (int n = 1; n <= most; ++n) {
     search.add(search.best_addition().first);
     if (n < s.min_views) continue;
-    const int need = static_cast<int>(std::ceil(0.99 * static_cast<double>(points.size())));
-    if (search.worst().k_seen >= need) plan.swaps += lower_worst(std::max(need, search.worst().k_seen - one_percent));
-    const auto report = evaluate_coverage(rig_of(), volume, fine);
+    const int need = static_cast<int>(std::ceil(0.99 * static_cast<double>(grid_size)));
+    if (search.worst().k_seen >= need)
+      plan.swaps += lower_worst_error(search, std::max(need, search.worst().k_seen - one_percent), progress);
+    const auto report = evaluate_coverage(rig_of(search, volume), volume, fine);
     if (!report) return std::unexpected(report.error());
     const double cover =
         static_cast<double>(std::count_if(report->views.begin(), report->views.end(), [&](int v) { return v >= s.min_views; })) /
@@ -423,7 +425,7 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
       progress(fmt::format("{} cameras: {:.1f} % seen by {} or more, worst predicted error {:.2f} mm", n, 100.0 * cover, views_needed,
                            report->predicted_max_mm));
     if (cover >= 0.99 && report->predicted_max_mm <= s.max_error_mm) {
-      plan.rig = rig_of();
+      plan.rig = rig_of(search, volume);
       return plan;
     }
     if (cover >= 0.99) best_error = std::min(best_error, report->predicted_max_mm);
@@ -436,6 +438,37 @@ std::expected<RigPlan, std::string> plan_rig(const Camera& model, const Tracking
   }
   return std::unexpected(fmt::format("max error: {:.2f} mm cannot be reached with up to {} cameras of this model (the best: {:.2f} mm)",
                                      s.max_error_mm, most, best_error));
+}
+
+}  // namespace
+
+std::expected<RigPlan, std::string> plan_rig(const Camera& model, const TrackingVolume& volume, const PlanSettings& s,
+                                             const PlanProgress& progress) {
+  const auto ceiling = checked_ceiling(model, volume, s);
+  if (!ceiling) return std::unexpected(ceiling.error());
+  const auto points = coarse_grid(volume, s.grid_points);
+  if (!points) return std::unexpected(points.error());
+
+  std::vector<Candidate> candidates = candidate_poses(model, volume, s, *ceiling);
+  const auto considered = static_cast<int>(candidates.size());
+  add_views(candidates, *points);
+  std::erase_if(candidates, [](const Candidate& c) { return c.points.empty(); });
+  if (candidates.empty()) {
+    return std::unexpected(std::string("volume: no camera position on the chosen mounts sees any of it (camera model or ceiling?)"));
+  }
+  if (progress) progress(fmt::format("{} camera poses that see the volume, {} grid points", candidates.size(), points->size()));
+
+  // The error scale: one pixel's noise at the volume's size, seen by one camera.
+  const CameraIntrinsics& k = model.intrinsics;
+  const double ref_mm = 1000.0 * s.sigma_px * volume.size_m.norm() / (0.5 * (k.fx + k.fy));
+  Search search(std::move(candidates), points->size(), s.min_views, s.sigma_px, ref_mm);
+
+  RigPlan plan;
+  plan.candidates = considered;
+  if (s.cameras > 0) {
+    return place_cameras(search, volume, s, points->size(), progress, std::move(plan));
+  }
+  return place_for_error(search, volume, s, points->size(), progress, std::move(plan));
 }
 
 }  // namespace rhot

@@ -1,10 +1,9 @@
 #include "tracking/rigid/RigidFit.h"
+#include "tracking/core/Solvers.h"
 
 #include <cmath>
 
 #include <Eigen/Geometry>
-#include <Eigen/Eigenvalues>
-#include <Eigen/SVD>
 
 namespace rhot {
 
@@ -34,20 +33,19 @@ std::optional<RigidFit> fit_rigid(std::span<const Eigen::Vector3d> from, std::sp
     var_a += w(i) * a.squaredNorm();
   }
   // Collinear points leave the rotation about their line free.
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
-  eigen.computeDirect(spread_a, Eigen::EigenvaluesOnly);
-  if (!(eigen.eigenvalues()(1) > 1e-10 * std::max(eigen.eigenvalues()(2), 1e-30))) return std::nullopt;
+  const Eigen::Vector3d spread_values = symmetric_eigenvalues_direct(spread_a);
+  if (!(spread_values(1) > 1e-10 * std::max(spread_values(2), 1e-30))) return std::nullopt;
 
   // Kabsch: the rotation maximising trace(R^T H^T), with the reflection case turned into a rotation.
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Svd3 decomposed = svd(cross);
   Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0) d(2, 2) = -1.0;
-  const Eigen::Matrix3d r = svd.matrixV() * d * svd.matrixU().transpose();
+  if ((decomposed.v * decomposed.u.transpose()).determinant() < 0.0) d(2, 2) = -1.0;
+  const Eigen::Matrix3d r = decomposed.v * d * decomposed.u.transpose();
   RigidFit fit;
   fit.to_from_from.rotation = Eigen::Quaterniond(r).normalized();
   fit.to_from_from.translation = mean_b - r * mean_a;
   // The similarity fit's scale (Umeyama): sum of the signed singular values over the spread of `from`.
-  fit.scale = (svd.singularValues().array() * d.diagonal().array()).sum() / var_a;
+  fit.scale = (decomposed.singular_values.array() * d.diagonal().array()).sum() / var_a;
   double sum = 0.0;
   for (std::size_t i = 0; i < n; ++i) sum += (fit.to_from_from * from[i] - to[i]).squaredNorm();
   fit.rms_m = std::sqrt(sum / static_cast<double>(n));

@@ -159,6 +159,122 @@ class BoardShading {
   Eigen::Vector2d lo_, hi_;
 };
 
+// The board point under every pixel corner of an image (pixel centres are at integer
+// coordinates, so the corners are at half-integers): corner (x, y) at index y * per_row + x.
+struct PixelCorners {
+  int per_row = 0;           // the image's width + 1
+  std::vector<double> u, v;  // board-plane coordinates, metres
+  std::vector<std::uint8_t> ok;
+};
+
+// The loops are written on plain doubles: they run a million times a picture, and so stay quick
+// in the sanitizer builds too.
+PixelCorners pixel_corners(const CameraIntrinsics& camera, const Rigid3d& camera_from_board) {
+  const int w = camera.width_px, h = camera.height_px;
+  const Distortion distortion(camera.distortion);
+  const double max_r2 = distortion.fold_r2();
+  // Board plane -> normalised image coordinates is the homography [r0 r1 t]; its inverse takes a
+  // ray (x, y, 1) to (u, v, 1) / depth, so the third component is positive in front of the camera.
+  const Eigen::Matrix3d r = camera_from_board.rotation.toRotationMatrix();
+  Eigen::Matrix3d homography;
+  homography << r.col(0), r.col(1), camera_from_board.translation;
+  const Eigen::Matrix3d board_from_ray = homography.inverse();
+
+  const double h00 = board_from_ray(0, 0), h01 = board_from_ray(0, 1), h02 = board_from_ray(0, 2);
+  const double h10 = board_from_ray(1, 0), h11 = board_from_ray(1, 1), h12 = board_from_ray(1, 2);
+  const double h20 = board_from_ray(2, 0), h21 = board_from_ray(2, 1), h22 = board_from_ray(2, 2);
+
+  PixelCorners c;
+  const int lw = w + 1;
+  const std::size_t corner_count = static_cast<std::size_t>(lw) * (h + 1);
+  c.per_row = lw;
+  c.u.assign(corner_count, 0.0);
+  c.v.assign(corner_count, 0.0);
+  c.ok.assign(corner_count, 0);
+  double row_start_x = 0.0, row_start_y = 0.0;
+  bool row_start_ok = false;
+  for (int y = 0; y <= h; ++y) {
+    const double dy = (y - 0.5 - camera.cy) / camera.fy;
+    double nx = 0.0, ny = 0.0;
+    bool previous_ok = false;
+    for (int x = 0; x <= w; ++x) {
+      const double dx = (x - 0.5 - camera.cx) / camera.fx;
+      if (!previous_ok) {
+        nx = (x == 0 && row_start_ok) ? row_start_x : dx;
+        ny = (x == 0 && row_start_ok) ? row_start_y : dy;
+      }
+      bool ok = distortion.invert(dx, dy, nx, ny, max_r2);
+      if (!ok && previous_ok) {  // a bad warm start: try again from the distorted point itself
+        nx = dx;
+        ny = dy;
+        ok = distortion.invert(dx, dy, nx, ny, max_r2);
+      }
+      previous_ok = ok;
+      if (x == 0) {
+        row_start_x = nx;
+        row_start_y = ny;
+        row_start_ok = ok;
+      }
+      if (!ok) continue;
+      const double qz = h20 * nx + h21 * ny + h22;
+      if (!(qz > 1e-12)) continue;
+      const double u = (h00 * nx + h01 * ny + h02) / qz, v = (h10 * nx + h11 * ny + h12) / qz;
+      if (!std::isfinite(u) || !std::isfinite(v)) continue;
+      const std::size_t k = static_cast<std::size_t>(y) * lw + x;
+      c.u[k] = u;
+      c.v[k] = v;
+      c.ok[k] = 1;
+    }
+  }
+  return c;
+}
+
+// Sub-sample positions in the pixel: a rank-1 lattice with a golden-ratio generator (the
+// Fibonacci lattice when the count is a Fibonacci number). Unlike a square grid of S x S points,
+// which sees an edge parallel to the pixel rows in steps of 1/S, every point has its own row and
+// column, so an edge at any angle is located to about 1/count of a pixel.
+struct SubSamples {
+  int count = 0;
+  std::vector<double> x, y;  // 0-1 across the pixel
+};
+
+SubSamples sub_samples(int samples) {
+  // The generator must share no factor with the count, or the rows repeat and leave the pattern
+  // off centre.
+  int generator = std::max(1, static_cast<int>(std::lround(samples / std::numbers::phi)));
+  while (std::gcd(generator, samples) != 1) ++generator;
+  SubSamples sub{samples, std::vector<double>(static_cast<std::size_t>(samples)), std::vector<double>(static_cast<std::size_t>(samples))};
+  for (int i = 0; i < samples; ++i) {
+    sub.x[static_cast<std::size_t>(i)] = (i + 0.5) / samples;
+    sub.y[static_cast<std::size_t>(i)] = (static_cast<int>(static_cast<long>(i) * generator % samples) + 0.5) / samples;
+  }
+  return sub;
+}
+
+// The grey of the pixel whose corners are k00 (top left), k10, k01 and k11 (bottom right): the
+// background where the board is not under all four, the board's grey at its centre where no edge
+// passes through it, else the mean over the sub-samples.
+double pixel_grey(const PixelCorners& c, std::size_t k00, std::size_t k10, std::size_t k01, std::size_t k11, const BoardShading& shading,
+                  const SubSamples& sub, double background) {
+  if (!(c.ok[k00] && c.ok[k10] && c.ok[k01] && c.ok[k11])) return background;
+  const double u00 = c.u[k00], u10 = c.u[k10], u01 = c.u[k01], u11 = c.u[k11];
+  const double v00 = c.v[k00], v10 = c.v[k10], v01 = c.v[k01], v11 = c.v[k11];
+  const double uc = 0.25 * (u00 + u10 + u01 + u11), vc = 0.25 * (v00 + v10 + v01 + v11);
+  // Over one pixel the map to the board is affine to a part in 1e3 of a pixel or better, so the
+  // footprint lies within the disc through its farthest corner.
+  const auto d2 = [&](double u, double v) { return (u - uc) * (u - uc) + (v - vc) * (v - vc); };
+  const double reach = std::sqrt(std::max(std::max(d2(u00, v00), d2(u10, v10)), std::max(d2(u01, v01), d2(u11, v11))));
+  if (shading.edge_distance(uc, vc) > 1.01 * reach) return shading.grey(uc, vc);
+  double sum = 0.0;
+  for (int i = 0; i < sub.count; ++i) {
+    const double fx = sub.x[static_cast<std::size_t>(i)], fy = sub.y[static_cast<std::size_t>(i)];
+    const double left_u = u00 + fy * (u01 - u00), left_v = v00 + fy * (v01 - v00);
+    const double right_u = u10 + fy * (u11 - u10), right_v = v10 + fy * (v11 - v10);
+    sum += shading.grey(left_u + fx * (right_u - left_u), left_v + fx * (right_v - left_v));
+  }
+  return sum / sub.count;
+}
+
 }  // namespace
 
 std::expected<void, std::string> BoardLayout::check() const {
@@ -225,106 +341,18 @@ std::pair<Eigen::Vector2d, Eigen::Vector2d> board_extent_m(const BoardLayout& la
 cv::Mat render_board(const CameraIntrinsics& camera, const Rigid3d& camera_from_board, const BoardLayout& layout,
                      const BoardRenderSettings& settings) {
   const int w = camera.width_px, h = camera.height_px;
-  const Distortion distortion(camera.distortion);
-  const double max_r2 = distortion.fold_r2();
-  // Board plane -> normalised image coordinates is the homography [r0 r1 t]; its inverse takes a
-  // ray (x, y, 1) to (u, v, 1) / depth, so the third component is positive in front of the camera.
-  const Eigen::Matrix3d r = camera_from_board.rotation.toRotationMatrix();
-  Eigen::Matrix3d homography;
-  homography << r.col(0), r.col(1), camera_from_board.translation;
-  const Eigen::Matrix3d board_from_ray = homography.inverse();
-
-  const double h00 = board_from_ray(0, 0), h01 = board_from_ray(0, 1), h02 = board_from_ray(0, 2);
-  const double h10 = board_from_ray(1, 0), h11 = board_from_ray(1, 1), h12 = board_from_ray(1, 2);
-  const double h20 = board_from_ray(2, 0), h21 = board_from_ray(2, 1), h22 = board_from_ray(2, 2);
-
-  // The board point under every pixel corner (pixel centres are at integer coordinates, so the
-  // corners are at half-integers). The loops below are written on plain doubles: they run a
-  // million times a picture, and so stay quick in the sanitizer builds too.
-  const int lw = w + 1;
-  const std::size_t corner_count = static_cast<std::size_t>(lw) * (h + 1);
-  std::vector<double> corner_u(corner_count, 0.0), corner_v(corner_count, 0.0);
-  std::vector<std::uint8_t> corner_ok(corner_count, 0);
-  double row_start_x = 0.0, row_start_y = 0.0;
-  bool row_start_ok = false;
-  for (int y = 0; y <= h; ++y) {
-    const double dy = (y - 0.5 - camera.cy) / camera.fy;
-    double nx = 0.0, ny = 0.0;
-    bool previous_ok = false;
-    for (int x = 0; x <= w; ++x) {
-      const double dx = (x - 0.5 - camera.cx) / camera.fx;
-      if (!previous_ok) {
-        nx = (x == 0 && row_start_ok) ? row_start_x : dx;
-        ny = (x == 0 && row_start_ok) ? row_start_y : dy;
-      }
-      bool ok = distortion.invert(dx, dy, nx, ny, max_r2);
-      if (!ok && previous_ok) {  // a bad warm start: try again from the distorted point itself
-        nx = dx;
-        ny = dy;
-        ok = distortion.invert(dx, dy, nx, ny, max_r2);
-      }
-      previous_ok = ok;
-      if (x == 0) {
-        row_start_x = nx;
-        row_start_y = ny;
-        row_start_ok = ok;
-      }
-      if (!ok) continue;
-      const double qz = h20 * nx + h21 * ny + h22;
-      if (!(qz > 1e-12)) continue;
-      const double u = (h00 * nx + h01 * ny + h02) / qz, v = (h10 * nx + h11 * ny + h12) / qz;
-      if (!std::isfinite(u) || !std::isfinite(v)) continue;
-      const std::size_t k = static_cast<std::size_t>(y) * lw + x;
-      corner_u[k] = u;
-      corner_v[k] = v;
-      corner_ok[k] = 1;
-    }
-  }
-
+  const PixelCorners corners = pixel_corners(camera, camera_from_board);
+  const int lw = corners.per_row;
   const BoardShading shading(layout, settings);
-  // Sub-sample positions in the pixel: a rank-1 lattice with a golden-ratio generator (the
-  // Fibonacci lattice when the count is a Fibonacci number). Unlike a square grid of S x S points,
-  // which sees an edge parallel to the pixel rows in steps of 1/S, every point has its own row and
-  // column, so an edge at any angle is located to about 1/count of a pixel.
-  const int samples = layout.pattern == BoardPattern::texture ? std::min(settings.samples_per_pixel, 16) : settings.samples_per_pixel;
-  // The generator must share no factor with the count, or the rows repeat and leave the pattern
-  // off centre.
-  int generator = std::max(1, static_cast<int>(std::lround(samples / std::numbers::phi)));
-  while (std::gcd(generator, samples) != 1) ++generator;
-  std::vector<double> sub_x(static_cast<std::size_t>(samples)), sub_y(static_cast<std::size_t>(samples));
-  for (int i = 0; i < samples; ++i) {
-    sub_x[static_cast<std::size_t>(i)] = (i + 0.5) / samples;
-    sub_y[static_cast<std::size_t>(i)] = (static_cast<int>(static_cast<long>(i) * generator % samples) + 0.5) / samples;
-  }
+  const SubSamples sub =
+      sub_samples(layout.pattern == BoardPattern::texture ? std::min(settings.samples_per_pixel, 16) : settings.samples_per_pixel);
   cv::Mat light(h, w, CV_64FC1);
   for (int y = 0; y < h; ++y) {
     auto* row = light.ptr<double>(y);
     const std::size_t top = static_cast<std::size_t>(y) * lw, bottom = top + lw;
     for (int x = 0; x < w; ++x) {
       const std::size_t k00 = top + x, k10 = k00 + 1, k01 = bottom + x, k11 = k01 + 1;
-      if (!(corner_ok[k00] && corner_ok[k10] && corner_ok[k01] && corner_ok[k11])) {
-        row[x] = settings.background;
-        continue;
-      }
-      const double u00 = corner_u[k00], u10 = corner_u[k10], u01 = corner_u[k01], u11 = corner_u[k11];
-      const double v00 = corner_v[k00], v10 = corner_v[k10], v01 = corner_v[k01], v11 = corner_v[k11];
-      const double uc = 0.25 * (u00 + u10 + u01 + u11), vc = 0.25 * (v00 + v10 + v01 + v11);
-      // Over one pixel the map to the board is affine to a part in 1e3 of a pixel or better, so the
-      // footprint lies within the disc through its farthest corner.
-      const auto d2 = [&](double u, double v) { return (u - uc) * (u - uc) + (v - vc) * (v - vc); };
-      const double reach = std::sqrt(std::max(std::max(d2(u00, v00), d2(u10, v10)), std::max(d2(u01, v01), d2(u11, v11))));
-      if (shading.edge_distance(uc, vc) > 1.01 * reach) {
-        row[x] = shading.grey(uc, vc);
-        continue;
-      }
-      double sum = 0.0;
-      for (int i = 0; i < samples; ++i) {
-        const double fx = sub_x[static_cast<std::size_t>(i)], fy = sub_y[static_cast<std::size_t>(i)];
-        const double left_u = u00 + fy * (u01 - u00), left_v = v00 + fy * (v01 - v00);
-        const double right_u = u10 + fy * (u11 - u10), right_v = v10 + fy * (v11 - v10);
-        sum += shading.grey(left_u + fx * (right_u - left_u), left_v + fx * (right_v - left_v));
-      }
-      row[x] = sum / samples;
+      row[x] = pixel_grey(corners, k00, k10, k01, k11, shading, sub, settings.background);
     }
   }
   if (settings.blur_sigma_px > 0.0)

@@ -89,12 +89,14 @@ std::expected<void, std::string> ColourImageSettings::check() const {
   return {};
 }
 
-cv::Mat draw_colour_markers(int width_px, int height_px, std::span<const ColourMarkerDrawing> markers, const ColourImageSettings& s) {
-  const auto display = [](int colour) -> const std::array<double, 3>& {
-    return kMarkerColours[static_cast<std::size_t>(std::clamp(colour, 0, kMarkerColourCount - 1))].display_srgb;
-  };
-  cv::RNG rng(s.seed);
-  // Linear-ish working image, RGB 0-1.
+namespace {
+
+const std::array<double, 3>& display_colour(int colour) {
+  return kMarkerColours[static_cast<std::size_t>(std::clamp(colour, 0, kMarkerColourCount - 1))].display_srgb;
+}
+
+// A grey-beige table, a little lighter towards the bottom right: linear-ish RGB 0-1.
+cv::Mat table_image(int width_px, int height_px) {
   cv::Mat img(height_px, width_px, CV_32FC3);
   for (int y = 0; y < height_px; ++y) {
     auto* row = img.ptr<cv::Vec3f>(y);
@@ -103,93 +105,109 @@ cv::Mat draw_colour_markers(int width_px, int height_px, std::span<const ColourM
       row[x] = cv::Vec3f(0.62f, 0.60f, 0.55f) * shade;  // a grey-beige table
     }
   }
+  return img;
+}
+
+// Wood grain: orange-brown stripes over the left third. Skin: two hands' worth of patches (hue
+// 15-25 degrees, saturation 0.3-0.5).
+void draw_wood_and_skin(cv::Mat& img, cv::RNG& rng) {
+  const int width_px = img.cols, height_px = img.rows;
   const auto paint_ellipse = [&](cv::Point2f c, cv::Size2f axes, float angle, cv::Vec3f colour) {
     cv::ellipse(img, cv::RotatedRect(c, axes, angle), cv::Scalar(colour[0], colour[1], colour[2]), cv::FILLED, cv::LINE_AA);
   };
-  if (s.clutter) {
-    // Wood grain: orange-brown stripes over the left third.
-    for (int i = 0; i < 12; ++i) {
-      const int y = static_cast<int>(rng.uniform(0, height_px));
-      cv::line(img, {0, y}, {width_px / 3, y + static_cast<int>(rng.uniform(-20, 20))},
-               cv::Scalar(0.62, 0.40 + rng.uniform(0.0, 0.08), 0.20), static_cast<int>(rng.uniform(2, 9)), cv::LINE_AA);
-    }
-    // Skin: two hands' worth of patches (hue 15-25 degrees, saturation 0.3-0.5).
-    for (int i = 0; i < 8; ++i) {
-      const float sat = static_cast<float>(rng.uniform(0.3, 0.5)), v = static_cast<float>(rng.uniform(0.55, 0.9));
-      const float hue = static_cast<float>(rng.uniform(12.0, 25.0));
-      const float r = v, b = v * (1.0f - sat), g = b + (r - b) * hue / 60.0f;
-      paint_ellipse({static_cast<float>(rng.uniform(0, width_px)), static_cast<float>(rng.uniform(0, height_px))},
-                    {static_cast<float>(rng.uniform(30, 90)), static_cast<float>(rng.uniform(60, 160))},
-                    static_cast<float>(rng.uniform(0, 180)), {r, g, b});
-    }
-    // Cables: thin lines of marker colours, elongated.
-    for (int i = 0; i < 3; ++i) {
-      const auto& c = display((i * 3 + 1) % 8);
-      for (int attempt = 0; attempt < 50; ++attempt) {
-        const Eigen::Vector2d a(rng.uniform(0, width_px), rng.uniform(0, height_px)),
-            b(rng.uniform(0, width_px), rng.uniform(0, height_px));
-        if (std::any_of(markers.begin(), markers.end(), [&](const ColourMarkerDrawing& m) {
-              const double t = std::clamp((m.pixel - a).dot(b - a) / std::max(1e-9, (b - a).squaredNorm()), 0.0, 1.0);
-              return (a + t * (b - a) - m.pixel).norm() < m.radius_px + 6.0;
-            })) {
-          continue;
-        }
-        cv::line(img, cv::Point(static_cast<int>(a.x()), static_cast<int>(a.y())),
-                 cv::Point(static_cast<int>(b.x()), static_cast<int>(b.y())), cv::Scalar(c[0], c[1], c[2]), 3, cv::LINE_AA);
-        break;
+  for (int i = 0; i < 12; ++i) {
+    const int y = static_cast<int>(rng.uniform(0, height_px));
+    cv::line(img, {0, y}, {width_px / 3, y + static_cast<int>(rng.uniform(-20, 20))}, cv::Scalar(0.62, 0.40 + rng.uniform(0.0, 0.08), 0.20),
+             static_cast<int>(rng.uniform(2, 9)), cv::LINE_AA);
+  }
+  for (int i = 0; i < 8; ++i) {
+    const float sat = static_cast<float>(rng.uniform(0.3, 0.5)), v = static_cast<float>(rng.uniform(0.55, 0.9));
+    const float hue = static_cast<float>(rng.uniform(12.0, 25.0));
+    const float r = v, b = v * (1.0f - sat), g = b + (r - b) * hue / 60.0f;
+    paint_ellipse({static_cast<float>(rng.uniform(0, width_px)), static_cast<float>(rng.uniform(0, height_px))},
+                  {static_cast<float>(rng.uniform(30, 90)), static_cast<float>(rng.uniform(60, 160))},
+                  static_cast<float>(rng.uniform(0, 180)), {r, g, b});
+  }
+}
+
+// Cables: thin lines of marker colours, elongated, clear of the markers.
+void draw_cables(cv::Mat& img, std::span<const ColourMarkerDrawing> markers, cv::RNG& rng) {
+  const int width_px = img.cols, height_px = img.rows;
+  for (int i = 0; i < 3; ++i) {
+    const auto& c = display_colour((i * 3 + 1) % 8);
+    for (int attempt = 0; attempt < 50; ++attempt) {
+      const Eigen::Vector2d a(rng.uniform(0, width_px), rng.uniform(0, height_px)), b(rng.uniform(0, width_px), rng.uniform(0, height_px));
+      if (std::any_of(markers.begin(), markers.end(), [&](const ColourMarkerDrawing& m) {
+            const double t = std::clamp((m.pixel - a).dot(b - a) / std::max(1e-9, (b - a).squaredNorm()), 0.0, 1.0);
+            return (a + t * (b - a) - m.pixel).norm() < m.radius_px + 6.0;
+          })) {
+        continue;
       }
-    }
-    // Boxes and a mug painted in the markers' colours, far larger than a marker.
-    for (int i = 0; i < 4; ++i) {
-      const auto& c = display(i * 2 % 8);
-      // Away from the markers: a marker on a box of its own colour is lost in it, as it would be.
-      for (int attempt = 0; attempt < 50; ++attempt) {
-        const cv::Rect box(static_cast<int>(rng.uniform(0, std::max(1, width_px - 80))),
-                           static_cast<int>(rng.uniform(0, std::max(1, height_px - 80))), static_cast<int>(rng.uniform(80, 140)),
-                           static_cast<int>(rng.uniform(80, 140)));
-        if (std::any_of(markers.begin(), markers.end(), [&](const ColourMarkerDrawing& m) {
-              const double dx = std::max({box.x - m.pixel.x(), 0.0, m.pixel.x() - (box.x + box.width)});
-              const double dy = std::max({box.y - m.pixel.y(), 0.0, m.pixel.y() - (box.y + box.height)});
-              return std::hypot(dx, dy) < m.radius_px + 6.0;
-            })) {
-          continue;
-        }
-        cv::rectangle(img, box, cv::Scalar(c[0] * 0.8, c[1] * 0.8, c[2] * 0.8), cv::FILLED);
-        break;
-      }
+      cv::line(img, cv::Point(static_cast<int>(a.x()), static_cast<int>(a.y())),
+               cv::Point(static_cast<int>(b.x()), static_cast<int>(b.y())), cv::Scalar(c[0], c[1], c[2]), 3, cv::LINE_AA);
+      break;
     }
   }
-  // Markers: shaded discs, edge pixels mixed by coverage.
-  for (const ColourMarkerDrawing& m : markers) {
-    if (!m.pixel.allFinite() || !(m.radius_px > 0.0)) continue;
-    const auto& c = display(m.colour);
-    const int x0 = std::max(0, static_cast<int>(std::floor(m.pixel.x() - m.radius_px - 1)));
-    const int x1 = std::min(width_px - 1, static_cast<int>(std::ceil(m.pixel.x() + m.radius_px + 1)));
-    const int y0 = std::max(0, static_cast<int>(std::floor(m.pixel.y() - m.radius_px - 1)));
-    const int y1 = std::min(height_px - 1, static_cast<int>(std::ceil(m.pixel.y() + m.radius_px + 1)));
-    for (int y = y0; y <= y1; ++y) {
-      auto* row = img.ptr<cv::Vec3f>(y);
-      for (int x = x0; x <= x1; ++x) {
-        int inside = 0;
-        double shade = 0.0;
-        for (int sy = 0; sy < 4; ++sy) {
-          for (int sx = 0; sx < 4; ++sx) {
-            const double dx = (x - 0.375 + 0.25 * sx - m.pixel.x()) / m.radius_px, dy = (y - 0.375 + 0.25 * sy - m.pixel.y()) / m.radius_px;
-            const double rr = dx * dx + dy * dy;
-            if (rr > 1.0) continue;
-            ++inside;
-            // A sphere lit from the upper left: Lambert on its normal, plus ambient.
-            const double nz = std::sqrt(1.0 - rr);
-            shade += 0.45 + 0.55 * std::max(0.0, -0.4 * dx - 0.5 * dy + 0.77 * nz);
-          }
-        }
-        if (inside == 0) continue;
-        const float a = static_cast<float>(inside) / 16.0f;
-        const float k = static_cast<float>(shade / inside);
-        row[x] = row[x] * (1.0f - a) + cv::Vec3f(static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2])) * (k * a);
+}
+
+// Boxes and a mug painted in the markers' colours, far larger than a marker.
+void draw_boxes(cv::Mat& img, std::span<const ColourMarkerDrawing> markers, cv::RNG& rng) {
+  const int width_px = img.cols, height_px = img.rows;
+  for (int i = 0; i < 4; ++i) {
+    const auto& c = display_colour(i * 2 % 8);
+    // Away from the markers: a marker on a box of its own colour is lost in it, as it would be.
+    for (int attempt = 0; attempt < 50; ++attempt) {
+      const cv::Rect box(static_cast<int>(rng.uniform(0, std::max(1, width_px - 80))),
+                         static_cast<int>(rng.uniform(0, std::max(1, height_px - 80))), static_cast<int>(rng.uniform(80, 140)),
+                         static_cast<int>(rng.uniform(80, 140)));
+      if (std::any_of(markers.begin(), markers.end(), [&](const ColourMarkerDrawing& m) {
+            const double dx = std::max({box.x - m.pixel.x(), 0.0, m.pixel.x() - (box.x + box.width)});
+            const double dy = std::max({box.y - m.pixel.y(), 0.0, m.pixel.y() - (box.y + box.height)});
+            return std::hypot(dx, dy) < m.radius_px + 6.0;
+          })) {
+        continue;
       }
+      cv::rectangle(img, box, cv::Scalar(c[0] * 0.8, c[1] * 0.8, c[2] * 0.8), cv::FILLED);
+      break;
     }
   }
+}
+
+// A marker: a shaded disc, its edge pixels mixed by coverage.
+void draw_marker(cv::Mat& img, const ColourMarkerDrawing& m) {
+  const auto& c = display_colour(m.colour);
+  const int x0 = std::max(0, static_cast<int>(std::floor(m.pixel.x() - m.radius_px - 1)));
+  const int x1 = std::min(img.cols - 1, static_cast<int>(std::ceil(m.pixel.x() + m.radius_px + 1)));
+  const int y0 = std::max(0, static_cast<int>(std::floor(m.pixel.y() - m.radius_px - 1)));
+  const int y1 = std::min(img.rows - 1, static_cast<int>(std::ceil(m.pixel.y() + m.radius_px + 1)));
+  for (int y = y0; y <= y1; ++y) {
+    auto* row = img.ptr<cv::Vec3f>(y);
+    for (int x = x0; x <= x1; ++x) {
+      int inside = 0;
+      double shade = 0.0;
+      for (int sy = 0; sy < 4; ++sy) {
+        for (int sx = 0; sx < 4; ++sx) {
+          const double dx = (x - 0.375 + 0.25 * sx - m.pixel.x()) / m.radius_px, dy = (y - 0.375 + 0.25 * sy - m.pixel.y()) / m.radius_px;
+          const double rr = dx * dx + dy * dy;
+          if (rr > 1.0) continue;
+          ++inside;
+          // A sphere lit from the upper left: Lambert on its normal, plus ambient.
+          const double nz = std::sqrt(1.0 - rr);
+          shade += 0.45 + 0.55 * std::max(0.0, -0.4 * dx - 0.5 * dy + 0.77 * nz);
+        }
+      }
+      if (inside == 0) continue;
+      const float a = static_cast<float>(inside) / 16.0f;
+      const float k = static_cast<float>(shade / inside);
+      row[x] = row[x] * (1.0f - a) + cv::Vec3f(static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2])) * (k * a);
+    }
+  }
+}
+
+// The working image as the camera gives it: exposed, white-balanced for s.kelvin, with noise,
+// 8-bit BGR.
+cv::Mat camera_image(const cv::Mat& img, const ColourImageSettings& s, cv::RNG& rng) {
+  const int width_px = img.cols, height_px = img.rows;
   const auto gain = white_balance_gains(s.kelvin);
   cv::Mat out(height_px, width_px, CV_8UC3);
   cv::Mat noise(height_px, width_px, CV_32FC3);
@@ -207,6 +225,24 @@ cv::Mat draw_colour_markers(int width_px, int height_px, std::span<const ColourM
     }
   }
   return out;
+}
+
+}  // namespace
+
+cv::Mat draw_colour_markers(int width_px, int height_px, std::span<const ColourMarkerDrawing> markers, const ColourImageSettings& s) {
+  cv::RNG rng(s.seed);
+  // Linear-ish working image, RGB 0-1.
+  cv::Mat img = table_image(width_px, height_px);
+  if (s.clutter) {
+    draw_wood_and_skin(img, rng);
+    draw_cables(img, markers, rng);
+    draw_boxes(img, markers, rng);
+  }
+  for (const ColourMarkerDrawing& m : markers) {
+    if (!m.pixel.allFinite() || !(m.radius_px > 0.0)) continue;
+    draw_marker(img, m);
+  }
+  return camera_image(img, s, rng);
 }
 
 }  // namespace rhot

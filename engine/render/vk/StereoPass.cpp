@@ -47,6 +47,106 @@ float srgb_from_linear(float linear) {
   return c < 0.0031308f ? c * 12.92f : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
+// The Frame uniform block of a frame. Precondition: its views and light are finite.
+FrameUniforms frame_uniforms(const FrameInput& frame) {
+  FrameUniforms u{};
+  for (int eye = 0; eye < 2; ++eye) u.clip_from_world[eye] = frame.views.clip_from_world(eye);
+  u.light_dir_world = glm::vec4(glm::normalize(frame.light_dir_world), 0.0f);
+  u.light_color = glm::vec4(frame.light_color, frame.ambient);
+  RHOT_PRECONDITION(finite(u.clip_from_world[0]) && finite(u.clip_from_world[1]) && finite(u.light_dir_world) && finite(u.light_color),
+                    "StereoPass::render: the views and light must be finite");
+  return u;
+}
+
+// One instanced draw of a mesh: instances [first_instance, first_instance + instance_count) of
+// the instance buffer.
+struct Draw {
+  const GpuMesh* mesh;
+  std::uint32_t first_instance;
+  std::uint32_t instance_count;
+};
+
+// The batches' finite instances into `out` (room for all of them), batch after batch, and the
+// draws that show them; `skipped` counts the instances left out. Precondition: every batch's mesh
+// is one of `meshes`.
+std::vector<Draw> write_instances(const std::vector<MeshBatch>& batches, std::span<const GpuMesh> meshes, GpuInstance* out,
+                                  std::size_t& skipped) {
+  std::vector<Draw> draws;
+  std::uint32_t written = 0;
+  for (const MeshBatch& b : batches) {
+    RHOT_PRECONDITION(b.mesh.index < meshes.size(), "StereoPass::render: unknown mesh handle");
+    const std::uint32_t first = written;
+    for (const MeshInstance& inst : b.instances) {
+      if (!finite(inst.world_from_local) || !finite(inst.color)) {
+        ++skipped;
+        continue;
+      }
+      const glm::mat3 normal = glm::transpose(glm::inverse(glm::mat3(inst.world_from_local)));
+      GpuInstance& g = out[written++];
+      g.world_from_local = inst.world_from_local;
+      for (int c = 0; c < 3; ++c) g.normal_matrix[c] = glm::vec4(normal[c], 0.0f);
+      g.color = inst.color;
+    }
+    if (written > first) draws.push_back({&meshes[b.mesh.index], first, written - first});
+  }
+  return draws;
+}
+
+// The line list's finite lines into `out` (room for all of them): the vertices written;
+// `skipped` counts the lines left out.
+std::uint32_t write_lines(const std::vector<LineVertex>& lines, LineVertex* out, std::size_t& skipped) {
+  std::uint32_t line_vertices = 0;
+  for (std::size_t i = 0; i + 1 < lines.size(); i += 2) {
+    const LineVertex& a = lines[i];
+    const LineVertex& b = lines[i + 1];
+    if (!finite(glm::vec4(a.position, 1.0f)) || !finite(glm::vec4(b.position, 1.0f)) || !finite(a.color) || !finite(b.color)) {
+      ++skipped;
+      continue;
+    }
+    out[line_vertices++] = a;
+    out[line_vertices++] = b;
+  }
+  return line_vertices;
+}
+
+void draw_meshes(VkCommandBuffer cmd, VkPipeline pipeline, VkBuffer instances, const std::vector<Draw>& draws) {
+  if (draws.empty()) return;
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+  for (const Draw& draw : draws) {
+    const std::array<VkBuffer, 2> buffers{draw.mesh->vertices.buffer, instances};
+    const std::array<VkDeviceSize, 2> offsets{0, VkDeviceSize{draw.first_instance} * sizeof(GpuInstance)};
+    vkCmdBindVertexBuffers(cmd, 0, 2, buffers.data(), offsets.data());
+    vkCmdBindIndexBuffer(cmd, draw.mesh->indices.buffer, 0, VK_INDEX_TYPE_UINT32);
+    vkCmdDrawIndexed(cmd, draw.mesh->index_count, draw.instance_count, 0, 0, 0);
+  }
+}
+
+void draw_lines(VkCommandBuffer cmd, VkPipeline pipeline, const VkBuffer& lines, std::uint32_t line_vertices) {
+  if (line_vertices == 0) return;
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+  const VkDeviceSize offset = 0;
+  vkCmdBindVertexBuffers(cmd, 0, 1, &lines, &offset);
+  vkCmdDraw(cmd, line_vertices, 1, 0, 0);
+}
+
+// A submission of `cmd` (kept alive by the caller, as is `sync`) waiting on and signalling what
+// `sync` names.
+VkSubmitInfo submit_info(const VkCommandBuffer& cmd, const SubmitSync& sync) {
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &cmd;
+  if (sync.wait != VK_NULL_HANDLE) {
+    submit.waitSemaphoreCount = 1;
+    submit.pWaitSemaphores = &sync.wait;
+    submit.pWaitDstStageMask = &sync.wait_stage;
+  }
+  if (sync.signal != VK_NULL_HANDLE) {
+    submit.signalSemaphoreCount = 1;
+    submit.pSignalSemaphores = &sync.signal;
+  }
+  return submit;
+}
+
 }  // namespace
 
 StereoPass::StereoPass(const Context& context, int eye_width_px, int eye_height_px, bool multiview, bool vertex_lit, glm::vec4 clear_color)
@@ -347,55 +447,14 @@ std::size_t StereoPass::render(const FrameInput& frame, std::span<const GpuMesh>
   std::size_t skipped = 0;
   // ---- frame data into host-visible buffers, once the previous frame no longer reads them.
   finish();
-  FrameUniforms u{};
-  for (int eye = 0; eye < 2; ++eye) u.clip_from_world[eye] = frame.views.clip_from_world(eye);
-  u.light_dir_world = glm::vec4(glm::normalize(frame.light_dir_world), 0.0f);
-  u.light_color = glm::vec4(frame.light_color, frame.ambient);
-  RHOT_PRECONDITION(finite(u.clip_from_world[0]) && finite(u.clip_from_world[1]) && finite(u.light_dir_world) && finite(u.light_color),
-                    "StereoPass::render: the views and light must be finite");
+  const FrameUniforms u = frame_uniforms(frame);
   std::memcpy(frame_uniforms_.mapped, &u, sizeof(u));
-
-  struct Draw {
-    const GpuMesh* mesh;
-    std::uint32_t first_instance;
-    std::uint32_t instance_count;
-  };
-  std::vector<Draw> draws;
   std::size_t total = 0;
   for (const MeshBatch& b : frame.batches) total += b.instances.size();
   ensure_capacity(instances_, std::max<VkDeviceSize>(total, 1) * sizeof(GpuInstance), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
-  auto* out = static_cast<GpuInstance*>(instances_.mapped);
-  std::uint32_t written = 0;
-  for (const MeshBatch& b : frame.batches) {
-    RHOT_PRECONDITION(b.mesh.index < meshes.size(), "StereoPass::render: unknown mesh handle");
-    const std::uint32_t first = written;
-    for (const MeshInstance& inst : b.instances) {
-      if (!finite(inst.world_from_local) || !finite(inst.color)) {
-        ++skipped;
-        continue;
-      }
-      const glm::mat3 normal = glm::transpose(glm::inverse(glm::mat3(inst.world_from_local)));
-      GpuInstance& g = out[written++];
-      g.world_from_local = inst.world_from_local;
-      for (int c = 0; c < 3; ++c) g.normal_matrix[c] = glm::vec4(normal[c], 0.0f);
-      g.color = inst.color;
-    }
-    if (written > first) draws.push_back({&meshes[b.mesh.index], first, written - first});
-  }
-
-  std::uint32_t line_vertices = 0;
+  const std::vector<Draw> draws = write_instances(frame.batches, meshes, static_cast<GpuInstance*>(instances_.mapped), skipped);
   ensure_capacity(lines_, std::max<VkDeviceSize>(frame.lines.size(), 1) * sizeof(LineVertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
-  auto* lv = static_cast<LineVertex*>(lines_.mapped);
-  for (std::size_t i = 0; i + 1 < frame.lines.size(); i += 2) {
-    const LineVertex& a = frame.lines[i];
-    const LineVertex& b = frame.lines[i + 1];
-    if (!finite(glm::vec4(a.position, 1.0f)) || !finite(glm::vec4(b.position, 1.0f)) || !finite(a.color) || !finite(b.color)) {
-      ++skipped;
-      continue;
-    }
-    lv[line_vertices++] = a;
-    lv[line_vertices++] = b;
-  }
+  const std::uint32_t line_vertices = write_lines(frame.lines, static_cast<LineVertex*>(lines_.mapped), skipped);
 
   // ---- record
   RHOT_VK_CHECK(vkResetCommandBuffer(cmd_, 0));
@@ -425,22 +484,8 @@ std::size_t StereoPass::render(const FrameInput& frame, std::span<const GpuMesh>
     const std::uint32_t eye = static_cast<std::uint32_t>(pass);
     vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_layout_, 0, 1, &descriptor_set_, 0, nullptr);
     vkCmdPushConstants(cmd_, pipeline_layout_, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(eye), &eye);
-    if (!draws.empty()) {
-      vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_GRAPHICS, mesh_pipeline_);
-      for (const Draw& draw : draws) {
-        const std::array<VkBuffer, 2> buffers{draw.mesh->vertices.buffer, instances_.buffer};
-        const std::array<VkDeviceSize, 2> offsets{0, VkDeviceSize{draw.first_instance} * sizeof(GpuInstance)};
-        vkCmdBindVertexBuffers(cmd_, 0, 2, buffers.data(), offsets.data());
-        vkCmdBindIndexBuffer(cmd_, draw.mesh->indices.buffer, 0, VK_INDEX_TYPE_UINT32);
-        vkCmdDrawIndexed(cmd_, draw.mesh->index_count, draw.instance_count, 0, 0, 0);
-      }
-    }
-    if (line_vertices > 0) {
-      vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_GRAPHICS, line_pipeline_);
-      const VkDeviceSize offset = 0;
-      vkCmdBindVertexBuffers(cmd_, 0, 1, &lines_.buffer, &offset);
-      vkCmdDraw(cmd_, line_vertices, 1, 0, 0);
-    }
+    draw_meshes(cmd_, mesh_pipeline_, instances_.buffer, draws);
+    draw_lines(cmd_, line_pipeline_, lines_.buffer, line_vertices);
     vkCmdEndRenderPass(cmd_);
     if (timestamps_ != VK_NULL_HANDLE) {
       // Multiview: both eyes in the first interval, the second empty.
@@ -453,18 +498,7 @@ std::size_t StereoPass::render(const FrameInput& frame, std::span<const GpuMesh>
   if (extra) extra(cmd_, colour_.image);
   RHOT_VK_CHECK(vkEndCommandBuffer(cmd_));
 
-  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  submit.commandBufferCount = 1;
-  submit.pCommandBuffers = &cmd_;
-  if (sync.wait != VK_NULL_HANDLE) {
-    submit.waitSemaphoreCount = 1;
-    submit.pWaitSemaphores = &sync.wait;
-    submit.pWaitDstStageMask = &sync.wait_stage;
-  }
-  if (sync.signal != VK_NULL_HANDLE) {
-    submit.signalSemaphoreCount = 1;
-    submit.pSignalSemaphores = &sync.signal;
-  }
+  const VkSubmitInfo submit = submit_info(cmd_, sync);
   RHOT_VK_CHECK(vkQueueSubmit(ctx_.queue(), 1, &submit, fence_));
   submitted_s_ = steady_now_s();
   watch_.watch(fence_);

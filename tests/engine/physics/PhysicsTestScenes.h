@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/core/World.h"
-#include "engine/physics/HandPhysics.h"
+#include "engine/interact/HandPhysics.h"
 #include "engine/scene/SceneLoader.h"
 
 namespace rhot::test {
@@ -17,6 +17,8 @@ inline SceneDesc parse(const std::string& text) {
   EXPECT_TRUE(scene.has_value()) << (scene ? "" : scene.error().to_string());
   return scene.value_or(SceneDesc{});
 }
+
+inline Entity named(World& world, const std::string& name) { return find_named(world, name); }
 
 inline constexpr const char* kFloor = R"({"name": "floor", "mesh": {"shape": "plane", "size_m": [4, 4]}, "body": {"type": "static"}})";
 

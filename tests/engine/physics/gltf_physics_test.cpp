@@ -13,7 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/core/World.h"
-#include "engine/physics/HandPhysics.h"
+#include "engine/interact/HandPhysics.h"
 #include "engine/scene/SceneLoader.h"
 
 namespace rhot {

@@ -13,7 +13,7 @@
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "engine/physics/BulletMath.h"
-#include "engine/physics/HandPhysics.h"
+#include "engine/interact/HandPhysics.h"
 #include "engine/sim/ScriptedHands.h"
 #include "engine/scene/SceneLoader.h"
 #include "tests/engine/physics/PhysicsTestScenes.h"
@@ -25,7 +25,7 @@ using test::kFloor;
 using test::parse;
 using test::physics_for;
 
-Entity named(World& world, const std::string& name) { return find_named(world, name); }
+using test::named;
 
 const char* kPlateScene = R"({"entities": [
     {"name": "floor", "mesh": {"shape": "plane", "size_m": [4, 4]}, "body": {"type": "static"}},

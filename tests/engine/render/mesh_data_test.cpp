@@ -131,7 +131,7 @@ TEST(Primitives, SphereHasItsRadiusSmoothNormalsAndConvergingVolume) {
 
 TEST(Primitives, OddTessellationsAreStillWellFormed) {
   for (const auto& [segments, rings] : {std::pair{3, 2}, {5, 3}, {7, 9}}) {
-    SCOPED_TRACE(testing::Message() << segments << " x " << rings);
+    SCOPED_TRACE(::testing::Message() << segments << " x " << rings);
     const MeshData sphere = make_sphere(1.0f, segments, rings);
     expect_well_formed(sphere);
     expect_faces_outward(sphere);
@@ -146,7 +146,7 @@ TEST(Primitives, OddTessellationsAreStillWellFormed) {
 // Capsule ground truth: every vertex is r from the axis segment, its normal points straight away
 // from the nearest point of that segment, and the volume is a cylinder plus a sphere.
 void expect_capsule(float r, float h, double max_volume_error) {
-  SCOPED_TRACE(testing::Message() << "radius " << r << ", height " << h);
+  SCOPED_TRACE(::testing::Message() << "radius " << r << ", height " << h);
   const MeshData m = make_capsule(r, h);
   expect_well_formed(m);
   expect_faces_outward(m);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -106,6 +107,25 @@ TEST(PoseMotion, PredictsAConstantTurnAndDriftExactly) {
   EXPECT_LT(motion.predict(pose, 0.02).rotation.angularDistance(pose.rotation), 1e-12);
 }
 
+TEST(MotionPredictor, VelocityIsTheLeastSquaresSlopeNotAnEndpointDifference) {
+  // Five frames, still but for the last, 4 mm further along x. The least-squares line through
+  // them rises 0.8 mm a frame (sum of (t - mean) (x - mean) over sum of (t - mean)^2: 8 / 10), where
+  // the first and last positions say 1 mm a frame and the last two 4 mm.
+  MotionPredictor p(1, 5);
+  std::vector<Eigen::Vector3d> x(1);
+  for (int i = 0; i < 5; ++i) {
+    x[0] = Eigen::Vector3d(i == 4 ? 0.004 : 0.0, 1.0, -0.5);
+    p.update(i / 90.0, x, true);
+  }
+  EXPECT_NEAR(p.velocity(0).x(), 0.0008 * 90.0, 1e-9);  // 0.072 m/s; the endpoints' 0.09, the last two's 0.36
+  EXPECT_NEAR(p.velocity(0).y(), 0.0, 1e-12);
+  EXPECT_NEAR(p.velocity(0).z(), 0.0, 1e-12);
+  // A sixth frame, still at 4 mm: the window (0, 0, 0, 4, 4 mm) rises 1.2 mm a frame (12 / 10),
+  // its endpoints 1 mm.
+  p.update(5 / 90.0, x, true);
+  EXPECT_NEAR(p.velocity(0).x(), 0.0012 * 90.0, 1e-9);
+}
+
 TEST(MotionPredictor, VelocityNoiseFallsWithTheFramesFitted) {
   // Positions with 1 mm of noise per axis on a still point: the fitted speed's spread over many
   // trials shrinks as more frames are fitted (two frames: sqrt(2) mm / 11.1 ms = 0.13 m/s).
@@ -124,8 +144,12 @@ TEST(MotionPredictor, VelocityNoiseFallsWithTheFramesFitted) {
     return std::sqrt(sum / 400.0);
   };
   const double two = spread(2), five = spread(5);
-  EXPECT_NEAR(two, std::sqrt(2.0) * 0.001 * 90.0, 0.015);
-  EXPECT_NEAR(five, 0.001 * 90.0 / std::sqrt(10.0), 0.005);  // sum of (t - mean)^2 = 10 frame times^2
+  // 1200 samples each (400 trials, 3 axes) pin each spread to about 2 % (one standard deviation).
+  // With this seed the two frames' spread is 0.12795 m/s and the five frames' 0.02815 m/s; the
+  // first-to-last difference of the same five positions would spread 0.03105 m/s (sqrt(2) mm /
+  // 44.4 ms = 0.0318 expected), which the tolerance of 0.0015 m/s tells from least squares'.
+  EXPECT_NEAR(two, std::sqrt(2.0) * 0.001 * 90.0, 0.005);
+  EXPECT_NEAR(five, 0.001 * 90.0 / std::sqrt(10.0), 0.0015);  // sum of (t - mean)^2 = 10 frame times^2
 }
 
 // The demo headless with a small renderer: every frame drawn is displayed in order, at a refresh,

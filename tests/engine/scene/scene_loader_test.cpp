@@ -3,6 +3,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <variant>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -311,9 +313,8 @@ TEST_F(SceneFiles, FailedLoadLeavesTheWorldUntouched) {
   World w;
   const auto good = parse_scene(scene_with(kCube), dir_);
   ASSERT_TRUE(good.has_value());
-  instantiate(*good, w);
-  const std::size_t entities = w.size();
-  const std::size_t meshes = w.count<Mesh>();
+  const std::vector<Entity> made = instantiate(*good, w);
+  ASSERT_EQ(made.size(), 1u);
 
   // The error is in the last entity: nothing of the first two may appear anywhere.
   const auto bad = parse_scene(scene_with(R"({"name": "x", "mesh": {"shape": "sphere", "radius_m": 1}},
@@ -321,9 +322,15 @@ TEST_F(SceneFiles, FailedLoadLeavesTheWorldUntouched) {
                                dir_);
   ASSERT_FALSE(bad.has_value());
   EXPECT_EQ(bad.error().json_path, "/entities/2/transform/position/1");
-  EXPECT_EQ(w.size(), entities);
-  EXPECT_EQ(w.count<Mesh>(), meshes);
-  EXPECT_EQ(w.count<Name>(), entities);
+  // The world holds the cube alone, as it was: one entity, one mesh, the cube's box.
+  EXPECT_EQ(w.size(), 1u);
+  EXPECT_EQ(w.count<Mesh>(), 1u);
+  EXPECT_EQ(find_named(w, "cube"), made[0]);
+  EXPECT_TRUE(find_named(w, "x").is_null());
+  EXPECT_TRUE(find_named(w, "y").is_null());
+  EXPECT_TRUE(find_named(w, "z").is_null());
+  ASSERT_TRUE(std::holds_alternative<BoxShape>(w.get<Mesh>(made[0]).shape));
+  EXPECT_EQ(std::get<BoxShape>(w.get<Mesh>(made[0]).shape).size_m, glm::vec3(0.1f));
 }
 
 }  // namespace

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/core/World.h"
-#include "engine/physics/HandPhysics.h"
+#include "engine/interact/HandPhysics.h"
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/Demo.h"
 #include "engine/sim/DemoScript.h"

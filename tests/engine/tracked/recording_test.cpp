@@ -4,6 +4,9 @@
 #include "engine/tracked/Recording.h"
 
 #include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -60,6 +63,68 @@ TEST(Recording, AWrittenRecordingReadsBackAndInterpolates) {
   // Clamped at both ends.
   EXPECT_NEAR(r->at(-1.0).hands[1].joints_world[0].x(), 0.0, 1e-12);
   EXPECT_NEAR(r->at(9.0).hands[1].joints_world[0].x(), 0.2, 1e-12);
+}
+
+// The text of a recording of `frames` frames, 0.1 s apart, written by RecordingWriter: a header line
+// and one line per frame, each ending in a newline.
+std::string written_recording(const std::string& file, int frames) {
+  {
+    auto writer = RecordingWriter::open(file, 90.0, {"cup"});
+    EXPECT_TRUE(writer.has_value()) << writer.error();
+    for (int f = 0; f < frames; ++f) {
+      RecordedFrame frame;
+      frame.t_s = 0.1 * f;
+      frame.hands[1].seen = true;
+      for (auto& p : frame.hands[1].joints_world) p = Eigen::Vector3d(0.1 * f, 1.0, -0.5);
+      EXPECT_TRUE(writer->write(frame).has_value());
+    }
+  }
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// A crash while a frame is written leaves its line cut short, without its newline (the docs promise
+// that a crash loses at most that frame): the frames before it are read, and one warning names the
+// file and the line.
+TEST(Recording, ALastLineCutShortByACrashIsLeftOutWithAWarning) {
+  const std::string file = ::testing::TempDir() + "rhot_cut_recording.jsonl";
+  const std::string text = written_recording(file, 4);
+  ASSERT_EQ(text.back(), '\n');
+  const std::size_t last_line = text.rfind('\n', text.size() - 2) + 1;
+  std::ofstream(file, std::ios::binary) << text.substr(0, last_line + 40);  // frame 4 on line 5, cut 40 bytes in
+  const auto r = load_recording(file);
+  ASSERT_TRUE(r.has_value()) << r.error();
+  EXPECT_EQ(r->frames.size(), 3u);
+  EXPECT_NEAR(r->frames.back().t_s, 0.2, 1e-12);
+  EXPECT_EQ(r->warnings, std::vector<std::string>{file + ":5: the last line is cut short (was the recording interrupted?); it is left out, "
+                                                         "the 3 frames before it are read"});
+
+  // Cut right after the header's newline plus a byte: no frame is whole.
+  std::ofstream(file, std::ios::binary) << text.substr(0, text.find('\n') + 2);
+  EXPECT_EQ(load_recording(file).error(), file + ": no frames");
+
+  // A whole recording reads without a warning.
+  std::ofstream(file, std::ios::binary) << text;
+  ASSERT_TRUE(load_recording(file).has_value());
+  EXPECT_TRUE(load_recording(file)->warnings.empty());
+}
+
+// Only a last line that is not even JSON counts as cut short: a line cut in the middle of the file,
+// or a last line that is whole JSON but no frame, is an error naming its line.
+TEST(Recording, ABadLineBeforeTheLastOrAWholeBadLastLineIsStillAnError) {
+  const std::string file = ::testing::TempDir() + "rhot_bad_middle_recording.jsonl";
+  const std::string text = written_recording(file, 4);
+  const std::size_t third = text.find('\n', text.find('\n', text.find('\n') + 1) + 1) + 1;  // the start of line 4
+  std::ofstream(file, std::ios::binary) << text.substr(0, third - 30) << "\n" << text.substr(third);
+  const auto middle = load_recording(file);
+  ASSERT_FALSE(middle.has_value());
+  EXPECT_EQ(middle.error().rfind(file + ":3:1:", 0), 0u) << middle.error();
+  EXPECT_NE(middle.error().find(": invalid JSON: "), std::string::npos) << middle.error();
+
+  std::ofstream(file, std::ios::binary) << text << R"({"t": 0.5, "hands": [], "objects": {}})";  // no newline, but whole
+  EXPECT_EQ(load_recording(file).error(), file + ":6: /hands: expected [left, right]");
 }
 
 }  // namespace

@@ -272,6 +272,31 @@ TEST(Intrinsics, BadPicturesGetMessagesNamingTheFile) {
             "differently give intrinsics worth trusting");
 }
 
+// Pictures of a 9 x 6 board looked for as 10 x 7: the classic detector used to search such a picture
+// for 20 to 40 s. Now it gives up at once, and after the first three pictures without the board the
+// search stops with the reason, the rest unsearched.
+TEST(Intrinsics, ABoardInNoneOfTheFirstPicturesStopsTheSearchThere) {
+  const fs::path dir = temp_dir();
+  const std::vector<fs::path> files = render_views(dir, webcam(640, 480, 600.0), chess_layout(), 6);
+  std::vector<int> searched;
+  const auto r =
+      detect_boards(files, *parse_board_spec("chess:10x7:25"), [&](int index, int, const std::string&) { searched.push_back(index); });
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error(),
+            "board chess:10x7:25 not found in any of the first 3 of 6 images, so the others were not searched; is the board's size "
+            "right? chess COLSxROWS counts inner corners (a board of 10 x 7 squares is chess:9x6)");
+  EXPECT_EQ(searched, (std::vector<int>{1, 2, 3}));
+
+  // The board in a later picture only: every picture is searched, and those without it are skipped.
+  const fs::path empty = dir / "empty.png";
+  ASSERT_TRUE(cv::imwrite(empty.string(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(128))));
+  const auto later = detect_boards({empty, files[0], files[1], files[2]}, *parse_board_spec("chess:9x6:25"));
+  ASSERT_TRUE(later.has_value()) << later.error();
+  EXPECT_EQ(later->size(), 4u);
+  EXPECT_FALSE((*later)[0].found());
+  EXPECT_TRUE((*later)[3].found());
+}
+
 TEST(Intrinsics, BoardSpecsAreReadOrRefusedWithTheReason) {
   auto b = parse_board_spec("chess:9x6:25");
   ASSERT_TRUE(b.has_value());

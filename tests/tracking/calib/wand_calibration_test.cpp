@@ -1,6 +1,7 @@
 // The wand calibration against the simulated rig's truth: camera centres and rotations after a
 // similarity alignment, residuals against what the pixel noise allows, the wand's length, and the
-// bad inputs it must refuse with a message.
+// bad inputs it must refuse with a message. The calibration is handed the cameras' intrinsics
+// only (every pose at the origin), never the truth it is measured against.
 
 #include "tracking/calib/WandCalibration.h"
 
@@ -8,6 +9,8 @@
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
+
+#include "tests/tracking/calib/CalibTestSupport.h"
 
 #include "tracking/calib/Similarity.h"
 #include "tracking/camera/RigFile.h"
@@ -20,6 +23,10 @@ rhot::CameraRig load(const std::string& name) {
   EXPECT_TRUE(rig) << rig.error();
   return *rig;
 }
+
+// The cameras as a user's intrinsics-only files give them (`rhot-calib intrinsics` writes each at
+// the origin, looking along +Z): the calibration must find every pose from the wave alone.
+using rhot::test::without_poses;
 
 struct Agreement {
   double centre_rms_mm = 0.0;
@@ -80,7 +87,7 @@ TEST(WandCalibration, SeatedFourFromAWandMatchesTheTruth) {
   const rhot::Detections d = wand_session(truth, 1000, 0.3, 3);
   rhot::WandSettings settings;
   settings.wand_length_m = 0.5;
-  const auto result = rhot::calibrate_wand(truth, d, settings);  // its poses are ignored
+  const auto result = rhot::calibrate_wand(without_poses(truth), d, settings);
   ASSERT_TRUE(result) << result.error();
   const Agreement a = compare(result->rig, truth);
   EXPECT_LT(a.centre_rms_mm, 1.0);
@@ -112,7 +119,7 @@ TEST(WandCalibration, RoomEightWithDropoutStraysAndOutliers) {
   const rhot::Detections d = wand_session(truth, 1000, 0.3, 5, 0.1, 0.05, 0.01);
   rhot::WandSettings settings;
   settings.wand_length_m = 0.5;
-  const auto result = rhot::calibrate_wand(truth, d, settings);
+  const auto result = rhot::calibrate_wand(without_poses(truth), d, settings);
   ASSERT_TRUE(result) << result.error();
   const Agreement a = compare(result->rig, truth);
   EXPECT_LT(a.centre_rms_mm, 1.0);
@@ -146,7 +153,7 @@ TEST(WandCalibration, OneMarkerWithoutAWandIsRightUpToScale) {
   noise.rig.seed = 9;
   noise.strays = 0.05;  // a stray blob makes its camera's frame ambiguous: dropped, not guessed
   const rhot::Detections d = rhot::simulate_wand_session(truth, session, noise);
-  const auto result = rhot::calibrate_wand(truth, d, rhot::WandSettings{});
+  const auto result = rhot::calibrate_wand(without_poses(truth), d, rhot::WandSettings{});
   ASSERT_TRUE(result) << result.error();
   EXPECT_FALSE(result->report.metric);
   EXPECT_GT(result->report.ambiguous, 0);
@@ -162,7 +169,7 @@ TEST(WandCalibration, OneMarkerWithoutAWandIsRightUpToScale) {
 TEST(WandCalibration, RefinesAFocalLengthThatWasWrong) {
   const rhot::CameraRig truth = load("seated-4");
   const rhot::Detections d = wand_session(truth, 800, 0.3, 11);
-  rhot::CameraRig start = truth;
+  rhot::CameraRig start = without_poses(truth);
   for (std::size_t c = 0; c < start.cameras.size(); ++c) {
     const double wrong = c % 2 == 0 ? 1.03 : 0.97;
     start.cameras[c].intrinsics.fx *= wrong;
@@ -184,7 +191,7 @@ TEST(WandCalibration, RefusesDetectionsOffTheImage) {
   rhot::Detections d = wand_session(truth, 200, 0.3, 1);
   d.frames[5].observations[0].pixel = {1400.0, 100.0};
   const int camera = d.frames[5].observations[0].camera;
-  const auto result = rhot::calibrate_wand(truth, d, rhot::WandSettings{});
+  const auto result = rhot::calibrate_wand(without_poses(truth), d, rhot::WandSettings{});
   ASSERT_FALSE(result);
   EXPECT_EQ(result.error(), "camera " + std::to_string(camera) + " (\"" + truth.cameras[static_cast<std::size_t>(camera)].name +
                                 "\"): 1 detections lie outside its 1280x720 image (first: frame " + std::to_string(d.frames[5].frame) +
@@ -196,13 +203,13 @@ TEST(WandCalibration, RefusesACameraTheRigLacksAndTooFewFrames) {
   rhot::Detections d = wand_session(truth, 200, 0.3, 1);
   d.frames[0].observations.push_back({4, {10, 10}, 0});
   d.camera_count = 5;
-  EXPECT_EQ(rhot::calibrate_wand(truth, d, rhot::WandSettings{}).error(),
+  EXPECT_EQ(rhot::calibrate_wand(without_poses(truth), d, rhot::WandSettings{}).error(),
             "the detections name camera 4 but the rig has only 2 cameras (0 to 1)");
   d.camera_count = 2;  // understated: the observation itself is checked
-  EXPECT_EQ(rhot::calibrate_wand(truth, d, rhot::WandSettings{}).error(),
+  EXPECT_EQ(rhot::calibrate_wand(without_poses(truth), d, rhot::WandSettings{}).error(),
             "frame " + std::to_string(d.frames[0].frame) + ": a detection names camera 4 but the rig has cameras 0 to 1");
   const rhot::Detections few = wand_session(truth, 10, 0.3, 1);
-  EXPECT_EQ(rhot::calibrate_wand(truth, few, rhot::WandSettings{}).error(),
+  EXPECT_EQ(rhot::calibrate_wand(without_poses(truth), few, rhot::WandSettings{}).error(),
             "too few frames: 20 marker positions were seen by two cameras or more (need 30)");
 }
 
@@ -214,7 +221,7 @@ TEST(WandCalibration, NamesTheCamerasAGraphInPiecesCannotConnect) {
     const bool front = f.frame % 2 == 0;
     std::erase_if(f.observations, [front](const rhot::MarkerObservation& o) { return (o.camera < 2) != front; });
   }
-  const auto result = rhot::calibrate_wand(truth, d, rhot::WandSettings{});
+  const auto result = rhot::calibrate_wand(without_poses(truth), d, rhot::WandSettings{});
   ASSERT_FALSE(result);
   EXPECT_EQ(result.error(),
             "the cameras do not form one connected graph (an edge needs 15 shared points): groups {front-left, front-right} {back-left, "
@@ -228,7 +235,7 @@ TEST(WandCalibration, RefusesAPlanarWave) {
   session.box_centre_m = truth.volume->centre_m;
   session.box_size_m = {1.0, 0.0, 1.0};  // the wand stays level at one height
   const rhot::Detections d = rhot::simulate_wand_session(truth, session, rhot::SessionNoise{});
-  const auto result = rhot::calibrate_wand(truth, d, rhot::WandSettings{});
+  const auto result = rhot::calibrate_wand(without_poses(truth), d, rhot::WandSettings{});
   ASSERT_FALSE(result);
   EXPECT_EQ(result.error().rfind("the wave is nearly planar", 0), 0u) << result.error();
 }
@@ -247,8 +254,8 @@ TEST(WandCalibration, SaysWhenTwoCameraStreamsAreSwapped) {
   }
   rhot::WandSettings settings;
   settings.wand_length_m = 0.5;
-  ASSERT_TRUE(rhot::calibrate_wand(truth, d, settings));
-  const auto result = rhot::calibrate_wand(truth, swapped, settings);
+  ASSERT_TRUE(rhot::calibrate_wand(without_poses(truth), d, settings));
+  const auto result = rhot::calibrate_wand(without_poses(truth), swapped, settings);
   ASSERT_FALSE(result);
   EXPECT_NE(result.error().find("are the detections' camera streams in the rig's order"), std::string::npos) << result.error();
 }

@@ -1,5 +1,6 @@
 #include "tracking/camera/RigFile.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -129,6 +130,100 @@ TEST(RigFile, MalformedAndInconsistentRigsAreRefusedWithTheField) {
             "volume_centre: contains a value that is not finite");
   const auto junk = error_after("%YAML:1.0", "{{{ not yaml");
   EXPECT_NE(junk, "loaded");
+}
+
+// A rig file of `count` cameras of seated-4's model, all turned alike (the identity rotation): the
+// first at the origin and each next one 10 cm further along -X, or all at the origin with
+// `at_origin`; without any rotation and translation where `poses` is false.
+std::string rig_text(std::size_t count, bool at_origin, bool poses = true) {
+  std::ostringstream y;
+  y << "%YAML:1.0\n---\nrig_name: \"generated\"\ncameras:\n";
+  for (std::size_t i = 0; i < count; ++i) {
+    y << "   -\n      name: \"cam" << i << "\"\n      image_width: 1280\n      image_height: 720\n"
+      << "      camera_matrix: !!opencv-matrix\n         rows: 3\n         cols: 3\n         dt: d\n"
+      << "         data: [ 900.0, 0.0, 639.5, 0.0, 900.0, 359.5, 0.0, 0.0, 1.0 ]\n"
+      << "      distortion_coefficients: !!opencv-matrix\n         rows: 1\n         cols: 5\n         dt: d\n"
+      << "         data: [ -0.05, 0.01, 0.0, 0.0, 0.0 ]\n";
+    if (!poses) continue;
+    y << "      rotation: !!opencv-matrix\n         rows: 3\n         cols: 3\n         dt: d\n"
+      << "         data: [ 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0 ]\n"
+      << "      translation: !!opencv-matrix\n         rows: 3\n         cols: 1\n         dt: d\n"
+      << "         data: [ " << (at_origin ? 0.0 : 0.1 * static_cast<double>(i)) << ", 0.0, 0.0 ]\n";
+  }
+  return y.str();
+}
+
+fs::path write_rig_text(const std::string& name, const std::string& text) {
+  const fs::path p = temp(name);
+  std::ofstream(p) << text;
+  return p;
+}
+
+TEST(RigFile, EveryShippedRigIsWithinTheCameraCap) {
+  std::size_t largest = 0;
+  for (const fs::directory_entry& e : fs::directory_iterator(fs::path(RHOT_ASSET_DIR) / "rigs")) {
+    if (e.path().extension() != ".yaml") continue;
+    const auto rig = load_rig(e.path());
+    ASSERT_TRUE(rig.has_value()) << rig.error();
+    largest = std::max(largest, rig->cameras.size());
+  }
+  EXPECT_EQ(largest, 54u) << "seed-wiimote-54.yaml";
+  EXPECT_LT(largest, kMaxRigCameras);
+}
+
+TEST(RigFile, MoreCamerasThanTheCapAreRefusedWhenLoadedOrSaved) {
+  const fs::path most = write_rig_text("most.yaml", rig_text(kMaxRigCameras, false));
+  const auto loaded = load_rig(most);
+  ASSERT_TRUE(loaded.has_value()) << loaded.error();
+  EXPECT_EQ(loaded->cameras.size(), 256u);
+
+  const fs::path too_many = write_rig_text("too_many.yaml", rig_text(kMaxRigCameras + 1, false));
+  EXPECT_EQ(load_rig(too_many).error(), too_many.string() + ": cameras: a rig may have at most 256 cameras, got 257");
+  EXPECT_EQ(load_rig_intrinsics(too_many).error(), too_many.string() + ": cameras: a rig may have at most 256 cameras, got 257");
+
+  CameraRig rig = *loaded;
+  Camera extra = rig.cameras.back();
+  extra.name = "one-too-many";
+  extra.cam_from_world.translation.x() -= 0.1;
+  rig.cameras.push_back(extra);
+  EXPECT_EQ(check_rig(rig).error(), "cameras: a rig may have at most 256 cameras, got 257");
+  const fs::path out = temp("not_saved.yaml");
+  EXPECT_EQ(save_rig(rig, out).error(), out.string() + ": not saved: cameras: a rig may have at most 256 cameras, got 257");
+}
+
+// One file of every camera's intrinsics, each camera at the origin as `rhot-calib intrinsics`
+// writes it: not a rig to track with, but read for its intrinsics it is whole.
+TEST(RigFile, ReadForIntrinsicsOnlyTheCamerasPosesAreIgnored) {
+  const fs::path at_origin = write_rig_text("at_origin.yaml", rig_text(3, true));
+  EXPECT_EQ(load_rig(at_origin).error(),
+            at_origin.string() + ": cameras[1] (\"cam1\").translation: same position as cameras[0] (\"cam0\")");
+  const auto intrinsics = load_rig_intrinsics(at_origin);
+  ASSERT_TRUE(intrinsics.has_value()) << intrinsics.error();
+  ASSERT_EQ(intrinsics->cameras.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Camera& c = intrinsics->cameras[i];
+    EXPECT_EQ(c.name, "cam" + std::to_string(i));
+    EXPECT_EQ(c.intrinsics.width_px, 1280);
+    EXPECT_EQ(c.intrinsics.fx, 900.0);
+    EXPECT_EQ(c.intrinsics.cy, 359.5);
+    EXPECT_EQ(c.intrinsics.distortion[0], -0.05);
+    EXPECT_TRUE(c.cam_from_world.translation.isZero());
+    EXPECT_TRUE(c.cam_from_world.rotation.isApprox(Eigen::Quaterniond::Identity()));
+  }
+  EXPECT_TRUE(check_rig_intrinsics(*intrinsics).has_value());
+  EXPECT_FALSE(check_rig(*intrinsics).has_value());
+
+  // No poses at all.
+  const fs::path no_poses = write_rig_text("no_poses.yaml", rig_text(2, true, false));
+  EXPECT_EQ(load_rig(no_poses).error(), no_poses.string() + ": cameras[0] (\"cam0\").rotation: missing");
+  ASSERT_TRUE(load_rig_intrinsics(no_poses).has_value()) << load_rig_intrinsics(no_poses).error();
+
+  // The intrinsics themselves are checked as ever.
+  std::string text = rig_text(2, true);
+  text.replace(text.find("900.0"), 5, "-900.0");
+  const fs::path bad = write_rig_text("bad_intrinsics.yaml", text);
+  EXPECT_EQ(load_rig_intrinsics(bad).error(),
+            bad.string() + ": cameras[0] (\"cam0\").camera_matrix: focal lengths fx and fy must be positive");
 }
 
 }  // namespace

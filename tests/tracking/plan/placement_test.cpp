@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -99,7 +102,22 @@ TEST(Placement, AnErrorTargetIsMetWithAsFewCamerasAsItTakes) {
   PlanSettings s;
   s.max_error_mm = 6.0;
   s.ceiling_m = 2.6;
-  const auto plan = plan_rig(webcam(), room, s);
+  // The planner reports each count it tries, after improving it: "N cameras: C % seen by 3 or
+  // more, worst predicted error E mm".
+  struct Tried {
+    int cameras = 0;
+    double seen_percent = 0.0;
+    double worst_mm = 0.0;
+  };
+  std::vector<Tried> tried;
+  const auto plan = plan_rig(webcam(), room, s, [&](const std::string& line) {
+    Tried t;
+    int views = 0;
+    if (std::sscanf(line.c_str(), "%d cameras: %lf %% seen by %d or more, worst predicted error %lf mm", &t.cameras, &t.seen_percent,
+                    &views, &t.worst_mm) == 4) {
+      tried.push_back(t);
+    }
+  });
   ASSERT_TRUE(plan.has_value()) << plan.error();
   const auto report =
       evaluate_coverage(plan->rig, room, {.sigma_px = 0.3, .grid_step_m = 0.0, .max_points = 20000, .samples_per_point = 1, .seed = 1});
@@ -107,9 +125,18 @@ TEST(Placement, AnErrorTargetIsMetWithAsFewCamerasAsItTakes) {
   EXPECT_LE(report->predicted_max_mm, 6.0);
   const auto seen = static_cast<double>(std::count_if(report->views.begin(), report->views.end(), [](int v) { return v >= 3; }));
   EXPECT_GE(seen / static_cast<double>(report->views.size()), 0.99);
-  // Six when this was written; eight webcams (room-8's) give 7 mm placed as in room-8.
-  EXPECT_GE(plan->rig.cameras.size(), 4u);
-  EXPECT_LE(plan->rig.cameras.size(), 8u);
+  // Six when this was written (the planner's best five reached 6.27 mm, its six 4.85 mm); eight
+  // webcams (room-8's) give 7 mm placed as in room-8.
+  EXPECT_EQ(plan->rig.cameras.size(), 6u);
+  // As few as it takes: one camera fewer, placed as well as the planner could, missed the target
+  // (it saw all of the volume, but its worst predicted error was 6.27 mm).
+  const int n = static_cast<int>(plan->rig.cameras.size());
+  const auto fewer = std::find_if(tried.begin(), tried.end(), [&](const Tried& t) { return t.cameras == n - 1; });
+  ASSERT_NE(fewer, tried.end()) << "no progress line for " << n - 1 << " cameras";
+  EXPECT_GT(fewer->worst_mm, 6.0) << fewer->seen_percent << " % seen by three";
+  ASSERT_FALSE(tried.empty());
+  EXPECT_EQ(tried.back().cameras, n);
+  EXPECT_LE(tried.back().worst_mm, 6.0);
 }
 
 TEST(Placement, BadInputIsRefusedWithTheReason) {

@@ -21,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path temp_dir() {
+fs::path board_dir() {
   const fs::path d = fs::path(::testing::TempDir()) / "rhot_board_images" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
   fs::remove_all(d);
   fs::create_directories(d);
@@ -55,7 +55,7 @@ std::optional<Eigen::Vector2d> project(const CameraIntrinsics& k, const Rigid3d&
 bool in_image(const CameraIntrinsics& k, const Eigen::Vector2d& pixel) { return Camera{"c", k, Rigid3d::identity()}.in_image(pixel); }
 
 TEST(BoardImages, OpenCvFindsTheCornersWhereTheModelProjectsThem) {
-  const fs::path dir = temp_dir();
+  const fs::path dir = board_dir();
   const CameraIntrinsics k = camera(1024, 768);
   const BoardLayout layout = chess(9, 6, 0.025);
   const std::vector<Rigid3d> poses = board_poses(k, layout, 4, 3);

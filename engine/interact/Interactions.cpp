@@ -1,4 +1,4 @@
-#include "engine/physics/Interactions.h"
+#include "engine/interact/Interactions.h"
 
 #include <cmath>
 

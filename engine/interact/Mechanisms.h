@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "engine/core/Entity.h"
-#include "engine/physics/GraspSystem.h"
+#include "engine/interact/GraspSystem.h"
 #include "engine/physics/PhysicsWorld.h"
 
 class btTypedConstraint;

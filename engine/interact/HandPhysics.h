@@ -12,12 +12,12 @@
 #include <string>
 #include <vector>
 
-#include "engine/physics/GraspSystem.h"
+#include "engine/interact/GraspSystem.h"
 #include "engine/physics/HandColliders.h"
-#include "engine/physics/Interactions.h"
-#include "engine/physics/Mechanisms.h"
+#include "engine/interact/Interactions.h"
+#include "engine/interact/Mechanisms.h"
 #include "engine/physics/PhysicsWorld.h"
-#include "engine/physics/SceneRules.h"
+#include "engine/interact/SceneRules.h"
 #include "engine/scene/SceneDesc.h"
 
 namespace rhot {

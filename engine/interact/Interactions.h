@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "engine/core/Entity.h"
-#include "engine/physics/GraspSystem.h"
+#include "engine/interact/GraspSystem.h"
 #include "engine/scene/SceneDesc.h"
 
 namespace rhot {

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "engine/core/Entity.h"
-#include "engine/physics/GraspSystem.h"
-#include "engine/physics/Mechanisms.h"
+#include "engine/interact/GraspSystem.h"
+#include "engine/interact/Mechanisms.h"
 #include "engine/physics/PhysicsWorld.h"
 #include "engine/scene/SceneDesc.h"
 

@@ -3,7 +3,7 @@
 // and never for a palm, a socket snaps what it accepts and lets a hand take it out, and rules turn
 // events into actions.
 
-#include "engine/physics/Mechanisms.h"
+#include "engine/interact/Mechanisms.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // Scene interactions on their own: "place" succeeds once the object rests in its box zone for the
 // dwell time, "hand over" on a release the other hand took; entities are checked when created.
 
-#include "engine/physics/Interactions.h"
+#include "engine/interact/Interactions.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "engine/physics/GraspSystem.h"
+#include "engine/interact/GraspSystem.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // The grasp system on its own rules: a grasp needs a grabbable object, a seen hand, and the thumb
 // with an opposing finger on it; opening releases; a hand cannot grasp again at once.
 
-#include "engine/physics/GraspSystem.h"
+#include "engine/interact/GraspSystem.h"
 
 #include <algorithm>
 

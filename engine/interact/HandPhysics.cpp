@@ -1,4 +1,4 @@
-#include "engine/physics/HandPhysics.h"
+#include "engine/interact/HandPhysics.h"
 
 #include "engine/core/World.h"
 #include "engine/hand/HandComponents.h"

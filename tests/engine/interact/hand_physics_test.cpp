@@ -13,7 +13,7 @@
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "engine/physics/BulletMath.h"
-#include "engine/physics/HandPhysics.h"
+#include "engine/interact/HandPhysics.h"
 #include "engine/sim/ScriptedHands.h"
 #include "engine/scene/SceneLoader.h"
 #include "tests/engine/physics/PhysicsTestScenes.h"

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/physics/GraspSystem.h"
+#include "engine/interact/GraspSystem.h"
 #include "engine/sim/ScriptedHands.h"
 #include "tests/engine/physics/PhysicsTestScenes.h"
 

@@ -1,4 +1,4 @@
-#include "engine/physics/Mechanisms.h"
+#include "engine/interact/Mechanisms.h"
 
 #include <algorithm>
 #include <cmath>
@@ -59,6 +59,62 @@ std::unique_ptr<btGeneric6DofSpring2Constraint> locked(btRigidBody& body, btRigi
   return c;
 }
 
+// A ball joint's constraint: `body` pivots about `anchor` (in its own frame) on `other` or the world.
+std::unique_ptr<btTypedConstraint> ball_constraint(btRigidBody& body, btRigidBody* other, const glm::vec3& anchor) {
+  const btVector3 pivot = to_bt(anchor);
+  if (other) {
+    const btVector3 in_other = other->getCenterOfMassTransform().inverse() * (body.getCenterOfMassTransform() * pivot);
+    return std::make_unique<btPoint2PointConstraint>(body, *other, pivot, in_other);
+  }
+  return std::make_unique<btPoint2PointConstraint>(body, pivot);
+}
+
+// A fixed, hinge or slider joint's 6-DoF constraint; `axis` becomes a hinge's or slider's free
+// axis (kAngularX or kLinearX), left as it is for a fixed joint.
+std::unique_ptr<btGeneric6DofSpring2Constraint> six_dof_constraint(btRigidBody& body, btRigidBody* other, const Joint& joint, int& axis) {
+  // A hinge's frame turns the other way round its x axis: Bullet's angle is of the other body
+  // relative to this one, and the value is this one's turn about `axis` (right-handed).
+  auto c = locked(body, other, axis_frame(joint.anchor_m, joint.type == JointType::kHinge ? -joint.axis : joint.axis));
+  const bool hinge = joint.type == JointType::kHinge, slider = joint.type == JointType::kSlider;
+  if (!hinge && !slider) return c;
+  axis = hinge ? kAngularX : kLinearX;
+  const double scale = hinge ? 1.0 / kDegPerRad : 1.0;
+  // Free (lower above upper) or within the limits.
+  const double lo = joint.limits ? (*joint.limits)[0] * scale : 1.0, hi = joint.limits ? (*joint.limits)[1] * scale : -1.0;
+  if (hinge) {
+    c->setAngularLowerLimit(btVector3(static_cast<btScalar>(lo), 0, 0));
+    c->setAngularUpperLimit(btVector3(static_cast<btScalar>(hi), 0, 0));
+  } else {
+    c->setLinearLowerLimit(btVector3(static_cast<btScalar>(lo), 0, 0));
+    c->setLinearUpperLimit(btVector3(static_cast<btScalar>(hi), 0, 0));
+  }
+  if (joint.spring) {
+    c->enableSpring(axis, true);
+    c->setStiffness(axis, static_cast<btScalar>(joint.spring->stiffness));
+    c->setDamping(axis, static_cast<btScalar>(joint.spring->damping));
+    c->setEquilibriumPoint(axis, static_cast<btScalar>(joint.spring->rest * scale));
+  }
+  return c;
+}
+
+// A button's spring along its axis, on `base` (its parent's body) or the world; the button's body
+// then floats free of gravity and never sleeps.
+std::unique_ptr<btGeneric6DofSpring2Constraint> button_constraint(btRigidBody& body, btRigidBody* base, const Button& button) {
+  auto c = locked(body, base, axis_frame(glm::vec3(0.0f), button.axis));
+  c->setLinearLowerLimit(btVector3(0, 0, 0));
+  c->setLinearUpperLimit(btVector3(static_cast<btScalar>(button.travel_m), 0, 0));
+  c->enableSpring(kLinearX, true);
+  c->setStiffness(kLinearX, static_cast<btScalar>(button.stiffness));
+  // Critically damped: it comes back out without ringing.
+  const double mass_kg = 1.0 / std::max(1e-6, static_cast<double>(body.getInvMass()));
+  c->setDamping(kLinearX, static_cast<btScalar>(2.0 * std::sqrt(button.stiffness * mass_kg)));
+  c->setEquilibriumPoint(kLinearX, 0);
+  body.setFlags(body.getFlags() | BT_DISABLE_WORLD_GRAVITY);
+  body.setGravity(btVector3(0, 0, 0));
+  body.setActivationState(DISABLE_DEACTIVATION);
+  return c;
+}
+
 }  // namespace
 
 struct Mechanisms::Part {
@@ -107,37 +163,9 @@ std::expected<std::unique_ptr<Mechanisms>, std::string> Mechanisms::create(World
     part->joint_type = joint.type;
     part->friction = joint.friction;
     if (joint.type == JointType::kBall) {
-      const btVector3 pivot = to_bt(joint.anchor_m);
-      if (other) {
-        const btVector3 in_other = other->getCenterOfMassTransform().inverse() * (body->getCenterOfMassTransform() * pivot);
-        part->constraint = std::make_unique<btPoint2PointConstraint>(*body, *other, pivot, in_other);
-      } else {
-        part->constraint = std::make_unique<btPoint2PointConstraint>(*body, pivot);
-      }
+      part->constraint = ball_constraint(*body, other, joint.anchor_m);
     } else {
-      // A hinge's frame turns the other way round its x axis: Bullet's angle is of the other body
-      // relative to this one, and the value is this one's turn about `axis` (right-handed).
-      auto c = locked(*body, other, axis_frame(joint.anchor_m, joint.type == JointType::kHinge ? -joint.axis : joint.axis));
-      const bool hinge = joint.type == JointType::kHinge, slider = joint.type == JointType::kSlider;
-      if (hinge || slider) {
-        part->axis = hinge ? kAngularX : kLinearX;
-        const double scale = hinge ? 1.0 / kDegPerRad : 1.0;
-        // Free (lower above upper) or within the limits.
-        const double lo = joint.limits ? (*joint.limits)[0] * scale : 1.0, hi = joint.limits ? (*joint.limits)[1] * scale : -1.0;
-        if (hinge) {
-          c->setAngularLowerLimit(btVector3(static_cast<btScalar>(lo), 0, 0));
-          c->setAngularUpperLimit(btVector3(static_cast<btScalar>(hi), 0, 0));
-        } else {
-          c->setLinearLowerLimit(btVector3(static_cast<btScalar>(lo), 0, 0));
-          c->setLinearUpperLimit(btVector3(static_cast<btScalar>(hi), 0, 0));
-        }
-        if (joint.spring) {
-          c->enableSpring(part->axis, true);
-          c->setStiffness(part->axis, static_cast<btScalar>(joint.spring->stiffness));
-          c->setDamping(part->axis, static_cast<btScalar>(joint.spring->damping));
-          c->setEquilibriumPoint(part->axis, static_cast<btScalar>(joint.spring->rest * scale));
-        }
-      }
+      auto c = six_dof_constraint(*body, other, joint, part->axis);
       part->six = c.get();
       part->constraint = std::move(c);
     }
@@ -162,18 +190,7 @@ std::expected<std::unique_ptr<Mechanisms>, std::string> Mechanisms::create(World
     // the world.
     const Parent* parent = world.find<Parent>(e);
     btRigidBody* base = parent ? physics.body(parent->entity) : nullptr;
-    auto c = locked(*body, base, axis_frame(glm::vec3(0.0f), button.axis));
-    c->setLinearLowerLimit(btVector3(0, 0, 0));
-    c->setLinearUpperLimit(btVector3(static_cast<btScalar>(button.travel_m), 0, 0));
-    c->enableSpring(kLinearX, true);
-    c->setStiffness(kLinearX, static_cast<btScalar>(button.stiffness));
-    // Critically damped: it comes back out without ringing.
-    const double mass_kg = 1.0 / std::max(1e-6, static_cast<double>(body->getInvMass()));
-    c->setDamping(kLinearX, static_cast<btScalar>(2.0 * std::sqrt(button.stiffness * mass_kg)));
-    c->setEquilibriumPoint(kLinearX, 0);
-    body->setFlags(body->getFlags() | BT_DISABLE_WORLD_GRAVITY);
-    body->setGravity(btVector3(0, 0, 0));
-    body->setActivationState(DISABLE_DEACTIVATION);
+    auto c = button_constraint(*body, base, button);
     part->six = c.get();
     part->constraint = std::move(c);
     out.parts_.push_back(std::move(part));

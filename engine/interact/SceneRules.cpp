@@ -1,4 +1,4 @@
-#include "engine/physics/SceneRules.h"
+#include "engine/interact/SceneRules.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
-#include "engine/physics/Interactions.h"
+#include "engine/interact/Interactions.h"
 #include "engine/scene/Components.h"
 #include "engine/scene/SceneLoader.h"
 

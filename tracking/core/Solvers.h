@@ -1,0 +1,37 @@
+#pragma once
+// Eigen's small dense decompositions, compiled once (Solvers.cpp) instead of in every file that
+// uses one: each instantiation of SelfAdjointEigenSolver or JacobiSVD costs tens of seconds of
+// compile time under the sanitizers (docs/PERFORMANCE.md, "Build time"). Each function is the
+// Eigen call its name says, with the same results bit for bit.
+
+#include <Eigen/Core>
+
+namespace rhot {
+
+// SelfAdjointEigenSolver::compute (the iterative QL algorithm): eigenvalues ascending, the
+// eigenvectors as the matching columns.
+struct SymmetricEigen3 {
+  Eigen::Vector3d values;
+  Eigen::Matrix3d vectors;
+};
+struct SymmetricEigen4 {
+  Eigen::Vector4d values;
+  Eigen::Matrix4d vectors;
+};
+SymmetricEigen3 symmetric_eigen(const Eigen::Matrix3d& m);
+SymmetricEigen4 symmetric_eigen(const Eigen::Matrix4d& m);
+// The eigenvalues alone (ascending): compute(m, EigenvaluesOnly).
+Eigen::Vector3d symmetric_eigenvalues(const Eigen::Matrix3d& m);
+// The closed-form solver for 3 x 3 (computeDirect(m, EigenvaluesOnly)): faster, a little less
+// accurate for badly scaled matrices.
+Eigen::Vector3d symmetric_eigenvalues_direct(const Eigen::Matrix3d& m);
+
+// JacobiSVD with full U and V: m = U diag(singular_values) V^T, singular values descending.
+struct Svd3 {
+  Eigen::Matrix3d u;
+  Eigen::Vector3d singular_values;
+  Eigen::Matrix3d v;
+};
+Svd3 svd(const Eigen::Matrix3d& m);
+
+}  // namespace rhot
