@@ -37,8 +37,8 @@ tip_mm=$(sed -n 's/^index fingertips: \([0-9.]*\) mm from the truth.*/\1/p' "${w
 [[ -n "${tip_mm}" ]] || { echo "examples_test: track_example printed no fingertip error" >&2; exit 1; }
 grep -q 'right wrist (' "${work}/track.out" || { echo "examples_test: track_example printed no tracked right wrist" >&2; exit 1; }
 grep -q 'star [0-9]* at (' "${work}/track.out" || { echo "examples_test: track_example printed no tracked object" >&2; exit 1; }
-# The demo's tracked fingertips are within a few millimetres (docs/tracking.md); 15 mm would be a broken tracker.
-awk -v e="${tip_mm}" 'BEGIN { exit !(e < 15.0) }' || { echo "examples_test: fingertips ${tip_mm} mm from the truth" >&2; exit 1; }
+# Measured 0.82 mm over these 2 s (seated-4, seed 1, deterministic): a tracker twice as bad fails.
+awk -v e="${tip_mm}" 'BEGIN { exit !(e < 2.0) }' || { echo "examples_test: fingertips ${tip_mm} mm from the truth" >&2; exit 1; }
 
 echo "== headless_example"
 "${work}/headless/build/headless_example" --frames 270 --png "${work}/left.png" | tee "${work}/headless.out"

@@ -61,7 +61,8 @@ TEST(ImageCompare, AGoldenMatchesItself) {
 }
 
 // The debug layer's ten magenta points (3 x 3 pixels drawn, 7 to 9 pixels each with their
-// anti-aliased rims), one group per point, left to right.
+// anti-aliased rims), one group per point, left to right. (The counts below are the committed
+// golden's; a regenerated golden moves them a little.)
 std::vector<std::vector<std::array<int, 2>>> debug_points(const Image& im) {
   std::vector<std::array<int, 2>> magenta;
   for (int x = 0; x < im.width; ++x) {

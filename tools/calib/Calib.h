@@ -46,9 +46,10 @@ std::filesystem::path pictures_dir(const std::string& pictures, const std::strin
 // Creates the folder an output file goes to (nothing when it exists or the path has none).
 void make_parent_folder(const std::string& file);
 
-// The cameras of one or more rig files, in order, as one rig (poses as the files have them): one
-// intrinsics file per camera from `intrinsics`, or a rig file with them all. Fails on a file that
-// does not load, or two cameras of one name.
+// The cameras of one or more rig files, in order, as one rig: one intrinsics file per camera from
+// `intrinsics`, or a rig file with them all. Poses in the files are ignored (load_rig_intrinsics):
+// a file gathering every camera's intrinsics at the world origin is taken as it is. Fails on a
+// file that does not load, or two cameras of one name.
 [[nodiscard]] std::expected<rhot::CameraRig, std::string> load_cameras(const std::vector<std::string>& files);
 
 // Prints a report as indented JSON on stdout.

@@ -47,7 +47,7 @@ void make_parent_folder(const std::string& file) {
 std::expected<rhot::CameraRig, std::string> load_cameras(const std::vector<std::string>& files) {
   rhot::CameraRig rig;
   for (const std::string& file : files) {
-    auto loaded = rhot::load_rig(file);
+    auto loaded = rhot::load_rig_intrinsics(file);
     if (!loaded) return std::unexpected(loaded.error());
     if (rig.name.empty()) rig.name = loaded->name;
     for (rhot::Camera& c : loaded->cameras) {

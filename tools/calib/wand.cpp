@@ -112,29 +112,6 @@ bool append_report(const std::string& file, const WandCalibration& c) {
   return static_cast<bool>(out);
 }
 
-// The cameras of --intrinsics, in order: one file per camera from `intrinsics`, or one file with
-// them all. Poses in the files are ignored (load_rig_intrinsics), so a file gathering every
-// camera's intrinsics at the world origin, as `intrinsics` writes each, is taken as it is. Fails on a
-// file that does not load, or a camera name given twice.
-std::expected<CameraRig, std::string> load_intrinsics(const std::vector<std::string>& files) {
-  CameraRig rig;
-  for (const std::string& file : files) {
-    auto loaded = load_rig_intrinsics(file);
-    if (!loaded) return std::unexpected(loaded.error());
-    if (rig.name.empty()) rig.name = loaded->name;
-    for (Camera& c : loaded->cameras) {
-      for (const Camera& other : rig.cameras) {
-        if (other.name == c.name) {
-          return std::unexpected(file + ": camera \"" + c.name +
-                                 "\" is already in an earlier file; name each camera apart (intrinsics --name)");
-        }
-      }
-      rig.cameras.push_back(std::move(c));
-    }
-  }
-  return rig;
-}
-
 // Cameras with rough intrinsics from the image size (--image-size, else MultiCamSelfCal's
 // Res.dat): the principal point at the centre, no distortion, a focal length of one image width
 // (the calibration searches it).
@@ -232,7 +209,7 @@ int run(const WandOptions& o) {
   }
   CameraRig rig;
   if (!o.intrinsics.empty()) {
-    auto loaded = load_intrinsics(o.intrinsics);
+    auto loaded = load_cameras(o.intrinsics);
     if (!loaded) {
       spdlog::error("{}", loaded.error());
       return 1;

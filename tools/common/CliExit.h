@@ -19,7 +19,7 @@
 namespace rhot {
 
 inline int cli_exit_status(const CLI::App& app, const CLI::ParseError& e) {
-  const int cli11_status = app.exit(e);  // prints the help, the version or the error message
+  const int cli11_status = app.exit(e);                            // prints the help, the version or the error message
   if (dynamic_cast<const CLI::Success*>(&e) != nullptr) return 0;  // also CallForHelp, CallForAllHelp, CallForVersion
   if (dynamic_cast<const CLI::RuntimeError*>(&e) != nullptr) return cli11_status;
   return 1;
