@@ -124,16 +124,18 @@ TEST(CalibCli, SimulatedWandSessionToAMetricRigAndItsWorld) {
 
 TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
   // The whole path from images: simulated camera images of one marker, the blob detector through
-  // `record`, then `wand` (not metric without a wand: compared with the truth up to scale).
+  // `record`, then `wand` (not metric without a wand: compared with the truth up to scale). Drawing
+  // and reading back the images is most of this test's time (two 1024 x 768 noisy PNGs a frame):
+  // 80 frames, whose 155 detections still put the thresholds below 4 to 10 times what they measure.
   const fs::path dir = temp_dir();
   const std::string truth = asset("rigs/stereo-2.yaml");
-  const auto sim = calib("simulate wand --rig " + truth + " --markers 1 --frames 160 --rate-hz 8 --seed 3 --out " +
+  const auto sim = calib("simulate wand --rig " + truth + " --markers 1 --frames 80 --rate-hz 8 --seed 3 --out " +
                          (dir / "truth.csv").string() + " --images " + (dir / "images").string());
   ASSERT_EQ(sim.exit_code, 0) << sim.output;
   const std::string source = "video:" + (dir / "images" / "cam0_%04d.png").string() + "," + (dir / "images" / "cam1_%04d.png").string();
   const auto record = calib("record --rig " + truth + " --source " + source + " --out " + (dir / "recorded.csv").string());
   ASSERT_EQ(record.exit_code, 0) << record.output;
-  EXPECT_NE(record.output.find("of 160 frames"), std::string::npos) << record.output;
+  EXPECT_NE(record.output.find("of 80 frames"), std::string::npos) << record.output;
   const std::string intrinsics = intrinsics_files(truth, dir);
   const auto wand = calib_json("wand --intrinsics " + intrinsics + " --detections " + (dir / "recorded.csv").string() + " --json --out " +
                                (dir / "rig.yaml").string());
@@ -143,7 +145,8 @@ TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
   EXPECT_LT(j["rms_px"].get<double>(), 0.5);
   // The same wave calibrated from the simulation's own detections: the images and the blob
   // detector add little, and both are near the truth up to scale (the second camera's rotation
-  // relative to the first; 160 positions of one marker pin it to about 0.1 degrees).
+  // relative to the first; 80 positions of one marker pin it to about 0.15 degrees). Measured:
+  // 0.005 degrees between the two, 0.08 degrees from the truth (160 frames: 0.002 and 0.11).
   const auto direct = calib("wand --intrinsics " + intrinsics + " --detections " + (dir / "truth.csv").string() + " --out " +
                             (dir / "direct.yaml").string());
   ASSERT_EQ(direct.exit_code, 0) << direct.output;
