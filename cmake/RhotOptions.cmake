@@ -9,6 +9,9 @@ target_compile_features(rhot_options INTERFACE cxx_std_23)
 target_compile_options(rhot_options INTERFACE
   $<BUILD_INTERFACE:-Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion -Wnon-virtual-dtor
   -Wold-style-cast -Wnull-dereference -Wdouble-promotion
+  # A target's own exceptions (the RHOT_WARNING_EXCEPTIONS property) come after the warnings they
+  # turn off: a target's private options would come before this interface's and be overridden.
+  $<TARGET_PROPERTY:RHOT_WARNING_EXCEPTIONS>
   $<$<BOOL:${RHOT_WERROR}>:-Werror>>)
 if(RHOT_SANITIZE)
   # -O1, as AddressSanitizer's authors advise: the checks stay, the tests (which run the whole
@@ -21,7 +24,8 @@ if(RHOT_SANITIZE)
   # the same at either level.
   target_compile_options(rhot_options INTERFACE
     $<IF:$<BOOL:$<TARGET_PROPERTY:RHOT_TEST_PROGRAM>>,-O0,-O1>
-    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined $<BUILD_INTERFACE:-Wno-maybe-uninitialized>)
+    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+    $<BUILD_INTERFACE:$<$<CXX_COMPILER_ID:GNU>:-Wno-maybe-uninitialized>>)
   target_link_options(rhot_options INTERFACE -fsanitize=address,undefined)
 endif()
 

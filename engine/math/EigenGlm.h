@@ -32,8 +32,8 @@ inline glm::mat4 to_glm(const Rigid3d& b_from_a) {
   return m;
 }
 
-inline Eigen::Vector3d to_eigen(const glm::vec3& v) { return {v.x, v.y, v.z}; }
+inline Eigen::Vector3d to_eigen(const glm::vec3& v) { return Eigen::Vector3f{v.x, v.y, v.z}.cast<double>(); }
 
-inline Eigen::Quaterniond to_eigen(const glm::quat& q) { return {q.w, q.x, q.y, q.z}; }
+inline Eigen::Quaterniond to_eigen(const glm::quat& q) { return Eigen::Quaternionf{q.w, q.x, q.y, q.z}.cast<double>(); }
 
 }  // namespace rhot

@@ -22,8 +22,8 @@ inline btTransform to_bt(const Rigid3d& r) { return btTransform(to_bt(r.rotation
 
 inline glm::vec3 to_glm(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 inline glm::quat to_glm(const btQuaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
-inline Eigen::Vector3d to_eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
-inline Eigen::Quaterniond to_eigen(const btQuaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
+inline Eigen::Vector3d to_eigen(const btVector3& v) { return Eigen::Matrix<btScalar, 3, 1>{v.x(), v.y(), v.z()}.cast<double>(); }
+inline Eigen::Quaterniond to_eigen(const btQuaternion& q) { return Eigen::Quaternion<btScalar>{q.w(), q.x(), q.y(), q.z()}.cast<double>(); }
 inline Rigid3d to_rigid(const btTransform& t) { return Rigid3d{to_eigen(t.getRotation()), to_eigen(t.getOrigin())}; }
 
 inline bool finite(const btVector3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }

@@ -31,7 +31,7 @@ std::optional<Eigen::Vector3d> half_extents(const EntityDesc& e) {
   if (!e.mesh) return std::nullopt;
   const auto half = shape_half_extents(e.mesh->shape);
   if (!half) return std::nullopt;
-  return Eigen::Vector3d(half->x * e.transform.scale.x, half->y * e.transform.scale.y, half->z * e.transform.scale.z);
+  return to_eigen(*half * e.transform.scale);
 }
 
 }  // namespace
@@ -60,7 +60,7 @@ std::expected<PickupResult, std::string> run_pickup(const SceneDesc& scene, cons
     for (const InteractionEvent& e : runtime.physics().events()) {
       if (e.object == block && e.hand == HandSide::kRight && e.type == InteractionEventType::kGrasp) r.grasped = true;
     }
-    const double y = world.get<Transform>(block).position.y;
+    const auto y = static_cast<double>(world.get<Transform>(block).position.y);
     if (t >= 0.4 && !rest_y) rest_y = y;  // where the cube rests once it has settled (the script looks then too)
     if (rest_y) r.lift_m = std::max(r.lift_m, y - *rest_y);
     const DemoWorld* sim = demo.simulated();
@@ -118,7 +118,7 @@ std::expected<std::vector<Eigen::Vector2d>, std::string> pickup_spots(const Scen
   std::uniform_real_distribution<double> ux(lo.x(), hi.x()), uz(lo.y(), hi.y());
   std::vector<Eigen::Vector2d> spots;
   for (int tries = 0; static_cast<int>(spots.size()) < count && tries < 100000; ++tries) {
-    const Eigen::Vector2d p(ux(rng), uz(rng));
+    const Eigen::Vector2d p{ux(rng), uz(rng)};
     const bool clear = std::all_of(obstacles.begin(), obstacles.end(),
                                    [&](const Obstacle& o) { return (p - o.xz).norm() >= std::max(0.11, o.radius_m + cube_radius + 0.02); });
     if (clear) spots.push_back(p);

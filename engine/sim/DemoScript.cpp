@@ -28,7 +28,7 @@ double grip_width(const EntityDesc& e) {
 // Where a hand closes on an object: its centre, or for a tall object 2.5 cm below its top (the
 // palm would land on the top otherwise).
 Eigen::Vector3d grip_point(const EntityDesc& e) {
-  Eigen::Vector3d c(e.transform.position.x, e.transform.position.y, e.transform.position.z);
+  Eigen::Vector3d c = to_eigen(e.transform.position);
   const auto half = e.mesh ? shape_half_extents(e.mesh->shape) : std::nullopt;
   if (half) c.y() += std::max(0.0, static_cast<double>(half->y * e.transform.scale.y) - 0.025);
   return c;

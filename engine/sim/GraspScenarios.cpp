@@ -263,7 +263,7 @@ class ScenarioWorld final : public SimulatedWorld {
     for (const EntityDesc& e : scene.entities) {
       if (e.name != "object" || !e.mesh) continue;
       if (const auto* box = std::get_if<BoxShape>(&e.mesh->shape)) object_half_ = 0.5 * to_eigen(box->size_m);
-      if (const auto* sphere = std::get_if<SphereShape>(&e.mesh->shape)) object_radius_ = sphere->radius_m;
+      if (const auto* sphere = std::get_if<SphereShape>(&e.mesh->shape)) object_radius_ = static_cast<double>(sphere->radius_m);
     }
   }
 

@@ -43,7 +43,7 @@ Rigid3d world_pose(const SceneDesc& scene, const EntityDesc& e) {
 Eigen::Vector3d half_of(const EntityDesc& e) {
   const auto h = e.mesh ? shape_half_extents(e.mesh->shape) : std::nullopt;
   if (!h) return Eigen::Vector3d::Constant(0.025);
-  return Eigen::Vector3d(h->x * e.transform.scale.x, h->y * e.transform.scale.y, h->z * e.transform.scale.z);
+  return to_eigen(*h * e.transform.scale);
 }
 
 // The hand for a point: the left one left of the middle of the table.

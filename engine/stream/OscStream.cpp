@@ -283,7 +283,8 @@ void OscStream::run() {
 
 void OscStream::send_frame(const StreamFrame& frame) {
   const std::vector<OscMessage> messages = stream_messages(frame, target_.vmc);
-  lo_bundle bundle = lo_bundle_new(LO_TT_IMMEDIATE);
+  constexpr lo_timetag kImmediate{0U, 1U};  // LO_TT_IMMEDIATE, which is a C compound literal
+  lo_bundle bundle = lo_bundle_new(kImmediate);
   for (const OscMessage& m : messages) {
     lo_message message = lo_message_new();
     for (const OscArg& a : m.args) {

@@ -26,7 +26,7 @@ std::vector<ColourMarkerDrawing> markers() {
   for (const int colour : {0, 2, 3, 4, 5, 7}) {
     for (int i = 0; i < 4; ++i) {
       for (;;) {
-        const Eigen::Vector2d p(ux(rng), uy(rng));
+        const Eigen::Vector2d p{ux(rng), uy(rng)};
         if (std::all_of(out.begin(), out.end(), [&](const ColourMarkerDrawing& m) { return (m.pixel - p).norm() > 30.0; })) {
           out.push_back({p, ur(rng), colour});
           break;

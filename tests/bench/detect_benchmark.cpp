@@ -24,7 +24,7 @@ cv::Mat image_with_spots(int spots) {
   CameraFrame frame;
   std::mt19937_64 rng(4);
   std::uniform_real_distribution<double> x(10.0, 1270.0), y(10.0, 710.0);
-  for (int i = 0; i < spots; ++i) frame.detections.push_back({Eigen::Vector2d(x(rng), y(rng)), -1});
+  for (int i = 0; i < spots; ++i) frame.detections.push_back({Eigen::Vector2d{x(rng), y(rng)}, -1});
   SyntheticImageSettings s;
   s.noise_sigma = 2.0;
   return draw_blobs(camera, frame, s);

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/Sanitizers.h"
 #include "tests/support/RunCommand.h"
 #include "tracking/net/ChildProcess.h"
 #include "tracking/net/NodeSource.h"
@@ -20,7 +21,7 @@ namespace {
 // Frames a loaded 2-core machine may lose or see incomplete to scheduling. Under AddressSanitizer
 // (CI's build) every process runs two to three times slower, so a few frames more miss the
 // assembly deadline there; the release build holds the tight figure.
-#if defined(__SANITIZE_ADDRESS__)
+#if RHOT_ASAN
 constexpr int kSchedulingSlackFrames = 8;
 constexpr double kFoundFloor = 0.96;
 constexpr double kHandsSeenFloor = 0.98;

@@ -320,7 +320,8 @@ void add_blob_samples(const cv::Mat& image, const cv::Mat* mask, const ColourLea
     const auto* lab = labels.ptr<int>(y);
     const auto* h = hsv.ptr<cv::Vec3f>(y);
     for (int x = 0; x < image.cols; ++x) {
-      if (keep[static_cast<std::size_t>(lab[x])]) samples.push_back({h[x][0], h[x][1], h[x][2]});
+      if (keep[static_cast<std::size_t>(lab[x])])
+        samples.push_back({static_cast<double>(h[x][0]), static_cast<double>(h[x][1]), static_cast<double>(h[x][2])});
     }
   }
 }

@@ -227,8 +227,8 @@ struct NodeSource::Impl {
       node.stats.clock_residual_us = node.clock.residual_us();
       node.stats.min_rtt_us = node.clock.min_rtt_us();
     } else if (const auto* s = std::get_if<StatusReply>(&*decoded)) {
-      node.stats.node_rate_hz = s->frame_rate_hz;
-      node.stats.node_detect_ms = s->detect_mean_ms;
+      node.stats.node_rate_hz = static_cast<double>(s->frame_rate_hz);
+      node.stats.node_detect_ms = static_cast<double>(s->detect_mean_ms);
       node.stats.node_dropped = s->frames_dropped;
     }
   }

@@ -111,7 +111,7 @@ std::expected<CoverageReport, std::string> evaluate_coverage(const CameraRig& ri
         }
         const Eigen::Matrix3d l = cov_mm.llt().matrixL();
         for (int s = 0; s < settings.samples_per_point; ++s) {
-          const Eigen::Vector3d n(normal(rng), normal(rng), normal(rng));
+          const Eigen::Vector3d n{normal(rng), normal(rng), normal(rng)};
           errors_mm.push_back((l * n).norm());
         }
       }

@@ -64,7 +64,7 @@ std::vector<Eigen::Vector3d> volume_points(const CameraRig& rig, unsigned seed) 
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-0.5, 0.5);
   std::vector<Eigen::Vector3d> out;
-  for (int k = 0; k < 200; ++k) out.push_back(centre + Eigen::Vector3d(u(rng) * size.x(), u(rng) * size.y(), u(rng) * size.z()));
+  for (int k = 0; k < 200; ++k) out.push_back(centre + Eigen::Vector3d{u(rng) * size.x(), u(rng) * size.y(), u(rng) * size.z()});
   return out;
 }
 
@@ -98,7 +98,7 @@ CameraRig perturbed_rig(const CameraRig& truth, double rms_px, unsigned seed) {
   };
   std::vector<Nudge> nudges;
   for (std::size_t c = 0; c < truth.cameras.size(); ++c) {
-    nudges.push_back({Eigen::Vector3d(g(rng), g(rng), g(rng)) * 1e-3, Eigen::Vector3d(g(rng), g(rng), g(rng)) * 1e-3, g(rng) * 1e-3});
+    nudges.push_back({Eigen::Vector3d{g(rng), g(rng), g(rng)} * 1e-3, Eigen::Vector3d{g(rng), g(rng), g(rng)} * 1e-3, g(rng) * 1e-3});
   }
   const auto apply = [&](double scale) {
     CameraRig out = truth;

@@ -194,8 +194,8 @@ void SimulatedRig::add_strays(int camera, std::vector<Detection>& detections) {
     std::mt19937_64 lamp_rng(settings_.seed * 7919u + static_cast<unsigned>(camera) + 1u);
     for (int k = 0; k < fixed; ++k) lamps.emplace_back(x(lamp_rng), y(lamp_rng));
   }
-  for (const Eigen::Vector2d& lamp : lamps) detections.push_back({lamp + Eigen::Vector2d(noise(rng_), noise(rng_)), -1});
-  for (int k = fixed; k < settings_.strays; ++k) detections.push_back({Eigen::Vector2d(x(rng_), y(rng_)), -1});
+  for (const Eigen::Vector2d& lamp : lamps) detections.push_back({lamp + Eigen::Vector2d{noise(rng_), noise(rng_)}, -1});
+  for (int k = fixed; k < settings_.strays; ++k) detections.push_back({Eigen::Vector2d{x(rng_), y(rng_)}, -1});
 }
 
 RigFrame SimulatedRig::next() { return frame_at(static_cast<double>(frame_) / settings_.rate_hz); }
@@ -252,7 +252,7 @@ RigFrame SimulatedRig::frame_at(double t_s) {
       // Draw the random numbers whatever happens, so one marker's visibility does not shift the
       // noise of every other: frames stay comparable across settings.
       const double drop = uniform(rng_);
-      const Eigen::Vector2d n(noise(rng_), noise(rng_));
+      const Eigen::Vector2d n{noise(rng_), noise(rng_)};
       if (!visible(static_cast<int>(c), p) || drop < settings_.dropout) continue;
       cf.detections.push_back({*rig_.cameras[c].project(p) + n, static_cast<int>(m)});
     }

@@ -113,7 +113,9 @@ cv::Mat table_image(int width_px, int height_px) {
 void draw_wood_and_skin(cv::Mat& img, cv::RNG& rng) {
   const int width_px = img.cols, height_px = img.rows;
   const auto paint_ellipse = [&](cv::Point2f c, cv::Size2f axes, float angle, cv::Vec3f colour) {
-    cv::ellipse(img, cv::RotatedRect(c, axes, angle), cv::Scalar(colour[0], colour[1], colour[2]), cv::FILLED, cv::LINE_AA);
+    cv::ellipse(img, cv::RotatedRect(c, axes, angle),
+                cv::Scalar(static_cast<double>(colour[0]), static_cast<double>(colour[1]), static_cast<double>(colour[2])), cv::FILLED,
+                cv::LINE_AA);
   };
   for (int i = 0; i < 12; ++i) {
     const int y = static_cast<int>(rng.uniform(0, height_px));

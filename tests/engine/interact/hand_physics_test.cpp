@@ -42,7 +42,7 @@ TEST(HandPhysics, AThousandRandomHandMotionsThroughTheDefaultSceneStayInTheWorld
     std::array<Eigen::Vector3d, 2> to;
     std::array<double, 2> closure_to;
     for (std::size_t h = 0; h < 2; ++h) {
-      to[h] = Eigen::Vector3d(-0.3 + 0.6 * u(rng), 0.74 + 0.25 * u(rng), -0.75 + 0.5 * u(rng));
+      to[h] = Eigen::Vector3d{-0.3 + 0.6 * u(rng), 0.74 + 0.25 * u(rng), -0.75 + 0.5 * u(rng)};
       closure_to[h] = u(rng);
     }
     for (int k = 1; k <= 12; ++k) {

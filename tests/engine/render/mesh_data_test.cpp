@@ -112,7 +112,7 @@ TEST(Primitives, SphereHasItsRadiusSmoothNormalsAndConvergingVolume) {
   expect_well_formed(m);
   expect_faces_outward(m);
   expect_closed(m);
-  const double exact = 4.0 / 3.0 * kPi * std::pow(double{r}, 3);
+  const double exact = 4.0 / 3.0 * kPi * std::pow(static_cast<double>(r), 3);
   const double coarse = signed_volume(m) / exact;
   const double fine = signed_volume(make_sphere(r, 256, 128)) / exact;
   EXPECT_LT(coarse, 1.0);
@@ -161,8 +161,8 @@ void expect_capsule(float r, float h, double max_volume_error) {
   EXPECT_NEAR(e.x, 2 * r, 1e-6f);
   EXPECT_NEAR(e.y, h, 1e-6f);
   EXPECT_NEAR(e.z, 2 * r, 1e-6f);
-  const double rd = r;
-  const double exact = kPi * rd * rd * (double{h} - 2.0 * rd) + 4.0 / 3.0 * kPi * rd * rd * rd;
+  const auto rd = static_cast<double>(r);
+  const double exact = kPi * rd * rd * (static_cast<double>(h) - 2.0 * rd) + 4.0 / 3.0 * kPi * rd * rd * rd;
   const double ratio = signed_volume(m) / exact;
   EXPECT_LT(ratio, 1.0);
   EXPECT_GT(ratio, 1.0 - max_volume_error);

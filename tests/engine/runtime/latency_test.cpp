@@ -136,7 +136,7 @@ TEST(MotionPredictor, VelocityNoiseFallsWithTheFramesFitted) {
     for (int trial = 0; trial < 400; ++trial) {
       MotionPredictor p(1, frames);
       for (int i = 0; i < frames; ++i) {
-        const std::vector<Eigen::Vector3d> x{Eigen::Vector3d(noise(rng), noise(rng), noise(rng))};
+        const std::vector<Eigen::Vector3d> x{Eigen::Vector3d{noise(rng), noise(rng), noise(rng)}};
         p.update(i / 90.0, x, true);
       }
       sum += p.velocity(0).squaredNorm() / 3.0;

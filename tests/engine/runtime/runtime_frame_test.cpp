@@ -79,7 +79,7 @@ std::unique_ptr<Headless> headless_demo() {
 
 Eigen::Vector3d position_of(Runtime& d, const char* name) {
   const glm::vec3 p = d.world().get<Transform>(find_named(d.world(), name)).position;
-  return {p.x, p.y, p.z};
+  return Eigen::Vector3f{p.x, p.y, p.z}.cast<double>();
 }
 
 TEST(DemoFrame, PausingFreezesTheDemoAndSteppingRunsOneFrame) {

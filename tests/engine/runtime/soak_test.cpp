@@ -19,7 +19,9 @@
 
 #include <gtest/gtest.h>
 
-#if defined(__SANITIZE_ADDRESS__)
+#include "tests/support/Sanitizers.h"
+
+#if RHOT_ASAN
 // AddressSanitizer's allocator statistics (declared in LLVM's sanitizer/allocator_interface.h,
 // which GCC does not ship; libasan defines it).
 extern "C" std::size_t __sanitizer_get_current_allocated_bytes();

@@ -28,7 +28,7 @@ TEST(Camera, ProjectionMatchesOpenCv) {
   const cv::Matx33d k(c.intrinsics.fx, 0, c.intrinsics.cx, 0, c.intrinsics.fy, c.intrinsics.cy, 0, 0, 1);
   const cv::Vec<double, 5> d(c.intrinsics.distortion.data());
   for (int i = 0; i < 200; ++i) {
-    const Eigen::Vector3d p(u(rng), 1.0 + u(rng), -0.5 + u(rng));
+    const Eigen::Vector3d p{u(rng), 1.0 + u(rng), -0.5 + u(rng)};
     std::vector<cv::Point2d> expected;
     cv::projectPoints(std::vector<cv::Point3d>{{p.x(), p.y(), p.z()}}, rvec, tvec, k, d, expected);
     const auto pixel = c.project(p);

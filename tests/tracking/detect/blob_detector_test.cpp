@@ -30,7 +30,7 @@ CameraFrame grid_of_spots(int width, int height, unsigned seed) {
   std::uniform_real_distribution<double> offset(-4.0, 4.0);
   CameraFrame frame;
   for (int y = 20; y < height - 20; y += 40) {
-    for (int x = 20; x < width - 20; x += 40) frame.detections.push_back({Eigen::Vector2d(x + offset(rng), y + offset(rng)), -1});
+    for (int x = 20; x < width - 20; x += 40) frame.detections.push_back({Eigen::Vector2d{x + offset(rng), y + offset(rng)}, -1});
   }
   return frame;
 }

@@ -29,7 +29,7 @@ std::vector<ColourMarkerDrawing> scattered_markers(int per_colour, unsigned seed
   for (const int colour : kSix) {
     for (int i = 0; i < per_colour; ++i) {
       for (;;) {
-        const Eigen::Vector2d p(ux(rng), uy(rng));
+        const Eigen::Vector2d p{ux(rng), uy(rng)};
         if (std::all_of(out.begin(), out.end(), [&](const ColourMarkerDrawing& m) { return (m.pixel - p).norm() > 30.0; })) {
           out.push_back({p, ur(rng), colour});
           break;

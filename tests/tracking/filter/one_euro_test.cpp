@@ -47,7 +47,7 @@ TEST(OneEuroFilter, StillJitterIsCutToAThird) {
   double sum2 = 0.0;
   int n = 0;
   for (int i = 0; i < 2000; ++i) {
-    const Eigen::Vector3d out = f.filter(Eigen::Vector3d(noise(rng), noise(rng), noise(rng)), i / 90.0);
+    const Eigen::Vector3d out = f.filter(Eigen::Vector3d{noise(rng), noise(rng), noise(rng)}, i / 90.0);
     if (i < 200) continue;
     sum2 += out.squaredNorm() / 3.0;
     ++n;

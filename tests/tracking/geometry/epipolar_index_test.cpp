@@ -35,9 +35,9 @@ TEST(EpipolarIndex, FindsExactlyThePointsAScanFinds) {
   int found = 0;
   for (const Eigen::Vector3d& e : epipoles) {
     std::vector<Eigen::Vector2d> points;
-    for (int k = 0; k < 2000; ++k) points.emplace_back(image(rng), image(rng));
+    for (int k = 0; k < 2000; ++k) points.push_back(Eigen::Vector2d{image(rng), image(rng)});
     if (std::abs(e.z()) > 1e-6) {
-      for (int k = 0; k < 50; ++k) points.emplace_back(e.x() / e.z() + jitter(rng), e.y() / e.z() + jitter(rng));
+      for (int k = 0; k < 50; ++k) points.push_back(Eigen::Vector2d{e.x() / e.z() + jitter(rng), e.y() / e.z() + jitter(rng)});
     }
     std::vector<char> skip(points.size(), 0);
     for (std::size_t k = 0; k < skip.size(); k += 5) skip[k] = 1;
@@ -47,7 +47,7 @@ TEST(EpipolarIndex, FindsExactlyThePointsAScanFinds) {
     std::vector<int> got;
     for (int q = 0; q < 300; ++q) {
       // A line through the epipole and a random point; tolerances from 0.1 to 10 pixels at f = 800.
-      const Eigen::Vector3d through = Eigen::Vector2d(image(rng), image(rng)).homogeneous();
+      const Eigen::Vector3d through = Eigen::Vector2d{image(rng), image(rng)}.homogeneous();
       Eigen::Vector3d line = e.cross(through);
       line *= std::exp(image(rng) * 5.0);  // any scale
       const double tolerance =

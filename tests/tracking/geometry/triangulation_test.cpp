@@ -22,7 +22,7 @@ std::vector<Observation> observe(const CameraRig& rig, const Eigen::Vector3d& p,
   for (std::size_t i = 0; i < rig.cameras.size(); ++i) {
     const auto pixel = rig.cameras[i].project(p);
     if (!pixel || !rig.cameras[i].in_image(*pixel)) continue;
-    obs.push_back({static_cast<int>(i), *pixel + Eigen::Vector2d(noise(rng), noise(rng))});
+    obs.push_back({static_cast<int>(i), *pixel + Eigen::Vector2d{noise(rng), noise(rng)}});
   }
   return obs;
 }
@@ -32,7 +32,7 @@ TEST(Triangulation, NoiselessPointsAreRecoveredToAMicrometre) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-0.45, 0.45);
   for (int i = 0; i < 500; ++i) {
-    const Eigen::Vector3d p(u(rng), 1.1 + u(rng), -0.45 + u(rng));
+    const Eigen::Vector3d p{u(rng), 1.1 + u(rng), -0.45 + u(rng)};
     const auto obs = observe(rig, p, 0.0, rng);
     ASSERT_GE(obs.size(), 2u);
     const auto t = triangulate(rig, obs);

@@ -104,7 +104,7 @@ TEST(FingerIK, LimitsHoldForUnreachableAndAbsurdTargets) {
   std::uniform_real_distribution<double> u(-0.3, 0.3);
   for (int trial = 0; trial < 500; ++trial) {
     // Anywhere around the hand, including behind the knuckle and bent backwards.
-    const Eigen::Vector3d target = c.root_m + Eigen::Vector3d(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d target = c.root_m + Eigen::Vector3d{u(rng), u(rng), u(rng)};
     for (const IkResult& r : {solve_fabrik(c, target), solve_dls(c, target)}) {
       EXPECT_TRUE(within_limits(c.limits, r.angles)) << "trial " << trial;
       EXPECT_TRUE(std::isfinite(r.tip_error_m));

@@ -216,7 +216,7 @@ TEST(HandSolver, RandomAndBrokenInputNeverGivesNaNOrBreaksALimit) {
           t = Eigen::Vector3d(1e300, -1e300, 0);
           break;
         default:
-          t = Eigen::Vector3d(u(rng), u(rng), u(rng));
+          t = Eigen::Vector3d{u(rng), u(rng), u(rng)};
       }
     }
     const double time = kind(rng) == 0 ? std::nan("") : f / 90.0;

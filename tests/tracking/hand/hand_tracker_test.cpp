@@ -213,7 +213,7 @@ int confusion_frames(const std::array<HandLayout, 2>& layouts, bool shared, unsi
       wrist[h] = truth.world_from_hand * pose.position_m[static_cast<std::size_t>(HandJoint::kWrist)];
       for (const Eigen::Vector3d& m : markers(layouts[h], truth.world_from_hand, pose)) {
         if (uniform(rng) < 0.3) continue;
-        points.push_back(m + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+        points.push_back(m + Eigen::Vector3d{noise(rng), noise(rng), noise(rng)});
       }
     }
     std::shuffle(points.begin(), points.end(), rng);

@@ -21,7 +21,8 @@ TEST(ClockSync, ANodeFiftyMillisecondsAheadAndDriftingIsFollowedWithinMicrosecon
   ClockSync sync;
   std::int64_t master = 1'000'000'000;
   for (int i = 0; i < 200; ++i, master += 50 * kMs) {  // 10 s of samples every 50 ms
-    const std::int64_t out = leg(rng) + (i % 5 == 0 ? held(rng) : 0);
+    const std::int64_t out_leg = leg(rng);             // drawn before `held`: the order of + is unspecified
+    const std::int64_t out = out_leg + (i % 5 == 0 ? held(rng) : 0);
     const std::int64_t back = leg(rng);
     sync.add(master, node_at(master + out), master + out + back);
   }

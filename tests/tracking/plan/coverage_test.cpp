@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -81,10 +82,10 @@ TEST(Coverage, PredictedErrorQuantilesAreWhatTriangulationMeasures) {
   std::normal_distribution<double> noise(0.0, 0.3);
   std::vector<double> errors_mm;
   while (errors_mm.size() < 20000) {
-    const Eigen::Vector3d p = volume.centre_m + volume.size_m.cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+    const Eigen::Vector3d p = volume.centre_m + volume.size_m.cwiseProduct(Eigen::Vector3d{unit(rng), unit(rng), unit(rng)});
     std::vector<Observation> seen;
     for (const int c : cameras_seeing(cameras, p)) {
-      seen.push_back({c, *cameras[static_cast<std::size_t>(c)].project(p) + Eigen::Vector2d(noise(rng), noise(rng))});
+      seen.push_back({c, *cameras[static_cast<std::size_t>(c)].project(p) + Eigen::Vector2d{noise(rng), noise(rng)}});
     }
     if (seen.size() < 2) continue;
     const auto t = refine_point(cameras, seen, p, 10);
@@ -120,7 +121,8 @@ TEST(Coverage, BadInputIsRefusedWithTheReason) {
   const TrackingVolume box{{0, 1, 0}, {1, 1, 1}};
   EXPECT_EQ(evaluate_coverage(CameraRig{}, box).error(), "the rig has no cameras");
   EXPECT_EQ(evaluate_coverage(rig, {{0, 1, 0}, {1, 0, 1}}).error(), "volume: every side must be positive and finite");
-  EXPECT_EQ(evaluate_coverage(rig, {{0, NAN, 0}, {1, 1, 1}}).error(), "volume: its centre must be finite");
+  EXPECT_EQ(evaluate_coverage(rig, {{0, std::numeric_limits<double>::quiet_NaN(), 0}, {1, 1, 1}}).error(),
+            "volume: its centre must be finite");
   CoverageSettings s;
   s.sigma_px = 0.0;
   EXPECT_EQ(evaluate_coverage(rig, box, s).error(), "sigma: must be positive");

@@ -1,6 +1,7 @@
 #include "tracking/plan/JoinGraph.h"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -69,7 +70,7 @@ TEST(JoinGraph, BadInputIsRefusedWithTheReason) {
   EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{{"a", "z", 1.0}}, "a").error(), "joins[0]: \"z\" is not a group");
   EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{{"a", "b", -1.0}}, "a").error(),
             "joins[0]: its error must be 0 or more and finite");
-  EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{{"a", "b", NAN}}, "a").error(),
+  EXPECT_EQ(propagate_join_errors(groups, std::vector<GroupJoin>{{"a", "b", std::numeric_limits<double>::quiet_NaN()}}, "a").error(),
             "joins[0]: its error must be 0 or more and finite");
   const std::vector<CameraGroup> twice = {{"a", 0.0}, {"a", 0.0}};
   EXPECT_EQ(propagate_join_errors(twice, std::vector<GroupJoin>{}, "a").error(), "groups: \"a\" is named twice");
