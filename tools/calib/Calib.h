@@ -32,6 +32,7 @@ void add_wand(CLI::App& app, int& exit_code);
 void add_world(CLI::App& app, int& exit_code);
 void add_merge(CLI::App& app, int& exit_code);
 void add_colours(CLI::App& app, int& exit_code);
+void add_hand_model(CLI::App& app, int& exit_code);
 // `simulate` has subcommands of its own: wand, lframe, floor (simulate.cpp) and board.
 void add_simulate(CLI::App& app, int& exit_code);
 void add_simulate_board(CLI::App& simulate, int& exit_code);

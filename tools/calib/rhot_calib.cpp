@@ -6,6 +6,7 @@
 //   rhot-calib world --rig RIG.yaml --detections PATH (--lframe | --floor) --out RIG.yaml [--json]
 //   rhot-calib merge RIG_A.yaml RIG_B.yaml --out RIG.yaml [--json]
 //   rhot-calib colours IMAGES... | --source video:DEV --out colours.json [--expect red,...] [--mask FILE...] [--json]
+//   rhot-calib hand-model --take TAKE.c3d|TAKE.tsv --out MODEL.json [--fit-seconds S] [--json]
 //   rhot-calib simulate wand|lframe|floor|board ...
 //
 // docs/calibration.md walks through them in order.
@@ -82,6 +83,7 @@ int main(int argc, char** argv) {
   rhot::calib_tool::add_world(app, exit_code);
   rhot::calib_tool::add_merge(app, exit_code);
   rhot::calib_tool::add_colours(app, exit_code);
+  rhot::calib_tool::add_hand_model(app, exit_code);
   rhot::calib_tool::add_simulate(app, exit_code);
   try {
     app.parse(argc, argv);

@@ -66,8 +66,18 @@ struct HandsArgs {
   std::vector<double> volume_centre;
   bool filter = false;
   bool calibrate_hand = false;
+  // A recorded take instead (tools/eval/take.cpp): its fingertips hidden by rule, estimated from the rest.
+  std::string take_file;
+  std::string model_file;        // a hidden-marker model (rhot-calib hand-model); none: fitted to the take's first part
+  double fit_fraction = 0.6;     // with no model: the share of the take fitted; the rest is the unfitted part
+  bool labelled = false;         // the take's labelled 3D points straight to the estimator
+  double evaluate_from_s = 0.0;  // with --model: judge from this time on (the part the model was not fitted to)
+  double hide_gap_s = 0.5;
+  int hide_together = 1;
 };
 int hands(const HandsArgs& args);
+// `rhot-eval hands --take`.
+int hands_take(const HandsArgs& args);
 // `rhot-eval nodes`'s flags.
 struct NodesArgs {
   std::string rig_file;

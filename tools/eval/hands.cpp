@@ -164,6 +164,11 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
 }  // namespace
 
 int hands(const HandsArgs& args) {
+  if (!args.take_file.empty()) return hands_take(args);
+  if (args.rig_file.empty()) {
+    std::cerr << "rhot-eval: hands needs --rig (simulated hands through a rig) or --take (a recorded take)\n";
+    return 1;
+  }
   const auto world = world_settings(args.world);
   if (!world) {
     std::cerr << "rhot-eval: " << world.error() << "\n";

@@ -4,6 +4,7 @@
 //                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
 //   rhot-eval demo [--scene FILE] [--placements N] [--seed S] [--hands tracked|perfect] [world flags] --json
 //   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--calibrate-hand] [world flags] [--frames N] --json
+//   rhot-eval hands --take FILE --labelled [--model FILE | --fit-fraction F] [--hide-gap-s S] [--hide-together N] [--seed K] --json
 //   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
 //   rhot-eval calibration --rig FILE [--wand-mm 500] [--sigma PX] [--frames 2000] [--seed S] [--dropout P] --json
 //   rhot-eval nodes [--nodes N] [--markers M] [--rate-hz R] [--seconds S] [--kill-node-at T --restart-node-at T2]
@@ -66,7 +67,23 @@ struct DemoArgs {
 CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
   auto* cmd = app.add_subcommand("hands", "scripted hand motions with a hand layout: every joint against the truth");
   a.layout_file = std::string(RHOT_ASSET_DIR) + "/hands/low-cost-right.json";
-  cmd->add_option("--rig", a.rig_file, "camera rig (OpenCV YAML)")->required();
+  cmd->add_option("--rig", a.rig_file, "camera rig (OpenCV YAML; needed but with --take)");
+  cmd->add_option("--take", a.take_file, "a labelled marker take (C3D or Qualisys TSV): hide its fingertips by rule and estimate them")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--model", a.model_file,
+                  "with --take: a hidden-marker model (rhot-calib hand-model); default: fitted to the take's first part");
+  cmd->add_option("--fit-fraction", a.fit_fraction, "with --take and no --model: the share of the take fitted (the rest is reported apart)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 0.9));
+  cmd->add_option("--evaluate-from-s", a.evaluate_from_s, "with --take and --model: judge from this many seconds into the take on")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--labelled", a.labelled, "with --take: feed the take's labelled 3D points to the estimator (no cameras)");
+  cmd->add_option("--hide-gap-s", a.hide_gap_s, "with --take: seconds each fingertip is hidden (then as long seen)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 60.0));
+  cmd->add_option("--hide-together", a.hide_together, "with --take: fingertips hidden at once (1, or 2: a tip and its neighbour's)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 2));
   cmd->add_option("--layout", a.layout_file, "hand marker layout (JSON)")->capture_default_str();
   cmd->add_option("--motion", a.motion, "open, fist, pinch, wave, power-grasp, precision-grasp or all")->capture_default_str();
   add_world_flags(*cmd, a.world, true);

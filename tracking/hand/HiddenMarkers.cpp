@@ -1,0 +1,334 @@
+#include "tracking/hand/HiddenMarkers.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <random>
+
+#include <Eigen/Cholesky>
+#include <nlohmann/json.hpp>
+
+namespace rhot {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Entries of a 3-per-marker vector that belong to the markers in `mask` (bit m: marker m).
+std::vector<Eigen::Index> coordinates(std::uint64_t mask, int markers) {
+  std::vector<Eigen::Index> out;
+  for (int m = 0; m < markers; ++m) {
+    if ((mask >> m & 1u) == 0) continue;
+    for (int k = 0; k < 3; ++k) out.push_back(3 * m + k);
+  }
+  return out;
+}
+
+// The markers' indices in the take, or the first missing name.
+std::expected<std::vector<int>, std::string> indices_in(const MarkerTake& take, std::span<const std::string> names) {
+  std::vector<int> out;
+  for (const std::string& name : names) {
+    const auto m = take.marker(name);
+    if (!m) return std::unexpected("the take has no marker \"" + name + "\"");
+    out.push_back(*m);
+  }
+  return out;
+}
+
+std::string error_at(const std::filesystem::path& file, const std::string& what) { return file.string() + ": " + what; }
+
+}  // namespace
+
+std::optional<Rigid3d> hand_frame_from_markers(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  if (!a.allFinite() || !b.allFinite() || !c.allFinite()) return std::nullopt;
+  const Eigen::Vector3d across = c - b, normal = across.cross(a - b);
+  if (across.norm() < 1e-4 || normal.norm() < 1e-8) return std::nullopt;
+  Eigen::Matrix3d r;
+  r.col(0) = across.normalized();
+  r.col(2) = normal.normalized();
+  r.col(1) = r.col(2).cross(r.col(0));
+  return Rigid3d{Eigen::Quaterniond(r).normalized(), (a + b + c) / 3.0};
+}
+
+std::vector<int> fingertip_markers(const HiddenMarkerModel& model) {
+  std::vector<int> out;
+  for (std::size_t m = 0; m < model.markers.size(); ++m) {
+    const std::string& name = model.markers[m];
+    if (name.size() > 4 && name.ends_with("_tip")) out.push_back(static_cast<int>(m));
+  }
+  return out;
+}
+
+HiddenMarkerEstimator::HiddenMarkerEstimator(HiddenMarkerModel model)
+    : model_(std::move(model)),
+      last_seen_(Eigen::VectorXd::Constant(3 * static_cast<Eigen::Index>(model_.markers.size()), kNaN)),
+      hidden_since_s_(model_.markers.size(), kNaN),
+      remembered_error_(model_.markers.size(), Eigen::Vector3d::Zero()) {}
+
+const Eigen::MatrixXd& HiddenMarkerEstimator::gain(std::uint64_t visible) {
+  const auto cached = gains_.find(visible);
+  if (cached != gains_.end()) return cached->second;
+  const int n = static_cast<int>(model_.markers.size());
+  const std::uint64_t all = n >= 64 ? ~0ull : (1ull << n) - 1;
+  const std::vector<Eigen::Index> v = coordinates(visible, n), h = coordinates(all & ~visible, n);
+  Eigen::MatrixXd c_vv = model_.covariance_m2(v, v);
+  c_vv.diagonal().array() += model_.ridge_m2;
+  const Eigen::MatrixXd c_hv = model_.covariance_m2(h, v);
+  // gain = C_HV (C_VV + ridge)^-1, through the symmetric system: (C_VV + ridge) gain^T = C_VH.
+  Eigen::MatrixXd g = c_vv.ldlt().solve(c_hv.transpose()).transpose();
+  return gains_.emplace(visible, std::move(g)).first->second;
+}
+
+Eigen::Vector3d HiddenMarkerEstimator::predict(int marker, std::uint64_t visible, const Eigen::VectorXd& hand_positions) {
+  const int n = static_cast<int>(model_.markers.size());
+  const std::vector<Eigen::Index> v = coordinates(visible, n);
+  const std::uint64_t all = n >= 64 ? ~0ull : (1ull << n) - 1;
+  const std::vector<Eigen::Index> h = coordinates(all & ~visible, n);
+  const auto row = std::ranges::find(h, 3 * marker) - h.begin();
+  const Eigen::VectorXd x_v = hand_positions(v) - model_.mean_m(v);
+  return model_.mean_m.segment<3>(3 * marker) + gain(visible).middleRows(row, 3) * x_v;
+}
+
+std::vector<HiddenMarkerEstimator::Marker> HiddenMarkerEstimator::update(double time_s,
+                                                                         std::span<const Eigen::Vector3d, 3> frame_markers_world,
+                                                                         std::span<const Eigen::Vector3d> markers_world) {
+  const int n = static_cast<int>(model_.markers.size());
+  std::vector<Marker> out(static_cast<std::size_t>(n));
+  const std::optional<Rigid3d> world_from_hand =
+      hand_frame_from_markers(frame_markers_world[0], frame_markers_world[1], frame_markers_world[2]);
+  Eigen::VectorXd x = Eigen::VectorXd::Constant(3 * n, kNaN);
+  std::uint64_t visible = 0;
+  for (int m = 0; m < n; ++m) {
+    const Eigen::Vector3d& p = markers_world[static_cast<std::size_t>(m)];
+    if (!p.allFinite()) continue;
+    out[static_cast<std::size_t>(m)] = {p, MarkerEstimate::kSeen};
+    if (!world_from_hand) continue;
+    x.segment<3>(3 * m) = world_from_hand->inverse() * p;
+    visible |= 1ull << m;
+  }
+  // Markers hidden from this frame on: the predictor's error where they were last seen, from the
+  // others' positions then (before this frame's overwrite them).
+  if (world_from_hand) {
+    std::uint64_t known_before = 0;
+    for (int m = 0; m < n; ++m) known_before |= (last_seen_.segment<3>(3 * m).allFinite() && (visible >> m & 1u) ? 1ull : 0ull) << m;
+    for (int m = 0; m < n; ++m) {
+      const auto i = static_cast<std::size_t>(m);
+      if ((visible >> m & 1u) != 0) {
+        hidden_since_s_[i] = kNaN;
+        continue;
+      }
+      if (!std::isnan(hidden_since_s_[i])) continue;
+      hidden_since_s_[i] = time_s;
+      remembered_error_[i].setZero();
+      if (last_seen_.segment<3>(3 * m).allFinite() && known_before != 0) {
+        remembered_error_[i] = last_seen_.segment<3>(3 * m) - predict(m, known_before, last_seen_);
+      }
+    }
+  }
+  for (int m = 0; m < n; ++m) {
+    if ((visible >> m & 1u) != 0) last_seen_.segment<3>(3 * m) = x.segment<3>(3 * m);
+  }
+  for (int m = 0; m < n; ++m) {
+    const auto i = static_cast<std::size_t>(m);
+    if (out[i].how == MarkerEstimate::kSeen) continue;
+    const Eigen::Vector3d last = last_seen_.segment<3>(3 * m);
+    if (world_from_hand && visible != 0) {
+      const double fade = model_.memory_s > 0.0 ? std::exp(-(time_s - hidden_since_s_[i]) / model_.memory_s) : 0.0;
+      out[i] = {*world_from_hand * (predict(m, visible, x) + fade * remembered_error_[i]), MarkerEstimate::kPredicted};
+    } else if (last.allFinite() && (world_from_hand || last_frame_)) {
+      out[i] = {(world_from_hand ? *world_from_hand : *last_frame_) * last, MarkerEstimate::kHeld};
+    }
+  }
+  if (world_from_hand) last_frame_ = world_from_hand;
+  return out;
+}
+
+std::expected<HiddenMarkerErrors, std::string> evaluate_hidden_markers(const MarkerTake& take, const HiddenMarkerModel& model,
+                                                                       const HideSettings& settings) {
+  const auto frame_index = indices_in(take, model.frame_markers);
+  if (!frame_index) return std::unexpected(frame_index.error());
+  const auto marker_index = indices_in(take, model.markers);
+  if (!marker_index) return std::unexpected(marker_index.error());
+  const int first = std::max(settings.first_frame, 0);
+  const int end = settings.end_frame < 0 ? take.frame_count() : std::min(settings.end_frame, take.frame_count());
+  if (end <= first) return std::unexpected("no frames to evaluate");
+  const std::vector<int> tips = fingertip_markers(model);
+  if (tips.empty()) return std::unexpected("the model has no fingertip marker (a name ending in \"_tip\")");
+
+  const int gap = std::max(1, static_cast<int>(std::lround(settings.gap_s * take.frame_rate_hz)));
+  std::mt19937 rng(settings.seed);
+  const int offset = std::uniform_int_distribution<int>(0, 2 * gap - 1)(rng);
+  HiddenMarkerEstimator estimator(model);
+  HiddenMarkerErrors errors;
+  const int n = static_cast<int>(model.markers.size());
+  std::vector<Eigen::Vector3d> held_hand(static_cast<std::size_t>(n), Eigen::Vector3d::Constant(kNaN));
+  std::vector<Eigen::Vector3d> markers(static_cast<std::size_t>(n));
+  for (int f = first; f < end; ++f) {
+    // Gap k (frames [k * 2 gap, k * 2 gap + gap) after the offset) hides tip k mod the tips.
+    const int since = f - first + offset;
+    std::vector<int> hidden;
+    if (since % (2 * gap) < gap) {
+      const auto k = static_cast<std::size_t>(since / (2 * gap)) % tips.size();
+      hidden.push_back(tips[k]);
+      if (settings.together >= 2 && tips.size() >= 2) hidden.push_back(tips[k + 1 < tips.size() ? k + 1 : k - 1]);
+    }
+    const std::array<Eigen::Vector3d, 3> frame{take.at(f, (*frame_index)[0]), take.at(f, (*frame_index)[1]), take.at(f, (*frame_index)[2])};
+    for (int m = 0; m < n; ++m) {
+      const bool hide = std::ranges::find(hidden, m) != hidden.end();
+      markers[static_cast<std::size_t>(m)] =
+          hide ? Eigen::Vector3d::Constant(kNaN) : take.at(f, (*marker_index)[static_cast<std::size_t>(m)]);
+    }
+    const auto estimate = estimator.update(take.time_s(f), frame, markers);
+    const std::optional<Rigid3d> world_from_hand = hand_frame_from_markers(frame[0], frame[1], frame[2]);
+    for (int m = 0; m < n; ++m) {
+      const auto i = static_cast<std::size_t>(m);
+      if (world_from_hand && markers[i].allFinite()) held_hand[i] = world_from_hand->inverse() * markers[i];
+    }
+    for (const int m : hidden) {
+      const auto i = static_cast<std::size_t>(m);
+      const Eigen::Vector3d& recorded = take.at(f, (*marker_index)[i]);
+      if (!recorded.allFinite() || !world_from_hand || !held_hand[i].allFinite()) continue;
+      ++errors.hidden_frames;
+      if (estimate[i].how == MarkerEstimate::kUnknown) continue;
+      const double e = 1e3 * (estimate[i].position_m - recorded).norm();
+      errors.hidden_mm.push_back(e);
+      errors.hidden_by_marker_mm[model.markers[i]].push_back(e);
+      errors.held_mm.push_back(1e3 * (*world_from_hand * held_hand[i] - recorded).norm());
+    }
+  }
+  return errors;
+}
+
+std::expected<HiddenMarkerModel, std::string> fit_hidden_marker_model(const MarkerTake& take,
+                                                                      const std::array<std::string, 3>& frame_markers,
+                                                                      const std::vector<std::string>& markers,
+                                                                      const HiddenMarkerFitSettings& settings) {
+  if (markers.empty() || markers.size() > 63) return std::unexpected("a model holds 1 to 63 markers");
+  const auto frame_index = indices_in(take, frame_markers);
+  if (!frame_index) return std::unexpected(frame_index.error());
+  const auto marker_index = indices_in(take, markers);
+  if (!marker_index) return std::unexpected(marker_index.error());
+  const int first = std::max(settings.first_frame, 0);
+  const int end = settings.end_frame < 0 ? take.frame_count() : std::min(settings.end_frame, take.frame_count());
+  const auto n = static_cast<Eigen::Index>(markers.size());
+  std::vector<Eigen::VectorXd> samples;
+  for (int f = first; f < end; ++f) {
+    const auto world_from_hand =
+        hand_frame_from_markers(take.at(f, (*frame_index)[0]), take.at(f, (*frame_index)[1]), take.at(f, (*frame_index)[2]));
+    if (!world_from_hand) continue;
+    Eigen::VectorXd x(3 * n);
+    bool all = true;
+    for (Eigen::Index m = 0; m < n && all; ++m) {
+      const Eigen::Vector3d& p = take.at(f, (*marker_index)[static_cast<std::size_t>(m)]);
+      all = p.allFinite();
+      if (all) x.segment<3>(3 * m) = world_from_hand->inverse() * p;
+    }
+    if (all) samples.push_back(x);
+  }
+  const auto needed = static_cast<std::size_t>(3 * n + 10);
+  if (samples.size() < needed) {
+    return std::unexpected("only " + std::to_string(samples.size()) + " frames with the hand's frame and every marker seen (" +
+                           std::to_string(needed) + " needed)");
+  }
+  HiddenMarkerModel model;
+  model.frame_markers = frame_markers;
+  model.markers = markers;
+  model.training_frames = static_cast<int>(samples.size());
+  model.mean_m = Eigen::VectorXd::Zero(3 * n);
+  for (const Eigen::VectorXd& x : samples) model.mean_m += x;
+  model.mean_m /= static_cast<double>(samples.size());
+  model.covariance_m2 = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (const Eigen::VectorXd& x : samples) model.covariance_m2.noalias() += (x - model.mean_m) * (x - model.mean_m).transpose();
+  model.covariance_m2 /= static_cast<double>(samples.size() - 1);
+
+  // The ridge and the memory that hide the tips best over the fitted frames.
+  double best = std::numeric_limits<double>::infinity();
+  HiddenMarkerModel candidate = model;
+  for (const double ridge : settings.ridge_candidates_m2) {
+    for (const double memory : settings.memory_candidates_s) {
+      candidate.ridge_m2 = ridge;
+      candidate.memory_s = memory;
+      const auto errors = evaluate_hidden_markers(take, candidate, {.first_frame = first, .end_frame = end});
+      if (!errors || errors->hidden_mm.empty()) continue;
+      double sum = 0.0;
+      for (const double e : errors->hidden_mm) sum += e;
+      if (sum / static_cast<double>(errors->hidden_mm.size()) < best) {
+        best = sum / static_cast<double>(errors->hidden_mm.size());
+        model.ridge_m2 = ridge;
+        model.memory_s = memory;
+      }
+    }
+  }
+  return model;
+}
+
+std::expected<void, std::string> save_hidden_marker_model(const HiddenMarkerModel& model, const std::filesystem::path& file) {
+  nlohmann::json j;
+  j["format"] = "rhot-hidden-marker-model";
+  j["version"] = 1;
+  j["source"] = model.source;
+  j["frame_markers"] = model.frame_markers;
+  j["markers"] = model.markers;
+  j["training_frames"] = model.training_frames;
+  j["ridge_mm2"] = model.ridge_m2 * 1e6;
+  j["memory_s"] = model.memory_s;
+  std::vector<double> mean(static_cast<std::size_t>(model.mean_m.size()));
+  for (Eigen::Index i = 0; i < model.mean_m.size(); ++i) mean[static_cast<std::size_t>(i)] = model.mean_m[i] * 1e3;
+  j["mean_mm"] = mean;
+  std::vector<std::vector<double>> covariance;
+  for (Eigen::Index r = 0; r < model.covariance_m2.rows(); ++r) {
+    covariance.emplace_back();
+    for (Eigen::Index c = 0; c < model.covariance_m2.cols(); ++c) covariance.back().push_back(model.covariance_m2(r, c) * 1e6);
+  }
+  j["covariance_mm2"] = covariance;
+  std::ofstream out(file);
+  out << j.dump(1) << '\n';
+  if (!out) return std::unexpected(error_at(file, "cannot be written"));
+  return {};
+}
+
+std::expected<HiddenMarkerModel, std::string> load_hidden_marker_model(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) return std::unexpected(error_at(file, "cannot be opened"));
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return std::unexpected(error_at(file, "not JSON"));
+  if (j.value("format", "") != "rhot-hidden-marker-model")
+    return std::unexpected(error_at(file, "format: expected \"rhot-hidden-marker-model\""));
+  HiddenMarkerModel model;
+  try {
+    model.source = j.value("source", "");
+    const auto frame = j.at("frame_markers").get<std::vector<std::string>>();
+    if (frame.size() != 3) return std::unexpected(error_at(file, "frame_markers: expected three names"));
+    std::ranges::copy(frame, model.frame_markers.begin());
+    model.markers = j.at("markers").get<std::vector<std::string>>();
+    model.training_frames = j.value("training_frames", 0);
+    model.ridge_m2 = j.at("ridge_mm2").get<double>() * 1e-6;
+    model.memory_s = j.at("memory_s").get<double>();
+    const auto mean = j.at("mean_mm").get<std::vector<double>>();
+    const auto covariance = j.at("covariance_mm2").get<std::vector<std::vector<double>>>();
+    const std::size_t size = 3 * model.markers.size();
+    if (model.markers.empty() || model.markers.size() > 63) return std::unexpected(error_at(file, "markers: expected 1 to 63 names"));
+    if (mean.size() != size)
+      return std::unexpected(error_at(file, "mean_mm: expected " + std::to_string(size) + " numbers (3 per marker)"));
+    if (covariance.size() != size || std::ranges::any_of(covariance, [&](const auto& row) { return row.size() != size; })) {
+      return std::unexpected(error_at(file, "covariance_mm2: expected " + std::to_string(size) + " rows of " + std::to_string(size)));
+    }
+    model.mean_m = Eigen::Map<const Eigen::VectorXd>(mean.data(), static_cast<Eigen::Index>(size)) * 1e-3;
+    model.covariance_m2.resize(static_cast<Eigen::Index>(size), static_cast<Eigen::Index>(size));
+    for (std::size_t r = 0; r < size; ++r) {
+      for (std::size_t c = 0; c < size; ++c)
+        model.covariance_m2(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = covariance[r][c] * 1e-6;
+    }
+  } catch (const nlohmann::json::exception& e) {
+    return std::unexpected(error_at(file, std::string("missing or mistyped field: ") + e.what()));
+  }
+  if (!model.mean_m.allFinite() || !model.covariance_m2.allFinite() || !std::isfinite(model.ridge_m2) || model.ridge_m2 < 0.0 ||
+      !std::isfinite(model.memory_s) || model.memory_s < 0.0) {
+    return std::unexpected(error_at(file, "numbers must be finite, and ridge_mm2 and memory_s not negative"));
+  }
+  if (!model.covariance_m2.isApprox(model.covariance_m2.transpose(), 1e-9))
+    return std::unexpected(error_at(file, "covariance_mm2: not symmetric"));
+  return model;
+}
+
+}  // namespace rhot
