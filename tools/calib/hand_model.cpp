@@ -1,6 +1,7 @@
 // rhot-calib hand-model: a hidden-marker model (tracking/hand/HiddenMarkers.h) fitted to a
 // labelled take of a user's own hand, for estimating hidden fingers the way that hand moves.
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -36,7 +37,9 @@ int run_hand_model(const HandModelOptions& o) {
     if (markers.empty()) return fail(o.take + ": no <finger>_tip or <finger>_middle markers (name them with --markers)");
   }
   HiddenMarkerFitSettings settings;
-  if (o.fit_seconds > 0.0) settings.end_frame = static_cast<int>(o.fit_seconds * take->frame_rate_hz);
+  if (o.fit_seconds > 0.0) {
+    settings.end_frame = static_cast<int>(std::min(static_cast<double>(take->frame_count()), o.fit_seconds * take->frame_rate_hz));
+  }
   spdlog::info("fitting {} markers to {} of {} frames", markers.size(), settings.end_frame < 0 ? take->frame_count() : settings.end_frame,
                take->frame_count());
   auto model = fit_hidden_marker_model(*take, {o.frame_markers[0], o.frame_markers[1], o.frame_markers[2]}, markers, settings);

@@ -76,7 +76,7 @@ CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
       ->capture_default_str()
       ->check(CLI::Range(0.1, 0.9));
   cmd->add_option("--evaluate-from-s", a.evaluate_from_s, "with --take and --model: judge from this many seconds into the take on")
-      ->check(CLI::NonNegativeNumber);
+      ->check(rhot::number_check(rhot::NumberBound::kNonNegative));
   cmd->add_flag("--labelled", a.labelled, "with --take: feed the take's labelled 3D points to the estimator (no cameras)");
   cmd->add_option("--hide-gap-s", a.hide_gap_s, "with --take: seconds each fingertip is hidden (then as long seen)")
       ->capture_default_str()

@@ -57,7 +57,7 @@ int hands_take(const HandsArgs& args) {
     auto loaded = load_hidden_marker_model(args.model_file);
     if (!loaded) return fail(loaded.error());
     model = std::move(*loaded);
-    unfitted_first = std::min(take->frame_count() - 1, static_cast<int>(args.evaluate_from_s * take->frame_rate_hz));
+    unfitted_first = static_cast<int>(std::min(static_cast<double>(take->frame_count() - 1), args.evaluate_from_s * take->frame_rate_hz));
   } else {
     std::vector<std::string> markers;
     for (const char* finger : kFingers) {

@@ -106,11 +106,10 @@ std::vector<HiddenMarkerEstimator::Marker> HiddenMarkerEstimator::update(double 
     x.segment<3>(3 * m) = world_from_hand->inverse() * p;
     visible |= 1ull << m;
   }
-  // Markers hidden from this frame on: the predictor's error where they were last seen, from the
-  // others' positions then (before this frame's overwrite them).
+  // Markers hidden from this frame on: the predictor's error on the last frame, from the markers
+  // seen both then and now (their positions then, before this frame's overwrite them).
   if (world_from_hand) {
-    std::uint64_t known_before = 0;
-    for (int m = 0; m < n; ++m) known_before |= (last_seen_.segment<3>(3 * m).allFinite() && (visible >> m & 1u) ? 1ull : 0ull) << m;
+    const std::uint64_t known_before = visible & previous_visible_;
     for (int m = 0; m < n; ++m) {
       const auto i = static_cast<std::size_t>(m);
       if ((visible >> m & 1u) != 0) {
@@ -140,6 +139,7 @@ std::vector<HiddenMarkerEstimator::Marker> HiddenMarkerEstimator::update(double 
     }
   }
   if (world_from_hand) last_frame_ = world_from_hand;
+  previous_visible_ = visible;
   return out;
 }
 
@@ -155,7 +155,7 @@ std::expected<HiddenMarkerErrors, std::string> evaluate_hidden_markers(const Mar
   const std::vector<int> tips = fingertip_markers(model);
   if (tips.empty()) return std::unexpected("the model has no fingertip marker (a name ending in \"_tip\")");
 
-  const int gap = std::max(1, static_cast<int>(std::lround(settings.gap_s * take.frame_rate_hz)));
+  const int gap = static_cast<int>(std::clamp(std::round(settings.gap_s * take.frame_rate_hz), 1.0, 1e6));
   std::mt19937 rng(settings.seed);
   const int offset = std::uniform_int_distribution<int>(0, 2 * gap - 1)(rng);
   HiddenMarkerEstimator estimator(model);
@@ -292,10 +292,10 @@ std::expected<HiddenMarkerModel, std::string> load_hidden_marker_model(const std
   if (!in) return std::unexpected(error_at(file, "cannot be opened"));
   const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
   if (j.is_discarded() || !j.is_object()) return std::unexpected(error_at(file, "not JSON"));
-  if (j.value("format", "") != "rhot-hidden-marker-model")
-    return std::unexpected(error_at(file, "format: expected \"rhot-hidden-marker-model\""));
   HiddenMarkerModel model;
   try {
+    if (j.value("format", "") != "rhot-hidden-marker-model")
+      return std::unexpected(error_at(file, "format: expected \"rhot-hidden-marker-model\""));
     model.source = j.value("source", "");
     const auto frame = j.at("frame_markers").get<std::vector<std::string>>();
     if (frame.size() != 3) return std::unexpected(error_at(file, "frame_markers: expected three names"));

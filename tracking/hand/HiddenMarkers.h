@@ -99,6 +99,7 @@ class HiddenMarkerEstimator {
   std::vector<double> hidden_since_s_;  // NaN while seen
   std::vector<Eigen::Vector3d> remembered_error_;
   std::optional<Rigid3d> last_frame_;
+  std::uint64_t previous_visible_ = 0;  // the markers seen in the hand's frame on the last frame
 };
 
 // The evaluation of `rhot-eval hands --take`: over [first_frame, end_frame) of a take, the modelled

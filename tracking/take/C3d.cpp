@@ -57,6 +57,8 @@ class C3dNumbers {
   }
   void put_i16(std::vector<std::uint8_t>& out, std::size_t at, std::int16_t v) const { put_u16(out, at, static_cast<std::uint16_t>(v)); }
   void put_f32(std::vector<std::uint8_t>& out, std::size_t at, float v) const {
+    // VAX F has no negative zero or denormals (the sign with a zero exponent is a reserved operand).
+    if (processor_ == C3dProcessor::kDec && std::fabs(v * 4.0f) < std::numeric_limits<float>::min()) v = 0.0f;
     const auto ieee = std::bit_cast<std::array<std::uint8_t, 4>>(processor_ == C3dProcessor::kDec ? v * 4.0f : v);
     std::array<std::uint8_t, 4> b{};
     switch (processor_) {
@@ -81,12 +83,9 @@ class C3dNumbers {
 struct C3dParameter {
   int type = 0;
   std::vector<int> dims;
-  std::size_t data = 0;  // offset into the file
-  std::size_t count() const {
-    std::size_t n = 1;
-    for (int d : dims) n *= static_cast<std::size_t>(d);
-    return n;
-  }
+  std::size_t data = 0;   // offset into the file
+  std::size_t items = 1;  // the product of the dimensions (checked against the section's size)
+  std::size_t count() const { return items; }
 };
 
 std::string upper(std::string s) {
@@ -151,9 +150,16 @@ class C3dReader {
         }
         const std::size_t dimensions = bytes_[next_field + 3];
         if (next_field + 4 + dimensions > end) return cut();
-        for (std::size_t d = 0; d < dimensions; ++d) p.dims.push_back(bytes_[next_field + 4 + d]);
         p.data = next_field + 4 + dimensions;
-        if (p.data + p.count() * static_cast<std::size_t>(std::abs(p.type)) > end) return cut();
+        // The product of up to 255 dimensions of up to 255 each: checked against what is left of the
+        // section at every step, so that it cannot wrap.
+        const std::size_t left = end - p.data;
+        for (std::size_t d = 0; d < dimensions; ++d) {
+          p.dims.push_back(bytes_[next_field + 4 + d]);
+          p.items *= static_cast<std::size_t>(p.dims.back());
+          if (p.items > left) return cut();
+        }
+        if (p.items * static_cast<std::size_t>(std::abs(p.type)) > left) return cut();
         entries.push_back({group, {name, p}});
       }
       if (next <= 0) break;
@@ -200,8 +206,11 @@ class C3dReader {
 
   std::expected<MarkerTake, std::string> read_points() {
     const C3dNumbers& n = *numbers_;
-    const int points = static_cast<int>(number("POINT:USED").value_or(n.u16(&bytes_[2])));
-    if (points == 0) return fail("no 3D points (POINT:USED is 0)");
+    const double used = number("POINT:USED").value_or(n.u16(&bytes_[2]));
+    if (used == 0.0) return fail("no 3D points (POINT:USED is 0)");
+    if (!(used >= 1.0 && used <= 65535.0 && used == std::floor(used)))
+      return fail(fmt::format("POINT:USED is {}, not a count of points", used));
+    const int points = static_cast<int>(used);
     std::vector<std::string> labels = strings("POINT:LABELS");
     for (int k = 2; static_cast<int>(labels.size()) < points; ++k) {
       const std::vector<std::string> more = strings("POINT:LABELS" + std::to_string(k));
@@ -230,7 +239,11 @@ class C3dReader {
     if (!std::isfinite(rate) || rate <= 0.0) return fail(fmt::format("frame rate {} Hz: must be positive", rate));
     if (!std::isfinite(scale) || scale == 0.0) return fail(fmt::format("POINT:SCALE {}: must be a non-zero number", scale));
     const bool float_storage = scale < 0.0;
-    const std::size_t start_block = static_cast<std::size_t>(number("POINT:DATA_START").value_or(n.u16(&bytes_[16])));
+    const double start = number("POINT:DATA_START").value_or(n.u16(&bytes_[16]));
+    if (!(start >= 0.0 && start <= static_cast<double>(bytes_.size() / kBlock + 1) && start == std::floor(start))) {
+      return fail(fmt::format("the data's first block ({}) is past the end of the file", start));
+    }
+    const auto start_block = static_cast<std::size_t>(start);
     const int first = n.u16(&bytes_[6]), last = n.u16(&bytes_[8]);
     if (start_block == 0 || last < first)
       return fail(fmt::format("its header's frames {} to {} or data block {} make no take", first, last, start_block));
@@ -348,6 +361,11 @@ std::expected<void, std::string> write_c3d(const MarkerTake& take, const std::fi
   if (take.frame_count() > 65535) return fail(fmt::format("{} frames: a C3D header holds at most 65,535", take.frame_count()));
   if (take.marker_count() > 255) return fail(fmt::format("{} markers: rhot writes at most 255 to C3D", take.marker_count()));
   if (options.analog_channels < 0 || options.analog_channels > 255) return fail("analog channels must be 0 to 255");
+  std::size_t longest = 1;
+  for (const std::string& name : take.marker_names) longest = std::max(longest, name.size());
+  // POINT:LABELS is one parameter: its dimensions are bytes, its size must fit the record's offset.
+  if (longest > 255 || longest * take.marker_names.size() > 32000)
+    return fail("marker names too long for C3D's POINT:LABELS (255 characters each, 32,000 in all)");
   const C3dNumbers n(options.processor);
   double scale_mm = -1.0;
   if (!options.float_storage) {

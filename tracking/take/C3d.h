@@ -10,8 +10,9 @@
 // integers to be multiplied by it.
 //
 // Read: every processor type and both storages; POINT:LABELS (and LABELS2 beyond 255 points),
-// POINT:UNITS (mm, cm, m), POINT:RATE or the header's rate, POINT:FRAMES or the header's range;
-// the analog samples are skipped. Refused with a message naming the fault: a file that is not C3D,
+// POINT:UNITS (mm, cm, m), POINT:RATE or the header's rate, the header's frame range (at most
+// 65,535 frames; longer takes, which keep their count elsewhere, are not read yet); the analog
+// samples are skipped. Refused with a message naming the fault: a file that is not C3D,
 // an unknown processor type or parameter type, a parameter section or data cut short, labels that
 // do not match the point count, units that are not a length.
 

@@ -66,7 +66,7 @@ std::expected<MarkerTake, std::string> read_qualisys_tsv(const std::filesystem::
     // Header keys are upper-case words; the first line that starts otherwise is the column line or data.
     const std::string key = fields.front();
     const bool is_key = !key.empty() && key.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZ_0123456789") == std::string::npos &&
-                        !parse_number(key).has_value();
+                        !parse_number(key).has_value() && !gap(key);
     if (!is_key) {
       first_data = line;
       break;
@@ -110,7 +110,6 @@ std::expected<MarkerTake, std::string> read_qualisys_tsv(const std::filesystem::
   take.frame_rate_hz = *rate;
   take.marker_names = marker_names;
   const auto frame_count = static_cast<std::size_t>(*frames);
-  take.positions_m.reserve(frame_count * marker_count);
   std::size_t leading = 0;  // Frame and Time columns before the markers'
   bool columns_known = false;
   std::optional<std::string> pending = first_data;

@@ -99,11 +99,17 @@ TEST(HiddenMarkers, TheEstimatorSaysHowEachMarkerWasObtained) {
   no_frame[1].setConstant(std::numeric_limits<double>::quiet_NaN());
   out = estimator.update(take.time_s(102), no_frame, markers);
   EXPECT_EQ(out[2].how, MarkerEstimate::kHeld);
-  // A fresh estimator that never saw the tip cannot place it.
+  // A fresh estimator that never saw the tip: the others and the model place it while the hand's
+  // frame is known (no memory to add); without the frame, nothing can.
   HiddenMarkerEstimator fresh(*model);
-  out = fresh.update(0.0, frame_of(0), markers);
-  EXPECT_EQ(out[2].how, MarkerEstimate::kPredicted);  // the others and the model place it
-  out = fresh.update(0.01, no_frame, markers);
+  std::vector<Eigen::Vector3d> first(take.frame(0).begin() + 3, take.frame(0).end());
+  first[2].setConstant(std::numeric_limits<double>::quiet_NaN());
+  out = fresh.update(0.0, frame_of(0), first);
+  EXPECT_EQ(out[2].how, MarkerEstimate::kPredicted);
+  EXPECT_LT((out[2].position_m - take.at(0, 5)).norm(), 0.01);
+  auto first_no_frame = frame_of(0);
+  first_no_frame[1].setConstant(std::numeric_limits<double>::quiet_NaN());
+  out = fresh.update(0.01, first_no_frame, first);
   EXPECT_EQ(out[2].how, MarkerEstimate::kUnknown);
 }
 

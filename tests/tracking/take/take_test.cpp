@@ -120,6 +120,11 @@ TEST(C3d, TruncatedAndMalformedFilesAreRefusedWithTheReason) {
   units[static_cast<std::size_t>(at) + 5 + 2 + 1 + 1 + 1 + 1] = 'n';
   EXPECT_EQ(refused(units), name + "POINT:UNITS is \"in\", not a length (mm, cm or m)");
   EXPECT_EQ(refused(good), "read");
+
+  MarkerTake long_names = moving_take();
+  long_names.marker_names[0] = std::string(300, 'x');
+  EXPECT_EQ(write_c3d(long_names, file).error(),
+            name + "marker names too long for C3D's POINT:LABELS (255 characters each, 32,000 in all)");
 }
 
 TEST(QualisysTsv, ATakeWrittenAndReadBackIsTheSameWithItsGaps) {
