@@ -293,6 +293,13 @@ TEST(EvalCli, AHandModelFittedToATakesFirstPartEstimatesItsHiddenTipsInTheRest) 
   const auto no_labels = rhot::test::run_program("rhot-eval", "hands --take " + take + " --json", "2>&1 >/dev/null");
   EXPECT_EQ(no_labels.exit_code, 1);
   EXPECT_EQ(no_labels.output, "rhot-eval: hands --take: only --labelled is built so far (the take's 3D points, no cameras)\n");
+  // CLI11's Range lets nan through (every comparison with it is false); it reached a float-to-int cast.
+  for (const char* flag : {"--hide-gap-s", "--fit-fraction"}) {
+    const auto nan =
+        rhot::test::run_program("rhot-eval", "hands --take " + take + " --labelled " + flag + " nan --json", "2>&1 >/dev/null");
+    EXPECT_EQ(nan.exit_code, 1) << flag;
+    EXPECT_NE(nan.output.find("expected a finite number, got nan"), std::string::npos) << flag << ": " << nan.output;
+  }
 }
 
 }  // namespace

@@ -23,11 +23,16 @@ test -f "${work}/prefix/include/rhot/engine/launch/Launch.h"
 test ! -e "${work}/prefix/include/rhot/engine/render/vk"
 test -f "${work}/prefix/share/rhot/assets/scenes/default.json"
 
+# The linker is the user's choice; this build's (lld where there is one, as cmake/RhotOptions.cmake
+# picks) links the two examples in a second instead of ld.bfd's several.
+linker=()
+if command -v ld.lld >/dev/null; then linker=(-DCMAKE_EXE_LINKER_FLAGS=-fuse-ld=lld); fi
+
 for example in track headless; do
   echo "== configure and build tools/examples/${example}"
   cp -r "${source_dir}/tools/examples/${example}" "${work}/${example}"
   cmake -S "${work}/${example}" -B "${work}/${example}/build" -G Ninja -DCMAKE_CXX_COMPILER="${cxx}" \
-    -DCMAKE_PREFIX_PATH="${work}/prefix" >"${work}/${example}.configure.log" || { cat "${work}/${example}.configure.log"; exit 1; }
+    -DCMAKE_PREFIX_PATH="${work}/prefix" "${linker[@]}" >"${work}/${example}.configure.log" || { cat "${work}/${example}.configure.log"; exit 1; }
   cmake --build "${work}/${example}/build" || exit 1
 done
 

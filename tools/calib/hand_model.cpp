@@ -18,7 +18,7 @@ namespace {
 
 struct HandModelOptions {
   std::string take, out;
-  std::vector<std::string> frame_markers{"hand_top", "hand_left", "hand_right"};
+  std::vector<std::string> frame_markers{kGloveFrameMarkers.begin(), kGloveFrameMarkers.end()};
   std::vector<std::string> markers;
   double fit_seconds = 0.0;
   bool json = false;
@@ -29,11 +29,7 @@ int run_hand_model(const HandModelOptions& o) {
   if (!take) return fail(take.error());
   std::vector<std::string> markers = o.markers;
   if (markers.empty()) {
-    for (const char* finger : {"thumb", "index", "middle", "ring", "little"}) {
-      for (const char* part : {"_tip", "_middle"}) {
-        if (take->marker(std::string(finger) + part)) markers.push_back(std::string(finger) + part);
-      }
-    }
+    markers = glove_finger_markers(*take);
     if (markers.empty()) return fail(o.take + ": no <finger>_tip or <finger>_middle markers (name them with --markers)");
   }
   HiddenMarkerFitSettings settings;

@@ -66,6 +66,7 @@ struct HandsArgs {
   std::vector<double> volume_centre;
   bool filter = false;
   bool calibrate_hand = false;
+  bool fingertip_model = false;
   // A recorded take instead (tools/eval/take.cpp): its fingertips hidden by rule, estimated from the rest.
   std::string take_file;
   std::string model_file;        // a hidden-marker model (rhot-calib hand-model); none: fitted to the take's first part

@@ -9,6 +9,7 @@
 #include <iostream>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <optional>
 #include <string>
 #include <vector>
@@ -65,7 +66,8 @@ rhot::HandPose calibrated_skeleton(const rhot::CameraRig& rig, const rhot::Camer
 // markers (its own bones hiding them) matched, triangulated, the hand star tracked, the fingers
 // solved, and every joint compared with the truth.
 nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion,
-                               const rhot::WorldSettings& world, const HandsArgs& args, const Eigen::Vector3d& centre) {
+                               const rhot::WorldSettings& world, const HandsArgs& args, const Eigen::Vector3d& centre,
+                               std::vector<double>& hidden_tip_errors) {
   const unsigned seed = args.seed;
   const int frames = args.frames;
   const rhot::HandPose skeleton = rhot::reference_open_hand(layout.side);
@@ -91,11 +93,12 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   rhot::PixelSigmaEstimate pixel_sigma;
   rhot::HandTrackerSettings tracker_settings;
   tracker_settings.filter = args.filter;
+  tracker_settings.fingertip_model = args.fingertip_model;
   const rhot::HandPose tracked_skeleton =
       args.calibrate_hand ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings) : skeleton;
   rhot::HandTracker tracker(layout, tracked_skeleton, tracker_settings);
 
-  std::vector<double> tip_errors, joint_errors, ik_us, tracker_us;
+  std::vector<double> tip_errors, hidden_errors, joint_errors, ik_us, tracker_us;
   long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0, segment_stars_seen = 0, reported_wrong = 0;
   for (int f = 0; f < frames; ++f) {
     const double t = static_cast<double>(f) / settings.rate_hz;
@@ -128,11 +131,16 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
       confident += hand.state.confidence[static_cast<std::size_t>(j)] >= 0.5 ? 1 : 0;
     }
     for (int fi = 0; fi < rhot::kFingerCount; ++fi) {
-      // A fingertip measured this frame: its marker found, or its distal bone's star seen.
-      if (!hand.state.tip_seen[static_cast<std::size_t>(fi)]) continue;
-      ++tips_seen;
+      // A fingertip measured this frame (its marker found, or its distal bone's star seen), or
+      // estimated while hidden.
       const auto tip = static_cast<std::size_t>(rhot::chain_joints(static_cast<rhot::Finger>(fi))[3]);
-      tip_errors.push_back(1000.0 * (hand.joints_world[tip] - world_from_hand * pose.position_m[tip]).norm());
+      const double e = 1000.0 * (hand.joints_world[tip] - world_from_hand * pose.position_m[tip]).norm();
+      if (!hand.state.tip_seen[static_cast<std::size_t>(fi)]) {
+        hidden_errors.push_back(e);
+        continue;
+      }
+      ++tips_seen;
+      tip_errors.push_back(e);
     }
   }
   auto mean = [](const std::vector<double>& v) {
@@ -151,6 +159,10 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   }
   j["fingertip_mean_mm"] = mean(tip_errors);
   j["fingertip_p95_mm"] = percentile(tip_errors, 0.95);
+  j["hidden_tip_mean_mm"] = mean(hidden_errors);
+  j["hidden_tip_p95_mm"] = percentile(hidden_errors, 0.95);
+  j["hidden_tip_frames"] = hidden_errors.size();
+  hidden_tip_errors.insert(hidden_tip_errors.end(), hidden_errors.begin(), hidden_errors.end());
   j["joint_mean_mm"] = mean(joint_errors);
   j["joint_p95_mm"] = percentile(joint_errors, 0.95);
   j["joints_with_confidence_fraction"] = static_cast<double>(confident) / static_cast<double>(std::max(1L, joint_frames));
@@ -203,10 +215,18 @@ int hands(const HandsArgs& args) {
   j["centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
   j["filter"] = args.filter;
   j["calibrate_hand"] = args.calibrate_hand;
+  j["fingertip_model"] = args.fingertip_model;
+  std::vector<double> hidden_tip_errors;
   for (const std::string_view name : motions) {
     std::cerr << "rhot-eval: hand motion " << name << "\n";
-    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, *world, args, box.centre);
+    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, *world, args, box.centre, hidden_tip_errors);
   }
+  // Hidden tips over every motion's hidden frames together (a motion may hide none).
+  j["hidden_tip_mean_mm"] = hidden_tip_errors.empty() ? 0.0
+                                                      : std::accumulate(hidden_tip_errors.begin(), hidden_tip_errors.end(), 0.0) /
+                                                            static_cast<double>(hidden_tip_errors.size());
+  j["hidden_tip_p95_mm"] = percentile(hidden_tip_errors, 0.95);
+  j["hidden_tip_frames"] = hidden_tip_errors.size();
   // Over all motions: the mean of the motions' numbers (each motion weighs alike).
   for (const char* key :
        {"fingertip_mean_mm", "fingertip_p95_mm", "joint_mean_mm", "joint_p95_mm", "joints_with_confidence_fraction", "ik_median_us",

@@ -74,12 +74,14 @@ CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
                   "with --take: a hidden-marker model (rhot-calib hand-model); default: fitted to the take's first part");
   cmd->add_option("--fit-fraction", a.fit_fraction, "with --take and no --model: the share of the take fitted (the rest is reported apart)")
       ->capture_default_str()
+      ->check(rhot::number_check(rhot::NumberBound::kPositive))  // CLI::Range lets nan through
       ->check(CLI::Range(0.1, 0.9));
   cmd->add_option("--evaluate-from-s", a.evaluate_from_s, "with --take and --model: judge from this many seconds into the take on")
       ->check(rhot::number_check(rhot::NumberBound::kNonNegative));
   cmd->add_flag("--labelled", a.labelled, "with --take: feed the take's labelled 3D points to the estimator (no cameras)");
   cmd->add_option("--hide-gap-s", a.hide_gap_s, "with --take: seconds each fingertip is hidden (then as long seen)")
       ->capture_default_str()
+      ->check(rhot::number_check(rhot::NumberBound::kPositive))
       ->check(CLI::Range(0.01, 60.0));
   cmd->add_option("--hide-together", a.hide_together, "with --take: fingertips hidden at once (1, or 2: a tip and its neighbour's)")
       ->capture_default_str()
@@ -93,6 +95,8 @@ CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
       ->expected(3)
       ->check(rhot::number_check(rhot::NumberBound::kAny));
   cmd->add_flag("--filter", a.filter, "1-euro filter the hand frame and the fingertips before the IK");
+  cmd->add_flag("--fingertip-model", a.fingertip_model,
+                "hidden fingertips placed where the seen ones say, by a model of the hand's fingertips fitted as it runs");
   cmd->add_flag("--calibrate-hand", a.calibrate_hand,
                 "first hold the hand flat for a second, through the cameras, and track with the finger lengths it gives");
   cmd->add_flag("--json", json, "print JSON (the only output format)");

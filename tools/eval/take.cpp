@@ -2,7 +2,6 @@
 // (tracking/hand/HiddenMarkers.h), against the recorded positions.
 
 #include <algorithm>
-#include <array>
 #include <iostream>
 #include <numeric>
 #include <string>
@@ -18,8 +17,6 @@ namespace rhot::eval {
 namespace {
 
 // The glove's names (assets/hands: three on the back of the hand, a tip and a middle per finger).
-constexpr std::array<const char*, 3> kGloveFrame{"hand_top", "hand_left", "hand_right"};
-constexpr std::array<const char*, 5> kFingers{"thumb", "index", "middle", "ring", "little"};
 
 double take_mean(const std::vector<double>& v) {
   return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
@@ -59,15 +56,10 @@ int hands_take(const HandsArgs& args) {
     model = std::move(*loaded);
     unfitted_first = static_cast<int>(std::min(static_cast<double>(take->frame_count() - 1), args.evaluate_from_s * take->frame_rate_hz));
   } else {
-    std::vector<std::string> markers;
-    for (const char* finger : kFingers) {
-      for (const char* part : {"_tip", "_middle"}) {
-        if (take->marker(std::string(finger) + part)) markers.push_back(std::string(finger) + part);
-      }
-    }
+    const std::vector<std::string> markers = glove_finger_markers(*take);
     unfitted_first = static_cast<int>(args.fit_fraction * take->frame_count());
     std::cerr << "rhot-eval: fitting a hidden-marker model to frames 1-" << unfitted_first << " of " << take->frame_count() << "\n";
-    auto fitted = fit_hidden_marker_model(*take, {kGloveFrame[0], kGloveFrame[1], kGloveFrame[2]}, markers, {.end_frame = unfitted_first});
+    auto fitted = fit_hidden_marker_model(*take, kGloveFrameMarkers, markers, {.end_frame = unfitted_first});
     if (!fitted) return fail(args.take_file + ": " + fitted.error());
     model = std::move(*fitted);
   }

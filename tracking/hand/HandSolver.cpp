@@ -111,7 +111,8 @@ FingerAngles angles_from_bones(const FingerChain& c, const std::array<Eigen::Vec
 }
 
 const HandState& HandSolver::update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips,
-                                    const std::array<std::optional<FingerAngles>, kFingerCount>& measured) {
+                                    const std::array<std::optional<FingerAngles>, kFingerCount>& measured,
+                                    const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& predicted) {
   const double dt = started_ && std::isfinite(time_s) && time_s > time_s_ ? time_s - time_s_ : 0.0;
   if (std::isfinite(time_s)) time_s_ = std::max(time_s_, time_s);
   started_ = true;
@@ -152,7 +153,16 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
     FingerAngles& a = state_.angles[fi];
     FingerAngles& r = rate_[fi];
     const double unseen_s = time_s_ - last_seen_s_[fi];
-    if (closing_count > 0) {
+    predicted_[fi] = predicted[fi].has_value() && predicted[fi]->allFinite();
+    if (predicted_[fi]) {
+      // Where the hand's other markers say this tip is; its rate kept for when the prediction stops.
+      const FingerAngles from = a;
+      a = solve_fabrik(chain, *predicted[fi], a).angles;
+      if (dt > 0.0) {
+        r.abduction_rad = (a.abduction_rad - from.abduction_rad) / dt;
+        for (std::size_t k = 0; k < 3; ++k) r.flexion_rad[k] = (a.flexion_rad[k] - from.flexion_rad[k]) / dt;
+      }
+    } else if (closing_count > 0) {
       // The others' mean flexion rate, shared over this finger's hinges by their ranges.
       const double closing = closing_sum / closing_count;
       double range = 0.0;
@@ -185,7 +195,10 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
     const bool seen = state_.tip_seen[fi];
     const auto p = finger_forward(chains_[fi], state_.angles[fi]);
     const double unseen_s = time_s_ - last_seen_s_[fi];
-    const double confidence = seen ? 0.9 : estimated_[fi] ? kEstimatedConfidence : 0.9 * std::exp(-unseen_s / kRelaxTime_s);
+    const double confidence = seen             ? 0.9
+                              : predicted_[fi] ? kPredictedConfidence
+                              : estimated_[fi] ? kEstimatedConfidence
+                                               : 0.9 * std::exp(-unseen_s / kRelaxTime_s);
     for (std::size_t k = 0; k < 4; ++k) {
       // The thumb's metacarpal joint moves with the CMC; the fingers' knuckles are fixed by the hand frame.
       state_.pose.position_m[static_cast<std::size_t>(joints[k])] = p[k];

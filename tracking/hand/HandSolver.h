@@ -10,8 +10,9 @@
 // kHold_s eases toward a relaxed pose.
 //
 // Joint confidence: 1 for joints fixed by the hand frame and for a seen fingertip; 0.9 for joints
-// placed by IK from a seen tip; kEstimatedConfidence for a hidden finger estimated from the seen
-// ones; for a finger unseen for t seconds with no finger seen, 0.9 exp(-t / 0.5 s).
+// placed by IK from a seen tip; kPredictedConfidence for a hidden finger placed by IK at its
+// predicted tip; kEstimatedConfidence for a hidden finger bent at the seen ones' rate; for a finger
+// unseen for t seconds with no finger seen, 0.9 exp(-t / 0.5 s).
 
 #include <array>
 #include <optional>
@@ -68,9 +69,12 @@ class HandSolver {
   HandSolver(HandSide side, const HandPose& skeleton, GestureSettings gestures = {});
 
   // One frame: fingertip positions in the hand frame (nothing for a tip not seen), and, where a
-  // finger's every bone was measured (stars on the segments), its angles, which then win.
+  // finger's every bone was measured (stars on the segments), its angles, which then win. A hidden
+  // tip's `predicted` place (hand frame: a model of how the hand's fingertips lie together,
+  // HiddenMarkers.h) is reached by IK in place of the rule below, with kPredictedConfidence.
   const HandState& update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips_hand_m,
-                          const std::array<std::optional<FingerAngles>, kFingerCount>& measured = {});
+                          const std::array<std::optional<FingerAngles>, kFingerCount>& measured = {},
+                          const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& predicted = {});
   const HandState& state() const { return state_; }
   const std::array<FingerChain, kFingerCount>& chains() const { return chains_; }
 
@@ -81,6 +85,7 @@ class HandSolver {
   static constexpr double kHold_s = 1.0;
   static constexpr double kCoast_s = 0.15;
   static constexpr double kEstimatedConfidence = 0.6;
+  static constexpr double kPredictedConfidence = 0.75;
 
  private:
   std::array<FingerChain, kFingerCount> chains_;
@@ -88,6 +93,7 @@ class HandSolver {
   std::array<double, kFingerCount> last_seen_s_{};
   std::array<FingerAngles, kFingerCount> rate_{};  // each finger's angular rates, rad/s (seen: measured; hidden: estimated)
   std::array<bool, kFingerCount> estimated_{};     // hidden and estimated from the seen fingers
+  std::array<bool, kFingerCount> predicted_{};     // hidden and placed at a predicted tip
   GestureSettings gestures_;
   HandState state_;
   double time_s_ = 0.0;

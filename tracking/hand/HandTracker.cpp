@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 namespace rhot {
 
@@ -13,7 +14,48 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
       solver_(layout.side, skeleton) {
   tip_filters_.fill(OneEuroFilter<3>(settings.position));
   if (!layout.segment_stars.empty()) segments_.emplace(StarLibrary(layout.segment_star_set()));
+  every_tip_marked_ = std::ranges::all_of(layout.fingertip_offset_m, [](const auto& offset) { return offset.has_value(); });
+  if (settings.fingertip_model && every_tip_marked_) {
+    // Made whole now, fitted later, and no predictor kept: a long run's memory stays what it was
+    // after its first frames.
+    HiddenMarkerModel model;
+    model.markers = {"thumb_tip", "index_tip", "middle_tip", "ring_tip", "little_tip"};
+    model.memory_s = kFingertipMemory_s;
+    model.ridge_m2 = kFingertipRidge_m2;
+    model.source = "fitted as the hand is tracked";
+    model.mean_m = Eigen::VectorXd::Zero(3 * kFingerCount);
+    model.covariance_m2 = Eigen::MatrixXd::Zero(3 * kFingerCount, 3 * kFingerCount);
+    model.training_frames = 0;
+    tip_estimator_.emplace(std::move(model), false);
+  }
   out_.state = solver_.state();
+}
+
+std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::predict_hidden_tips(
+    double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips) {
+  std::array<std::optional<Eigen::Vector3d>, kFingerCount> out{};
+  if (!tip_estimator_) return out;
+  if (!out_.hand_seen) {
+    tip_estimator_->hand_lost();
+    return out;
+  }
+  if (std::ranges::all_of(tips, [](const auto& tip) { return tip.has_value(); })) {
+    Eigen::VectorXd x(3 * kFingerCount);
+    for (int f = 0; f < kFingerCount; ++f) x.segment<3>(3 * f) = *tips[static_cast<std::size_t>(f)];
+    tip_statistics_.add(x);
+    const int frames = tip_statistics_.frames();
+    if (frames >= kFingertipModelFrames && frames - fingertip_model_frames() >= kFingertipModelRefit) {
+      tip_estimator_->set_statistics(tip_statistics_.mean_m(), tip_statistics_.covariance_m2(), frames);
+    }
+  }
+  if (fingertip_model_frames() == 0) return out;
+  std::array<Eigen::Vector3d, kFingerCount> hand;
+  for (std::size_t f = 0; f < kFingerCount; ++f) hand[f] = tips[f].value_or(Eigen::Vector3d::Constant(std::nan("")));
+  const auto estimated = tip_estimator_->update_in_hand(time_s, hand);
+  for (std::size_t f = 0; f < kFingerCount; ++f) {
+    if (!tips[f] && estimated[f].how == MarkerEstimate::kPredicted) out[f] = estimated[f].position_m;
+  }
+  return out;
 }
 
 const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
@@ -142,7 +184,8 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
     }
   }
   const auto start = std::chrono::steady_clock::now();
-  out_.state = solver_.update(time_s, tips, measured);
+  const auto predicted = predict_hidden_tips(time_s, tips);
+  out_.state = solver_.update(time_s, tips, measured, predicted);
   last_ik_us_ = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   for (std::size_t j = 0; j < kHandJointCount; ++j) out_.joints_world[j] = out_.world_from_hand * out_.state.pose.position_m[j];
   return out_;

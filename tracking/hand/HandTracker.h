@@ -17,6 +17,7 @@
 #include "tracking/filter/OneEuroFilter.h"
 #include "tracking/hand/HandLayout.h"
 #include "tracking/hand/HandSolver.h"
+#include "tracking/hand/HiddenMarkers.h"
 #include "tracking/rigid/StarTracker.h"
 
 namespace rhot {
@@ -35,6 +36,12 @@ struct HandTrackerSettings {
   bool filter = false;
   OneEuroSettings position;  // for the hand's origin and the fingertips, metres
   OneEuroSettings rotation{1.0, 2.0, 1.0};
+  // Hidden fingertips predicted from the seen ones (HiddenMarkers.h) by a model of how this hand's
+  // fingertips lie together, fitted as the tracker runs from the frames in which all five are seen
+  // (used once it has HandTracker::kFingertipModelFrames of them). Off, or before that, a hidden
+  // finger follows HandSolver's rule alone. Layouts that mark all five fingertips only. Off by
+  // default until the demo's soak passes with it (docs/tracking.md, "Inside the tracker").
+  bool fingertip_model = false;
 };
 
 class HandTracker {
@@ -81,6 +88,15 @@ class HandTracker {
   static constexpr double kGateGrowth_mps = 0.25;
   static constexpr double kFingertipGateMax_m = 0.04;
   static constexpr double kColourGate_m = 0.08;
+  // The fingertip model: frames with all five tips seen before it is used, how often it is refitted
+  // (frames), how long a hidden tip's last offset from the prediction is kept (HiddenMarkerModel::
+  // memory_s, the value fitted to the real glove take) and the ridge on its seen tips.
+  static constexpr int kFingertipModelFrames = 90;
+  static constexpr int kFingertipModelRefit = 30;
+  static constexpr double kFingertipMemory_s = 0.5;
+  static constexpr double kFingertipRidge_m2 = 1e-6;
+  // How many frames the fingertip model has been fitted to (0: not in use yet).
+  int fingertip_model_frames() const { return tip_estimator_ ? tip_estimator_->model().training_frames : 0; }
 
  private:
   HandLayout layout_;
@@ -97,6 +113,13 @@ class HandTracker {
   // Per fingertip, the free points outside its tight gate but inside its widened one, last frame
   // and this frame (hand frame): where a lost marker may be reappearing.
   std::array<std::vector<Eigen::Vector3d>, kFingerCount> reappearing_{}, reappearing_now_{};
+  // The hidden tips' places from the model (hand frame), fitting it first with this frame's tips
+  // when all five are seen.
+  std::array<std::optional<Eigen::Vector3d>, kFingerCount> predict_hidden_tips(
+      double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips);
+  bool every_tip_marked_ = false;
+  MarkerStatistics tip_statistics_{kFingerCount};
+  std::optional<HiddenMarkerEstimator> tip_estimator_;
   HandSolver solver_;
   TrackedHand out_;
   double last_ik_us_ = 0.0;

@@ -9,6 +9,8 @@
 #include <Eigen/Cholesky>
 #include <nlohmann/json.hpp>
 
+#include "base/Check.h"
+
 namespace rhot {
 namespace {
 
@@ -59,8 +61,9 @@ std::vector<int> fingertip_markers(const HiddenMarkerModel& model) {
   return out;
 }
 
-HiddenMarkerEstimator::HiddenMarkerEstimator(HiddenMarkerModel model)
+HiddenMarkerEstimator::HiddenMarkerEstimator(HiddenMarkerModel model, bool keep_predictors)
     : model_(std::move(model)),
+      keep_predictors_(keep_predictors),
       last_seen_(Eigen::VectorXd::Constant(3 * static_cast<Eigen::Index>(model_.markers.size()), kNaN)),
       hidden_since_s_(model_.markers.size(), kNaN),
       remembered_error_(model_.markers.size(), Eigen::Vector3d::Zero()) {}
@@ -68,6 +71,10 @@ HiddenMarkerEstimator::HiddenMarkerEstimator(HiddenMarkerModel model)
 const Eigen::MatrixXd& HiddenMarkerEstimator::gain(std::uint64_t visible) {
   const auto cached = gains_.find(visible);
   if (cached != gains_.end()) return cached->second;
+  return gains_.emplace(visible, compute_gain(visible)).first->second;
+}
+
+Eigen::MatrixXd HiddenMarkerEstimator::compute_gain(std::uint64_t visible) const {
   const int n = static_cast<int>(model_.markers.size());
   const std::uint64_t all = n >= 64 ? ~0ull : (1ull << n) - 1;
   const std::vector<Eigen::Index> v = coordinates(visible, n), h = coordinates(all & ~visible, n);
@@ -75,8 +82,7 @@ const Eigen::MatrixXd& HiddenMarkerEstimator::gain(std::uint64_t visible) {
   c_vv.diagonal().array() += model_.ridge_m2;
   const Eigen::MatrixXd c_hv = model_.covariance_m2(h, v);
   // gain = C_HV (C_VV + ridge)^-1, through the symmetric system: (C_VV + ridge) gain^T = C_VH.
-  Eigen::MatrixXd g = c_vv.ldlt().solve(c_hv.transpose()).transpose();
-  return gains_.emplace(visible, std::move(g)).first->second;
+  return c_vv.ldlt().solve(c_hv.transpose()).transpose();
 }
 
 Eigen::Vector3d HiddenMarkerEstimator::predict(int marker, std::uint64_t visible, const Eigen::VectorXd& hand_positions) {
@@ -86,42 +92,97 @@ Eigen::Vector3d HiddenMarkerEstimator::predict(int marker, std::uint64_t visible
   const std::vector<Eigen::Index> h = coordinates(all & ~visible, n);
   const auto row = std::ranges::find(h, 3 * marker) - h.begin();
   const Eigen::VectorXd x_v = hand_positions(v) - model_.mean_m(v);
-  return model_.mean_m.segment<3>(3 * marker) + gain(visible).middleRows(row, 3) * x_v;
+  if (keep_predictors_) return model_.mean_m.segment<3>(3 * marker) + gain(visible).middleRows(row, 3) * x_v;
+  return model_.mean_m.segment<3>(3 * marker) + compute_gain(visible).middleRows(row, 3) * x_v;
+}
+
+MarkerStatistics::MarkerStatistics(int markers)
+    : mean_(Eigen::VectorXd::Zero(3 * markers)), scatter_(Eigen::MatrixXd::Zero(3 * markers, 3 * markers)) {}
+
+void MarkerStatistics::add(const Eigen::VectorXd& x) {
+  RHOT_PRECONDITION(x.size() == mean_.size() && x.allFinite(), "every marker seen, once each");
+  ++frames_;
+  const Eigen::VectorXd before = x - mean_;
+  mean_ += before / frames_;
+  scatter_.noalias() += before * (x - mean_).transpose();
+}
+
+Eigen::MatrixXd MarkerStatistics::covariance_m2() const {
+  if (frames_ < 2) return Eigen::MatrixXd::Zero(mean_.size(), mean_.size());
+  const Eigen::MatrixXd c = scatter_ / (frames_ - 1);
+  return 0.5 * (c + c.transpose());
+}
+
+void HiddenMarkerEstimator::set_statistics(Eigen::VectorXd mean_m, Eigen::MatrixXd covariance_m2, int training_frames) {
+  const auto n = 3 * static_cast<Eigen::Index>(model_.markers.size());
+  RHOT_PRECONDITION(mean_m.size() == n && covariance_m2.rows() == n && covariance_m2.cols() == n, "statistics of another model's size");
+  model_.mean_m = std::move(mean_m);
+  model_.covariance_m2 = std::move(covariance_m2);
+  model_.training_frames = training_frames;
+  gains_.clear();
 }
 
 std::vector<HiddenMarkerEstimator::Marker> HiddenMarkerEstimator::update(double time_s,
                                                                          std::span<const Eigen::Vector3d, 3> frame_markers_world,
                                                                          std::span<const Eigen::Vector3d> markers_world) {
-  const int n = static_cast<int>(model_.markers.size());
-  std::vector<Marker> out(static_cast<std::size_t>(n));
+  const std::size_t n = model_.markers.size();
+  std::vector<Marker> out(n);
   const std::optional<Rigid3d> world_from_hand =
       hand_frame_from_markers(frame_markers_world[0], frame_markers_world[1], frame_markers_world[2]);
+  if (!world_from_hand) {
+    // Seen markers are passed on; the hidden ones stay where they were last seen, in the last frame.
+    for (std::size_t m = 0; m < n; ++m) {
+      const Eigen::Vector3d last = last_seen_.segment<3>(3 * static_cast<Eigen::Index>(m));
+      if (markers_world[m].allFinite()) {
+        out[m] = {markers_world[m], MarkerEstimate::kSeen};
+      } else if (last.allFinite() && last_frame_) {
+        out[m] = {*last_frame_ * last, MarkerEstimate::kHeld};
+      }
+    }
+    hand_lost();
+    return out;
+  }
+  const Rigid3d hand_from_world = world_from_hand->inverse();
+  std::vector<Eigen::Vector3d> markers_hand(n, Eigen::Vector3d::Constant(kNaN));
+  for (std::size_t m = 0; m < n; ++m) {
+    if (markers_world[m].allFinite()) markers_hand[m] = hand_from_world * markers_world[m];
+  }
+  out = update_in_hand(time_s, markers_hand);
+  for (std::size_t m = 0; m < n; ++m) {
+    out[m].position_m = out[m].how == MarkerEstimate::kSeen ? markers_world[m] : *world_from_hand * out[m].position_m;
+  }
+  last_frame_ = world_from_hand;
+  return out;
+}
+
+std::vector<HiddenMarkerEstimator::Marker> HiddenMarkerEstimator::update_in_hand(double time_s,
+                                                                                 std::span<const Eigen::Vector3d> markers_hand) {
+  const int n = static_cast<int>(model_.markers.size());
+  RHOT_PRECONDITION(static_cast<int>(markers_hand.size()) == n, "one position per modelled marker");
+  std::vector<Marker> out(static_cast<std::size_t>(n));
   Eigen::VectorXd x = Eigen::VectorXd::Constant(3 * n, kNaN);
   std::uint64_t visible = 0;
   for (int m = 0; m < n; ++m) {
-    const Eigen::Vector3d& p = markers_world[static_cast<std::size_t>(m)];
+    const Eigen::Vector3d& p = markers_hand[static_cast<std::size_t>(m)];
     if (!p.allFinite()) continue;
     out[static_cast<std::size_t>(m)] = {p, MarkerEstimate::kSeen};
-    if (!world_from_hand) continue;
-    x.segment<3>(3 * m) = world_from_hand->inverse() * p;
+    x.segment<3>(3 * m) = p;
     visible |= 1ull << m;
   }
   // Markers hidden from this frame on: the predictor's error on the last frame, from the markers
   // seen both then and now (their positions then, before this frame's overwrite them).
-  if (world_from_hand) {
-    const std::uint64_t known_before = visible & previous_visible_;
-    for (int m = 0; m < n; ++m) {
-      const auto i = static_cast<std::size_t>(m);
-      if ((visible >> m & 1u) != 0) {
-        hidden_since_s_[i] = kNaN;
-        continue;
-      }
-      if (!std::isnan(hidden_since_s_[i])) continue;
-      hidden_since_s_[i] = time_s;
-      remembered_error_[i].setZero();
-      if (last_seen_.segment<3>(3 * m).allFinite() && known_before != 0) {
-        remembered_error_[i] = last_seen_.segment<3>(3 * m) - predict(m, known_before, last_seen_);
-      }
+  const std::uint64_t known_before = visible & previous_visible_;
+  for (int m = 0; m < n; ++m) {
+    const auto i = static_cast<std::size_t>(m);
+    if ((visible >> m & 1u) != 0) {
+      hidden_since_s_[i] = kNaN;
+      continue;
+    }
+    if (!std::isnan(hidden_since_s_[i])) continue;
+    hidden_since_s_[i] = time_s;
+    remembered_error_[i].setZero();
+    if (last_seen_.segment<3>(3 * m).allFinite() && known_before != 0) {
+      remembered_error_[i] = last_seen_.segment<3>(3 * m) - predict(m, known_before, last_seen_);
     }
   }
   for (int m = 0; m < n; ++m) {
@@ -131,16 +192,26 @@ std::vector<HiddenMarkerEstimator::Marker> HiddenMarkerEstimator::update(double 
     const auto i = static_cast<std::size_t>(m);
     if (out[i].how == MarkerEstimate::kSeen) continue;
     const Eigen::Vector3d last = last_seen_.segment<3>(3 * m);
-    if (world_from_hand && visible != 0) {
+    if (visible != 0) {
       const double fade = model_.memory_s > 0.0 ? std::exp(-(time_s - hidden_since_s_[i]) / model_.memory_s) : 0.0;
-      out[i] = {*world_from_hand * (predict(m, visible, x) + fade * remembered_error_[i]), MarkerEstimate::kPredicted};
-    } else if (last.allFinite() && (world_from_hand || last_frame_)) {
-      out[i] = {(world_from_hand ? *world_from_hand : *last_frame_) * last, MarkerEstimate::kHeld};
+      out[i] = {predict(m, visible, x) + fade * remembered_error_[i], MarkerEstimate::kPredicted};
+    } else if (last.allFinite()) {
+      out[i] = {last, MarkerEstimate::kHeld};
     }
   }
-  if (world_from_hand) last_frame_ = world_from_hand;
   previous_visible_ = visible;
   return out;
+}
+
+std::vector<std::string> glove_finger_markers(const MarkerTake& take) {
+  std::vector<std::string> markers;
+  for (const char* finger : {"thumb", "index", "middle", "ring", "little"}) {
+    for (const char* part : {"_tip", "_middle"}) {
+      std::string name = std::string(finger) + part;
+      if (take.marker(name)) markers.push_back(std::move(name));
+    }
+  }
+  return markers;
 }
 
 std::expected<HiddenMarkerErrors, std::string> evaluate_hidden_markers(const MarkerTake& take, const HiddenMarkerModel& model,
@@ -155,6 +226,8 @@ std::expected<HiddenMarkerErrors, std::string> evaluate_hidden_markers(const Mar
   const std::vector<int> tips = fingertip_markers(model);
   if (tips.empty()) return std::unexpected("the model has no fingertip marker (a name ending in \"_tip\")");
 
+  if (!(settings.gap_s > 0.0) || !std::isfinite(settings.gap_s))
+    return std::unexpected("the hiding gap must be a positive number of seconds");
   const int gap = static_cast<int>(std::clamp(std::round(settings.gap_s * take.frame_rate_hz), 1.0, 1e6));
   std::mt19937 rng(settings.seed);
   const int offset = std::uniform_int_distribution<int>(0, 2 * gap - 1)(rng);
@@ -211,7 +284,7 @@ std::expected<HiddenMarkerModel, std::string> fit_hidden_marker_model(const Mark
   const int first = std::max(settings.first_frame, 0);
   const int end = settings.end_frame < 0 ? take.frame_count() : std::min(settings.end_frame, take.frame_count());
   const auto n = static_cast<Eigen::Index>(markers.size());
-  std::vector<Eigen::VectorXd> samples;
+  MarkerStatistics samples(static_cast<int>(n));
   for (int f = first; f < end; ++f) {
     const auto world_from_hand =
         hand_frame_from_markers(take.at(f, (*frame_index)[0]), take.at(f, (*frame_index)[1]), take.at(f, (*frame_index)[2]));
@@ -223,23 +296,19 @@ std::expected<HiddenMarkerModel, std::string> fit_hidden_marker_model(const Mark
       all = p.allFinite();
       if (all) x.segment<3>(3 * m) = world_from_hand->inverse() * p;
     }
-    if (all) samples.push_back(x);
+    if (all) samples.add(x);
   }
-  const auto needed = static_cast<std::size_t>(3 * n + 10);
-  if (samples.size() < needed) {
-    return std::unexpected("only " + std::to_string(samples.size()) + " frames with the hand's frame and every marker seen (" +
+  const int needed = static_cast<int>(3 * n + 10);
+  if (samples.frames() < needed) {
+    return std::unexpected("only " + std::to_string(samples.frames()) + " frames with the hand's frame and every marker seen (" +
                            std::to_string(needed) + " needed)");
   }
   HiddenMarkerModel model;
   model.frame_markers = frame_markers;
   model.markers = markers;
-  model.training_frames = static_cast<int>(samples.size());
-  model.mean_m = Eigen::VectorXd::Zero(3 * n);
-  for (const Eigen::VectorXd& x : samples) model.mean_m += x;
-  model.mean_m /= static_cast<double>(samples.size());
-  model.covariance_m2 = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-  for (const Eigen::VectorXd& x : samples) model.covariance_m2.noalias() += (x - model.mean_m) * (x - model.mean_m).transpose();
-  model.covariance_m2 /= static_cast<double>(samples.size() - 1);
+  model.training_frames = samples.frames();
+  model.mean_m = samples.mean_m();
+  model.covariance_m2 = samples.covariance_m2();
 
   // The ridge and the memory that hide the tips best over the fitted frames.
   double best = std::numeric_limits<double>::infinity();

@@ -55,6 +55,11 @@ struct HiddenMarkerFitSettings {
   std::vector<double> ridge_candidates_m2{1e-7, 1e-6, 1e-5};
 };
 
+// The three markers on the back of the glove (tests/data, docs/tracking.md) that carry its hand frame.
+inline const std::array<std::string, 3> kGloveFrameMarkers{"hand_top", "hand_left", "hand_right"};
+// The glove's finger markers present in `take`: each <finger>_tip and <finger>_middle, thumb first.
+[[nodiscard]] std::vector<std::string> glove_finger_markers(const MarkerTake& take);
+
 // Fits a model to the frames of `take` in which the frame markers and every modelled marker are seen.
 [[nodiscard]] std::expected<HiddenMarkerModel, std::string> fit_hidden_marker_model(const MarkerTake& take,
                                                                                     const std::array<std::string, 3>& frame_markers,
@@ -63,6 +68,22 @@ struct HiddenMarkerFitSettings {
 
 [[nodiscard]] std::expected<void, std::string> save_hidden_marker_model(const HiddenMarkerModel& model, const std::filesystem::path& file);
 [[nodiscard]] std::expected<HiddenMarkerModel, std::string> load_hidden_marker_model(const std::filesystem::path& file);
+
+// The running mean and covariance of a vector of positions (3 per marker, hand frame), from frames
+// in which every marker is seen: a model fitted as a tracker runs (Welford's update).
+class MarkerStatistics {
+ public:
+  explicit MarkerStatistics(int markers);
+  void add(const Eigen::VectorXd& positions_m);
+  int frames() const { return frames_; }
+  const Eigen::VectorXd& mean_m() const { return mean_; }
+  Eigen::MatrixXd covariance_m2() const;
+
+ private:
+  int frames_ = 0;
+  Eigen::VectorXd mean_;
+  Eigen::MatrixXd scatter_;  // sum of outer products of the differences from the running mean
+};
 
 // How a marker's position was obtained.
 enum class MarkerEstimate : std::uint8_t {
@@ -75,7 +96,10 @@ enum class MarkerEstimate : std::uint8_t {
 // Runs the model over a stream of frames.
 class HiddenMarkerEstimator {
  public:
-  explicit HiddenMarkerEstimator(HiddenMarkerModel model);
+  // keep_predictors: each set of visible markers' predictor is kept once computed (fast where the
+  // same sets recur: evaluating and fitting a take); false, computed when needed and dropped (a
+  // tracker's memory does not grow with every set of hidden tips it meets).
+  explicit HiddenMarkerEstimator(HiddenMarkerModel model, bool keep_predictors = true);
 
   struct Marker {
     Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // world
@@ -85,15 +109,26 @@ class HiddenMarkerEstimator {
   // where hidden). Returns every modelled marker, seen or estimated.
   std::vector<Marker> update(double time_s, std::span<const Eigen::Vector3d, 3> frame_markers_world,
                              std::span<const Eigen::Vector3d> markers_world);
+  // One frame whose hand frame is known some other way (a tracker's hand star): the modelled markers
+  // in that frame (NaN where hidden), and every one back in it, seen or estimated.
+  std::vector<Marker> update_in_hand(double time_s, std::span<const Eigen::Vector3d> markers_hand);
+  // A frame in which the hand's frame is not known: nothing is predicted, and a marker seen again
+  // afterwards starts afresh.
+  void hand_lost() { previous_visible_ = 0; }
+
+  // New statistics for the model (a model fitted as a tracker runs); the cached predictors go.
+  void set_statistics(Eigen::VectorXd mean_m, Eigen::MatrixXd covariance_m2, int training_frames);
 
   const HiddenMarkerModel& model() const { return model_; }
 
  private:
   // x_H's predictor for a set of visible coordinates: x_H = mean_H + gain (x_V - mean_V).
   const Eigen::MatrixXd& gain(std::uint64_t visible_markers);
+  Eigen::MatrixXd compute_gain(std::uint64_t visible_markers) const;
   Eigen::Vector3d predict(int marker, std::uint64_t visible, const Eigen::VectorXd& hand_positions);
 
   HiddenMarkerModel model_;
+  bool keep_predictors_ = true;
   std::map<std::uint64_t, Eigen::MatrixXd> gains_;
   Eigen::VectorXd last_seen_;           // hand frame, per marker (NaN until seen)
   std::vector<double> hidden_since_s_;  // NaN while seen

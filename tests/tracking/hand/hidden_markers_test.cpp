@@ -113,6 +113,31 @@ TEST(HiddenMarkers, TheEstimatorSaysHowEachMarkerWasObtained) {
   EXPECT_EQ(out[2].how, MarkerEstimate::kUnknown);
 }
 
+TEST(HiddenMarkers, RunningStatisticsAreTheBatchMeanAndCovariance) {
+  // Positions a metre from the origin varying by millimetres: where a one-pass sum of squares
+  // loses its digits, the running update must not.
+  std::mt19937 rng(3);
+  std::normal_distribution<double> mm(0.0, 0.002);
+  std::vector<Eigen::VectorXd> samples;
+  MarkerStatistics running(2);
+  EXPECT_EQ(running.covariance_m2(), Eigen::MatrixXd::Zero(6, 6)) << "no frames, no spread";
+  for (int i = 0; i < 500; ++i) {
+    Eigen::VectorXd x(6);
+    const double shared = mm(rng);
+    for (Eigen::Index k = 0; k < 6; ++k) x[k] = 1.0 + 0.1 * static_cast<double>(k) + shared + 0.5 * mm(rng);
+    samples.push_back(x);
+    running.add(x);
+  }
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(6);
+  for (const auto& x : samples) mean += x / 500.0;
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(6, 6);
+  for (const auto& x : samples) covariance += (x - mean) * (x - mean).transpose() / 499.0;
+  EXPECT_EQ(running.frames(), 500);
+  EXPECT_LT((running.mean_m() - mean).norm(), 1e-12);
+  EXPECT_LT((running.covariance_m2() - covariance).norm(), 1e-12 * covariance.norm() + 1e-15);
+  EXPECT_EQ(running.covariance_m2(), running.covariance_m2().transpose());
+}
+
 TEST(HiddenMarkers, AModelFileRoundTripsAndBadOnesAreRefused) {
   const auto dir = test::fresh_test_dir("hidden_markers");
   const auto model =
