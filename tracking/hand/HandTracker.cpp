@@ -39,7 +39,8 @@ std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::predict_hi
     tip_estimator_->hand_lost();
     return out;
   }
-  if (std::ranges::all_of(tips, [](const auto& tip) { return tip.has_value(); })) {
+  // Only finite tips are statistics: a NaN point handed to update() must not reach the model.
+  if (std::ranges::all_of(tips, [](const auto& tip) { return tip.has_value() && tip->allFinite(); })) {
     Eigen::VectorXd x(3 * kFingerCount);
     for (int f = 0; f < kFingerCount; ++f) x.segment<3>(3 * f) = *tips[static_cast<std::size_t>(f)];
     tip_statistics_.add(x);
