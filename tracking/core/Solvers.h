@@ -2,7 +2,10 @@
 // Eigen's small dense decompositions, compiled once (Solvers.cpp) instead of in every file that
 // uses one: each instantiation of SelfAdjointEigenSolver or JacobiSVD costs tens of seconds of
 // compile time under the sanitizers (docs/PERFORMANCE.md, "Build time"). Each function is the
-// Eigen call its name says, with the same results bit for bit.
+// Eigen call its name says, with the same results bit for bit, except the closed-form eigenvalues
+// (symmetric_eigenvalues_direct and _packed), which are rhot's own scalar code.
+
+#include <array>
 
 #include <Eigen/Core>
 
@@ -22,9 +25,11 @@ SymmetricEigen3 symmetric_eigen(const Eigen::Matrix3d& m);
 SymmetricEigen4 symmetric_eigen(const Eigen::Matrix4d& m);
 // The eigenvalues alone (ascending): compute(m, EigenvaluesOnly).
 Eigen::Vector3d symmetric_eigenvalues(const Eigen::Matrix3d& m);
-// The closed-form solver for 3 x 3 (computeDirect(m, EigenvaluesOnly)): faster, a little less
-// accurate for badly scaled matrices.
+// The closed-form solver for 3 x 3 (the algorithm of computeDirect(m, EigenvaluesOnly), ascending):
+// faster, a little less accurate for badly scaled matrices. The packed form takes the upper
+// triangle row by row (m00, m01, m02, m11, m12, m22).
 Eigen::Vector3d symmetric_eigenvalues_direct(const Eigen::Matrix3d& m);
+std::array<double, 3> symmetric_eigenvalues_packed(const std::array<double, 6>& upper);
 
 // JacobiSVD with full U and V: m = U diag(singular_values) V^T, singular values descending.
 struct Svd3 {

@@ -26,6 +26,7 @@ struct PointState {
   int views = 0;
   std::array<double, 6> info{0, 0, 0, 0, 0, 0};
   double bound_mm = 0.0;  // with the chosen cameras (Search::bound_mm), kept by Search::apply
+  double score = 0.0;     // Search::score, kept by Search::apply (no views: 0)
 };
 
 class Search {
@@ -52,7 +53,7 @@ class Search {
       PointState then = now;
       then.views += sign;
       for (std::size_t e = 0; e < 6; ++e) then.info[e] += sign * cand.info[n][e];
-      d += score(then) - score(now);
+      d += score(then) - now.score;
     }
     return d;
   }
@@ -96,6 +97,38 @@ class Search {
     }
     return w;
   }
+  // worst() were candidate c added, without adding it: `now` is worst() and `by_bound` is
+  // seen_twice_by_bound() of the current state. Only c's own points change; the largest bound
+  // among the others is the first point in `by_bound` that c does not see.
+  Worst worst_with(std::size_t c, const Worst& now, const std::vector<int>& by_bound) const {
+    const Candidate& cand = candidates_[c];
+    Worst w{now.k_seen, now.two_seen, 0.0};
+    for (std::size_t n = 0; n < cand.points.size(); ++n) {
+      PointState then = state_[static_cast<std::size_t>(cand.points[n])];
+      then.views += 1;
+      w.k_seen += then.views == k_ ? 1 : 0;
+      w.two_seen += then.views == 2 ? 1 : 0;
+      if (then.views < 2) continue;
+      for (std::size_t e = 0; e < 6; ++e) then.info[e] += cand.info[n][e];
+      w.max_mm = std::max(w.max_mm, bound_mm(then));
+    }
+    for (const int p : by_bound) {
+      if (std::binary_search(cand.points.begin(), cand.points.end(), p)) continue;
+      w.max_mm = std::max(w.max_mm, state_[static_cast<std::size_t>(p)].bound_mm);
+      break;
+    }
+    return w;
+  }
+  // The points seen by two chosen cameras or more, largest bound first.
+  std::vector<int> seen_twice_by_bound() const {
+    std::vector<int> out;
+    for (std::size_t i = 0; i < state_.size(); ++i) {
+      if (state_[i].views >= 2) out.push_back(static_cast<int>(i));
+    }
+    std::sort(out.begin(), out.end(),
+              [&](int a, int b) { return state_[static_cast<std::size_t>(a)].bound_mm > state_[static_cast<std::size_t>(b)].bound_mm; });
+    return out;
+  }
   // Swaps the chosen camera in `slot` for the candidate that lowers the worst point most without
   // losing coverage; false when none does.
   bool lower_worst(std::size_t slot, int k_floor) {
@@ -105,7 +138,8 @@ class Search {
     // Without it, the worst point: only a candidate that sees it can bring the maximum below
     // `now`, and only if it lowers that point's bound below it.
     std::size_t at = state_.size();
-    worst(&at);
+    const Worst without = worst(&at);
+    const std::vector<int> by_bound = seen_twice_by_bound();
     std::size_t best = was;
     Worst best_worst = now;
     for (std::size_t c = 0; c < candidates_.size(); ++c) {
@@ -117,9 +151,7 @@ class Search {
       there.views += 1;
       for (std::size_t e = 0; e < 6; ++e) there.info[e] += cand.info[static_cast<std::size_t>(hit - cand.points.begin())][e];
       if (there.views >= 2 && !(bound_mm(there) < best_worst.max_mm)) continue;
-      apply(c, +1);
-      const Worst w = worst();
-      apply(c, -1);
+      const Worst w = worst_with(c, without, by_bound);
       if (w.better_than(best_worst, k_floor)) {
         best = c;
         best_worst = w;
@@ -153,16 +185,14 @@ class Search {
       s.views += sign;
       for (std::size_t e = 0; e < 6; ++e) s.info[e] += sign * cand.info[n][e];
       s.bound_mm = s.views >= 2 ? bound_mm(s) : 0.0;
+      s.score = score(s);
     }
   }
   // 2.7955 sqrt(largest eigenvalue of C), C = sigma^2 F^-1, in mm; infinite for parallel rays.
   double bound_mm(const PointState& s) const {
-    const auto& f = s.info;
-    Eigen::Matrix3d m;
-    m << f[0], f[1], f[2], f[1], f[3], f[4], f[2], f[4], f[5];
-    const Eigen::Vector3d values = symmetric_eigenvalues_direct(m);
-    const double smallest = values(0);
-    if (!(smallest > 1e-12 * values(2))) return std::numeric_limits<double>::infinity();
+    const std::array<double, 3> values = symmetric_eigenvalues_packed(s.info);
+    const double smallest = values[0];
+    if (!(smallest > 1e-12 * values[2])) return std::numeric_limits<double>::infinity();
     return 2.7955 * 1000.0 * sigma_px_ / std::sqrt(smallest);
   }
   double score(const PointState& s) const {
@@ -315,13 +345,18 @@ void add_views(std::vector<Candidate>& candidates, const std::vector<Eigen::Vect
   Eigen::Matrix<double, 2, 3> j;
   for (Candidate& c : candidates) {
     const CameraProjection projection(c.camera);
+    c.points.reserve(points.size());
+    c.info.reserve(points.size());
     for (std::size_t p = 0; p < points.size(); ++p) {
       const auto pixel = projection.project(points[p], j);
       if (!pixel || !projection.in_image(*pixel)) continue;
-      const Eigen::Matrix3d f = j.transpose() * j;
+      // J^T J's upper triangle, written out (Eigen's product is not inlined at -O1).
+      const auto f = [&](int a, int b) { return j(0, a) * j(0, b) + j(1, a) * j(1, b); };
       c.points.push_back(static_cast<int>(p));
       c.info.push_back({f(0, 0), f(0, 1), f(0, 2), f(1, 1), f(1, 2), f(2, 2)});
     }
+    c.points.shrink_to_fit();
+    c.info.shrink_to_fit();
   }
 }
 
