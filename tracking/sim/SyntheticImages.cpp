@@ -68,17 +68,23 @@ cv::Mat draw_blobs(const CameraIntrinsics& camera, const CameraFrame& frame, con
     }
     return image;
   }
-  cv::Mat light(camera.height_px, camera.width_px, CV_64FC1, cv::Scalar(s.background));
-  for (const cv::Rect& box : boxes) {
+  // The noise drawn first, in single precision (OpenCV draws its normal numbers as floats), then
+  // the background added in one pass and the blobs' light over their boxes: two passes over the
+  // image instead of five over one of doubles (rhot-calib simulate --images: 64 -> 25 ms a
+  // 1024 x 768 picture under the sanitizers, with the PNG written).
+  cv::RNG rng(s.seed);  // OpenCV's generator: the same seed gives the same noise
+  cv::Mat light(camera.height_px, camera.width_px, CV_32FC1);
+  rng.fill(light, cv::RNG::NORMAL, s.background, s.noise_sigma);
+  for (std::size_t b = 0; b < boxes.size(); ++b) {  // each blob over its own box (boxes overlap)
+    const cv::Rect& box = boxes[b];
     for (int y = box.y; y < box.y + box.height; ++y) {
-      auto* row = light.ptr<double>(y);
-      for (int x = box.x; x < box.x + box.width; ++x) row[x] = light_at(x, y, s.background);
+      auto* row = light.ptr<float>(y);
+      for (int x = box.x; x < box.x + box.width; ++x) {
+        const double dx = x - frame.detections[b].pixel.x(), dy = y - frame.detections[b].pixel.y();
+        row[x] += static_cast<float>(s.peak * std::exp(-(dx * dx + dy * dy) * inv_two_var));
+      }
     }
   }
-  cv::RNG rng(s.seed);  // OpenCV's generator: the same seed gives the same noise
-  cv::Mat noise(light.size(), CV_64FC1);
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, s.noise_sigma);
-  light += noise;
   cv::Mat image;
   light.convertTo(image, CV_8UC1);  // rounds and saturates to 0-255
   return image;

@@ -93,7 +93,7 @@ TEST(BlobDetector, CentroidsOfNoisySpotsAreWithinATenthOfAPixel) {
     EXPECT_EQ(e.extra, 0) << seed;
     worst = std::max(worst, e.max_px);
   }
-  EXPECT_LT(worst, 0.08) << "measured 0.058 px over these five images";
+  EXPECT_LT(worst, 0.08) << "measured 0.060 px over these five images";
 }
 
 TEST(BlobDetector, TwoTouchingSpotsAreSplitOrDroppedNeverMerged) {

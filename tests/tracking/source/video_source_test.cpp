@@ -119,8 +119,8 @@ TEST(VideoSource, ImageSequencesGiveTheTrueDetectionsWhichTriangulateToTheTrueMa
   }
   EXPECT_GT(isolated_count, 100);
   EXPECT_GT(points_checked, 40);
-  EXPECT_LT(worst_pixel, 0.06) << "measured 0.040 px (306 spots, noise 2 grey levels)";
-  EXPECT_LT(worst_point_m, 1e-4) << "measured 0.065 mm (80 markers)";
+  EXPECT_LT(worst_pixel, 0.06) << "measured 0.045 px (306 spots, noise 2 grey levels)";
+  EXPECT_LT(worst_point_m, 1e-4) << "measured 0.058 mm (80 markers)";
   EXPECT_FALSE(source->next().has_value()) << "the sequence is over";
   EXPECT_TRUE(source->ended());
   for (const VideoCameraStats& s : source->stats()) {
