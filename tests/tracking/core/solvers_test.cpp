@@ -13,9 +13,12 @@ namespace {
 Eigen::Matrix3d random_symmetric(std::mt19937& rng, double log10_spread) {
   // R diag(values) R^T with eigenvalues over log10_spread decades and either sign.
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  const Eigen::Quaterniond q = Eigen::Quaterniond(unit(rng), unit(rng), unit(rng), unit(rng)).normalized();
+  const Eigen::Quaterniond q = Eigen::Quaterniond{unit(rng), unit(rng), unit(rng), unit(rng)}.normalized();
   Eigen::Vector3d values;
-  for (int i = 0; i < 3; ++i) values(i) = std::pow(10.0, log10_spread * 0.5 * (unit(rng) + 1.0)) * (unit(rng) < -0.8 ? -1.0 : 1.0);
+  for (int i = 0; i < 3; ++i) {
+    const double magnitude = std::pow(10.0, log10_spread * 0.5 * (unit(rng) + 1.0));
+    values(i) = unit(rng) < -0.8 ? -magnitude : magnitude;
+  }
   const Eigen::Matrix3d r = q.toRotationMatrix();
   return r * values.asDiagonal() * r.transpose();
 }
