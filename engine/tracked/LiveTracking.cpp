@@ -1,5 +1,6 @@
 #include "engine/tracked/LiveTracking.h"
 
+#include <algorithm>
 #include <limits>
 #include <optional>
 #include <string>
@@ -32,6 +33,17 @@ LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObj
     all.stars.push_back(hand);
   }
   star_tracker_ = std::make_unique<StarTracker>(StarLibrary(all));
+  // A colour some fingertip wears and no hand star does (the objects' stars wear the hand stars'
+  // colour or none): such a point is a fingertip, never a star's marker.
+  for (const HandLayout& layout : layouts_) {
+    for (const int colour : layout.fingertip_colour) {
+      const bool star_colour =
+          std::any_of(layouts_.begin(), layouts_.end(), [&](const HandLayout& l) { return l.hand_star_colour == colour; });
+      if (colour >= 0 && !star_colour &&
+          std::find(fingertip_only_colours_.begin(), fingertip_only_colours_.end(), colour) == fingertip_only_colours_.end())
+        fingertip_only_colours_.push_back(colour);
+    }
+  }
   HandTrackerSettings tracker_settings;
   tracker_settings.filter = settings_.filter_hands;
   for (std::size_t h = 0; h < 2; ++h) {
@@ -130,7 +142,24 @@ void LiveTracking::match() {
 
 void LiveTracking::track_stars(double t_s) {
   results_.world_from_object.clear();
-  const auto& stars = star_tracker_->update(t_s, results_.points, point_sigma_m_);
+  // The points a star's marker may be: all of them, less those whose colour only fingertips wear.
+  // With two colour cameras, fingertip markers beside the blue markers of a carried mug were taken
+  // for the other hand's star, half a metre from that hand (rhot-eval colour, 2026-11-26).
+  star_point_.clear();
+  star_points_.clear();
+  star_point_sigma_m_.clear();
+  for (std::size_t p = 0; p < results_.points.size(); ++p) {
+    const int colour = p < results_.point_colours.size() ? results_.point_colours[p] : -1;
+    if (std::find(fingertip_only_colours_.begin(), fingertip_only_colours_.end(), colour) != fingertip_only_colours_.end()) continue;
+    star_point_.push_back(static_cast<int>(p));
+    star_points_.push_back(results_.points[p]);
+    star_point_sigma_m_.push_back(point_sigma_m_[p]);
+  }
+  const auto& stars = star_tracker_->update(t_s, star_points_, star_point_sigma_m_);
+  stars_ = stars;  // with this frame's point indices
+  for (TrackedStar& s : stars_) {
+    for (int& p : s.point) p = p >= 0 ? star_point_[static_cast<std::size_t>(p)] : -1;
+  }
   for (const auto& [id, object_from_star] : object_from_star_) {
     for (const TrackedStar& s : stars) {
       if (s.id != id || !s.seen_now()) continue;
@@ -146,7 +175,7 @@ void LiveTracking::track_stars(double t_s) {
 void LiveTracking::track_hands(double t_s) {
   // The hand stars were followed with the objects' (track_stars); the points left go to the fingertips.
   const std::array<HandTracker*, 2> hands{hand_trackers_[0].get(), hand_trackers_[1].get()};
-  rhot::track_hands(hands, hand_star_, star_tracker_->stars(), t_s, results_.points, point_sigma_m_, taken_, results_.point_colours);
+  rhot::track_hands(hands, hand_star_, stars_, t_s, results_.points, point_sigma_m_, taken_, results_.point_colours);
   for (std::size_t h = 0; h < 2; ++h) {
     const TrackedHand& tracked = hand_trackers_[h]->last();
     results_.hands[h] = hand_input(tracked);

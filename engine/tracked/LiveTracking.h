@@ -82,6 +82,14 @@ class LiveTracking final : public ResultSource {
   std::array<HandLayout, 2> layouts_;
   std::unique_ptr<StarTracker> star_tracker_;  // the objects' stars, then the left and right hand stars
   std::array<int, 2> hand_star_{};             // each hand's star in star_tracker_
+  // Colours only fingertips wear (coloured layouts): points of these colours are never a star's
+  // marker, so the star tracker does not see them. star_point_ maps its points to this frame's,
+  // and stars_ holds its stars with this frame's point indices.
+  std::vector<int> fingertip_only_colours_;
+  std::vector<int> star_point_;
+  std::vector<Eigen::Vector3d> star_points_;
+  std::vector<double> star_point_sigma_m_;
+  std::vector<TrackedStar> stars_;
   std::array<std::unique_ptr<HandTracker>, 2> hand_trackers_;
   std::vector<bool> taken_;  // this frame's points used by a star or a fingertip
   RigFrame frame_;

@@ -11,6 +11,11 @@
 //   centroid_rms_px           detection to the marker centre's projection, for markers at least
 //                             90 % visible (a partly hidden sphere's centroid moves, rightly)
 //   fingertip_mean_mm         tracked fingertip joints to the true ones, frames with the hand seen
+//   hand_seen_fraction        hands seen (their star found) per hand and frame
+//   hand_in_view_fraction     hands whose wrist and true fingertips lie inside every image, likewise
+//   misplaced_hand_frames     hands seen with their frame 5 cm or more from the true one
+// Every 90 frames a line on stderr gives the same per hand over those frames, with the markers of
+// its star and its fingertips visible by 20 pixels in every image (means).
 //   detect_median_ms          one image through the detector as the demo runs it (tracked), and
 //                             detect_full_median_ms for a whole-image search of the same images
 //
@@ -26,6 +31,7 @@
 
 #include <filesystem>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -71,9 +77,33 @@ struct ColourTally {
   std::map<int, Counts> per_colour;
   std::vector<double> detect_ms, detect_full_ms;
   double tip_sum_m = 0.0;
-  long tips = 0, hand_frames = 0, hands_seen = 0;
+  long tips = 0, hand_frames = 0, hands_seen = 0, hands_in_view = 0, hands_misplaced = 0;
   long images = 0;
+  // The same since the last progress line, per hand (left, right).
+  std::array<double, 2> window_tip_sum_m{};
+  std::array<long, 2> window_tips{}, window_frames{}, window_seen{}, window_in_view{}, window_star_markers{}, window_tip_markers{};
 };
+
+// One progress line: per hand over the window, the frames with the hand in view (its wrist and
+// true fingertips inside every image), its star's markers visible by 20 pixels in every image (a
+// mean), the frames with the hand seen and the fingertips' error; then the window is reset.
+std::string window_summary(ColourTally& tally) {
+  std::string out;
+  for (std::size_t h = 0; h < 2; ++h) {
+    const auto per_frame = [&](long count) {
+      return tally.window_frames[h] > 0 ? static_cast<double>(count) / static_cast<double>(tally.window_frames[h]) : 0.0;
+    };
+    const double tip_mm = tally.window_tips[h] > 0 ? 1000.0 * tally.window_tip_sum_m[h] / static_cast<double>(tally.window_tips[h]) : 0.0;
+    out += fmt::format(
+        "{}{} hand in view {:.2f}, markers in every image: star {:.1f}, fingertips {:.1f}; seen {:.2f}, fingertips {:.1f} mm",
+        h == 0 ? "" : "; ", h == 0 ? "left" : "right", per_frame(tally.window_in_view[h]), per_frame(tally.window_star_markers[h]),
+        per_frame(tally.window_tip_markers[h]), per_frame(tally.window_seen[h]), tip_mm);
+    tally.window_tip_sum_m[h] = 0.0;
+    tally.window_tips[h] = tally.window_frames[h] = tally.window_seen[h] = tally.window_in_view[h] = tally.window_star_markers[h] =
+        tally.window_tip_markers[h] = 0;
+  }
+  return out;
+}
 
 // --colours' model, or the default one without it: false after saying what was wrong.
 bool load_model(const ColourArgs& a, ColourModel& model) {
@@ -192,17 +222,49 @@ void count_detections(const RigFrame& frame, const ColourShot& shot, const std::
 }
 
 // The tracked fingertips against the true ones, for the hands seen.
-void count_fingertips(LiveTracking& live, const DemoWorld& world, ColourTally& tally) {
+void count_fingertips(LiveTracking& live, const DemoWorld& world, const CameraRig& rig, const std::vector<std::vector<MarkerView>>& views,
+                      ColourTally& tally) {
   const auto truth = world.truth();
+  std::size_t first_marker = 0;  // the hand's markers in the shot: the left layout's, then the right's
   for (std::size_t h = 0; h < 2 && truth; ++h) {
+    // Its hand star's four markers (layout_markers' first), then its fingertip markers, visible
+    // by 20 pixels in every image.
+    const std::size_t markers = layout_marker_colours(live.layouts()[h]).size();
+    for (std::size_t m = first_marker; m < first_marker + std::min<std::size_t>(markers, 4 + kFingerCount); ++m) {
+      const bool everywhere = std::all_of(views.begin(), views.end(), [&](const std::vector<MarkerView>& v) {
+        return m < v.size() && v[m].in_front && v[m].visible_px >= 20;
+      });
+      (m < first_marker + 4 ? tally.window_star_markers : tally.window_tip_markers)[h] += everywhere ? 1 : 0;
+    }
+    first_marker += markers;
     ++tally.hand_frames;
+    ++tally.window_frames[h];
+    // In view: the wrist and every true fingertip inside every camera's image.
+    bool in_view = true;
+    for (const Camera& camera : rig.cameras) {
+      const CameraProjection projection(camera);
+      for (const HandJoint j : {HandJoint::kWrist, HandJoint::kThumbTip, HandJoint::kIndexTip, HandJoint::kMiddleTip, HandJoint::kRingTip,
+                                HandJoint::kLittleTip}) {
+        const auto pixel =
+            projection.project(truth->hands[h].world_from_hand * truth->hands[h].pose.position_m[static_cast<std::size_t>(j)]);
+        in_view = in_view && pixel && projection.in_image(*pixel);
+      }
+    }
+    tally.window_in_view[h] += in_view ? 1 : 0;
+    tally.hands_in_view += in_view ? 1 : 0;
     const TrackedHand& hand = live.tracked_hand(h == 0 ? HandSide::kLeft : HandSide::kRight);
     if (!hand.hand_seen) continue;
     ++tally.hands_seen;
+    // Seen, but its frame 5 cm or more from the true one: another constellation taken for its star.
+    if ((hand.world_from_hand.translation - truth->hands[h].world_from_hand.translation).norm() >= 0.05) ++tally.hands_misplaced;
+    ++tally.window_seen[h];
     for (int k = 0; k < kFingerCount; ++k) {
       const auto tip = static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3]);
-      tally.tip_sum_m += (hand.joints_world[tip] - truth->hands[h].world_from_hand * truth->hands[h].pose.position_m[tip]).norm();
+      const double error_m = (hand.joints_world[tip] - truth->hands[h].world_from_hand * truth->hands[h].pose.position_m[tip]).norm();
+      tally.tip_sum_m += error_m;
       ++tally.tips;
+      tally.window_tip_sum_m[h] += error_m;
+      ++tally.window_tips[h];
     }
   }
 }
@@ -221,6 +283,9 @@ nlohmann::ordered_json report(const ColourArgs& a, const std::string& device_nam
   for (auto it = overall.begin(); it != overall.end(); ++it) j[it.key()] = it.value();
   j["fingertip_mean_mm"] = tally.tips > 0 ? 1000.0 * tally.tip_sum_m / static_cast<double>(tally.tips) : 0.0;
   j["hand_seen_fraction"] = tally.hand_frames > 0 ? static_cast<double>(tally.hands_seen) / static_cast<double>(tally.hand_frames) : 0.0;
+  j["hand_in_view_fraction"] =
+      tally.hand_frames > 0 ? static_cast<double>(tally.hands_in_view) / static_cast<double>(tally.hand_frames) : 0.0;
+  j["misplaced_hand_frames"] = tally.hands_misplaced;
   j["detect_median_ms"] = median(tally.detect_ms);
   j["detect_full_median_ms"] = median(tally.detect_full_ms);
   nlohmann::ordered_json colours;
@@ -284,8 +349,10 @@ int colour(const ColourArgs& a) {
     if (f == 0 && !a.pictures_dir.empty() && !write_pictures(a, frame, *src, model)) return 1;
     tally.detect_ms.push_back(src->last_detect_ms() / static_cast<double>(frame.cameras.size()));
     count_detections(frame, shot, views, *src, full_detector, tally);
-    count_fingertips(live, *world, tally);
-    if ((f + 1) % 30 == 0 || f + 1 == a.frames) std::cerr << "rhot-eval colour: " << (f + 1) << "/" << a.frames << " frames\n";
+    count_fingertips(live, *world, *rig, views, tally);
+    if ((f + 1) % 90 == 0 || f + 1 == a.frames)
+      std::cerr << "rhot-eval colour: " << (f + 1) << "/" << a.frames << " frames (t = " << fmt::format("{:.1f}", t)
+                << " s; since the last line: " << window_summary(tally) << ")\n";
   }
   std::cout << report(a, cams->renderer_info().device_name, tally).dump(2) << "\n";
   return 0;
