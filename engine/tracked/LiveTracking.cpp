@@ -33,13 +33,16 @@ LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObj
     all.stars.push_back(hand);
   }
   star_tracker_ = std::make_unique<StarTracker>(StarLibrary(all));
-  // A colour some fingertip wears and no hand star does (the objects' stars wear the hand stars'
-  // colour or none): such a point is a fingertip, never a star's marker.
+  stars_ = star_tracker_->stars();  // the hands' stages may run before the stars' first
+  // A colour some fingertip wears and no hand star does: such a point is a fingertip, never a
+  // star's marker. Only where both hand stars are coloured (the objects' stars wear the hand stars'
+  // colour, docs/colour-markers.md): an uncoloured star's markers may be seen in any colour.
+  const bool stars_coloured = std::all_of(layouts_.begin(), layouts_.end(), [](const HandLayout& l) { return l.hand_star_colour >= 0; });
   for (const HandLayout& layout : layouts_) {
     for (const int colour : layout.fingertip_colour) {
       const bool star_colour =
           std::any_of(layouts_.begin(), layouts_.end(), [&](const HandLayout& l) { return l.hand_star_colour == colour; });
-      if (colour >= 0 && !star_colour &&
+      if (stars_coloured && colour >= 0 && !star_colour &&
           std::find(fingertip_only_colours_.begin(), fingertip_only_colours_.end(), colour) == fingertip_only_colours_.end())
         fingertip_only_colours_.push_back(colour);
     }
@@ -143,7 +146,7 @@ void LiveTracking::match() {
 void LiveTracking::track_stars(double t_s) {
   results_.world_from_object.clear();
   // The points a star's marker may be: all of them, less those whose colour only fingertips wear.
-  // With two colour cameras, fingertip markers beside the blue markers of a carried mug were taken
+  // With two colour cameras, fingertip markers beside blue star markers were taken
   // for the other hand's star, half a metre from that hand (rhot-eval colour, 2026-11-26).
   star_point_.clear();
   star_points_.clear();

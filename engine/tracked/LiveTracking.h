@@ -5,7 +5,8 @@
 //   source    the next multi-camera frame (the source's warnings are logged)
 //   matching  detections matched across cameras and triangulated
 //   stars     the tracked objects' marker stars and both hands' stars identified and followed
-//             by one StarTracker (a point is one star's marker at most); each object's pose
+//             by one StarTracker (a point is one star's marker at most; with coloured markers,
+//             points of a colour only fingertips wear are not offered); each object's pose
 //   hands     the points left shared out to both hands' fingertips, nearest first; each hand's
 //             star and fingertip markers -> a 26-joint hand (HandTracker.h, track_hands)
 //

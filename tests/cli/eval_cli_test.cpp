@@ -302,11 +302,11 @@ TEST(EvalCli, AHandModelFittedToATakesFirstPartEstimatesItsHiddenTipsInTheRest) 
   }
 }
 
-// Coloured markers through two colour cameras, 30 frames from 6.5 s into the demo's script: the
-// right hand carries the mug beside its blue star while the left hand is out of view. Fingertip
-// markers (their colours no star wears) beside the mug's markers were taken for the left hand's
-// star until the star tracker stopped seeing them: 6 frames with a "left hand" 0.5 m from the true
-// one, fingertips 90 mm off on average. Measured now: none, 2.2 mm.
+// Coloured markers through two colour cameras, 30 frames from 6.5 s into the demo's script, the
+// left hand out of the cameras' view. Fingertip markers (their colours no star wears) beside blue
+// star markers were taken for the left hand's star until the star tracker stopped seeing them: 6
+// hand frames with a "left hand" 0.5 m from the true one, fingertips 90 mm off on average. Measured
+// now: none, 2.2 mm.
 TEST(EvalCli, ColourFingertipsAreNeverTakenForAHandStar) {
   const EvalRun r = run_eval("colour --frames 30 --start-s 6.5 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -68,8 +68,8 @@ cv::Mat draw_blobs(const CameraIntrinsics& camera, const CameraFrame& frame, con
     }
     return image;
   }
-  // The noise drawn first, in single precision (OpenCV draws its normal numbers as floats), then
-  // the background added in one pass and the blobs' light over their boxes: two passes over the
+  // The noise drawn in single precision around the background (OpenCV draws its normal numbers as
+  // floats), the blobs' light added over their boxes, then rounded to 8 bits: two passes over the
   // image instead of five over one of doubles (rhot-calib simulate --images: 64 -> 25 ms a
   // 1024 x 768 picture under the sanitizers, with the PNG written).
   cv::RNG rng(s.seed);  // OpenCV's generator: the same seed gives the same noise

@@ -5,6 +5,7 @@
 #include <limits>
 #include <random>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 namespace rhot {
