@@ -11,14 +11,14 @@
 //   centroid_rms_px           detection to the marker centre's projection, for markers at least
 //                             90 % visible (a partly hidden sphere's centroid moves, rightly)
 //   fingertip_mean_mm         tracked fingertip joints to the true ones, frames with the hand seen
+//   detect_median_ms          one image through the detector as the demo runs it (tracked), and
+//                             detect_full_median_ms for a whole-image search of the same images
 //   hand_seen_fraction        hands seen (their star found) per hand and frame
 //   hand_in_view_fraction     hands whose wrist and true fingertips lie inside every image, likewise
 //   misplaced_hand_frames     hands seen with their frame 5 cm or more from the true one (a count
 //                             per hand and frame)
 // Every 90 frames a line on stderr gives the same per hand over those frames, with the markers of
 // its star and its fingertips visible by 20 pixels in every image (means).
-//   detect_median_ms          one image through the detector as the demo runs it (tracked), and
-//                             detect_full_median_ms for a whole-image search of the same images
 //
 // Without --colours the default model is used with its white reference taken from the scene under
 // daylight (6500 K), as rhot-calib colours would take it; --white-balance-k then changes the light.

@@ -46,13 +46,16 @@ cv::Mat draw_blobs(const CameraIntrinsics& camera, const CameraFrame& frame, con
   std::vector<cv::Rect> boxes;
   boxes.reserve(frame.detections.size());
   for (const Detection& d : frame.detections) boxes.push_back(blob_box(camera, d, radius));
+  // Blob b's light at a pixel.
+  const auto blob_light = [&](std::size_t b, int x, int y) {
+    const double dx = x - frame.detections[b].pixel.x(), dy = y - frame.detections[b].pixel.y();
+    return s.peak * std::exp(-(dx * dx + dy * dy) * inv_two_var);
+  };
   // The light at a pixel: the background, then each blob whose box holds it, in detection order.
   const auto light_at = [&](int x, int y, double background) {
     double light = background;
     for (std::size_t b = 0; b < boxes.size(); ++b) {
-      if (!boxes[b].contains({x, y})) continue;
-      const double dx = x - frame.detections[b].pixel.x(), dy = y - frame.detections[b].pixel.y();
-      light += s.peak * std::exp(-(dx * dx + dy * dy) * inv_two_var);
+      if (boxes[b].contains({x, y})) light += blob_light(b, x, y);
     }
     return light;
   };
@@ -79,10 +82,7 @@ cv::Mat draw_blobs(const CameraIntrinsics& camera, const CameraFrame& frame, con
     const cv::Rect& box = boxes[b];
     for (int y = box.y; y < box.y + box.height; ++y) {
       auto* row = light.ptr<float>(y);
-      for (int x = box.x; x < box.x + box.width; ++x) {
-        const double dx = x - frame.detections[b].pixel.x(), dy = y - frame.detections[b].pixel.y();
-        row[x] += static_cast<float>(s.peak * std::exp(-(dx * dx + dy * dy) * inv_two_var));
-      }
+      for (int x = box.x; x < box.x + box.width; ++x) row[x] += static_cast<float>(blob_light(b, x, y));
     }
   }
   cv::Mat image;
