@@ -34,8 +34,10 @@ std::expected<std::array<HandLayout, 2>, std::string> default_hand_layouts(const
   std::array<HandLayout, 2> layouts;
   const std::string kind = colour_markers ? "colour" : "low-cost";
   for (std::size_t h = 0; h < 2; ++h) {
-    auto layout = load_hand_layout(asset_dir / "hands" / (kind + (h == 0 ? "-left.json" : "-right.json")));
+    const std::filesystem::path file = asset_dir / "hands" / (kind + (h == 0 ? "-left.json" : "-right.json"));
+    auto layout = load_hand_layout(file);
     if (!layout) return std::unexpected(layout.error());
+    if (!layout->has_hand_star()) return std::unexpected(file.string() + ": " + camera_hand_star_problem(*layout));
     layouts[h] = std::move(*layout);
   }
   // Hands that could be taken for each other, or for an object, from three markers are refused.

@@ -274,7 +274,7 @@ class ScenarioWorld final : public SimulatedWorld {
       if (!truth[h]) continue;
       for (const Occluder& o : hand_bone_occluders(truth[h]->world_from_hand, truth[h]->pose)) out.occluders.push_back(o);
       const auto markers = layout_markers(layouts_[h], truth[h]->world_from_hand, truth[h]->pose);
-      const std::size_t star = layouts_[h].hand_star_m.size();
+      const std::size_t star = layouts_[h].hand_frame_markers;
       for (std::size_t m = 0; m < markers.size(); ++m) {
         const bool tip = m >= star && m < star + marked_tips(layouts_[h]);
         if (tip && hands_.tips_hidden(t_s)) out.occluders.push_back({markers[m], markers[m], 0.006});
@@ -293,8 +293,7 @@ class ScenarioWorld final : public SimulatedWorld {
 
  private:
   static std::size_t marked_tips(const HandLayout& layout) {
-    return static_cast<std::size_t>(std::count_if(layout.fingertip_offset_m.begin(), layout.fingertip_offset_m.end(),
-                                                  [](const std::optional<double>& o) { return o.has_value(); }));
+    return static_cast<std::size_t>(std::ranges::count_if(layout.fingertip_marker, [](int m) { return m >= 0; }));
   }
 
   const ScenarioHands& hands_;

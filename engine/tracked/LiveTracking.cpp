@@ -34,14 +34,15 @@ LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObj
   }
   star_tracker_ = std::make_unique<StarTracker>(StarLibrary(all));
   stars_ = star_tracker_->stars();  // the hands' stages may run before the stars' first
-  // A colour some fingertip wears and no hand star does: such a point is a fingertip, never a
+  // A colour some finger marker wears and no hand star does: such a point is a finger's, never a
   // star's marker. Only where both hand stars are coloured (the objects' stars wear the hand stars'
   // colour, docs/colour-markers.md): an uncoloured star's markers may be seen in any colour.
-  const bool stars_coloured = std::all_of(layouts_.begin(), layouts_.end(), [](const HandLayout& l) { return l.hand_star_colour >= 0; });
+  const bool stars_coloured = std::all_of(layouts_.begin(), layouts_.end(), [](const HandLayout& l) { return l.hand_star_colour() >= 0; });
   for (const HandLayout& layout : layouts_) {
-    for (const int colour : layout.fingertip_colour) {
+    for (std::size_t m = layout.hand_frame_markers; m < layout.markers.size(); ++m) {
+      const int colour = layout.markers[m].colour;
       const bool star_colour =
-          std::any_of(layouts_.begin(), layouts_.end(), [&](const HandLayout& l) { return l.hand_star_colour == colour; });
+          std::any_of(layouts_.begin(), layouts_.end(), [&](const HandLayout& l) { return l.hand_star_colour() == colour; });
       if (stars_coloured && colour >= 0 && !star_colour &&
           std::find(fingertip_only_colours_.begin(), fingertip_only_colours_.end(), colour) == fingertip_only_colours_.end())
         fingertip_only_colours_.push_back(colour);

@@ -46,8 +46,16 @@ FingertipSample flat_hand_sample(const HandLayout& layout, const HandPose& refer
   const Rigid3d hand_from_world = hand.world_from_hand.inverse();
   for (std::size_t f = 0; f < kFingerCount; ++f) {
     const int p = hand.fingertip_point[f];
-    if (p < 0 || static_cast<std::size_t>(p) >= points_world.size() || !layout.fingertip_offset_m[f]) continue;
-    sample[f] = hand_from_world * points_world[static_cast<std::size_t>(p)] - *layout.fingertip_offset_m[f] * chains[f].rest_direction;
+    const LayoutMarker* marker = layout.fingertip(static_cast<int>(f));
+    if (p < 0 || static_cast<std::size_t>(p) >= points_world.size() || marker == nullptr) continue;
+    // The marker's offset in its joint's frame on the straight finger: -Z along the rest direction,
+    // +Y the finger's up; a marker on the distal joint sits one distal bone short of the tip.
+    const FingerChain& chain = chains[f];
+    const Eigen::Vector3d x = chain.rest_direction.cross(chain.up);
+    Eigen::Vector3d tip_to_marker =
+        marker->offset_m.x() * x + marker->offset_m.y() * chain.up - marker->offset_m.z() * chain.rest_direction;
+    if (marker->bone != chain_joints(static_cast<Finger>(f))[3]) tip_to_marker -= chain.length_m[2] * chain.rest_direction;
+    sample[f] = hand_from_world * points_world[static_cast<std::size_t>(p)] - tip_to_marker;
   }
   return sample;
 }

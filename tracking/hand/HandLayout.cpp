@@ -14,16 +14,46 @@
 
 namespace rhot {
 
+std::vector<Eigen::Vector3d> HandLayout::hand_star_m() const {
+  std::vector<Eigen::Vector3d> out;
+  for (std::size_t m = 0; m < hand_frame_markers; ++m) out.push_back(markers[m].offset_m);
+  return out;
+}
+
+const LayoutMarker* HandLayout::fingertip(int finger) const {
+  const int m = fingertip_marker[static_cast<std::size_t>(finger)];
+  return m >= 0 ? &markers[static_cast<std::size_t>(m)] : nullptr;
+}
+
+int HandLayout::finger_of_marker(std::size_t marker) const {
+  return marker < hand_frame_markers ? -1 : static_cast<int>(finger_of_bone(markers[marker].bone));
+}
+
+int HandLayout::marker_index(std::string_view marker_name) const {
+  for (std::size_t m = 0; m < markers.size(); ++m) {
+    if (markers[m].name == marker_name) return static_cast<int>(m);
+  }
+  return -1;
+}
+
 StarSet HandLayout::hand_star_set() const {
   StarSet set;
+  if (!has_hand_star()) return set;
   set.rules.marker_diameter_mm = marker_diameter_mm;
   set.rules.variation_mm = 1.5;
   set.rules.box_mm = {200, 200, 200};
   MarkerStar star;
   star.id = 0;
-  for (std::size_t m = 0; m < 4; ++m) star.markers_mm[m] = hand_star_m[m] * 1000.0;
+  for (std::size_t m = 0; m < 4; ++m) star.markers_mm[m] = markers[m].offset_m * 1000.0;
   set.stars.push_back(star);
   return set;
+}
+
+std::string camera_hand_star_problem(const HandLayout& layout) {
+  if (layout.has_hand_star()) return "";
+  return "the layout \"" + layout.name + "\" has " + std::to_string(layout.hand_frame_markers) +
+         " markers on the back of the hand; following a hand through cameras needs four (a marker star): this layout serves labelled "
+         "takes only";
 }
 
 StarSet HandLayout::segment_star_set() const {
@@ -38,6 +68,7 @@ std::vector<std::string> check_hand_stars(const std::array<HandLayout, 2>& layou
   std::array<std::string, 2> name;
   double variation_mm = 0.0;
   for (std::size_t h = 0; h < 2; ++h) {
+    if (!layouts[h].has_hand_star()) return {};  // no star to clash: the hand is not followed through cameras
     const StarSet set = layouts[h].hand_star_set();
     hand[h] = set.stars[0];
     variation_mm = std::max(variation_mm, set.rules.variation_mm);
@@ -77,17 +108,59 @@ Eigen::Vector3d bone_back_normal(const FingerChain& chain, const Eigen::Vector3d
   return bone.normalized().cross(plane_normal).normalized();
 }
 
+std::array<Eigen::Quaterniond, 3> finger_bone_frames(const FingerChain& chain, const std::array<Eigen::Vector3d, 4>& joints) {
+  std::array<Eigen::Quaterniond, 3> out;
+  out.fill(Eigen::Quaterniond::Identity());
+  const Eigen::Vector3d first = joints[1] - joints[0];
+  for (std::size_t k = 0; k < 3; ++k) {
+    const Eigen::Vector3d bone = joints[k + 1] - joints[k];
+    if (!(bone.norm() > 1e-9) || !(first.norm() > 1e-9) || !bone.allFinite()) continue;  // no direction: the hand's axes
+    const Eigen::Vector3d z = -bone.normalized();
+    const Eigen::Vector3d y = bone_back_normal(chain, first.normalized(), -z);
+    if (!y.allFinite()) continue;
+    Eigen::Matrix3d r;
+    r.col(0) = y.cross(z);
+    r.col(1) = y;
+    r.col(2) = z;
+    out[k] = Eigen::Quaterniond(r).normalized();
+  }
+  return out;
+}
+
+std::array<Eigen::Quaterniond, kHandJointCount> marker_frames(const HandPose& pose, HandSide side) {
+  std::array<Eigen::Quaterniond, kHandJointCount> out;
+  out.fill(Eigen::Quaterniond::Identity());
+  const auto chains = hand_chains(reference_open_hand(side), side);
+  for (int f = 0; f < kFingerCount; ++f) {
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    std::array<Eigen::Vector3d, 4> at;
+    for (std::size_t k = 0; k < 4; ++k) at[k] = pose.position_m[static_cast<std::size_t>(joints[k])];
+    const auto frames = finger_bone_frames(chains[static_cast<std::size_t>(f)], at);
+    for (std::size_t k = 0; k < 3; ++k) out[static_cast<std::size_t>(joints[k])] = frames[k];
+    out[static_cast<std::size_t>(joints[3])] = frames[2];
+  }
+  return out;
+}
+
+Eigen::Vector3d finger_marker(const LayoutMarker& marker, const FingerChain& reference_chain,
+                              const std::array<Eigen::Vector3d, 4>& joints) {
+  const auto chain = chain_joints(finger_of_bone(marker.bone));
+  const auto k = static_cast<std::size_t>(std::find(chain.begin(), chain.end(), marker.bone) - chain.begin());
+  const auto frames = finger_bone_frames(reference_chain, joints);
+  return joints[std::min<std::size_t>(k, 3)] + frames[std::min<std::size_t>(k, 2)] * marker.offset_m;
+}
+
+Eigen::Vector3d layout_marker_in_hand(const LayoutMarker& marker, const HandPose& pose,
+                                      const std::array<Eigen::Quaterniond, kHandJointCount>& frames) {
+  const auto j = static_cast<std::size_t>(marker.bone);
+  if (marker.bone == HandJoint::kWrist) return marker.offset_m;  // the hand frame itself
+  return pose.position_m[j] + frames[j] * marker.offset_m;
+}
+
 std::vector<Eigen::Vector3d> layout_markers(const HandLayout& layout, const Rigid3d& world_from_hand, const HandPose& pose) {
   std::vector<Eigen::Vector3d> out;
-  for (const Eigen::Vector3d& m : layout.hand_star_m) out.push_back(world_from_hand * m);
-  for (int f = 0; f < kFingerCount; ++f) {
-    const auto offset = layout.fingertip_offset_m[static_cast<std::size_t>(f)];
-    if (!offset) continue;
-    const auto joints = chain_joints(static_cast<Finger>(f));
-    const Eigen::Vector3d tip = pose.position_m[static_cast<std::size_t>(joints[3])];
-    const Eigen::Vector3d along = (tip - pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
-    out.push_back(world_from_hand * (tip + *offset * along));
-  }
+  const auto frames = marker_frames(pose, layout.side);
+  for (const LayoutMarker& m : layout.markers) out.push_back(world_from_hand * layout_marker_in_hand(m, pose, frames));
   if (!layout.segment_stars.empty()) {
     const auto chains = hand_chains(reference_open_hand(layout.side), layout.side);
     for (const SegmentStar& s : layout.segment_stars) {
@@ -98,11 +171,19 @@ std::vector<Eigen::Vector3d> layout_markers(const HandLayout& layout, const Rigi
   return out;
 }
 
-std::vector<int> layout_marker_colours(const HandLayout& layout) {
-  std::vector<int> out(4, layout.hand_star_colour);
-  for (int f = 0; f < kFingerCount; ++f) {
-    if (layout.fingertip_offset_m[static_cast<std::size_t>(f)]) out.push_back(layout.fingertip_colour[static_cast<std::size_t>(f)]);
+std::vector<std::string> layout_marker_names(const HandLayout& layout) {
+  std::vector<std::string> out;
+  for (const LayoutMarker& m : layout.markers) out.push_back(m.name);
+  for (const SegmentStar& s : layout.segment_stars) {
+    for (std::size_t k = 0; k < s.star.markers_mm.size(); ++k)
+      out.push_back(std::string(joint_name(s.bone)) + "_star_" + std::to_string(k));
   }
+  return out;
+}
+
+std::vector<int> layout_marker_colours(const HandLayout& layout) {
+  std::vector<int> out;
+  for (const LayoutMarker& m : layout.markers) out.push_back(m.colour);
   for (const SegmentStar& s : layout.segment_stars) out.insert(out.end(), s.star.markers_mm.size(), -1);
   return out;
 }
@@ -133,8 +214,109 @@ Eigen::Vector3d point_mm(const JsonNode& n) {
   return 1e-3 * Eigen::Vector3d(v[0], v[1], v[2]);
 }
 
+// The joints a marker may be given on: the wrist (the back of the hand) and every finger's chain.
+bool marker_bone(HandJoint joint) {
+  if (joint == HandJoint::kWrist) return true;
+  if (joint == HandJoint::kPalm) return false;
+  const auto chain = chain_joints(finger_of_bone(joint));
+  return std::find(chain.begin(), chain.end(), joint) != chain.end();
+}
+
+std::string marker_bone_list() {
+  std::string out = "wrist";
+  for (int j = 0; j < kHandJointCount; ++j) {
+    if (j != static_cast<int>(HandJoint::kWrist) && marker_bone(static_cast<HandJoint>(j)))
+      out += ", " + std::string(joint_name(static_cast<HandJoint>(j)));
+  }
+  return out;
+}
+
+// A finger's last bone: its distal joint and its tip (a marker there is its fingertip marker).
+bool on_last_bone(HandJoint joint) {
+  if (joint == HandJoint::kWrist) return false;
+  const auto chain = chain_joints(finger_of_bone(joint));
+  return joint == chain[3] || static_cast<int>(joint) + 1 == static_cast<int>(chain[3]);
+}
+
+int read_colour(const JsonNode& node) {
+  const auto colour = marker_colour_from_name(node.string());
+  if (!colour) node.fail("expected a marker colour (" + marker_colour_list() + "), got " + describe_json(node.raw()));
+  return *colour;
+}
+
+// The earlier form: "hand_star_mm", "fingertip_markers" and "marker_colours".
+std::vector<LayoutMarker> read_star_and_tips(const JsonNode& j) {
+  std::vector<LayoutMarker> markers;
+  if (!j.has("hand_star_mm")) j.fail("missing required key \"markers\" (or the earlier form's \"hand_star_mm\")");
+  const JsonNode star = j["hand_star_mm"];
+  if (!star.raw().is_array() || star.raw().size() != 4)
+    star.fail("expected four [x, y, z] marker centres, got " + describe_json(star.raw()));
+  const auto corners = star.elements();
+  for (std::size_t m = 0; m < 4; ++m) markers.push_back({"hand_star_" + std::to_string(m), HandJoint::kWrist, point_mm(corners[m]), -1});
+  if (auto tips_node = j.optional("fingertip_markers")) {
+    if (!tips_node->raw().is_object())
+      tips_node->fail("expected an object of fingertip joint names, got " + describe_json(tips_node->raw()));
+    for (const auto& [name, value] : tips_node->raw().items()) {
+      const JsonNode tip = (*tips_node)[name.c_str()];
+      std::optional<HandJoint> joint;
+      for (int f = 0; f < kFingerCount; ++f) {
+        if (joint_name(chain_joints(static_cast<Finger>(f))[3]) == name) joint = chain_joints(static_cast<Finger>(f))[3];
+      }
+      if (!joint) tip.fail("not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
+      markers.push_back({name, *joint, Eigen::Vector3d(0.0, 0.0, -1e-3 * tip.number()), -1});
+    }
+  }
+  if (auto colours = j.optional("marker_colours")) {
+    if (!colours->raw().is_object()) colours->fail("expected an object of marker names and colours, got " + describe_json(colours->raw()));
+    for (const auto& [name, value] : colours->raw().items()) {
+      const JsonNode node = (*colours)[name.c_str()];
+      const int colour = read_colour(node);
+      if (name == "hand_star") {
+        for (std::size_t m = 0; m < 4; ++m) markers[m].colour = colour;
+        continue;
+      }
+      const bool fingertip = std::ranges::any_of(std::array{0, 1, 2, 3, 4},
+                                                 [&](int f) { return joint_name(chain_joints(static_cast<Finger>(f))[3]) == name; });
+      if (!fingertip) node.fail("not \"hand_star\" or a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
+      const auto it = std::find_if(markers.begin() + 4, markers.end(), [&](const LayoutMarker& m) { return m.name == name; });
+      if (it == markers.end()) node.fail("a colour for a fingertip without a marker (add it to \"fingertip_markers\")");
+      it->colour = colour;
+    }
+  }
+  return markers;
+}
+
+// The form of any number of markers, each on a bone.
+std::vector<LayoutMarker> read_markers(const JsonNode& list) {
+  std::vector<LayoutMarker> markers;
+  for (const JsonNode& e : list.elements()) {
+    e.expect_object({"name", "bone", "offset_mm", "colour"});
+    LayoutMarker m;
+    const JsonNode name = e["name"];
+    m.name = name.non_empty_string();
+    for (std::size_t k = 0; k < markers.size(); ++k) {
+      if (markers[k].name == m.name) name.fail("\"" + m.name + "\" names marker " + std::to_string(k) + " already");
+    }
+    const JsonNode bone = e["bone"];
+    const std::string bone_name = bone.string();
+    std::optional<HandJoint> joint;
+    for (int k = 0; k < kHandJointCount; ++k) {
+      if (joint_name(static_cast<HandJoint>(k)) == bone_name) joint = static_cast<HandJoint>(k);
+    }
+    if (!joint) bone.fail("expected a joint (" + marker_bone_list() + "), got " + describe_json(bone.raw()));
+    if (!marker_bone(*joint)) bone.fail("\"" + bone_name + "\" moves with the hand: give the back of the hand's markers on \"wrist\"");
+    m.bone = *joint;
+    const JsonNode offset = e["offset_mm"];
+    m.offset_m = point_mm(offset);
+    if (m.offset_m.cwiseAbs().maxCoeff() > 0.15) offset.fail("expected each coordinate within 150 mm of the joint");
+    if (auto colour = e.optional("colour")) m.colour = read_colour(*colour);
+    markers.push_back(std::move(m));
+  }
+  return markers;
+}
+
 HandLayout read_layout(const JsonNode& j, const std::filesystem::path& folder) {
-  j.expect_object({"format", "version", "name", "side", "marker_diameter_mm", "hand_star_mm", "fingertip_markers", "star_set",
+  j.expect_object({"format", "version", "name", "side", "marker_diameter_mm", "markers", "hand_star_mm", "fingertip_markers", "star_set",
                    "segment_stars", "description", "marker_colours"});
   const JsonNode format = j["format"];
   if (format.string() != "rhot-hand-layout") format.fail("expected \"rhot-hand-layout\", got " + describe_json(format.raw()));
@@ -146,43 +328,72 @@ HandLayout read_layout(const JsonNode& j, const std::filesystem::path& folder) {
   if (side_name != "left" && side_name != "right") side.fail("expected \"left\" or \"right\", got " + describe_json(side.raw()));
   layout.side = side_name == "left" ? HandSide::kLeft : HandSide::kRight;
   layout.marker_diameter_mm = j["marker_diameter_mm"].positive();
-  const JsonNode star = j["hand_star_mm"];
-  if (!star.raw().is_array() || star.raw().size() != 4)
-    star.fail("expected four [x, y, z] marker centres, got " + describe_json(star.raw()));
-  const auto corners = star.elements();
-  for (std::size_t m = 0; m < 4; ++m) layout.hand_star_m[m] = point_mm(corners[m]);
-  if (auto tips_node = j.optional("fingertip_markers")) {
-    if (!tips_node->raw().is_object())
-      tips_node->fail("expected an object of fingertip joint names, got " + describe_json(tips_node->raw()));
-    constexpr std::array<HandJoint, 5> tips{HandJoint::kThumbTip, HandJoint::kIndexTip, HandJoint::kMiddleTip, HandJoint::kRingTip,
-                                            HandJoint::kLittleTip};
-    for (const auto& [name, value] : tips_node->raw().items()) {
-      const JsonNode tip = (*tips_node)[name.c_str()];
-      std::size_t finger = 5;
-      for (std::size_t f = 0; f < 5; ++f) {
-        if (joint_name(tips[f]) == name) finger = f;
+  std::vector<LayoutMarker> markers;
+  const auto marker_list = j.optional("markers");
+  if (marker_list) {
+    for (const char* older : {"hand_star_mm", "fingertip_markers", "marker_colours"}) {
+      if (auto node = j.optional(older)) node->fail("a layout with \"markers\" gives every marker there (with its \"colour\")");
+    }
+    markers = read_markers(*marker_list);
+  } else {
+    markers = read_star_and_tips(j);
+  }
+  const JsonNode& where = marker_list ? *marker_list : j["hand_star_mm"];
+  // In order: the back of the hand, the fingertips (thumb first), the rest as given.
+  std::vector<std::size_t> back, rest;
+  std::array<std::optional<std::size_t>, kFingerCount> tip{};
+  for (std::size_t k = 0; k < markers.size(); ++k) {
+    const HandJoint bone = markers[k].bone;
+    if (bone == HandJoint::kWrist) {
+      back.push_back(k);
+    } else if (on_last_bone(bone)) {
+      auto& slot = tip[static_cast<std::size_t>(finger_of_bone(bone))];
+      if (slot) {
+        where.fail("\"" + markers[k].name + "\" and \"" + markers[*slot].name +
+                   "\" are both on the last bone of a finger, whose one marker there is its fingertip marker");
       }
-      if (finger == 5) tip.fail("not a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
-      layout.fingertip_offset_m[finger] = 1e-3 * tip.number();
+      slot = k;
+    } else {
+      rest.push_back(k);
     }
   }
-  if (auto colours = j.optional("marker_colours")) {
-    if (!colours->raw().is_object()) colours->fail("expected an object of marker names and colours, got " + describe_json(colours->raw()));
-    for (const auto& [name, value] : colours->raw().items()) {
-      const JsonNode node = (*colours)[name.c_str()];
-      const auto colour = marker_colour_from_name(node.string());
-      if (!colour) node.fail("expected a marker colour (" + marker_colour_list() + "), got " + describe_json(node.raw()));
-      if (name == "hand_star") {
-        layout.hand_star_colour = *colour;
-        continue;
+  if (back.size() < 3 || back.size() > 4) {
+    where.fail("expected three or four markers on \"wrist\" (the back of the hand, which gives the hand its frame), got " +
+               std::to_string(back.size()));
+  }
+  for (const std::size_t k : back) {
+    if (markers[k].colour != markers[back[0]].colour) {
+      where.fail("the back of the hand's markers share one colour: \"" + markers[k].name + "\" differs from \"" + markers[back[0]].name +
+                 "\"");
+    }
+  }
+  for (const std::size_t k : back) layout.markers.push_back(markers[k]);
+  layout.hand_frame_markers = back.size();
+  for (std::size_t f = 0; f < kFingerCount; ++f) {
+    if (!tip[f]) continue;
+    layout.fingertip_marker[f] = static_cast<int>(layout.markers.size());
+    layout.markers.push_back(markers[*tip[f]]);
+  }
+  for (const std::size_t k : rest) layout.markers.push_back(markers[k]);
+  // Four markers must be a star: edges distinct, markers apart, faces apart (it sits in the hand's
+  // frame, not in a box of its own, so the box rule does not apply).
+  for (const std::string& problem : check_star_set(layout.hand_star_set())) {
+    if (problem.find("is not inside the box") != std::string::npos) continue;
+    where.fail(problem.substr(problem.find(": ") + 2));
+  }
+  // Three markers give a frame only where they make a triangle: each at least 5 mm off the line
+  // through the other two.
+  for (std::size_t a = 0; a < layout.hand_frame_markers; ++a) {
+    for (std::size_t b = a + 1; b < layout.hand_frame_markers; ++b) {
+      for (std::size_t c = b + 1; c < layout.hand_frame_markers; ++c) {
+        const Eigen::Vector3d p = layout.markers[a].offset_m, q = layout.markers[b].offset_m, r = layout.markers[c].offset_m;
+        const double area2 = (q - p).cross(r - p).norm();
+        const double longest = std::max({(q - p).norm(), (r - p).norm(), (r - q).norm()});
+        if (longest < 1e-9 || area2 / longest < 0.005) {
+          where.fail("the back of the hand's markers \"" + layout.markers[a].name + "\", \"" + layout.markers[b].name + "\" and \"" +
+                     layout.markers[c].name + "\" are nearly in a line (each must be 5 mm off the line through the others)");
+        }
       }
-      std::size_t finger = 5;
-      for (std::size_t f = 0; f < 5; ++f) {
-        if (joint_name(chain_joints(static_cast<Finger>(f))[3]) == name) finger = f;
-      }
-      if (finger == 5) node.fail("not \"hand_star\" or a fingertip joint (thumb_tip, index_tip, middle_tip, ring_tip, little_tip)");
-      if (!layout.fingertip_offset_m[finger]) node.fail("a colour for a fingertip without a marker (add it to \"fingertip_markers\")");
-      layout.fingertip_colour[finger] = *colour;
     }
   }
   if (auto list = j.optional("segment_stars")) {
@@ -213,12 +424,6 @@ HandLayout read_layout(const JsonNode& j, const std::filesystem::path& folder) {
       }
       layout.segment_stars.push_back({*it, *found});
     }
-  }
-  // The star must be a star: edges distinct, markers apart, faces apart (it sits in the hand's
-  // frame, not in a box of its own, so the box rule does not apply).
-  for (const std::string& problem : check_star_set(layout.hand_star_set())) {
-    if (problem.find("is not inside the box") != std::string::npos) continue;
-    star.fail(problem.substr(problem.find(": ") + 2));
   }
   return layout;
 }

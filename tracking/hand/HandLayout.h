@@ -1,20 +1,35 @@
 #pragma once
-// Where a hand's markers are, as data (assets/hands/*.json):
+// Where a hand's markers are, as data (assets/hands/*.json): any number of markers, each on a
+// named bone (OpenXR's joint names, HandJoints.h) at an offset in that joint's frame:
 //
 //   {
-//     "format": "rhot-hand-layout", "version": 1, "name": "low-cost", "side": "right",
+//     "format": "rhot-hand-layout", "version": 1, "name": "glove-13", "side": "right",
 //     "marker_diameter_mm": 6.0,
-//     "hand_star_mm": [[x, y, z], ...4],          the star on the back of the hand, hand frame, mm
-//     "fingertip_markers": { "index_tip": 3.0, ... }  a marker per fingertip joint named here, its
-//                                                    centre this many mm beyond the tip along the
-//                                                    distal bone
-//     "marker_colours": { "hand_star": "blue",     optional: coloured markers (tracking/core/MarkerColour.h):
-//                         "index_tip": "yellow" }  the hand star's and fingertips' colours
+//     "markers": [
+//       { "name": "hand_top", "bone": "wrist", "offset_mm": [x, y, z] },      the back of the hand
+//       { "name": "index_middle", "bone": "index_proximal", "offset_mm": [0, 14, -26] },
+//       { "name": "index_tip", "bone": "index_tip", "offset_mm": [0, 0, -8], "colour": "yellow" }
+//     ],
 //     "star_set": "../stars/seed-case.json",        stars on finger bones (seed 003): the set they
 //     "segment_stars": [                             come from (relative to this file), and per bone
 //       { "bone": "index_proximal", "star_id": 3 }   (named by its first joint) the star's id
 //     ]
 //   }
+//
+// A marker's offset is in its joint's frame (marker_frames below): -Z along the bone that starts
+// at the joint, toward the fingertip; +Y out of the back of the finger; a tip joint's frame is its
+// distal joint's. "wrist" is the hand frame itself: the markers on it (three
+// or four) are the back of the hand, which gives the hand its frame; four of them are followed
+// through cameras as a marker star (StarTracker), three only where the markers come labelled (a
+// take's). Each other marker is on a finger's bone: the finger's root (a finger's proximal joint,
+// the thumb's metacarpal), its two hinges or its tip. A finger's marker on its tip joint or its
+// distal bone is its fingertip marker (at most one), which the fingers' IK reaches for; its other
+// markers (a glove's middle markers) are matched and followed as well, and tell where a hidden
+// fingertip is (HiddenMarkers.h).
+//
+// The earlier form is still read: "hand_star_mm" (four [x, y, z] on the wrist, mm),
+// "fingertip_markers" ({ "index_tip": 3.0 }: a marker that many mm beyond the tip along the distal
+// bone, offset [0, 0, -3]) and "marker_colours" ({ "hand_star": "blue", "index_tip": "yellow" }).
 //
 // A segment star stands on the back of its bone, as in seed 003's Fig. 1: its frame's y along the
 // bone (from its first joint toward the next), z out of the back of the finger, perpendicular to
@@ -28,9 +43,11 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "tracking/core/Rigid3.h"
 #include "tracking/hand/HandSolver.h"
@@ -44,24 +61,52 @@ struct SegmentStar {
   MarkerStar star;                             // star frame, millimetres
 };
 
+// A marker on the skin: its centre at offset_m in the frame of joint `bone` (see above).
+struct LayoutMarker {
+  std::string name;
+  HandJoint bone = HandJoint::kWrist;
+  Eigen::Vector3d offset_m = Eigen::Vector3d::Zero();
+  int colour = -1;  // tracking/core/MarkerColour.h; -1 for none
+};
+
 struct HandLayout {
   std::string name;
   HandSide side = HandSide::kRight;
   double marker_diameter_mm = 6.0;
-  std::array<Eigen::Vector3d, 4> hand_star_m;                 // hand frame, metres
-  std::array<std::optional<double>, 5> fingertip_offset_m{};  // per finger (thumb..little): nothing when unmarked
-  int hand_star_colour = -1;                                  // the hand star's markers' colour, -1 for none
-  std::array<int, 5> fingertip_colour{-1, -1, -1, -1, -1};    // per finger, -1 for none
+  // Every marker on the skin (the segment stars' apart), in this order: the back of the hand's (on
+  // the wrist, hand_frame_markers of them), each marked finger's fingertip marker (thumb first),
+  // then the fingers' other markers in the file's order.
+  std::vector<LayoutMarker> markers;
+  std::size_t hand_frame_markers = 0;
+  std::array<int, 5> fingertip_marker{-1, -1, -1, -1, -1};  // per finger (thumb..little), its index in markers; -1 unmarked
   std::vector<SegmentStar> segment_stars;
   StarSetRules segment_star_rules;  // of the set the segment stars come from
 
-  // The hand star as a one-star set, for StarLibrary.
+  // The back of the hand's markers (hand frame, metres).
+  std::vector<Eigen::Vector3d> hand_star_m() const;
+  // Whether the back of the hand is a marker star of four (followed through cameras).
+  bool has_hand_star() const { return hand_frame_markers == 4; }
+  // The back of the hand's colour (they share one), -1 for none.
+  int hand_star_colour() const { return hand_frame_markers > 0 ? markers.front().colour : -1; }
+  // A finger's fingertip marker, if it has one.
+  const LayoutMarker* fingertip(int finger) const;
+  int fingertip_colour(int finger) const { return fingertip(finger) != nullptr ? fingertip(finger)->colour : -1; }
+  // The finger a marker (an index in markers) is on; -1 for the back of the hand's.
+  int finger_of_marker(std::size_t marker) const;
+  // The index of a marker by name, -1 for none.
+  int marker_index(std::string_view name) const;
+
+  // The hand star as a one-star set, for StarLibrary (has_hand_star() layouts only).
   StarSet hand_star_set() const;
   // The segment stars as a set (in layout order), for StarLibrary.
   StarSet segment_star_set() const;
 };
 
 [[nodiscard]] std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::path& file);
+
+// Why a layout's hand cannot be followed through cameras (fewer than four markers on the back of
+// the hand: no marker star), for a message; empty when it can.
+std::string camera_hand_star_problem(const HandLayout& layout);
 
 // Whether two hands and the objects' stars can be told apart from any three of their markers: every
 // face of either hand star that differs from a face of the other hand's star, or of an object's
@@ -76,8 +121,25 @@ Rigid3d hand_from_segment_star(const HandPose& pose, HandJoint bone, const Finge
 // The back of a finger's bone pointing along `bone`, for a finger whose first bone points along
 // `first_bone` (both hand frame).
 Eigen::Vector3d bone_back_normal(const FingerChain& chain, const Eigen::Vector3d& first_bone, const Eigen::Vector3d& bone);
-// Every marker of a layout on a hand in `pose` (hand star, fingertip markers, segment stars), world.
+// Where a layout's marker is on a hand in `pose` (hand frame); `frames`: marker_frames(pose).
+Eigen::Vector3d layout_marker_in_hand(const LayoutMarker& marker, const HandPose& pose,
+                                      const std::array<Eigen::Quaterniond, kHandJointCount>& frames);
+// The frame of every joint a marker is given in (hand frame): the wrist's and palm's are the hand
+// frame's axes; a finger joint's -Z runs along its bone toward the fingertip and +Y out of the back
+// of the finger, square to the bone in the finger's flexion plane (bone_back_normal, with the
+// reference hand's chains), X = Y x Z; a tip's is its distal joint's. For the fingers these are
+// OpenXR's joint frames (JointFrames.h) up to the finger's abduction; unlike those, the thumb's
+// turn with the thumb as it flexes, so a thumbnail's marker stays on the thumbnail.
+std::array<Eigen::Quaterniond, kHandJointCount> marker_frames(const HandPose& pose, HandSide side);
+// The same for one finger's three bones, from its joints (root, two hinges, tip; hand frame) and its
+// chain of the reference hand.
+std::array<Eigen::Quaterniond, 3> finger_bone_frames(const FingerChain& reference_chain, const std::array<Eigen::Vector3d, 4>& joints);
+// Where a marker on a finger's bone is (hand frame) for the finger's joints.
+Eigen::Vector3d finger_marker(const LayoutMarker& marker, const FingerChain& reference_chain, const std::array<Eigen::Vector3d, 4>& joints);
+// Every marker of a layout on a hand in `pose` (its markers in order, then the segment stars'), world.
 std::vector<Eigen::Vector3d> layout_markers(const HandLayout& layout, const Rigid3d& world_from_hand, const HandPose& pose);
+// Their names: the markers', then "<bone>_star_<k>" for a segment star's k-th marker.
+std::vector<std::string> layout_marker_names(const HandLayout& layout);
 
 // Each marker's colour (-1 for none), in layout_markers' order.
 std::vector<int> layout_marker_colours(const HandLayout& layout);

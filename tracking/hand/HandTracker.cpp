@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+
+#include <Eigen/Geometry>
 #include <cmath>
 
 namespace rhot {
@@ -9,58 +11,80 @@ namespace rhot {
 HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, HandTrackerSettings settings)
     : layout_(layout),
       settings_(settings),
-      star_(std::make_unique<StarTracker>(StarLibrary(layout.hand_star_set()))),
+      star_(layout.has_hand_star() ? std::make_unique<StarTracker>(StarLibrary(layout.hand_star_set())) : nullptr),
       hand_filter_(settings.position, settings.rotation),
-      solver_(layout.side, skeleton) {
+      solver_(layout.side, skeleton),
+      reference_chains_(hand_chains(reference_open_hand(layout.side), layout.side)) {
   tip_filters_.fill(OneEuroFilter<3>(settings.position));
   if (!layout.segment_stars.empty()) segments_.emplace(StarLibrary(layout.segment_star_set()));
-  every_tip_marked_ = std::ranges::all_of(layout.fingertip_offset_m, [](const auto& offset) { return offset.has_value(); });
+  const std::size_t n = layout.markers.size();
+  predicted_marker_.assign(n, Eigen::Vector3d::Zero());
+  tip_to_marker_.assign(n, Eigen::Vector3d::Zero());
+  gate_m_.assign(n, kFingertipGateMax_m);
+  marker_found_s_.assign(n, std::nullopt);
+  reappearing_.assign(n, {});
+  reappearing_now_.assign(n, {});
+  out_.marker_point.assign(n, -1);
+  every_tip_marked_ = std::ranges::all_of(layout.fingertip_marker, [](int m) { return m >= 0; });
   if (settings.fingertip_model && every_tip_marked_) {
+    // The fingertips first (predict_hidden_tips reads them there), then the other finger markers.
+    for (const int m : layout.fingertip_marker) modelled_.push_back(m);
+    for (std::size_t m = layout.hand_frame_markers; m < n; ++m) {
+      if (std::ranges::find(layout.fingertip_marker, static_cast<int>(m)) == layout.fingertip_marker.end())
+        modelled_.push_back(static_cast<int>(m));
+    }
     // Made whole now, fitted later, and no predictor kept: a long run's memory stays what it was
     // after its first frames.
     HiddenMarkerModel model;
-    model.markers = {"thumb_tip", "index_tip", "middle_tip", "ring_tip", "little_tip"};
+    for (const int m : modelled_) model.markers.push_back(layout.markers[static_cast<std::size_t>(m)].name);
     model.memory_s = kFingertipMemory_s;
     model.ridge_m2 = kFingertipRidge_m2;
     model.source = "fitted as the hand is tracked";
-    model.mean_m = Eigen::VectorXd::Zero(3 * kFingerCount);
-    model.covariance_m2 = Eigen::MatrixXd::Zero(3 * kFingerCount, 3 * kFingerCount);
+    const auto dims = static_cast<Eigen::Index>(3 * modelled_.size());
+    model.mean_m = Eigen::VectorXd::Zero(dims);
+    model.covariance_m2 = Eigen::MatrixXd::Zero(dims, dims);
     model.training_frames = 0;
+    tip_statistics_.emplace(static_cast<int>(modelled_.size()));
     tip_estimator_.emplace(std::move(model), false);
   }
   out_.state = solver_.state();
 }
 
 std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::predict_hidden_tips(
-    double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips) {
+    double time_s, const std::vector<std::optional<Eigen::Vector3d>>& seen) {
   std::array<std::optional<Eigen::Vector3d>, kFingerCount> out{};
   if (!tip_estimator_) return out;
   if (!out_.hand_seen) {
     tip_estimator_->hand_lost();
     return out;
   }
-  // Only finite tips are statistics: a NaN point handed to update() must not reach the model.
-  if (std::ranges::all_of(tips, [](const auto& tip) { return tip.has_value() && tip->allFinite(); })) {
-    Eigen::VectorXd x(3 * kFingerCount);
-    for (int f = 0; f < kFingerCount; ++f) x.segment<3>(3 * f) = *tips[static_cast<std::size_t>(f)];
-    tip_statistics_.add(x);
-    const int frames = tip_statistics_.frames();
+  // Only finite places are statistics: a NaN point handed to update() must not reach the model.
+  if (std::ranges::all_of(seen, [](const auto& at) { return at.has_value() && at->allFinite(); })) {
+    Eigen::VectorXd x(static_cast<Eigen::Index>(3 * seen.size()));
+    for (std::size_t k = 0; k < seen.size(); ++k) x.segment<3>(static_cast<Eigen::Index>(3 * k)) = *seen[k];
+    tip_statistics_->add(x);
+    const int frames = tip_statistics_->frames();
     if (frames >= kFingertipModelFrames && frames - fingertip_model_frames() >= kFingertipModelRefit) {
-      tip_estimator_->set_statistics(tip_statistics_.mean_m(), tip_statistics_.covariance_m2(), frames);
+      tip_estimator_->set_statistics(tip_statistics_->mean_m(), tip_statistics_->covariance_m2(), frames);
     }
   }
   if (fingertip_model_frames() == 0) return out;
-  std::array<Eigen::Vector3d, kFingerCount> hand;
-  for (std::size_t f = 0; f < kFingerCount; ++f) hand[f] = tips[f].value_or(Eigen::Vector3d::Constant(std::nan("")));
+  std::vector<Eigen::Vector3d> hand(seen.size());
+  for (std::size_t k = 0; k < seen.size(); ++k) hand[k] = seen[k].value_or(Eigen::Vector3d::Constant(std::nan("")));
   const auto estimated = tip_estimator_->update_in_hand(time_s, hand);
   for (std::size_t f = 0; f < kFingerCount; ++f) {
-    if (!tips[f] && estimated[f].how == MarkerEstimate::kPredicted) out[f] = estimated[f].position_m;
+    if (!seen[f] && estimated[f].how == MarkerEstimate::kPredicted) out[f] = estimated[f].position_m;
   }
   return out;
 }
 
 const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
                                        std::span<const int> colour) {
+  if (!star_) {
+    // No star to follow the hand by (three markers on its back): only labelled markers place it.
+    begin(time_s, false, {});
+    return finish(time_s, points, sigma_m, {});
+  }
   const std::vector<TrackedStar>& stars = star_->update(time_s, points, sigma_m);
   std::vector<bool> taken(points.size(), false);
   HandTracker* const self = this;
@@ -69,22 +93,63 @@ const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vec
   return out_;
 }
 
+const TrackedHand& HandTracker::update_labelled(double time_s, std::span<const Eigen::Vector3d> markers_world) {
+  const std::size_t n = std::min(markers_world.size(), layout_.markers.size());
+  const auto seen = [&](std::size_t m) { return m < n && markers_world[m].allFinite(); };
+  // The hand frame: the layout's back-of-hand markers fitted to the seen ones (Kabsch, no scale).
+  std::vector<std::size_t> back;
+  for (std::size_t m = 0; m < layout_.hand_frame_markers; ++m) {
+    if (seen(m)) back.push_back(m);
+  }
+  Rigid3d world_from_hand;
+  bool hand_seen = back.size() >= 3;
+  if (hand_seen) {
+    Eigen::Matrix3Xd from(3, static_cast<Eigen::Index>(back.size())), to(3, static_cast<Eigen::Index>(back.size()));
+    for (std::size_t k = 0; k < back.size(); ++k) {
+      from.col(static_cast<Eigen::Index>(k)) = layout_.markers[back[k]].offset_m;
+      to.col(static_cast<Eigen::Index>(k)) = markers_world[back[k]];
+    }
+    const Eigen::Matrix4d t = Eigen::umeyama(from, to, false);
+    hand_seen = t.allFinite();
+    if (hand_seen) {
+      world_from_hand.rotation = Eigen::Quaterniond(Eigen::Matrix3d(t.block<3, 3>(0, 0))).normalized();
+      world_from_hand.translation = t.block<3, 1>(0, 3);
+    }
+  }
+  labelled_ = true;
+  begin(time_s, hand_seen, world_from_hand);
+  std::vector<int> marker_point(layout_.markers.size(), -1);
+  for (std::size_t m = 0; m < n; ++m) {
+    if (seen(m)) marker_point[m] = static_cast<int>(m);
+  }
+  finish(time_s, markers_world.first(n), {}, marker_point);
+  labelled_ = false;
+  return out_;
+}
+
 void HandTracker::begin(double time_s, const TrackedStar& star) {
-  out_.hand_seen = star.seen_now();
-  out_.fingertip_point.fill(-1);
+  begin(time_s, star.seen_now(), star.world_from_star);
   if (!out_.hand_seen) return;
-  out_.world_from_hand = settings_.filter ? hand_filter_.filter(star.world_from_star, time_s) : star.world_from_star;
-  // Each marked fingertip's marker where the last solve puts it: beyond the tip along the last bone.
-  const HandState& last = solver_.state();
-  for (int f = 0; f < kFingerCount; ++f) {
-    const auto fi = static_cast<std::size_t>(f);
-    if (!layout_.fingertip_offset_m[fi]) continue;
-    const auto joints = chain_joints(static_cast<Finger>(f));
-    const Eigen::Vector3d tip = last.pose.position_m[static_cast<std::size_t>(joints[3])];
-    along_[fi] = (tip - last.pose.position_m[static_cast<std::size_t>(joints[2])]).normalized();
-    predicted_marker_[fi] = tip + *layout_.fingertip_offset_m[fi] * along_[fi];
-    gate_m_[fi] = tip_found_s_[fi] ? std::min(kFingertipGateMax_m, kFingertipGate_m + kGateGrowth_mps * (time_s - *tip_found_s_[fi]))
-                                   : kFingertipGateMax_m;
+  for (std::size_t m = 0; m < layout_.hand_frame_markers && m < star.point.size(); ++m) out_.marker_point[m] = star.point[m];
+}
+
+void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand) {
+  out_.hand_seen = seen;
+  out_.fingertip_point.fill(-1);
+  std::ranges::fill(out_.marker_point, -1);
+  if (!out_.hand_seen) return;
+  out_.world_from_hand = settings_.filter ? hand_filter_.filter(world_from_hand, time_s) : world_from_hand;
+  // Each finger marker where the last solve puts it.
+  const HandPose& last = solver_.state().pose;
+  const auto frames = marker_frames(last, layout_.side);
+  for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
+    predicted_marker_[m] = layout_marker_in_hand(layout_.markers[m], last, frames);
+    const auto f = static_cast<std::size_t>(layout_.finger_of_marker(m));
+    if (layout_.fingertip_marker[f] == static_cast<int>(m)) {
+      tip_to_marker_[m] = predicted_marker_[m] - last.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(f))[3])];
+    }
+    gate_m_[m] = marker_found_s_[m] ? std::min(kFingertipGateMax_m, kFingertipGate_m + kGateGrowth_mps * (time_s - *marker_found_s_[m]))
+                                    : kFingertipGateMax_m;
   }
 }
 
@@ -95,46 +160,77 @@ std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(s
   for (auto& r : reappearing_now_) r.clear();
   if (!out_.hand_seen) return out;
   const Rigid3d hand_from_world = out_.world_from_hand.inverse();
-  for (int f = 0; f < kFingerCount; ++f) {
-    const auto fi = static_cast<std::size_t>(f);
-    if (!layout_.fingertip_offset_m[fi]) continue;
+  for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
+    const int want = layout_.markers[m].colour;
     for (std::size_t q = 0; q < points.size(); ++q) {
       if (taken[q]) continue;
       const Eigen::Vector3d p = hand_from_world * points[q];
-      const double d = (p - predicted_marker_[fi]).norm();
-      const int want = layout_.fingertip_colour[fi];
+      const double d = (p - predicted_marker_[m]).norm();
       if (want >= 0 && q < colour.size()) {
-        // A coloured fingertip's marker is known by its colour: any point of it near the finger.
+        // A coloured marker is known by its colour: any point of it near the finger.
         if (colour[q] != want || d >= kColourGate_m) continue;
-        out.push_back({d, f, static_cast<int>(q)});
+        out.push_back({d, static_cast<int>(m), static_cast<int>(q)});
         continue;
       }
-      if (d >= gate_m_[fi]) continue;
+      if (d >= gate_m_[m]) continue;
       if (d >= kFingertipGate_m) {
         // Outside the tight gate: a marker found again only if it was there the frame before.
-        reappearing_now_[fi].push_back(p);
-        const bool persists = std::any_of(reappearing_[fi].begin(), reappearing_[fi].end(),
+        reappearing_now_[m].push_back(p);
+        const bool persists = std::any_of(reappearing_[m].begin(), reappearing_[m].end(),
                                           [&](const Eigen::Vector3d& before) { return (p - before).norm() < kFingertipGate_m; });
         if (!persists) continue;
       }
-      out.push_back({d, f, static_cast<int>(q)});
+      out.push_back({d, static_cast<int>(m), static_cast<int>(q)});
     }
   }
   return out;
 }
 
+Eigen::Vector3d HandTracker::tip_for_marker(int finger, std::size_t marker, const Eigen::Vector3d& seen) const {
+  Eigen::Vector3d tip = seen - tip_to_marker_[marker];
+  const LayoutMarker& m = layout_.markers[marker];
+  if (m.offset_m.head<2>().norm() < 1e-6 && m.bone == chain_joints(static_cast<Finger>(finger))[3]) return tip;  // along the bone
+  // A marker off the bone's axis (a nail's): the way from the tip to it turns with the finger, so
+  // the finger is posed toward the tip, the way taken from that pose, twice.
+  const auto f = static_cast<std::size_t>(finger);
+  const FingerChain& chain = solver_.chains()[f];
+  FingerAngles angles = solver_.state().angles[f];
+  for (int pass = 0; pass < 2; ++pass) {
+    angles = solve_fabrik(chain, tip, angles).angles;
+    const auto joints = finger_forward(chain, angles);
+    tip = seen - (finger_marker(m, reference_chains_[f], joints) - joints[3]);
+  }
+  return tip;
+}
+
+std::vector<Eigen::Vector3d> HandTracker::markers_in_hand() const {
+  const HandPose& pose = solver_.state().pose;
+  const auto frames = marker_frames(pose, layout_.side);
+  std::vector<Eigen::Vector3d> out;
+  for (const LayoutMarker& m : layout_.markers) out.push_back(layout_marker_in_hand(m, pose, frames));
+  return out;
+}
+
 const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
-                                       const std::array<int, kFingerCount>& fingertip_point) {
+                                       std::span<const int> marker_point) {
   std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips{};
+  std::vector<std::optional<Eigen::Vector3d>> other(layout_.markers.size());  // finger markers other than the tips, hand frame
   reappearing_ = reappearing_now_;
   if (out_.hand_seen) {
     const Rigid3d hand_from_world = out_.world_from_hand.inverse();
-    for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
-      const int p = fingertip_point[fi];
-      if (p < 0 || !layout_.fingertip_offset_m[fi]) continue;
-      out_.fingertip_point[fi] = p;
-      tip_found_s_[fi] = time_s;
-      tips[fi] = hand_from_world * points[static_cast<std::size_t>(p)] - *layout_.fingertip_offset_m[fi] * along_[fi];
+    for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size() && m < marker_point.size(); ++m) {
+      const int p = marker_point[m];
+      if (p < 0 || static_cast<std::size_t>(p) >= points.size()) continue;
+      out_.marker_point[m] = p;
+      marker_found_s_[m] = time_s;
+      const Eigen::Vector3d at = hand_from_world * points[static_cast<std::size_t>(p)];
+      const auto f = static_cast<std::size_t>(layout_.finger_of_marker(m));
+      if (layout_.fingertip_marker[f] == static_cast<int>(m)) {
+        out_.fingertip_point[f] = p;
+        tips[f] = tip_for_marker(static_cast<int>(f), m, at);
+      } else {
+        other[m] = at;
+      }
     }
     for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
       if (!settings_.filter) break;
@@ -149,7 +245,7 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
   // has its angles measured, and a seen last bone gives its tip.
   std::array<std::optional<FingerAngles>, kFingerCount> measured{};
   out_.segment_stars_seen = 0;
-  if (segments_) {
+  if (segments_ && !labelled_) {
     const auto& stars = segments_->update(time_s, points, sigma_m);
     if (out_.hand_seen) {
       const Rigid3d hand_from_world = out_.world_from_hand.inverse();
@@ -185,7 +281,12 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
     }
   }
   const auto start = std::chrono::steady_clock::now();
-  const auto predicted = predict_hidden_tips(time_s, tips);
+  std::vector<std::optional<Eigen::Vector3d>> seen(modelled_.size());
+  for (std::size_t k = 0; k < modelled_.size(); ++k) {
+    const auto m = static_cast<std::size_t>(modelled_[k]);
+    seen[k] = k < kFingerCount ? tips[k] : other[m];
+  }
+  const auto predicted = predict_hidden_tips(time_s, seen);
   out_.state = solver_.update(time_s, tips, measured, predicted);
   last_ik_us_ = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   for (std::size_t j = 0; j < kHandJointCount; ++j) out_.joints_world[j] = out_.world_from_hand * out_.state.pose.position_m[j];
@@ -205,19 +306,19 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
   struct Pick {
     double distance_m;
     std::size_t hand;
-    int finger, point;
+    int marker, point;
   };
   std::vector<Pick> picks;
   for (std::size_t h = 0; h < hands.size(); ++h) {
     hands[h]->begin(time_s, stars[static_cast<std::size_t>(hand_star[h])]);
-    for (const auto& c : hands[h]->fingertip_candidates(points, taken, colour)) picks.push_back({c.distance_m, h, c.finger, c.point});
+    for (const auto& c : hands[h]->fingertip_candidates(points, taken, colour)) picks.push_back({c.distance_m, h, c.marker, c.point});
   }
   // Nearest first over every hand: a point goes to the fingertip it fits best, whichever hand's.
   std::sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance_m < b.distance_m; });
-  std::vector<std::array<int, kFingerCount>> tip(hands.size());
-  for (auto& t : tip) t.fill(-1);
+  std::vector<std::vector<int>> tip(hands.size());
+  for (std::size_t h = 0; h < hands.size(); ++h) tip[h].assign(hands[h]->layout().markers.size(), -1);
   for (const Pick& p : picks) {
-    int& slot = tip[p.hand][static_cast<std::size_t>(p.finger)];
+    int& slot = tip[p.hand][static_cast<std::size_t>(p.marker)];
     if (slot >= 0 || taken[static_cast<std::size_t>(p.point)]) continue;
     slot = p.point;
     taken[static_cast<std::size_t>(p.point)] = true;

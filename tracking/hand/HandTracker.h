@@ -1,7 +1,11 @@
 #pragma once
 // A hand from triangulated points, with a layout (HandLayout.h): the hand star gives the hand
-// frame (StarTracker), the points left near each fingertip's predicted marker are its marker
-// (nearest first, each point once), and HandSolver fits the fingers.
+// frame (StarTracker), the points left near each finger marker's predicted place are its marker
+// (nearest first, each point once), and HandSolver fits the fingers to their fingertip markers.
+// A layout's other finger markers (a glove's middle markers) are matched alike and, with the
+// fingertip model on, tell where a hidden fingertip is. Labelled markers (a take's) need no
+// matching: update_labelled takes them by the layout's order, the hand frame from the back of the
+// hand's three or four.
 //
 // Alone, a HandTracker follows its hand star with a StarTracker of its own. With other hands and
 // objects in view (track_hands below), the hand stars are followed by one StarTracker with every
@@ -28,6 +32,7 @@ struct TrackedHand {
   HandState state;          // hand frame
   std::array<Eigen::Vector3d, kHandJointCount> joints_world{};
   std::array<int, kFingerCount> fingertip_point{-1, -1, -1, -1, -1};  // index into the points, -1 for none
+  std::vector<int> marker_point;  // per layout marker (HandLayout::markers): index into the points, -1 for none
   int segment_stars_seen = 0;
 };
 
@@ -36,11 +41,11 @@ struct HandTrackerSettings {
   bool filter = false;
   OneEuroSettings position;  // for the hand's origin and the fingertips, metres
   OneEuroSettings rotation{1.0, 2.0, 1.0};
-  // Hidden fingertips predicted from the seen ones (HiddenMarkers.h) by a model of how this hand's
-  // fingertips lie together, fitted as the tracker runs from the frames in which all five are seen
-  // (used once it has HandTracker::kFingertipModelFrames of them). Off, or before that, a hidden
-  // finger follows HandSolver's rule alone. Layouts that mark all five fingertips only. Off by
-  // default until the demo's soak passes with it (docs/tracking.md, "Inside the tracker").
+  // Hidden fingertips predicted from the seen markers (HiddenMarkers.h) by a model of how this
+  // hand's finger markers lie together, fitted as the tracker runs from the frames in which all are
+  // seen (used once it has HandTracker::kFingertipModelFrames of them). Off, or before that, a
+  // hidden finger follows HandSolver's rule alone. Layouts that mark all five fingertips only. Off
+  // by default until the demo's soak passes with it (docs/tracking.md, "Inside the tracker").
   bool fingertip_model = false;
 };
 
@@ -54,24 +59,33 @@ class HandTracker {
   const TrackedHand& update(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m = {},
                             std::span<const int> colour = {});
 
-  // A fingertip marker a point could be: how far it is from where the finger's marker is predicted.
+  // Labelled markers: each of the layout's markers (world, in HandLayout::markers' order; NaN where
+  // hidden). The hand frame comes from the back of the hand's markers (all of three, or three of
+  // four); without them the hand is not seen.
+  const TrackedHand& update_labelled(double time_s, std::span<const Eigen::Vector3d> markers_world);
+
+  // A finger marker a point could be: how far it is from where the marker is predicted.
   struct FingertipCandidate {
     double distance_m = 0.0;
-    int finger = 0;
+    int marker = 0;  // index into HandLayout::markers
     int point = 0;
   };
   // The update in three steps, for a hand star followed outside (track_hands):
   //   begin      the hand frame from this frame's star
-  //   fingertip_candidates  the free points near each marked fingertip's predicted marker
-  //   finish     the fingers solved with the points given to each fingertip (-1: none)
+  //   fingertip_candidates  the free points near each finger marker's predicted place
+  //   finish     the fingers solved with the points given to each marker (-1: none)
   void begin(double time_s, const TrackedStar& hand_star);
+  void begin(double time_s, bool seen, const Rigid3d& world_from_hand);
   // A fingertip the layout gives a colour takes only points of that colour (when `colour` is given),
   // within kColourGate_m of its predicted marker and without the reappearance rule: the colour
   // names the marker, so a finger lost for a while is found again at once.
   std::vector<FingertipCandidate> fingertip_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken,
                                                        std::span<const int> colour = {});
   const TrackedHand& finish(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m,
-                            const std::array<int, kFingerCount>& fingertip_point);
+                            std::span<const int> marker_point);
+  const HandLayout& layout() const { return layout_; }
+  // Where the last solve puts each of the layout's markers (hand frame): a hidden marker's estimate.
+  std::vector<Eigen::Vector3d> markers_in_hand() const;
   const HandSolver& solver() const { return solver_; }
   const TrackedHand& last() const { return out_; }  // the last update's result
   // Time spent in HandSolver::update (the IK) on the last frame.
@@ -101,26 +115,35 @@ class HandTracker {
  private:
   HandLayout layout_;
   HandTrackerSettings settings_;
-  std::unique_ptr<StarTracker> star_;    // for update(): the hand star alone
+  std::unique_ptr<StarTracker> star_;    // for update(): the hand star alone (layouts with one)
   std::optional<StarTracker> segments_;  // the layout's segment stars, if any
   PoseFilter hand_filter_;
   std::array<OneEuroFilter<3>, kFingerCount> tip_filters_;
-  // This frame's, from begin(): each marked fingertip's last bone direction and predicted marker (hand frame).
-  std::array<Eigen::Vector3d, kFingerCount> along_{};
-  std::array<Eigen::Vector3d, kFingerCount> predicted_marker_{};
-  std::array<double, kFingerCount> gate_m_{};
-  std::array<std::optional<double>, kFingerCount> tip_found_s_{};  // when each fingertip last had its marker
-  // Per fingertip, the free points outside its tight gate but inside its widened one, last frame
-  // and this frame (hand frame): where a lost marker may be reappearing.
-  std::array<std::vector<Eigen::Vector3d>, kFingerCount> reappearing_{}, reappearing_now_{};
-  // The hidden tips' places from the model (hand frame), fitting it first with this frame's tips
-  // when all five are seen.
-  std::array<std::optional<Eigen::Vector3d>, kFingerCount> predict_hidden_tips(
-      double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips);
+  // This frame's, from begin(), per layout marker (the back of the hand's unused): each finger
+  // marker's predicted place and its gate (hand frame), and for a fingertip marker the way from its
+  // tip joint to it in the last solve.
+  std::vector<Eigen::Vector3d> predicted_marker_;
+  std::vector<Eigen::Vector3d> tip_to_marker_;
+  std::vector<double> gate_m_;
+  std::vector<std::optional<double>> marker_found_s_;  // when each marker last had a point
+  // Per marker, the free points outside its tight gate but inside its widened one, last frame and
+  // this frame (hand frame): where a lost marker may be reappearing.
+  std::vector<std::vector<Eigen::Vector3d>> reappearing_, reappearing_now_;
+  // The model's markers (layout indices): each fingertip marker, then the other finger markers.
+  std::vector<int> modelled_;
+  // Each hidden fingertip's place from the model (hand frame), fitting it first with this frame's
+  // markers when every modelled one is seen (`seen`: each modelled marker's measured place, its tip
+  // joint for a fingertip marker).
+  std::array<std::optional<Eigen::Vector3d>, kFingerCount> predict_hidden_tips(double time_s,
+                                                                               const std::vector<std::optional<Eigen::Vector3d>>& seen);
   bool every_tip_marked_ = false;
-  MarkerStatistics tip_statistics_{kFingerCount};
+  bool labelled_ = false;  // in update_labelled: the points are the layout's markers, no segment stars among them
+  std::optional<MarkerStatistics> tip_statistics_;
   std::optional<HiddenMarkerEstimator> tip_estimator_;
   HandSolver solver_;
+  std::array<FingerChain, kFingerCount> reference_chains_;  // the marker frames' (HandLayout.h, marker_frames)
+  // A fingertip's place from its marker seen at `seen` (hand frame).
+  Eigen::Vector3d tip_for_marker(int finger, std::size_t marker, const Eigen::Vector3d& seen) const;
   TrackedHand out_;
   double last_ik_us_ = 0.0;
 };
