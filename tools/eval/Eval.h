@@ -75,6 +75,12 @@ struct HandsArgs {
   double evaluate_from_s = 0.0;  // with --model: judge from this time on (the part the model was not fitted to)
   double hide_gap_s = 0.5;
   int hide_together = 1;
+  // With --layout given: the take's markers (renamed by --map TAKE_NAME=LAYOUT_NAME) fed to the hand
+  // tracker, labelled, instead of the estimator alone; the skeleton's fingers fitted to the take's
+  // first calibrate_seconds (0: the reference hand).
+  bool layout_given = false;
+  std::vector<std::string> maps;
+  double calibrate_seconds = 0.0;
 };
 int hands(const HandsArgs& args);
 // `rhot-eval hands --take`.

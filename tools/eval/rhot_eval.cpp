@@ -86,7 +86,15 @@ CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
   cmd->add_option("--hide-together", a.hide_together, "with --take: fingertips hidden at once (1, or 2: a tip and its neighbour's)")
       ->capture_default_str()
       ->check(CLI::Range(1, 2));
-  cmd->add_option("--layout", a.layout_file, "hand marker layout (JSON)")->capture_default_str();
+  cmd->add_option("--layout", a.layout_file,
+                  "hand marker layout (JSON); with --take, the take's markers drive the hand tracker through this layout")
+      ->capture_default_str()
+      ->each([&a](const std::string&) { a.layout_given = true; });
+  cmd->add_option("--map", a.maps, "with --take and --layout: TAKE_NAME=LAYOUT_NAME, a take's marker under the layout's name (repeat)");
+  cmd->add_option("--calibrate-seconds", a.calibrate_seconds,
+                  "with --take and --layout: fit the fingers' lengths to the take's first S seconds (judged after them)")
+      ->check(rhot::number_check(rhot::NumberBound::kNonNegative))
+      ->check(CLI::Range(0.0, 600.0));
   cmd->add_option("--motion", a.motion, "open, fist, pinch, wave, power-grasp, precision-grasp or all")->capture_default_str();
   add_world_flags(*cmd, a.world, true);
   cmd->add_option("--frames", a.frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));

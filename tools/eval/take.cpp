@@ -1,8 +1,14 @@
-// rhot-eval hands --take: a recorded take's fingertips hidden by rule and estimated from the rest
-// (tracking/hand/HiddenMarkers.h), against the recorded positions.
+// rhot-eval hands --take: a recorded take's fingertips hidden by rule and estimated from the rest,
+// against the recorded positions: by the hidden-marker estimator alone (tracking/hand/
+// HiddenMarkers.h), or, with --layout, by the hand tracker fed the take's labelled markers
+// (HandTracker::update_labelled: its fingertip model, IK and skeleton).
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
 #include <iostream>
+#include <map>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -10,6 +16,8 @@
 #include <nlohmann/json.hpp>
 
 #include "tools/eval/Eval.h"
+#include "tracking/hand/HandCalibration.h"
+#include "tracking/hand/HandTracker.h"
 #include "tracking/hand/HiddenMarkers.h"
 #include "tracking/take/MarkerTake.h"
 
@@ -38,6 +46,197 @@ nlohmann::json take_report(const HiddenMarkerErrors& e) {
   return j;
 }
 
+// Each layout marker's index in the take: by its name, or the take's name --map gives it.
+std::expected<std::vector<int>, std::string> take_indices(const MarkerTake& take, const HandLayout& layout,
+                                                          const std::vector<std::string>& maps) {
+  std::map<std::string, std::string> take_name;  // layout name -> take name
+  for (const std::string& m : maps) {
+    const auto eq = m.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == m.size()) return std::unexpected("--map " + m + ": expected TAKE_NAME=LAYOUT_NAME");
+    const std::string from = m.substr(0, eq), to = m.substr(eq + 1);
+    if (!take.marker(from)) return std::unexpected("--map " + m + ": the take has no marker \"" + from + "\"");
+    if (layout.marker_index(to) < 0) return std::unexpected("--map " + m + ": the layout has no marker \"" + to + "\"");
+    take_name[to] = from;
+  }
+  std::vector<int> out;
+  std::string missing;
+  for (const LayoutMarker& lm : layout.markers) {
+    const auto it = take_name.find(lm.name);
+    const auto index = take.marker(it == take_name.end() ? lm.name : it->second);
+    if (!index) missing += std::string(missing.empty() ? "" : ", ") + "\"" + lm.name + "\"";
+    out.push_back(index.value_or(-1));
+  }
+  if (!missing.empty()) {
+    std::string names;
+    for (const std::string& n : take.marker_names) names += std::string(names.empty() ? "" : ", ") + n;
+    return std::unexpected("the take has no marker for the layout's " + missing + " (its markers: " + names +
+                           "; name one with --map TAKE_NAME=LAYOUT_NAME)");
+  }
+  return out;
+}
+
+// Frame f's markers in the layout's order (NaN in a gap).
+std::vector<Eigen::Vector3d> layout_frame(const MarkerTake& take, const std::vector<int>& index, int f) {
+  std::vector<Eigen::Vector3d> out;
+  for (const int i : index) out.push_back(take.at(f, i));
+  return out;
+}
+
+// The take's units against the layout's: the back of the hand's markers as far apart as the
+// layout's within a factor of two (a take in the wrong units is 10 or 1,000 times off).
+std::string units_problem(const MarkerTake& take, const HandLayout& layout, const std::vector<int>& index) {
+  const std::size_t n = layout.hand_frame_markers;
+  for (int f = 0; f < take.frame_count(); ++f) {
+    const auto markers = layout_frame(take, index, f);
+    if (!std::all_of(markers.begin(), markers.begin() + static_cast<std::ptrdiff_t>(n), [](const auto& p) { return p.allFinite(); }))
+      continue;
+    double in_take = 0.0, in_layout = 0.0;
+    for (std::size_t a = 0; a < n; ++a) {
+      for (std::size_t b = a + 1; b < n; ++b) {
+        in_take += (markers[a] - markers[b]).norm();
+        in_layout += (layout.markers[a].offset_m - layout.markers[b].offset_m).norm();
+      }
+    }
+    const double ratio = in_take / in_layout;
+    if (ratio > 0.5 && ratio < 2.0) return "";
+    const auto mm = [](double m) {
+      std::array<char, 32> text{};
+      std::snprintf(text.data(), text.size(), "%.3g", 1e3 * m);
+      return std::string(text.data());
+    };
+    return "the back of the hand's markers are " + mm(in_take) + " mm apart in all (frame " + std::to_string(f + 1) +
+           ") where the layout's are " + mm(in_layout) + " mm: is the take in other units than it says?";
+  }
+  return "no frame shows every marker on the back of the hand";
+}
+
+double vector_mean(const std::vector<double>& v) { return take_mean(v); }
+
+int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
+  const auto fail = [&](const std::string& what) {
+    std::cerr << "rhot-eval: " << what << "\n";
+    return 1;
+  };
+  const auto layout = load_hand_layout(args.layout_file);
+  if (!layout) return fail(layout.error());
+  if (!layout->segment_stars.empty())
+    return fail(args.layout_file + ": a layout with segment stars is not read from takes (their stars' markers have no names there)");
+  if (!std::ranges::all_of(layout->fingertip_marker, [](int m) { return m >= 0; }))
+    return fail(args.layout_file + ": the take's fingertips are hidden in turn: the layout must mark all five");
+  if (take.frame_rate_hz < 20.0 || take.frame_rate_hz > 2000.0) {
+    return fail(args.take_file + ": frame rate " + std::to_string(take.frame_rate_hz) + " Hz: the hand tracker takes 20 to 2,000 Hz");
+  }
+  const auto index = take_indices(take, *layout, args.maps);
+  if (!index) return fail(args.take_file + ": " + index.error());
+  if (const std::string units = units_problem(take, *layout, *index); !units.empty()) return fail(args.take_file + ": " + units);
+
+  HandPose skeleton = reference_open_hand(layout->side);
+  LabelledCalibration calibration;
+  const int calibration_frames = static_cast<int>(std::lround(args.calibrate_seconds * take.frame_rate_hz));
+  if (calibration_frames >= take.frame_count())
+    return fail("--calibrate-seconds: the take is only " + std::to_string(take.frame_count() / take.frame_rate_hz) + " s long");
+  if (calibration_frames > 0) {
+    std::cerr << "rhot-eval: fitting the fingers' lengths to frames 1-" << calibration_frames << "\n";
+    std::vector<std::vector<Eigen::Vector3d>> frames;
+    for (int f = 0; f < calibration_frames; ++f) frames.push_back(layout_frame(take, *index, f));
+    const auto calibrated = calibrate_from_labelled(*layout, skeleton, frames, &calibration);
+    if (!calibrated) return fail("--calibrate-seconds: no finger could be fitted from the calibration frames");
+    skeleton = *calibrated;
+  }
+  const int first = std::max(calibration_frames, static_cast<int>(std::lround(args.evaluate_from_s * take.frame_rate_hz)));
+  if (first >= take.frame_count()) return fail("--evaluate-from-s: after the take's end");
+  const auto schedule =
+      HideSchedule::make({.gap_s = args.hide_gap_s, .together = args.hide_together, .seed = args.seed, .first_frame = first},
+                         take.frame_rate_hz, kFingerCount);
+  if (!schedule) return fail("--hide-gap-s: expected a positive number of seconds");
+
+  HandTrackerSettings settings;
+  settings.fingertip_model = true;
+  HandTracker tracker(*layout, skeleton, settings);
+  std::vector<double> hidden_mm, held_mm, visible_mm;
+  std::map<std::string, std::vector<double>> hidden_by_finger, visible_by_finger;
+  std::vector<Eigen::Vector3d> last_seen_hand(layout->markers.size(), Eigen::Vector3d::Constant(std::nan("")));
+  int frames_judged = 0, hand_seen = 0, hidden_frames = 0;
+  double ik_sum_us = 0.0;
+  for (int f = 0; f < take.frame_count(); ++f) {
+    std::vector<Eigen::Vector3d> markers = layout_frame(take, *index, f);
+    const std::vector<std::size_t> hidden = f >= first ? schedule->hidden(f) : std::vector<std::size_t>{};
+    for (const std::size_t k : hidden)
+      markers[static_cast<std::size_t>(layout->fingertip_marker[k])] = Eigen::Vector3d::Constant(std::nan(""));
+    const TrackedHand& hand = tracker.update_labelled(take.time_s(f), markers);
+    if (f % 500 == 0) std::cerr << "rhot-eval: frame " << f + 1 << " of " << take.frame_count() << "\n";
+    if (f < first) {
+      if (hand.hand_seen) {
+        for (std::size_t m = 0; m < markers.size(); ++m) {
+          if (markers[m].allFinite()) last_seen_hand[m] = hand.world_from_hand.inverse() * markers[m];
+        }
+      }
+      continue;
+    }
+    ++frames_judged;
+    if (!hand.hand_seen) continue;
+    ++hand_seen;
+    ik_sum_us += tracker.last_ik_us();
+    const Rigid3d hand_from_world = hand.world_from_hand.inverse();
+    const auto estimated = tracker.markers_in_hand();
+    for (std::size_t k = 0; k < kFingerCount; ++k) {
+      const auto m = static_cast<std::size_t>(layout->fingertip_marker[k]);
+      const Eigen::Vector3d& recorded = take.at(f, (*index)[m]);
+      if (!recorded.allFinite()) continue;
+      const double e = 1e3 * (hand.world_from_hand * estimated[m] - recorded).norm();
+      const std::string& name = layout->markers[m].name;
+      if (std::ranges::find(hidden, k) != hidden.end()) {
+        ++hidden_frames;
+        hidden_mm.push_back(e);
+        hidden_by_finger[name].push_back(e);
+        if (last_seen_hand[m].allFinite()) held_mm.push_back(1e3 * (hand.world_from_hand * last_seen_hand[m] - recorded).norm());
+      } else {
+        visible_mm.push_back(e);
+        visible_by_finger[name].push_back(e);
+      }
+    }
+    for (std::size_t m = 0; m < markers.size(); ++m) {
+      if (markers[m].allFinite()) last_seen_hand[m] = hand_from_world * markers[m];
+    }
+  }
+  nlohmann::json j;
+  j["take"] = args.take_file;
+  j["layout"] = args.layout_file;
+  j["through"] = "hand tracker, labelled markers";
+  j["frames"] = take.frame_count();
+  j["frame_rate_hz"] = take.frame_rate_hz;
+  j["evaluated_frames"] = {first + 1, take.frame_count()};
+  j["hide_gap_s"] = args.hide_gap_s;
+  j["hide_together"] = args.hide_together;
+  j["seed"] = args.seed;
+  j["hidden_tip_mean_mm"] = vector_mean(hidden_mm);
+  j["hidden_tip_p95_mm"] = percentile(hidden_mm, 0.95);
+  j["visible_tip_mean_mm"] = vector_mean(visible_mm);
+  j["visible_tip_p95_mm"] = percentile(visible_mm, 0.95);
+  j["held_tip_mean_mm"] = vector_mean(held_mm);
+  j["held_tip_p95_mm"] = percentile(held_mm, 0.95);
+  j["hidden_frames"] = hidden_frames;
+  j["hand_seen_fraction"] = frames_judged > 0 ? static_cast<double>(hand_seen) / frames_judged : 0.0;
+  j["ik_mean_us"] = hand_seen > 0 ? ik_sum_us / hand_seen : 0.0;
+  j["fingertip_model_frames"] = tracker.fingertip_model_frames();
+  j["calibrate_seconds"] = args.calibrate_seconds;
+  j["calibration"] = {{"finger_scale", calibration.scale}, {"frames", calibration.frames}};
+  for (std::size_t k = 0; k < kFingerCount; ++k) {
+    const Eigen::Vector3d& moved = calibration.knuckle_moved_m[k];
+    j["calibration"]["knuckle_moved_mm"].push_back({1e3 * moved.x(), 1e3 * moved.y(), 1e3 * moved.z()});
+    j["calibration"]["reach_rms_mm"].push_back({1e3 * calibration.reach_rms_m[k][0], 1e3 * calibration.reach_rms_m[k][1]});
+  }
+
+  for (const auto& [name, errors] : hidden_by_finger) {
+    j["fingers"][name] = {{"hidden_mean_mm", take_mean(errors)},
+                          {"hidden_p95_mm", percentile(errors, 0.95)},
+                          {"hidden_frames", errors.size()},
+                          {"visible_mean_mm", take_mean(visible_by_finger[name])}};
+  }
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int hands_take(const HandsArgs& args) {
@@ -48,6 +247,7 @@ int hands_take(const HandsArgs& args) {
   if (!args.labelled) return fail("hands --take: only --labelled is built so far (the take's 3D points, no cameras)");
   const auto take = read_marker_take(args.take_file);
   if (!take) return fail(take.error());
+  if (args.layout_given) return take_through_tracker(args, *take);
   HiddenMarkerModel model;
   int unfitted_first = 0;
   if (!args.model_file.empty()) {

@@ -1,6 +1,8 @@
 #include "tracking/hand/HandCalibration.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -8,6 +10,206 @@
 #include "base/Json.h"
 
 namespace rhot {
+namespace {
+
+// A fingertip marker's offset from the tip on the straight finger: its joint's frame there has -Z
+// along the rest direction and +Y the finger's up; a marker on the distal joint sits one distal
+// bone short of the tip.
+Eigen::Vector3d straight_tip_to_marker(const LayoutMarker& marker, const FingerChain& chain, Finger finger) {
+  const Eigen::Vector3d x = chain.rest_direction.cross(chain.up);
+  Eigen::Vector3d out = marker.offset_m.x() * x + marker.offset_m.y() * chain.up - marker.offset_m.z() * chain.rest_direction;
+  if (marker.bone != chain_joints(finger)[3]) out -= chain.length_m[2] * chain.rest_direction;
+  return out;
+}
+
+// How far a finger's markers, on the finger posed to reach its tip marker (FABRIK toward the tip
+// the marker implies, twice, the marker's way from the tip taken from the pose), are from where
+// they were seen: the RMS over every seen marker of `seen` (hand frame; per frame, the finger's
+// markers in `markers`' order, the tip marker first, NaN where not seen).
+double reach_rms(std::span<const LayoutMarker* const> markers, const FingerChain& chain, const FingerChain& frames_chain,
+                 std::span<const std::vector<Eigen::Vector3d>> seen) {
+  const LayoutMarker& tip = *markers[0];
+  const auto finger = finger_of_bone(tip.bone);
+  double sum = 0.0;
+  int n = 0;
+  FingerAngles angles;
+  for (const auto& frame : seen) {
+    const Eigen::Vector3d& p = frame[0];
+    Eigen::Vector3d target = p - straight_tip_to_marker(tip, chain, finger);
+    std::array<Eigen::Vector3d, 4> joints{};
+    for (int pass = 0; pass < 2; ++pass) {
+      angles = solve_fabrik(chain, target, angles).angles;
+      joints = finger_forward(chain, angles);
+      target += p - finger_marker(tip, frames_chain, joints);
+    }
+    for (std::size_t k = 0; k < markers.size(); ++k) {
+      if (!frame[k].allFinite()) continue;
+      sum += (finger_marker(*markers[k], frames_chain, joints) - frame[k]).squaredNorm();
+      ++n;
+    }
+  }
+  return n > 0 ? std::sqrt(sum / n) : 0.0;
+}
+
+struct ReachFit {
+  Eigen::Vector3d knuckle_moved_m = Eigen::Vector3d::Zero();
+  double scale = 1.0;
+  double rms_before_m = 0.0, rms_after_m = 0.0;
+};
+
+// The knuckle's place and the finger's scale that bring the markers nearest where they were seen
+// (reach_rms), by Nelder and Mead's simplex from the reference knuckle and `scale` (in millimetres
+// and hundredths of the scale, so that the four weigh alike; started twice, the second time afresh
+// from the first's best). Moving the knuckle costs as if it added (distance / 30 mm)^2 mm^2 to the
+// mean square, so that a knuckle the motion does not pin down stays where it was.
+ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerChain& chain, const FingerChain& frames_chain, double scale,
+                   std::span<const std::vector<Eigen::Vector3d>> seen) {
+  using Vec = Eigen::Vector4d;  // knuckle moved (mm), scale x 100
+  const auto chain_at = [&](const Vec& q) {
+    FingerChain c = chain;
+    c.root_m += 1e-3 * q.head<3>();
+    for (double& l : c.length_m) l *= 0.01 * q(3);
+    return c;
+  };
+  const auto cost = [&](const Vec& q) {
+    if (!(q(3) >= 60.0 && q(3) <= 200.0)) return std::numeric_limits<double>::infinity();
+    const double rms_mm = 1e3 * reach_rms(markers, chain_at(q), frames_chain, seen);
+    return rms_mm * rms_mm + q.head<3>().squaredNorm() / (30.0 * 30.0);
+  };
+  Vec q(0.0, 0.0, 0.0, 100.0 * scale);
+  for (int start = 0; start < 2; ++start) {
+    std::array<Vec, 5> x;
+    std::array<double, 5> fx{};
+    for (std::size_t i = 0; i < 5; ++i) {
+      x[i] = q;
+      if (i > 0) x[i](static_cast<Eigen::Index>(i - 1)) += 4.0;
+      fx[i] = cost(x[i]);
+    }
+    for (int iteration = 0; iteration < 300; ++iteration) {
+      std::array<std::size_t, 5> order{0, 1, 2, 3, 4};
+      std::ranges::sort(order, [&](std::size_t a, std::size_t b) { return fx[a] < fx[b]; });
+      const std::size_t best = order[0], worst = order[4], second = order[3];
+      double size = 0.0;
+      for (std::size_t i = 0; i < 5; ++i) size = std::max(size, (x[i] - x[best]).cwiseAbs().maxCoeff());
+      if (size < 0.05) break;
+      Vec centre = Vec::Zero();
+      for (std::size_t i = 0; i < 5; ++i) {
+        if (i != worst) centre += x[i] / 4.0;
+      }
+      const Vec reflected = centre + (centre - x[worst]);
+      const double fr = cost(reflected);
+      if (fr < fx[best]) {
+        const Vec expanded = centre + 2.0 * (centre - x[worst]);
+        const double fe = cost(expanded);
+        x[worst] = fe < fr ? expanded : reflected;
+        fx[worst] = std::min(fe, fr);
+      } else if (fr < fx[second]) {
+        x[worst] = reflected;
+        fx[worst] = fr;
+      } else {
+        const Vec contracted = centre + 0.5 * (x[worst] - centre);
+        const double fc = cost(contracted);
+        if (fc < fx[worst]) {
+          x[worst] = contracted;
+          fx[worst] = fc;
+        } else {
+          for (std::size_t i = 0; i < 5; ++i) {
+            if (i == best) continue;
+            x[i] = x[best] + 0.5 * (x[i] - x[best]);
+            fx[i] = cost(x[i]);
+          }
+        }
+      }
+    }
+    q = x[static_cast<std::size_t>(std::min_element(fx.begin(), fx.end()) - fx.begin())];
+  }
+  ReachFit out;
+  out.knuckle_moved_m = 1e-3 * q.head<3>();
+  out.scale = 0.01 * q(3);
+  out.rms_before_m = reach_rms(markers, chain_at(Vec(0.0, 0.0, 0.0, 100.0 * scale)), frames_chain, seen);
+  out.rms_after_m = reach_rms(markers, chain_at(q), frames_chain, seen);
+  return out;
+}
+
+}  // namespace
+
+std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const HandPose& reference,
+                                                std::span<const std::vector<Eigen::Vector3d>> frames, LabelledCalibration* report) {
+  LabelledCalibration local;
+  LabelledCalibration& r = report != nullptr ? *report : local;
+  constexpr std::size_t kReachSamples = 60;
+  r = {};
+  HandPose out = reference;
+  // Every frame's markers in the hand's frame (where its back is seen).
+  std::vector<std::vector<Eigen::Vector3d>> in_hand;
+  for (const auto& markers : frames) {
+    const auto world_from_hand = labelled_hand_frame(layout, markers);
+    if (!world_from_hand) continue;
+    const Rigid3d hand_from_world = world_from_hand->inverse();
+    std::vector<Eigen::Vector3d> h;
+    for (std::size_t m = 0; m < layout.markers.size(); ++m) {
+      h.push_back(m < markers.size() && markers[m].allFinite() ? hand_from_world * markers[m] : Eigen::Vector3d::Constant(std::nan("")));
+    }
+    in_hand.push_back(std::move(h));
+  }
+  r.frames = static_cast<int>(in_hand.size());
+  // Each finger's tip (its marker less the offset on the straight finger) at its tenth-furthest
+  // place from the knuckle over the frames stands for the finger held straight.
+  const auto chains = hand_chains(reference, layout.side);
+  bool any = false;
+  for (int f = 0; f < kFingerCount; ++f) {
+    const auto fi = static_cast<std::size_t>(f);
+    const LayoutMarker* tip = layout.fingertip(f);
+    if (tip == nullptr) continue;
+    const FingerChain& c = chains[fi];
+    const auto m = static_cast<std::size_t>(layout.fingertip_marker[fi]);
+    std::vector<double> reach;
+    for (const auto& h : in_hand) {
+      if (h[m].allFinite()) reach.push_back((h[m] - straight_tip_to_marker(*tip, c, static_cast<Finger>(f)) - c.root_m).norm());
+    }
+    if (reach.size() < 20) continue;
+    std::ranges::sort(reach);
+    const double scale =
+        reach[static_cast<std::size_t>(0.9 * static_cast<double>(reach.size() - 1))] / (c.length_m[0] + c.length_m[1] + c.length_m[2]);
+    if (!(scale > 0.6 && scale < 2.0)) continue;  // not this finger, or never straightened
+    // Then the knuckle and the length together: where the finger's markers, on the finger posed to
+    // reach its tip marker, come nearest the seen ones over (up to) kReachSamples frames spread over
+    // the run (a middle marker pins the knuckle down where the tip's path alone leaves it loose).
+    std::vector<const LayoutMarker*> finger_markers{tip};
+    std::vector<std::size_t> finger_marker_index{m};
+    for (std::size_t k = layout.hand_frame_markers; k < layout.markers.size(); ++k) {
+      if (k != m && layout.finger_of_marker(k) == f) {
+        finger_markers.push_back(&layout.markers[k]);
+        finger_marker_index.push_back(k);
+      }
+    }
+    std::vector<std::vector<Eigen::Vector3d>> seen;
+    for (const auto& h : in_hand) {
+      if (!h[m].allFinite()) continue;
+      std::vector<Eigen::Vector3d> frame;
+      for (const std::size_t k : finger_marker_index) frame.push_back(h[k]);
+      seen.push_back(std::move(frame));
+    }
+    std::vector<std::vector<Eigen::Vector3d>> samples;
+    const std::size_t step = std::max<std::size_t>(1, seen.size() / kReachSamples);
+    for (std::size_t i = 0; i < seen.size(); i += step) samples.push_back(seen[i]);
+    const ReachFit fit = fit_reach(finger_markers, c, chains[fi], scale, samples);
+    r.scale[fi] = fit.scale;
+    r.knuckle_moved_m[fi] = fit.knuckle_moved_m;
+    r.reach_rms_m[fi] = {fit.rms_before_m, fit.rms_after_m};
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    std::vector<HandJoint> ray(joints.begin(), joints.end());
+    if (f != 0) ray.push_back(static_cast<HandJoint>(static_cast<int>(joints[0]) - 1));  // the metacarpal's base: its direction stays
+    for (std::size_t k = 1; k < 4; ++k) {
+      auto& p = out.position_m[static_cast<std::size_t>(joints[k])];
+      p = c.root_m + fit.scale * (p - c.root_m);
+    }
+    for (const HandJoint j : ray) out.position_m[static_cast<std::size_t>(j)] += fit.knuckle_moved_m;
+    any = true;
+  }
+  if (!any) return std::nullopt;
+  return out;
+}
 
 std::optional<HandPose> calibrate_flat_hand(const HandPose& reference, HandSide side, std::span<const FingertipSample> samples) {
   HandPose out = reference;
@@ -48,14 +250,8 @@ FingertipSample flat_hand_sample(const HandLayout& layout, const HandPose& refer
     const int p = hand.fingertip_point[f];
     const LayoutMarker* marker = layout.fingertip(static_cast<int>(f));
     if (p < 0 || static_cast<std::size_t>(p) >= points_world.size() || marker == nullptr) continue;
-    // The marker's offset in its joint's frame on the straight finger: -Z along the rest direction,
-    // +Y the finger's up; a marker on the distal joint sits one distal bone short of the tip.
-    const FingerChain& chain = chains[f];
-    const Eigen::Vector3d x = chain.rest_direction.cross(chain.up);
-    Eigen::Vector3d tip_to_marker =
-        marker->offset_m.x() * x + marker->offset_m.y() * chain.up - marker->offset_m.z() * chain.rest_direction;
-    if (marker->bone != chain_joints(static_cast<Finger>(f))[3]) tip_to_marker -= chain.length_m[2] * chain.rest_direction;
-    sample[f] = hand_from_world * points_world[static_cast<std::size_t>(p)] - tip_to_marker;
+    sample[f] =
+        hand_from_world * points_world[static_cast<std::size_t>(p)] - straight_tip_to_marker(*marker, chains[f], static_cast<Finger>(f));
   }
   return sample;
 }

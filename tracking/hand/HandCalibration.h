@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <optional>
 #include <span>
+#include <vector>
 #include <string>
 
 #include "tracking/hand/HandLayout.h"
@@ -34,6 +35,27 @@ std::optional<HandPose> calibrate_flat_hand(const HandPose& reference, HandSide 
 // held to the reference bones' reach, so a longer finger shows its length.
 FingertipSample flat_hand_sample(const HandLayout& layout, const HandPose& reference, const TrackedHand& hand,
                                  std::span<const Eigen::Vector3d> points_world);
+
+// Per-user hand from labelled frames of any layout (each frame: the layout's markers, world, in its
+// order; NaN where not seen), a few seconds of the user's own motion. For each finger with a
+// fingertip marker:
+//  - its length first: the tenth-furthest of its tip's places (the marker less its offset on the
+//    straight finger) from the knuckle stands for the straight finger (a ratio of 0.6-2.0 to the
+//    reference's, else the finger is left as it is);
+//  - then its knuckle's place and its length together, fitted so that the finger's markers (the
+//    tip's and any other on the finger, such as a glove's middle marker), on the finger posed to
+//    reach the tip marker within its limits, come nearest where they were seen (60 frames spread
+//    over the run; a knuckle moved far costs, so one the motion does not pin down stays).
+// The finger's whole ray moves with its knuckle. Nothing when no fingertip was seen in 20 frames.
+struct LabelledCalibration {
+  int frames = 0;                                                   // frames with the back of the hand seen
+  std::array<double, kFingerCount> scale{1.0, 1.0, 1.0, 1.0, 1.0};  // each finger's length against the reference's
+  std::array<Eigen::Vector3d, kFingerCount> knuckle_moved_m{};      // hand frame
+  std::array<std::array<double, 2>, kFingerCount> reach_rms_m{};    // the marker's RMS miss, before and after the knuckle's fit
+};
+std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const HandPose& reference,
+                                                std::span<const std::vector<Eigen::Vector3d>> frames,
+                                                LabelledCalibration* report = nullptr);
 
 [[nodiscard]] std::expected<void, std::string> save_hand_calibration(const HandPose& skeleton, HandSide side,
                                                                      const std::filesystem::path& file);

@@ -49,6 +49,25 @@ StarSet HandLayout::hand_star_set() const {
   return set;
 }
 
+std::optional<Rigid3d> labelled_hand_frame(const HandLayout& layout, std::span<const Eigen::Vector3d> markers_world) {
+  std::vector<std::size_t> back;
+  for (std::size_t m = 0; m < layout.hand_frame_markers && m < markers_world.size(); ++m) {
+    if (markers_world[m].allFinite()) back.push_back(m);
+  }
+  if (back.size() < 3) return std::nullopt;
+  Eigen::Matrix3Xd from(3, static_cast<Eigen::Index>(back.size())), to(3, static_cast<Eigen::Index>(back.size()));
+  for (std::size_t k = 0; k < back.size(); ++k) {
+    from.col(static_cast<Eigen::Index>(k)) = layout.markers[back[k]].offset_m;
+    to.col(static_cast<Eigen::Index>(k)) = markers_world[back[k]];
+  }
+  const Eigen::Matrix4d t = Eigen::umeyama(from, to, false);
+  if (!t.allFinite()) return std::nullopt;
+  Rigid3d out;
+  out.rotation = Eigen::Quaterniond(Eigen::Matrix3d(t.block<3, 3>(0, 0))).normalized();
+  out.translation = t.block<3, 1>(0, 3);
+  return out;
+}
+
 std::string camera_hand_star_problem(const HandLayout& layout) {
   if (layout.has_hand_star()) return "";
   return "the layout \"" + layout.name + "\" has " + std::to_string(layout.hand_frame_markers) +

@@ -42,6 +42,7 @@
 #include <expected>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -103,6 +104,11 @@ struct HandLayout {
 };
 
 [[nodiscard]] std::expected<HandLayout, std::string> load_hand_layout(const std::filesystem::path& file);
+
+// The hand frame from labelled markers (world, in the layout's order; NaN where not seen): the
+// layout's back-of-hand markers fitted to the seen ones (Kabsch, no scale; all of three, or three
+// of four). Nothing with fewer seen, or non-finite.
+std::optional<Rigid3d> labelled_hand_frame(const HandLayout& layout, std::span<const Eigen::Vector3d> markers_world);
 
 // Why a layout's hand cannot be followed through cameras (fewer than four markers on the back of
 // the hand: no marker star), for a message; empty when it can.

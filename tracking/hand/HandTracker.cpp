@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 
-#include <Eigen/Geometry>
 #include <cmath>
 
 namespace rhot {
@@ -95,32 +94,12 @@ const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vec
 
 const TrackedHand& HandTracker::update_labelled(double time_s, std::span<const Eigen::Vector3d> markers_world) {
   const std::size_t n = std::min(markers_world.size(), layout_.markers.size());
-  const auto seen = [&](std::size_t m) { return m < n && markers_world[m].allFinite(); };
-  // The hand frame: the layout's back-of-hand markers fitted to the seen ones (Kabsch, no scale).
-  std::vector<std::size_t> back;
-  for (std::size_t m = 0; m < layout_.hand_frame_markers; ++m) {
-    if (seen(m)) back.push_back(m);
-  }
-  Rigid3d world_from_hand;
-  bool hand_seen = back.size() >= 3;
-  if (hand_seen) {
-    Eigen::Matrix3Xd from(3, static_cast<Eigen::Index>(back.size())), to(3, static_cast<Eigen::Index>(back.size()));
-    for (std::size_t k = 0; k < back.size(); ++k) {
-      from.col(static_cast<Eigen::Index>(k)) = layout_.markers[back[k]].offset_m;
-      to.col(static_cast<Eigen::Index>(k)) = markers_world[back[k]];
-    }
-    const Eigen::Matrix4d t = Eigen::umeyama(from, to, false);
-    hand_seen = t.allFinite();
-    if (hand_seen) {
-      world_from_hand.rotation = Eigen::Quaterniond(Eigen::Matrix3d(t.block<3, 3>(0, 0))).normalized();
-      world_from_hand.translation = t.block<3, 1>(0, 3);
-    }
-  }
+  const auto world_from_hand = labelled_hand_frame(layout_, markers_world.first(n));
   labelled_ = true;
-  begin(time_s, hand_seen, world_from_hand);
+  begin(time_s, world_from_hand.has_value(), world_from_hand.value_or(Rigid3d{}));
   std::vector<int> marker_point(layout_.markers.size(), -1);
   for (std::size_t m = 0; m < n; ++m) {
-    if (seen(m)) marker_point[m] = static_cast<int>(m);
+    if (markers_world[m].allFinite()) marker_point[m] = static_cast<int>(m);
   }
   finish(time_s, markers_world.first(n), {}, marker_point);
   labelled_ = false;

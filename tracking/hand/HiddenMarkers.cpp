@@ -214,6 +214,28 @@ std::vector<std::string> glove_finger_markers(const MarkerTake& take) {
   return markers;
 }
 
+std::optional<HideSchedule> HideSchedule::make(const HideSettings& settings, double frame_rate_hz, std::size_t tips) {
+  if (!(settings.gap_s > 0.0) || !std::isfinite(settings.gap_s) || !(frame_rate_hz > 0.0) || tips == 0) return std::nullopt;
+  HideSchedule out;
+  out.first_ = settings.first_frame;
+  out.gap_ = static_cast<int>(std::clamp(std::round(settings.gap_s * frame_rate_hz), 1.0, 1e6));
+  std::mt19937 rng(settings.seed);
+  out.offset_ = std::uniform_int_distribution<int>(0, 2 * out.gap_ - 1)(rng);
+  out.together_ = settings.together;
+  out.tips_ = tips;
+  return out;
+}
+
+std::vector<std::size_t> HideSchedule::hidden(int frame) const {
+  std::vector<std::size_t> out;
+  const int since = frame - first_ + offset_;
+  if (since < 0 || since % (2 * gap_) >= gap_) return out;
+  const auto k = static_cast<std::size_t>(since / (2 * gap_)) % tips_;
+  out.push_back(k);
+  if (together_ >= 2 && tips_ >= 2) out.push_back(k + 1 < tips_ ? k + 1 : k - 1);
+  return out;
+}
+
 std::expected<HiddenMarkerErrors, std::string> evaluate_hidden_markers(const MarkerTake& take, const HiddenMarkerModel& model,
                                                                        const HideSettings& settings) {
   const auto frame_index = indices_in(take, model.frame_markers);
@@ -226,25 +248,18 @@ std::expected<HiddenMarkerErrors, std::string> evaluate_hidden_markers(const Mar
   const std::vector<int> tips = fingertip_markers(model);
   if (tips.empty()) return std::unexpected("the model has no fingertip marker (a name ending in \"_tip\")");
 
-  if (!(settings.gap_s > 0.0) || !std::isfinite(settings.gap_s))
-    return std::unexpected("the hiding gap must be a positive number of seconds");
-  const int gap = static_cast<int>(std::clamp(std::round(settings.gap_s * take.frame_rate_hz), 1.0, 1e6));
-  std::mt19937 rng(settings.seed);
-  const int offset = std::uniform_int_distribution<int>(0, 2 * gap - 1)(rng);
+  HideSettings from_first = settings;
+  from_first.first_frame = first;
+  const auto schedule = HideSchedule::make(from_first, take.frame_rate_hz, tips.size());
+  if (!schedule) return std::unexpected("the hiding gap must be a positive number of seconds");
   HiddenMarkerEstimator estimator(model);
   HiddenMarkerErrors errors;
   const int n = static_cast<int>(model.markers.size());
   std::vector<Eigen::Vector3d> held_hand(static_cast<std::size_t>(n), Eigen::Vector3d::Constant(kNaN));
   std::vector<Eigen::Vector3d> markers(static_cast<std::size_t>(n));
   for (int f = first; f < end; ++f) {
-    // Gap k (frames [k * 2 gap, k * 2 gap + gap) after the offset) hides tip k mod the tips.
-    const int since = f - first + offset;
     std::vector<int> hidden;
-    if (since % (2 * gap) < gap) {
-      const auto k = static_cast<std::size_t>(since / (2 * gap)) % tips.size();
-      hidden.push_back(tips[k]);
-      if (settings.together >= 2 && tips.size() >= 2) hidden.push_back(tips[k + 1 < tips.size() ? k + 1 : k - 1]);
-    }
+    for (const std::size_t k : schedule->hidden(f)) hidden.push_back(tips[k]);
     const std::array<Eigen::Vector3d, 3> frame{take.at(f, (*frame_index)[0]), take.at(f, (*frame_index)[1]), take.at(f, (*frame_index)[2])};
     for (int m = 0; m < n; ++m) {
       const bool hide = std::ranges::find(hidden, m) != hidden.end();

@@ -149,6 +149,21 @@ struct HideSettings {
   int end_frame = -1;
 };
 
+// Which tips the rule hides on each frame: gap k (frames [k 2g, k 2g + g) counted from the first
+// frame plus an offset drawn from the seed, g the gap in frames) hides tip k mod the tips, and with
+// `together` 2 its neighbour too (the next, or for the last the one before).
+class HideSchedule {
+ public:
+  // Refused (nothing) for a gap that is not a positive number of seconds, or no tips.
+  static std::optional<HideSchedule> make(const HideSettings& settings, double frame_rate_hz, std::size_t tips);
+  std::vector<std::size_t> hidden(int frame) const;  // indices into the tips
+
+ private:
+  HideSchedule() = default;
+  int first_ = 0, gap_ = 1, offset_ = 0, together_ = 1;
+  std::size_t tips_ = 0;
+};
+
 struct HiddenMarkerErrors {
   std::vector<double> hidden_mm;  // every hidden frame of every hidden tip with a recorded position
   std::vector<double> held_mm;    // the same frames, the marker held where it was last seen (hand frame)

@@ -433,6 +433,67 @@ TEST(HandCalibration, AUsersLongerOrShorterFingersAreMeasuredFromAFlatHandThroug
 namespace rhot {
 namespace {
 
+// A user's glove hand whose fingers are 20 % longer than the reference's and whose index and ring
+// knuckles sit elsewhere, closing and opening; the seen tip markers through the tracker (labelled,
+// 3-6 s), with the reference skeleton and with the one calibrated from the first 3 s.
+TEST(HandCalibration, ALabelledTakesFirstSecondsGiveEachFingersKnuckleAndLength) {
+  const HandLayout layout = shipped_layout("glove-13-right");
+  const HandPose reference = reference_open_hand(HandSide::kRight);
+  HandPose user = reference;
+  for (int f = 0; f < kFingerCount; ++f) {
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    const Eigen::Vector3d root = reference.position_m[static_cast<std::size_t>(joints[0])];
+    for (std::size_t k = 1; k < 4; ++k) {
+      auto& p = user.position_m[static_cast<std::size_t>(joints[k])];
+      p = root + 1.2 * (p - root);
+    }
+  }
+  const std::array<std::pair<Finger, Eigen::Vector3d>, 2> moved{
+      {{Finger::kIndex, {0.005, 0.0, -0.008}}, {Finger::kRing, {-0.004, 0.0, 0.006}}}};
+  for (const auto& [finger, by] : moved) {
+    const auto joints = chain_joints(finger);
+    for (const HandJoint j : joints) user.position_m[static_cast<std::size_t>(j)] += by;
+    user.position_m[static_cast<std::size_t>(joints[0]) - 1] += by;  // the metacarpal's base
+  }
+  const auto chains = hand_chains(reference, HandSide::kRight), user_chains = hand_chains(user, HandSide::kRight);
+  const auto relaxed = HandSolver(HandSide::kRight, reference).state().angles;
+  std::vector<std::vector<Eigen::Vector3d>> frames;
+  for (int f = 0; f < 540; ++f) {
+    const HandMotionFrame truth = *hand_motion("power-grasp", f / 90.0, chains, relaxed, {0.0, 1.1, -0.45});
+    frames.push_back(markers(layout, truth.world_from_hand, hand_pose_from_angles(user, user_chains, truth.angles)));
+  }
+  LabelledCalibration report;
+  const auto calibrated = calibrate_from_labelled(layout, reference, std::span(frames).first(270), &report);
+  ASSERT_TRUE(calibrated.has_value());
+  EXPECT_EQ(report.frames, 270);
+  const auto seen_tip_error_mm = [&](const HandPose& skeleton) {
+    HandTracker tracker(layout, skeleton);
+    double sum = 0.0;
+    int n = 0;
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+      const TrackedHand& hand = tracker.update_labelled(static_cast<double>(f) / 90.0, frames[f]);
+      if (f < 270) continue;
+      const auto estimated = tracker.markers_in_hand();
+      for (std::size_t m = 3; m < 8; ++m, ++n) sum += 1e3 * (hand.world_from_hand * estimated[m] - frames[f][m]).norm();
+    }
+    return sum / n;
+  };
+  const double before = seen_tip_error_mm(reference), after = seen_tip_error_mm(*calibrated);
+  SCOPED_TRACE(::testing::Message() << "seen tip markers " << before << " mm with the reference hand, " << after << " mm calibrated");
+  // Measured: 12.1 mm with the reference hand, 0.63 mm calibrated. The knuckles found are 5.0 and
+  // 5.8 mm from the true ones (moved 9.4 and 7.2 mm), the fingers 1.24 long for 1.2, the markers'
+  // RMS miss 8.5 -> 3.5 and 7.0 -> 3.6 mm: the truth's last hinges are not the IK's coupling, so the
+  // knuckle that serves the IK best is not quite the true one.
+  EXPECT_LT(after, 1.5);
+  EXPECT_LT(after, 0.15 * before);
+  for (const auto& [finger, by] : moved) {
+    const auto f = static_cast<std::size_t>(finger);
+    EXPECT_LT((report.knuckle_moved_m[f] - by).norm(), by.norm()) << "finger " << f << ": " << report.knuckle_moved_m[f].transpose();
+    EXPECT_NEAR(report.scale[f], 1.2, 0.06) << "finger " << f;
+    EXPECT_LT(report.reach_rms_m[f][1], 0.6 * report.reach_rms_m[f][0]) << "finger " << f;
+  }
+}
+
 TEST(HandCalibration, AFlatHandGivesEachFingersLengthAndTheFileKeepsIt) {
   const HandPose reference = reference_open_hand(HandSide::kRight);
   const auto chains = hand_chains(reference, HandSide::kRight);
