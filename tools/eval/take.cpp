@@ -132,6 +132,7 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
 
   HandPose skeleton = reference_open_hand(layout->side);
   LabelledCalibration calibration;
+  HandLayout fitted_layout = *layout;
   const int calibration_frames = static_cast<int>(std::lround(args.calibrate_seconds * take.frame_rate_hz));
   if (calibration_frames >= take.frame_count())
     return fail("--calibrate-seconds: the take is only " + std::to_string(take.frame_count() / take.frame_rate_hz) + " s long");
@@ -142,6 +143,7 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
     const auto calibrated = calibrate_from_labelled(*layout, skeleton, frames, &calibration);
     if (!calibrated) return fail("--calibrate-seconds: no finger could be fitted from the calibration frames");
     skeleton = *calibrated;
+    fitted_layout = calibration.layout;
   }
   const int first = std::max(calibration_frames, static_cast<int>(std::lround(args.evaluate_from_s * take.frame_rate_hz)));
   if (first >= take.frame_count()) return fail("--evaluate-from-s: after the take's end");
@@ -152,7 +154,7 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
 
   HandTrackerSettings settings;
   settings.fingertip_model = true;
-  HandTracker tracker(*layout, skeleton, settings);
+  HandTracker tracker(fitted_layout, skeleton, settings);
   std::vector<double> hidden_mm, held_mm, visible_mm;
   std::map<std::string, std::vector<double>> hidden_by_finger, visible_by_finger;
   std::vector<Eigen::Vector3d> last_seen_hand(layout->markers.size(), Eigen::Vector3d::Constant(std::nan("")));

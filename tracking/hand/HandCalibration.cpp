@@ -22,16 +22,19 @@ Eigen::Vector3d straight_tip_to_marker(const LayoutMarker& marker, const FingerC
   return out;
 }
 
+// The weight of a finger's other markers' squared misses against its tip marker's: the tracker's IK
+// reaches for the tip, so the tip's miss is what a user sees; the others pin the knuckle down.
+constexpr double kOtherMarkerWeight = 0.25;
+
 // How far a finger's markers, on the finger posed to reach its tip marker (FABRIK toward the tip
 // the marker implies, twice, the marker's way from the tip taken from the pose), are from where
-// they were seen: the RMS over every seen marker of `seen` (hand frame; per frame, the finger's
-// markers in `markers`' order, the tip marker first, NaN where not seen).
+// they were seen: the weighted RMS over every seen marker of `seen` (hand frame; per frame, the
+// finger's markers in `markers`' order, the tip marker first, NaN where not seen).
 double reach_rms(std::span<const LayoutMarker* const> markers, const FingerChain& chain, const FingerChain& frames_chain,
                  std::span<const std::vector<Eigen::Vector3d>> seen) {
   const LayoutMarker& tip = *markers[0];
   const auto finger = finger_of_bone(tip.bone);
-  double sum = 0.0;
-  int n = 0;
+  double sum = 0.0, n = 0.0;
   FingerAngles angles;
   for (const auto& frame : seen) {
     const Eigen::Vector3d& p = frame[0];
@@ -44,62 +47,86 @@ double reach_rms(std::span<const LayoutMarker* const> markers, const FingerChain
     }
     for (std::size_t k = 0; k < markers.size(); ++k) {
       if (!frame[k].allFinite()) continue;
-      sum += (finger_marker(*markers[k], frames_chain, joints) - frame[k]).squaredNorm();
-      ++n;
+      const double weight = k == 0 ? 1.0 : kOtherMarkerWeight;
+      sum += weight * (finger_marker(*markers[k], frames_chain, joints) - frame[k]).squaredNorm();
+      n += weight;
     }
   }
-  return n > 0 ? std::sqrt(sum / n) : 0.0;
+  return n > 0.0 ? std::sqrt(sum / n) : 0.0;
 }
 
 struct ReachFit {
   Eigen::Vector3d knuckle_moved_m = Eigen::Vector3d::Zero();
   double scale = 1.0;
+  std::vector<Eigen::Vector3d> offsets_m;  // each non-tip marker's fitted offset (markers[1...])
   double rms_before_m = 0.0, rms_after_m = 0.0;
 };
 
-// The knuckle's place and the finger's scale that bring the markers nearest where they were seen
-// (reach_rms), by Nelder and Mead's simplex from the reference knuckle and `scale` (in millimetres
-// and hundredths of the scale, so that the four weigh alike; started twice, the second time afresh
-// from the first's best). Moving the knuckle costs as if it added (distance / 30 mm)^2 mm^2 to the
-// mean square, so that a knuckle the motion does not pin down stays where it was.
+// The knuckle's place, the finger's scale and each other marker's offset (its lift off the bone and
+// its place along it) that bring the markers nearest where they were seen (reach_rms), by
+// Nelder and Mead's simplex from the reference knuckle, `scale` and the layout's offsets (in millimetres and hundredths of the scale, so
+// that all weigh alike; started twice, the second time afresh from the first's best). Moving the knuckle costs as if it added (distance /
+// 30 mm)^2 mm^2 to the mean square, so that a knuckle the motion does not pin down stays where it was; a lift moved costs (distance / 10
+// mm)^2 mm^2.
 ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerChain& chain, const FingerChain& frames_chain, double scale,
                    std::span<const std::vector<Eigen::Vector3d>> seen) {
-  using Vec = Eigen::Vector4d;  // knuckle moved (mm), scale x 100
-  const auto chain_at = [&](const Vec& q) {
+  const std::size_t others = markers.size() - 1;
+  const auto n = static_cast<Eigen::Index>(4 + 2 * others);
+  // q: knuckle moved (mm), scale x 100, then per other marker its offset's y and z moved (mm).
+  const auto apply = [&](const Eigen::VectorXd& q, std::vector<LayoutMarker>& moved) {
     FingerChain c = chain;
     c.root_m += 1e-3 * q.head<3>();
     for (double& l : c.length_m) l *= 0.01 * q(3);
+    moved.clear();
+    for (std::size_t k = 0; k < markers.size(); ++k) {
+      moved.push_back(*markers[k]);
+      if (k == 0) continue;
+      const auto i = static_cast<Eigen::Index>(4 + 2 * (k - 1));
+      moved.back().offset_m.y() += 1e-3 * q(i);
+      moved.back().offset_m.z() += 1e-3 * q(i + 1);
+    }
     return c;
   };
-  const auto cost = [&](const Vec& q) {
-    if (!(q(3) >= 60.0 && q(3) <= 200.0)) return std::numeric_limits<double>::infinity();
-    const double rms_mm = 1e3 * reach_rms(markers, chain_at(q), frames_chain, seen);
-    return rms_mm * rms_mm + q.head<3>().squaredNorm() / (30.0 * 30.0);
+  std::vector<LayoutMarker> moved;
+  std::vector<const LayoutMarker*> moved_ptr;
+  const auto rms_at = [&](const Eigen::VectorXd& q) {
+    const FingerChain c = apply(q, moved);
+    moved_ptr.clear();
+    for (const LayoutMarker& m : moved) moved_ptr.push_back(&m);
+    return reach_rms(moved_ptr, c, frames_chain, seen);
   };
-  Vec q(0.0, 0.0, 0.0, 100.0 * scale);
-  for (int start = 0; start < 2; ++start) {
-    std::array<Vec, 5> x;
-    std::array<double, 5> fx{};
-    for (std::size_t i = 0; i < 5; ++i) {
-      x[i] = q;
+  const auto cost = [&](const Eigen::VectorXd& q) {
+    if (!(q(3) >= 60.0 && q(3) <= 200.0)) return std::numeric_limits<double>::infinity();
+    const double rms_mm = 1e3 * rms_at(q);
+    return rms_mm * rms_mm + q.head<3>().squaredNorm() / (30.0 * 30.0) + q.tail(n - 4).squaredNorm() / (10.0 * 10.0);
+  };
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(n);
+  q(3) = 100.0 * scale;
+  const Eigen::VectorXd start = q;
+  const auto points = static_cast<std::size_t>(n + 1);
+  for (int restart = 0; restart < 2; ++restart) {
+    std::vector<Eigen::VectorXd> x(points, q);
+    std::vector<double> fx(points);
+    for (std::size_t i = 0; i < points; ++i) {
       if (i > 0) x[i](static_cast<Eigen::Index>(i - 1)) += 4.0;
       fx[i] = cost(x[i]);
     }
-    for (int iteration = 0; iteration < 300; ++iteration) {
-      std::array<std::size_t, 5> order{0, 1, 2, 3, 4};
+    std::vector<std::size_t> order(points);
+    for (int iteration = 0; iteration < 150 * static_cast<int>(n); ++iteration) {
+      for (std::size_t i = 0; i < points; ++i) order[i] = i;
       std::ranges::sort(order, [&](std::size_t a, std::size_t b) { return fx[a] < fx[b]; });
-      const std::size_t best = order[0], worst = order[4], second = order[3];
+      const std::size_t best = order.front(), worst = order.back(), second = order[points - 2];
       double size = 0.0;
-      for (std::size_t i = 0; i < 5; ++i) size = std::max(size, (x[i] - x[best]).cwiseAbs().maxCoeff());
+      for (std::size_t i = 0; i < points; ++i) size = std::max(size, (x[i] - x[best]).cwiseAbs().maxCoeff());
       if (size < 0.05) break;
-      Vec centre = Vec::Zero();
-      for (std::size_t i = 0; i < 5; ++i) {
-        if (i != worst) centre += x[i] / 4.0;
+      Eigen::VectorXd centre = Eigen::VectorXd::Zero(n);
+      for (std::size_t i = 0; i < points; ++i) {
+        if (i != worst) centre += x[i] / static_cast<double>(n);
       }
-      const Vec reflected = centre + (centre - x[worst]);
+      const Eigen::VectorXd reflected = centre + (centre - x[worst]);
       const double fr = cost(reflected);
       if (fr < fx[best]) {
-        const Vec expanded = centre + 2.0 * (centre - x[worst]);
+        const Eigen::VectorXd expanded = centre + 2.0 * (centre - x[worst]);
         const double fe = cost(expanded);
         x[worst] = fe < fr ? expanded : reflected;
         fx[worst] = std::min(fe, fr);
@@ -107,13 +134,13 @@ ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerCha
         x[worst] = reflected;
         fx[worst] = fr;
       } else {
-        const Vec contracted = centre + 0.5 * (x[worst] - centre);
+        const Eigen::VectorXd contracted = centre + 0.5 * (x[worst] - centre);
         const double fc = cost(contracted);
         if (fc < fx[worst]) {
           x[worst] = contracted;
           fx[worst] = fc;
         } else {
-          for (std::size_t i = 0; i < 5; ++i) {
+          for (std::size_t i = 0; i < points; ++i) {
             if (i == best) continue;
             x[i] = x[best] + 0.5 * (x[i] - x[best]);
             fx[i] = cost(x[i]);
@@ -126,8 +153,10 @@ ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerCha
   ReachFit out;
   out.knuckle_moved_m = 1e-3 * q.head<3>();
   out.scale = 0.01 * q(3);
-  out.rms_before_m = reach_rms(markers, chain_at(Vec(0.0, 0.0, 0.0, 100.0 * scale)), frames_chain, seen);
-  out.rms_after_m = reach_rms(markers, chain_at(q), frames_chain, seen);
+  out.rms_before_m = rms_at(start);
+  out.rms_after_m = rms_at(q);
+  apply(q, moved);
+  for (std::size_t k = 1; k < moved.size(); ++k) out.offsets_m.push_back(moved[k].offset_m);
   return out;
 }
 
@@ -137,8 +166,9 @@ std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const 
                                                 std::span<const std::vector<Eigen::Vector3d>> frames, LabelledCalibration* report) {
   LabelledCalibration local;
   LabelledCalibration& r = report != nullptr ? *report : local;
-  constexpr std::size_t kReachSamples = 60;
+  constexpr std::size_t kReachSamples = 30;
   r = {};
+  r.layout = layout;
   HandPose out = reference;
   // Every frame's markers in the hand's frame (where its back is seen).
   std::vector<std::vector<Eigen::Vector3d>> in_hand;
@@ -172,9 +202,10 @@ std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const 
     const double scale =
         reach[static_cast<std::size_t>(0.9 * static_cast<double>(reach.size() - 1))] / (c.length_m[0] + c.length_m[1] + c.length_m[2]);
     if (!(scale > 0.6 && scale < 2.0)) continue;  // not this finger, or never straightened
-    // Then the knuckle and the length together: where the finger's markers, on the finger posed to
-    // reach its tip marker, come nearest the seen ones over (up to) kReachSamples frames spread over
-    // the run (a middle marker pins the knuckle down where the tip's path alone leaves it loose).
+    // Then the knuckle, the length and the finger's other markers' offsets together: where the
+    // finger's markers, on the finger posed to reach its tip marker, come nearest the seen ones over
+    // (up to) kReachSamples frames spread over the run (a middle marker pins the knuckle down where
+    // the tip's path alone leaves it loose).
     std::vector<const LayoutMarker*> finger_markers{tip};
     std::vector<std::size_t> finger_marker_index{m};
     for (std::size_t k = layout.hand_frame_markers; k < layout.markers.size(); ++k) {
@@ -197,6 +228,7 @@ std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const 
     r.scale[fi] = fit.scale;
     r.knuckle_moved_m[fi] = fit.knuckle_moved_m;
     r.reach_rms_m[fi] = {fit.rms_before_m, fit.rms_after_m};
+    for (std::size_t k = 1; k < finger_marker_index.size(); ++k) r.layout.markers[finger_marker_index[k]].offset_m = fit.offsets_m[k - 1];
     const auto joints = chain_joints(static_cast<Finger>(f));
     std::vector<HandJoint> ray(joints.begin(), joints.end());
     if (f != 0) ray.push_back(static_cast<HandJoint>(static_cast<int>(joints[0]) - 1));  // the metacarpal's base: its direction stays
