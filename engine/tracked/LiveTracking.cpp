@@ -27,6 +27,10 @@ LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObj
   // that one assignment a frame shares the points between them all.
   StarSet all = objects.stars;
   for (std::size_t h = 0; h < 2; ++h) {
+    if (!layouts_[h].has_hand_star()) {
+      hand_star_[h] = -1;  // three markers on the back: no star for the cameras, the hand never seen (Launch refuses such layouts)
+      continue;
+    }
     MarkerStar hand = layouts_[h].hand_star_set().stars[0];
     hand.id = -1 - static_cast<int>(h);
     hand_star_[h] = static_cast<int>(all.stars.size());

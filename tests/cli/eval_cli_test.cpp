@@ -365,6 +365,9 @@ TEST(EvalCli, ATakesLabelledMarkersDriveTheHandTrackerThroughALayout) {
             "rhot-eval: " + take + ": --map IndexTip: expected TAKE_NAME=LAYOUT_NAME\n");
   EXPECT_EQ(refused(take + " --layout " + layout + " --map IndexTip=index_nail"),
             "rhot-eval: " + take + ": --map IndexTip=index_nail: the layout has no marker \"index_nail\"\n");
+  EXPECT_EQ(refused(take + " --layout " + layout + " --model model.json"),
+            "rhot-eval: hands --take: --model is the estimator's alone (without --layout); the tracker fits its own\n");
+  EXPECT_EQ(refused(take + " --map IndexTip=index_tip"), "rhot-eval: hands --take: --map and --calibrate-seconds need --layout\n");
   const std::string metres = write_simulated_glove_take("eval_cli_sim_glove_metres.tsv", 1000.0);
   EXPECT_EQ(refused(metres + " --layout " + layout + " --map IndexTip=index_tip"),
             "rhot-eval: " + metres +

@@ -223,6 +223,7 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
   j["fingertip_model_frames"] = tracker.fingertip_model_frames();
   j["calibrate_seconds"] = args.calibrate_seconds;
   j["calibration"] = {{"finger_scale", calibration.scale}, {"frames", calibration.frames}};
+  for (const double a : calibration.turned_rad) j["calibration"]["finger_turned_deg"].push_back(a * 180.0 / 3.14159265358979);
   for (std::size_t k = 0; k < kFingerCount; ++k) {
     const Eigen::Vector3d& moved = calibration.knuckle_moved_m[k];
     j["calibration"]["knuckle_moved_mm"].push_back({1e3 * moved.x(), 1e3 * moved.y(), 1e3 * moved.z()});
@@ -249,7 +250,12 @@ int hands_take(const HandsArgs& args) {
   if (!args.labelled) return fail("hands --take: only --labelled is built so far (the take's 3D points, no cameras)");
   const auto take = read_marker_take(args.take_file);
   if (!take) return fail(take.error());
-  if (args.layout_given) return take_through_tracker(args, *take);
+  if (args.layout_given) {
+    if (!args.model_file.empty())
+      return fail("hands --take: --model is the estimator's alone (without --layout); the tracker fits its own");
+    return take_through_tracker(args, *take);
+  }
+  if (!args.maps.empty() || args.calibrate_seconds > 0.0) return fail("hands --take: --map and --calibrate-seconds need --layout");
   HiddenMarkerModel model;
   int unfitted_first = 0;
   if (!args.model_file.empty()) {

@@ -25,6 +25,7 @@ Eigen::Vector3d straight_tip_to_marker(const LayoutMarker& marker, const FingerC
 // The weight of a finger's other markers' squared misses against its tip marker's: the tracker's IK
 // reaches for the tip, so the tip's miss is what a user sees; the others pin the knuckle down.
 constexpr double kOtherMarkerWeight = 0.25;
+constexpr int kSimplexStarts = 1;
 
 // How far a finger's markers, on the finger posed to reach its tip marker (FABRIK toward the tip
 // the marker implies, twice, the marker's way from the tip taken from the pose), are from where
@@ -58,30 +59,42 @@ double reach_rms(std::span<const LayoutMarker* const> markers, const FingerChain
 struct ReachFit {
   Eigen::Vector3d knuckle_moved_m = Eigen::Vector3d::Zero();
   double scale = 1.0;
-  std::vector<Eigen::Vector3d> offsets_m;  // each non-tip marker's fitted offset (markers[1...])
+  Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();  // the finger's rest direction and plane turned about its knuckle
+  std::vector<Eigen::Vector3d> offsets_m;              // each non-tip marker's fitted offset (markers[1...])
   double rms_before_m = 0.0, rms_after_m = 0.0;
 };
 
-// The knuckle's place, the finger's scale and each other marker's offset (its lift off the bone and
-// its place along it) that bring the markers nearest where they were seen (reach_rms), by
-// Nelder and Mead's simplex from the reference knuckle, `scale` and the layout's offsets (in millimetres and hundredths of the scale, so
-// that all weigh alike; started twice, the second time afresh from the first's best). Moving the knuckle costs as if it added (distance /
-// 30 mm)^2 mm^2 to the mean square, so that a knuckle the motion does not pin down stays where it was; a lift moved costs (distance / 10
-// mm)^2 mm^2.
+// The knuckle's place, the finger's scale, its rest direction (turned sideways and up or down
+// about the knuckle) and each other marker's offset (its lift off the bone and its place along it)
+// that bring the markers nearest where they were seen (reach_rms), by Nelder and Mead's simplex
+// from the reference knuckle, `scale`, the reference direction and the layout's offsets. The
+// parameters are in millimetres, hundredths of the scale and hundredths of a radian (about a
+// millimetre at a fingertip), so that all weigh alike; the simplex is started twice, the second
+// time afresh from the first's best. Moving the knuckle costs as if it added (distance / 30 mm)^2
+// mm^2 to the mean square, turning the finger (angle / 0.2 rad)^2 and moving an offset (distance /
+// 10 mm)^2, so that what the motion does not pin down stays where it was.
 ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerChain& chain, const FingerChain& frames_chain, double scale,
                    std::span<const std::vector<Eigen::Vector3d>> seen) {
   const std::size_t others = markers.size() - 1;
-  const auto n = static_cast<Eigen::Index>(4 + 2 * others);
-  // q: knuckle moved (mm), scale x 100, then per other marker its offset's y and z moved (mm).
+  const auto n = static_cast<Eigen::Index>(6 + 2 * others);
+  // q: knuckle moved (mm), scale x 100, turned sideways and up (0.01 rad), then per other marker
+  // its offset's y and z moved (mm).
+  const Eigen::Vector3d lateral = chain.rest_direction.cross(chain.up).normalized();
+  const auto turn_of = [&](const Eigen::VectorXd& q) {
+    return Eigen::Matrix3d(Eigen::AngleAxisd(0.01 * q(4), chain.up) * Eigen::AngleAxisd(0.01 * q(5), lateral));
+  };
   const auto apply = [&](const Eigen::VectorXd& q, std::vector<LayoutMarker>& moved) {
     FingerChain c = chain;
     c.root_m += 1e-3 * q.head<3>();
     for (double& l : c.length_m) l *= 0.01 * q(3);
+    const Eigen::Matrix3d turn = turn_of(q);
+    c.rest_direction = turn * chain.rest_direction;
+    c.up = turn * chain.up;
     moved.clear();
     for (std::size_t k = 0; k < markers.size(); ++k) {
       moved.push_back(*markers[k]);
       if (k == 0) continue;
-      const auto i = static_cast<Eigen::Index>(4 + 2 * (k - 1));
+      const auto i = static_cast<Eigen::Index>(6 + 2 * (k - 1));
       moved.back().offset_m.y() += 1e-3 * q(i);
       moved.back().offset_m.z() += 1e-3 * q(i + 1);
     }
@@ -98,13 +111,14 @@ ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerCha
   const auto cost = [&](const Eigen::VectorXd& q) {
     if (!(q(3) >= 60.0 && q(3) <= 200.0)) return std::numeric_limits<double>::infinity();
     const double rms_mm = 1e3 * rms_at(q);
-    return rms_mm * rms_mm + q.head<3>().squaredNorm() / (30.0 * 30.0) + q.tail(n - 4).squaredNorm() / (10.0 * 10.0);
+    return rms_mm * rms_mm + q.head<3>().squaredNorm() / (30.0 * 30.0) + q.segment<2>(4).squaredNorm() / (20.0 * 20.0) +
+           q.tail(n - 6).squaredNorm() / (10.0 * 10.0);
   };
   Eigen::VectorXd q = Eigen::VectorXd::Zero(n);
   q(3) = 100.0 * scale;
   const Eigen::VectorXd start = q;
   const auto points = static_cast<std::size_t>(n + 1);
-  for (int restart = 0; restart < 2; ++restart) {
+  for (int restart = 0; restart < kSimplexStarts; ++restart) {
     std::vector<Eigen::VectorXd> x(points, q);
     std::vector<double> fx(points);
     for (std::size_t i = 0; i < points; ++i) {
@@ -118,7 +132,7 @@ ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerCha
       const std::size_t best = order.front(), worst = order.back(), second = order[points - 2];
       double size = 0.0;
       for (std::size_t i = 0; i < points; ++i) size = std::max(size, (x[i] - x[best]).cwiseAbs().maxCoeff());
-      if (size < 0.05) break;
+      if (size < 0.2) break;
       Eigen::VectorXd centre = Eigen::VectorXd::Zero(n);
       for (std::size_t i = 0; i < points; ++i) {
         if (i != worst) centre += x[i] / static_cast<double>(n);
@@ -153,6 +167,7 @@ ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerCha
   ReachFit out;
   out.knuckle_moved_m = 1e-3 * q.head<3>();
   out.scale = 0.01 * q(3);
+  out.turn = turn_of(q);
   out.rms_before_m = rms_at(start);
   out.rms_after_m = rms_at(q);
   apply(q, moved);
@@ -183,8 +198,8 @@ std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const 
     in_hand.push_back(std::move(h));
   }
   r.frames = static_cast<int>(in_hand.size());
-  // Each finger's tip (its marker less the offset on the straight finger) at its tenth-furthest
-  // place from the knuckle over the frames stands for the finger held straight.
+  // The 90th percentile of each finger's tip's distances from the knuckle over the frames (the
+  // marker less its offset on the straight finger) stands for the finger held straight.
   const auto chains = hand_chains(reference, layout.side);
   bool any = false;
   for (int f = 0; f < kFingerCount; ++f) {
@@ -204,7 +219,7 @@ std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const 
     if (!(scale > 0.6 && scale < 2.0)) continue;  // not this finger, or never straightened
     // Then the knuckle, the length and the finger's other markers' offsets together: where the
     // finger's markers, on the finger posed to reach its tip marker, come nearest the seen ones over
-    // (up to) kReachSamples frames spread over the run (a middle marker pins the knuckle down where
+    // kReachSamples to twice that many frames spread evenly over the run (a middle marker pins the knuckle down where
     // the tip's path alone leaves it loose).
     std::vector<const LayoutMarker*> finger_markers{tip};
     std::vector<std::size_t> finger_marker_index{m};
@@ -227,6 +242,7 @@ std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const 
     const ReachFit fit = fit_reach(finger_markers, c, chains[fi], scale, samples);
     r.scale[fi] = fit.scale;
     r.knuckle_moved_m[fi] = fit.knuckle_moved_m;
+    r.turned_rad[fi] = Eigen::AngleAxisd(fit.turn).angle();
     r.reach_rms_m[fi] = {fit.rms_before_m, fit.rms_after_m};
     for (std::size_t k = 1; k < finger_marker_index.size(); ++k) r.layout.markers[finger_marker_index[k]].offset_m = fit.offsets_m[k - 1];
     const auto joints = chain_joints(static_cast<Finger>(f));
@@ -234,7 +250,11 @@ std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const 
     if (f != 0) ray.push_back(static_cast<HandJoint>(static_cast<int>(joints[0]) - 1));  // the metacarpal's base: its direction stays
     for (std::size_t k = 1; k < 4; ++k) {
       auto& p = out.position_m[static_cast<std::size_t>(joints[k])];
-      p = c.root_m + fit.scale * (p - c.root_m);
+      p = c.root_m + fit.turn * (fit.scale * (p - c.root_m));
+    }
+    if (f != 0) {  // a finger's rest direction is its metacarpal's: the metacarpal's base turns about the knuckle too
+      auto& base = out.position_m[static_cast<std::size_t>(joints[0]) - 1];
+      base = c.root_m + fit.turn * (base - c.root_m);
     }
     for (const HandJoint j : ray) out.position_m[static_cast<std::size_t>(j)] += fit.knuckle_moved_m;
     any = true;

@@ -39,22 +39,25 @@ FingertipSample flat_hand_sample(const HandLayout& layout, const HandPose& refer
 // Per-user hand from labelled frames of any layout (each frame: the layout's markers, world, in its
 // order; NaN where not seen), a few seconds of the user's own motion. For each finger with a
 // fingertip marker:
-//  - its length first: the tenth-furthest of its tip's places (the marker less its offset on the
-//    straight finger) from the knuckle stands for the straight finger (a ratio of 0.6-2.0 to the
+//  - its length first: the 90th percentile of its tip's distances from the knuckle (the marker less
+//    its offset on the straight finger) stands for the straight finger (a ratio of 0.6-2.0 to the
 //    reference's, else the finger is left as it is);
-//  - then its knuckle's place, its length and its other markers' offsets (a glove's middle marker:
-//    its lift off the bone and its place along it) together, fitted so that the finger's markers, on
+//  - then its knuckle's place, its length, its rest direction (turned sideways or up and down about
+//    the knuckle: the middle finger's abduction is locked, a user's may point elsewhere) and its
+//    other markers' offsets (a glove's middle marker: its lift off the bone and its place along it)
+//    together, fitted so that the finger's markers, on
 //    the finger posed to reach the tip marker within its limits, come nearest where they were seen
-//    (30 frames spread over the run; the other markers' misses weigh a quarter of the tip's, whose
-//    miss is what the tracker shows; a knuckle or an offset moved far costs, so one the motion does
-//    not pin down stays).
+//    (30 to 59 frames spread evenly over the run; the other markers' misses weigh a quarter of the
+//    tip's, whose miss is what the tracker shows; a knuckle or an offset moved far costs, so one
+//    the motion does not pin down stays).
 // The finger's whole ray moves with its knuckle. Nothing when no fingertip was seen in 20 frames.
 struct LabelledCalibration {
   int frames = 0;                                                   // frames with the back of the hand seen
   std::array<double, kFingerCount> scale{1.0, 1.0, 1.0, 1.0, 1.0};  // each finger's length against the reference's
-  std::array<Eigen::Vector3d, kFingerCount> knuckle_moved_m{};      // hand frame
-  std::array<std::array<double, 2>, kFingerCount> reach_rms_m{};    // the finger's markers' RMS miss, before and after the fit
-  HandLayout layout;                                                // the layout given, its fingers' other markers' offsets fitted
+  std::array<Eigen::Vector3d, kFingerCount> knuckle_moved_m{};
+  std::array<double, kFingerCount> turned_rad{};                  // how far each finger's rest direction was turned      // hand frame
+  std::array<std::array<double, 2>, kFingerCount> reach_rms_m{};  // the finger's markers' RMS miss, before and after the fit
+  HandLayout layout;                                              // the layout given, its fingers' other markers' offsets fitted
 };
 std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const HandPose& reference,
                                                 std::span<const std::vector<Eigen::Vector3d>> frames,

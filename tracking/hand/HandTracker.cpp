@@ -25,7 +25,8 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   reappearing_now_.assign(n, {});
   out_.marker_point.assign(n, -1);
   every_tip_marked_ = std::ranges::all_of(layout.fingertip_marker, [](int m) { return m >= 0; });
-  if (settings.fingertip_model && every_tip_marked_) {
+  // The model takes 63 markers at most (HiddenMarkerEstimator's sets of visible markers are bits).
+  if (settings.fingertip_model && every_tip_marked_ && n - layout.hand_frame_markers <= 63) {
     // The fingertips first (predict_hidden_tips reads them there), then the other finger markers.
     for (const int m : layout.fingertip_marker) modelled_.push_back(m);
     for (std::size_t m = layout.hand_frame_markers; m < n; ++m) {
@@ -102,6 +103,9 @@ const TrackedHand& HandTracker::update_labelled(double time_s, std::span<const E
     if (markers_world[m].allFinite()) marker_point[m] = static_cast<int>(m);
   }
   finish(time_s, markers_world.first(n), {}, marker_point);
+  if (out_.hand_seen) {
+    for (std::size_t m = 0; m < layout_.hand_frame_markers && m < n; ++m) out_.marker_point[m] = marker_point[m];
+  }
   labelled_ = false;
   return out_;
 }
@@ -289,7 +293,11 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
   };
   std::vector<Pick> picks;
   for (std::size_t h = 0; h < hands.size(); ++h) {
-    hands[h]->begin(time_s, stars[static_cast<std::size_t>(hand_star[h])]);
+    if (hand_star[h] < 0 || static_cast<std::size_t>(hand_star[h]) >= stars.size()) {
+      hands[h]->begin(time_s, false, {});  // no star to follow this hand by
+    } else {
+      hands[h]->begin(time_s, stars[static_cast<std::size_t>(hand_star[h])]);
+    }
     for (const auto& c : hands[h]->fingertip_candidates(points, taken, colour)) picks.push_back({c.distance_m, h, c.marker, c.point});
   }
   // Nearest first over every hand: a point goes to the fingertip it fits best, whichever hand's.

@@ -44,7 +44,8 @@ struct HandTrackerSettings {
   // Hidden fingertips predicted from the seen markers (HiddenMarkers.h) by a model of how this
   // hand's finger markers lie together, fitted as the tracker runs from the frames in which all are
   // seen (used once it has HandTracker::kFingertipModelFrames of them). Off, or before that, a
-  // hidden finger follows HandSolver's rule alone. Layouts that mark all five fingertips only. Off
+  // hidden finger follows HandSolver's rule alone. Layouts that mark all five fingertips (and have
+  // at most 63 finger markers) only. Off
   // by default until the demo's soak passes with it (docs/tracking.md, "Inside the tracker").
   bool fingertip_model = false;
 };
@@ -149,7 +150,7 @@ class HandTracker {
 };
 
 // Every hand of a frame, their stars followed with every other star by one StarTracker (`stars`:
-// that tracker's output; hand_star[h]: the index of hand h's star in it). The points of every star
+// that tracker's output; hand_star[h]: the index of hand h's star in it, -1 for a hand without one). The points of every star
 // seen this frame are taken; the fingertips get the points left, nearest first over all hands.
 // `taken` comes back marking the points the stars and the fingertips use.
 void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_star, const std::vector<TrackedStar>& stars, double time_s,
