@@ -110,7 +110,58 @@ std::string units_problem(const MarkerTake& take, const HandLayout& layout, cons
   return "no frame shows every marker on the back of the hand";
 }
 
-double vector_mean(const std::vector<double>& v) { return take_mean(v); }
+// The errors of a tracker run over a whole take, its fingertips hidden by `schedule` from frame
+// `first` on and judged from there: each tip against its recorded place, hidden or seen, and a
+// hidden one held where it was last seen (hand frame).
+struct TrackerErrors {
+  std::vector<double> hidden_mm, held_mm, visible_mm;
+  std::map<std::string, std::vector<double>> hidden_by_finger, visible_by_finger;
+  int frames_judged = 0, hand_seen = 0, hidden_frames = 0;
+  double ik_sum_us = 0.0;
+};
+
+TrackerErrors run_tracker_over_take(HandTracker& tracker, const MarkerTake& take, const std::vector<int>& index, int first,
+                                    const HideSchedule& schedule) {
+  const HandLayout& layout = tracker.layout();
+  TrackerErrors out;
+  std::vector<Eigen::Vector3d> last_seen_hand(layout.markers.size(), Eigen::Vector3d::Constant(std::nan("")));
+  for (int f = 0; f < take.frame_count(); ++f) {
+    std::vector<Eigen::Vector3d> markers = layout_frame(take, index, f);
+    const std::vector<std::size_t> hidden = f >= first ? schedule.hidden(f) : std::vector<std::size_t>{};
+    for (const std::size_t k : hidden)
+      markers[static_cast<std::size_t>(layout.fingertip_marker[k])] = Eigen::Vector3d::Constant(std::nan(""));
+    const TrackedHand& hand = tracker.update_labelled(take.time_s(f), markers);
+    if (f % 500 == 0) std::cerr << "rhot-eval: frame " << f + 1 << " of " << take.frame_count() << "\n";
+    if (f >= first) ++out.frames_judged;
+    if (!hand.hand_seen) continue;
+    if (f >= first) {
+      ++out.hand_seen;
+      out.ik_sum_us += tracker.last_ik_us();
+      const auto estimated = tracker.markers_in_hand();
+      for (std::size_t k = 0; k < kFingerCount; ++k) {
+        const auto m = static_cast<std::size_t>(layout.fingertip_marker[k]);
+        const Eigen::Vector3d& recorded = take.at(f, index[m]);
+        if (!recorded.allFinite()) continue;
+        const double e = 1e3 * (hand.world_from_hand * estimated[m] - recorded).norm();
+        const std::string& name = layout.markers[m].name;
+        if (std::ranges::find(hidden, k) != hidden.end()) {
+          ++out.hidden_frames;
+          out.hidden_mm.push_back(e);
+          out.hidden_by_finger[name].push_back(e);
+          if (last_seen_hand[m].allFinite()) out.held_mm.push_back(1e3 * (hand.world_from_hand * last_seen_hand[m] - recorded).norm());
+        } else {
+          out.visible_mm.push_back(e);
+          out.visible_by_finger[name].push_back(e);
+        }
+      }
+    }
+    const Rigid3d hand_from_world = hand.world_from_hand.inverse();
+    for (std::size_t m = 0; m < markers.size(); ++m) {
+      if (markers[m].allFinite()) last_seen_hand[m] = hand_from_world * markers[m];
+    }
+  }
+  return out;
+}
 
 int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
   const auto fail = [&](const std::string& what) {
@@ -155,52 +206,7 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
   HandTrackerSettings settings;
   settings.fingertip_model = true;
   HandTracker tracker(fitted_layout, skeleton, settings);
-  std::vector<double> hidden_mm, held_mm, visible_mm;
-  std::map<std::string, std::vector<double>> hidden_by_finger, visible_by_finger;
-  std::vector<Eigen::Vector3d> last_seen_hand(layout->markers.size(), Eigen::Vector3d::Constant(std::nan("")));
-  int frames_judged = 0, hand_seen = 0, hidden_frames = 0;
-  double ik_sum_us = 0.0;
-  for (int f = 0; f < take.frame_count(); ++f) {
-    std::vector<Eigen::Vector3d> markers = layout_frame(take, *index, f);
-    const std::vector<std::size_t> hidden = f >= first ? schedule->hidden(f) : std::vector<std::size_t>{};
-    for (const std::size_t k : hidden)
-      markers[static_cast<std::size_t>(layout->fingertip_marker[k])] = Eigen::Vector3d::Constant(std::nan(""));
-    const TrackedHand& hand = tracker.update_labelled(take.time_s(f), markers);
-    if (f % 500 == 0) std::cerr << "rhot-eval: frame " << f + 1 << " of " << take.frame_count() << "\n";
-    if (f < first) {
-      if (hand.hand_seen) {
-        for (std::size_t m = 0; m < markers.size(); ++m) {
-          if (markers[m].allFinite()) last_seen_hand[m] = hand.world_from_hand.inverse() * markers[m];
-        }
-      }
-      continue;
-    }
-    ++frames_judged;
-    if (!hand.hand_seen) continue;
-    ++hand_seen;
-    ik_sum_us += tracker.last_ik_us();
-    const Rigid3d hand_from_world = hand.world_from_hand.inverse();
-    const auto estimated = tracker.markers_in_hand();
-    for (std::size_t k = 0; k < kFingerCount; ++k) {
-      const auto m = static_cast<std::size_t>(layout->fingertip_marker[k]);
-      const Eigen::Vector3d& recorded = take.at(f, (*index)[m]);
-      if (!recorded.allFinite()) continue;
-      const double e = 1e3 * (hand.world_from_hand * estimated[m] - recorded).norm();
-      const std::string& name = layout->markers[m].name;
-      if (std::ranges::find(hidden, k) != hidden.end()) {
-        ++hidden_frames;
-        hidden_mm.push_back(e);
-        hidden_by_finger[name].push_back(e);
-        if (last_seen_hand[m].allFinite()) held_mm.push_back(1e3 * (hand.world_from_hand * last_seen_hand[m] - recorded).norm());
-      } else {
-        visible_mm.push_back(e);
-        visible_by_finger[name].push_back(e);
-      }
-    }
-    for (std::size_t m = 0; m < markers.size(); ++m) {
-      if (markers[m].allFinite()) last_seen_hand[m] = hand_from_world * markers[m];
-    }
-  }
+  const TrackerErrors e = run_tracker_over_take(tracker, take, *index, first, *schedule);
   nlohmann::json j;
   j["take"] = args.take_file;
   j["layout"] = args.layout_file;
@@ -211,15 +217,15 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
   j["hide_gap_s"] = args.hide_gap_s;
   j["hide_together"] = args.hide_together;
   j["seed"] = args.seed;
-  j["hidden_tip_mean_mm"] = vector_mean(hidden_mm);
-  j["hidden_tip_p95_mm"] = percentile(hidden_mm, 0.95);
-  j["visible_tip_mean_mm"] = vector_mean(visible_mm);
-  j["visible_tip_p95_mm"] = percentile(visible_mm, 0.95);
-  j["held_tip_mean_mm"] = vector_mean(held_mm);
-  j["held_tip_p95_mm"] = percentile(held_mm, 0.95);
-  j["hidden_frames"] = hidden_frames;
-  j["hand_seen_fraction"] = frames_judged > 0 ? static_cast<double>(hand_seen) / frames_judged : 0.0;
-  j["ik_mean_us"] = hand_seen > 0 ? ik_sum_us / hand_seen : 0.0;
+  j["hidden_tip_mean_mm"] = take_mean(e.hidden_mm);
+  j["hidden_tip_p95_mm"] = percentile(e.hidden_mm, 0.95);
+  j["visible_tip_mean_mm"] = take_mean(e.visible_mm);
+  j["visible_tip_p95_mm"] = percentile(e.visible_mm, 0.95);
+  j["held_tip_mean_mm"] = take_mean(e.held_mm);
+  j["held_tip_p95_mm"] = percentile(e.held_mm, 0.95);
+  j["hidden_frames"] = e.hidden_frames;
+  j["hand_seen_fraction"] = e.frames_judged > 0 ? static_cast<double>(e.hand_seen) / e.frames_judged : 0.0;
+  j["ik_mean_us"] = e.hand_seen > 0 ? e.ik_sum_us / e.hand_seen : 0.0;
   j["fingertip_model_frames"] = tracker.fingertip_model_frames();
   j["calibrate_seconds"] = args.calibrate_seconds;
   j["calibration"] = {{"finger_scale", calibration.scale}, {"frames", calibration.frames}};
@@ -230,11 +236,11 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
     j["calibration"]["reach_rms_mm"].push_back({1e3 * calibration.reach_rms_m[k][0], 1e3 * calibration.reach_rms_m[k][1]});
   }
 
-  for (const auto& [name, errors] : hidden_by_finger) {
+  for (const auto& [name, errors] : e.hidden_by_finger) {
     j["fingers"][name] = {{"hidden_mean_mm", take_mean(errors)},
                           {"hidden_p95_mm", percentile(errors, 0.95)},
                           {"hidden_frames", errors.size()},
-                          {"visible_mean_mm", take_mean(visible_by_finger[name])}};
+                          {"visible_mean_mm", e.visible_by_finger.contains(name) ? take_mean(e.visible_by_finger.at(name)) : 0.0}};
   }
   std::cout << j.dump(2) << "\n";
   return 0;
