@@ -81,6 +81,9 @@ struct HandsArgs {
   bool layout_given = false;
   std::vector<std::string> maps;
   double calibrate_seconds = 0.0;
+  // --hide MARKER@T0-T1 (a layout marker hidden from T0 to T1 seconds of the take; repeat): in place
+  // of the rule's gaps.
+  std::vector<std::string> hides;
 };
 int hands(const HandsArgs& args);
 // `rhot-eval hands --take`.

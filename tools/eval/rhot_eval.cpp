@@ -91,6 +91,9 @@ CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
       ->capture_default_str()
       ->each([&a](const std::string&) { a.layout_given = true; });
   cmd->add_option("--map", a.maps, "with --take and --layout: TAKE_NAME=LAYOUT_NAME, a take's marker under the layout's name (repeat)");
+  cmd->add_option("--hide", a.hides,
+                  "with --take and --layout: MARKER@T0-T1, the layout's marker hidden from T0 to T1 seconds into the take (repeat; "
+                  "in place of the gaps of --hide-gap-s)");
   cmd->add_option("--calibrate-seconds", a.calibrate_seconds,
                   "with --take and --layout: fit the fingers' lengths to the take's first S seconds (judged after them)")
       ->check(rhot::number_check(rhot::NumberBound::kNonNegative))

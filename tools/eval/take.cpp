@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <numeric>
@@ -110,26 +112,71 @@ std::string units_problem(const MarkerTake& take, const HandLayout& layout, cons
   return "no frame shows every marker on the back of the hand";
 }
 
-// The errors of a tracker run over a whole take, its fingertips hidden by `schedule` from frame
-// `first` on and judged from there: each tip against its recorded place, hidden or seen, and a
-// hidden one held where it was last seen (hand frame).
+// A layout marker hidden over a window of the take's time (--hide MARKER@T0-T1).
+struct HideWindow {
+  std::size_t marker = 0;
+  double from_s = 0.0, to_s = 0.0;
+};
+
+// Each --hide MARKER@T0-T1: a finger marker of the layout, 0 <= T0 < T1 <= the take's length.
+std::expected<std::vector<HideWindow>, std::string> parse_hides(const std::vector<std::string>& hides, const HandLayout& layout,
+                                                                double take_s) {
+  std::vector<HideWindow> out;
+  for (const std::string& h : hides) {
+    const std::string what = "--hide " + h + ": ";
+    const std::size_t at = h.rfind('@');
+    const std::size_t dash = at == std::string::npos ? std::string::npos : h.find('-', at + 2);
+    if (at == std::string::npos || dash == std::string::npos)
+      return std::unexpected(what + "expected MARKER@T0-T1 (seconds into the take), e.g. index_tip@12.5-13");
+    const int marker = layout.marker_index(h.substr(0, at));
+    if (marker < 0) {
+      std::string names;
+      for (std::size_t m = layout.hand_frame_markers; m < layout.markers.size(); ++m)
+        names += (names.empty() ? "" : ", ") + layout.markers[m].name;
+      return std::unexpected(what + "no marker \"" + h.substr(0, at) + "\" in the layout (its finger markers: " + names + ")");
+    }
+    if (static_cast<std::size_t>(marker) < layout.hand_frame_markers)
+      return std::unexpected(what + "a marker on the back of the hand gives the hand its frame: hide finger markers");
+    const auto number = [](const std::string& text) {
+      double v = std::nan("");
+      const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+      return error == std::errc() && end == text.data() + text.size() ? v : std::nan("");
+    };
+    const double from = number(h.substr(at + 1, dash - at - 1));
+    const double to = number(h.substr(dash + 1));
+    if (!std::isfinite(from) || !std::isfinite(to) || from < 0.0)
+      return std::unexpected(what + "the window's times must be seconds from 0 on, e.g. index_tip@12.5-13");
+    if (!(to > from)) return std::unexpected(what + "the window ends before it starts");
+    if (to > take_s + 1e-9) {
+      std::array<char, 32> length{};
+      std::snprintf(length.data(), length.size(), "%.2f", take_s);
+      return std::unexpected(what + "the window ends after the take's end (" + length.data() + " s)");
+    }
+    out.push_back({static_cast<std::size_t>(marker), from, to});
+  }
+  return out;
+}
+
+// The errors of a tracker run over a whole take, its markers hidden by `hidden_at` (layout marker
+// indices per frame) from frame `first` on and judged from there: each fingertip against its
+// recorded place, hidden or seen, a hidden one also held where it was last seen (hand frame), and
+// every other hidden finger marker apart.
 struct TrackerErrors {
   std::vector<double> hidden_mm, held_mm, visible_mm;
-  std::map<std::string, std::vector<double>> hidden_by_finger, visible_by_finger;
+  std::map<std::string, std::vector<double>> hidden_by_finger, visible_by_finger, hidden_other;
   int frames_judged = 0, hand_seen = 0, hidden_frames = 0;
   double ik_sum_us = 0.0;
 };
 
 TrackerErrors run_tracker_over_take(HandTracker& tracker, const MarkerTake& take, const std::vector<int>& index, int first,
-                                    const HideSchedule& schedule) {
+                                    const std::function<std::vector<std::size_t>(int)>& hidden_at) {
   const HandLayout& layout = tracker.layout();
   TrackerErrors out;
   std::vector<Eigen::Vector3d> last_seen_hand(layout.markers.size(), Eigen::Vector3d::Constant(std::nan("")));
   for (int f = 0; f < take.frame_count(); ++f) {
     std::vector<Eigen::Vector3d> markers = layout_frame(take, index, f);
-    const std::vector<std::size_t> hidden = f >= first ? schedule.hidden(f) : std::vector<std::size_t>{};
-    for (const std::size_t k : hidden)
-      markers[static_cast<std::size_t>(layout.fingertip_marker[k])] = Eigen::Vector3d::Constant(std::nan(""));
+    const std::vector<std::size_t> hidden = f >= first ? hidden_at(f) : std::vector<std::size_t>{};
+    for (const std::size_t m : hidden) markers[m] = Eigen::Vector3d::Constant(std::nan(""));
     const TrackedHand& hand = tracker.update_labelled(take.time_s(f), markers);
     if (f % 500 == 0) std::cerr << "rhot-eval: frame " << f + 1 << " of " << take.frame_count() << "\n";
     if (f >= first) ++out.frames_judged;
@@ -138,21 +185,27 @@ TrackerErrors run_tracker_over_take(HandTracker& tracker, const MarkerTake& take
       ++out.hand_seen;
       out.ik_sum_us += tracker.last_ik_us();
       const auto estimated = tracker.markers_in_hand();
+      const auto error_mm = [&](std::size_t m) { return 1e3 * (hand.world_from_hand * estimated[m] - take.at(f, index[m])).norm(); };
       for (std::size_t k = 0; k < kFingerCount; ++k) {
         const auto m = static_cast<std::size_t>(layout.fingertip_marker[k]);
-        const Eigen::Vector3d& recorded = take.at(f, index[m]);
-        if (!recorded.allFinite()) continue;
-        const double e = 1e3 * (hand.world_from_hand * estimated[m] - recorded).norm();
+        if (!take.at(f, index[m]).allFinite()) continue;
+        const double e = error_mm(m);
         const std::string& name = layout.markers[m].name;
-        if (std::ranges::find(hidden, k) != hidden.end()) {
+        if (std::ranges::find(hidden, m) != hidden.end()) {
           ++out.hidden_frames;
           out.hidden_mm.push_back(e);
           out.hidden_by_finger[name].push_back(e);
-          if (last_seen_hand[m].allFinite()) out.held_mm.push_back(1e3 * (hand.world_from_hand * last_seen_hand[m] - recorded).norm());
+          if (last_seen_hand[m].allFinite())
+            out.held_mm.push_back(1e3 * (hand.world_from_hand * last_seen_hand[m] - take.at(f, index[m])).norm());
         } else {
           out.visible_mm.push_back(e);
           out.visible_by_finger[name].push_back(e);
         }
+      }
+      for (const std::size_t m : hidden) {
+        if (std::ranges::find(layout.fingertip_marker, static_cast<int>(m)) == layout.fingertip_marker.end() &&
+            take.at(f, index[m]).allFinite())
+          out.hidden_other[layout.markers[m].name].push_back(error_mm(m));
       }
     }
     const Rigid3d hand_from_world = hand.world_from_hand.inverse();
@@ -202,11 +255,31 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
       HideSchedule::make({.gap_s = args.hide_gap_s, .together = args.hide_together, .seed = args.seed, .first_frame = first},
                          take.frame_rate_hz, kFingerCount);
   if (!schedule) return fail("--hide-gap-s: expected a positive number of seconds");
+  const auto windows = parse_hides(args.hides, *layout, take.frame_count() / take.frame_rate_hz);
+  if (!windows) return fail(windows.error());
+  for (const HideWindow& w : *windows) {
+    if (w.to_s <= first / take.frame_rate_hz)
+      return fail("--hide " + layout->markers[w.marker].name +
+                  ": the window ends before the judged part begins (the calibration's frames)");
+  }
+  // The rule's gaps (each fingertip in turn), or the windows named.
+  const auto hidden_at = [&](int f) {
+    std::vector<std::size_t> out;
+    if (windows->empty()) {
+      for (const std::size_t k : schedule->hidden(f)) out.push_back(static_cast<std::size_t>(layout->fingertip_marker[k]));
+      return out;
+    }
+    const double t = take.time_s(f);
+    for (const HideWindow& w : *windows) {
+      if (t >= w.from_s && t < w.to_s && std::ranges::find(out, w.marker) == out.end()) out.push_back(w.marker);
+    }
+    return out;
+  };
 
   HandTrackerSettings settings;
   settings.fingertip_model = true;
   HandTracker tracker(fitted_layout, skeleton, settings);
-  const TrackerErrors e = run_tracker_over_take(tracker, take, *index, first, *schedule);
+  const TrackerErrors e = run_tracker_over_take(tracker, take, *index, first, hidden_at);
   nlohmann::json j;
   j["take"] = args.take_file;
   j["layout"] = args.layout_file;
@@ -242,6 +315,11 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
                           {"hidden_frames", errors.size()},
                           {"visible_mean_mm", e.visible_by_finger.contains(name) ? take_mean(e.visible_by_finger.at(name)) : 0.0}};
   }
+  for (const auto& [name, errors] : e.hidden_other) {
+    j["hidden_markers"][name] = {
+        {"hidden_mean_mm", take_mean(errors)}, {"hidden_p95_mm", percentile(errors, 0.95)}, {"hidden_frames", errors.size()}};
+  }
+  for (const std::string& h : args.hides) j["hide"].push_back(h);
   std::cout << j.dump(2) << "\n";
   return 0;
 }
@@ -261,7 +339,8 @@ int hands_take(const HandsArgs& args) {
       return fail("hands --take: --model is the estimator's alone (without --layout); the tracker fits its own");
     return take_through_tracker(args, *take);
   }
-  if (!args.maps.empty() || args.calibrate_seconds > 0.0) return fail("hands --take: --map and --calibrate-seconds need --layout");
+  if (!args.maps.empty() || args.calibrate_seconds > 0.0 || !args.hides.empty())
+    return fail("hands --take: --map, --calibrate-seconds and --hide need --layout");
   HiddenMarkerModel model;
   int unfitted_first = 0;
   if (!args.model_file.empty()) {

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "base/Json.h"
+#include "tracking/hand/FingerFit.h"
 
 namespace rhot {
 namespace {
@@ -22,39 +23,35 @@ Eigen::Vector3d straight_tip_to_marker(const LayoutMarker& marker, const FingerC
   return out;
 }
 
-// The weight of a finger's other markers' squared misses against its tip marker's: the tracker's IK
-// reaches for the tip, so the tip's miss is what a user sees; the others pin the knuckle down.
-constexpr double kOtherMarkerWeight = 0.25;
-constexpr int kSimplexStarts = 1;
-
-// How far a finger's markers, on the finger posed to reach its tip marker (FABRIK toward the tip
-// the marker implies, twice, the marker's way from the tip taken from the pose), are from where
-// they were seen: the weighted RMS over every seen marker of `seen` (hand frame; per frame, the
-// finger's markers in `markers`' order, the tip marker first, NaN where not seen).
-double reach_rms(std::span<const LayoutMarker* const> markers, const FingerChain& chain, const FingerChain& frames_chain,
-                 std::span<const std::vector<Eigen::Vector3d>> seen) {
-  const LayoutMarker& tip = *markers[0];
-  const auto finger = finger_of_bone(tip.bone);
+// How far a finger's markers, on the finger fitted to them as the tracker fits it (FingerFit.h:
+// the tip marker weighing 1, the others HandTracker::kOtherMarkerWeight), are from where they were
+// seen: the weighted RMS over every seen marker of `seen` (hand frame; per frame, the finger's
+// markers in `markers`' order, the tip marker first, NaN where not seen). `warm`: each frame's
+// angles from the last call (a fit that moved the finger a little starts there), updated.
+double reach_rms(std::span<const LayoutMarker* const> markers, const FingerChain& chain, std::span<const std::vector<Eigen::Vector3d>> seen,
+                 std::vector<FingerAngles>& warm) {
   double sum = 0.0, n = 0.0;
-  FingerAngles angles;
-  for (const auto& frame : seen) {
-    const Eigen::Vector3d& p = frame[0];
-    Eigen::Vector3d target = p - straight_tip_to_marker(tip, chain, finger);
-    std::array<Eigen::Vector3d, 4> joints{};
-    for (int pass = 0; pass < 2; ++pass) {
-      angles = solve_fabrik(chain, target, angles).angles;
-      joints = finger_forward(chain, angles);
-      target += p - finger_marker(tip, frames_chain, joints);
-    }
+  warm.resize(seen.size());
+  const FingerFitSettings settings = finger_fit_settings(finger_of_bone(markers[0]->bone));
+  std::vector<FingerPoint> points;
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    points.clear();
+    double weights = 0.0;
     for (std::size_t k = 0; k < markers.size(); ++k) {
-      if (!frame[k].allFinite()) continue;
-      const double weight = k == 0 ? 1.0 : kOtherMarkerWeight;
-      sum += weight * (finger_marker(*markers[k], frames_chain, joints) - frame[k]).squaredNorm();
-      n += weight;
+      if (!seen[i][k].allFinite()) continue;
+      const double weight = k == 0 ? 1.0 : HandTracker::kOtherMarkerWeight;
+      points.push_back(finger_point(*markers[k], seen[i][k], weight));
+      weights += weight;
     }
+    const FingerFit fit = fit_finger(chain, points, warm[i], settings);
+    warm[i] = fit.angles;
+    sum += fit.rms_m * fit.rms_m * weights;
+    n += weights;
   }
   return n > 0.0 ? std::sqrt(sum / n) : 0.0;
 }
+
+constexpr int kSimplexStarts = 1;
 
 struct ReachFit {
   Eigen::Vector3d knuckle_moved_m = Eigen::Vector3d::Zero();
@@ -73,7 +70,7 @@ struct ReachFit {
 // time afresh from the first's best. Moving the knuckle costs as if it added (distance / 30 mm)^2
 // mm^2 to the mean square, turning the finger (angle / 0.2 rad)^2 and moving an offset (distance /
 // 10 mm)^2, so that what the motion does not pin down stays where it was.
-ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerChain& chain, const FingerChain& frames_chain, double scale,
+ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerChain& chain, double scale,
                    std::span<const std::vector<Eigen::Vector3d>> seen) {
   const std::size_t others = markers.size() - 1;
   const auto n = static_cast<Eigen::Index>(6 + 2 * others);
@@ -102,11 +99,12 @@ ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerCha
   };
   std::vector<LayoutMarker> moved;
   std::vector<const LayoutMarker*> moved_ptr;
+  std::vector<FingerAngles> warm;
   const auto rms_at = [&](const Eigen::VectorXd& q) {
     const FingerChain c = apply(q, moved);
     moved_ptr.clear();
     for (const LayoutMarker& m : moved) moved_ptr.push_back(&m);
-    return reach_rms(moved_ptr, c, frames_chain, seen);
+    return reach_rms(moved_ptr, c, seen, warm);
   };
   const auto cost = [&](const Eigen::VectorXd& q) {
     if (!(q(3) >= 60.0 && q(3) <= 200.0)) return std::numeric_limits<double>::infinity();
@@ -239,7 +237,7 @@ std::optional<HandPose> calibrate_from_labelled(const HandLayout& layout, const 
     std::vector<std::vector<Eigen::Vector3d>> samples;
     const std::size_t step = std::max<std::size_t>(1, seen.size() / kReachSamples);
     for (std::size_t i = 0; i < seen.size(); i += step) samples.push_back(seen[i]);
-    const ReachFit fit = fit_reach(finger_markers, c, chains[fi], scale, samples);
+    const ReachFit fit = fit_reach(finger_markers, c, scale, samples);
     r.scale[fi] = fit.scale;
     r.knuckle_moved_m[fi] = fit.knuckle_moved_m;
     r.turned_rad[fi] = Eigen::AngleAxisd(fit.turn).angle();

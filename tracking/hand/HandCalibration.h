@@ -43,13 +43,13 @@ FingertipSample flat_hand_sample(const HandLayout& layout, const HandPose& refer
 //    its offset on the straight finger) stands for the straight finger (a ratio of 0.6-2.0 to the
 //    reference's, else the finger is left as it is);
 //  - then its knuckle's place, its length, its rest direction (turned sideways or up and down about
-//    the knuckle: the middle finger's abduction is locked, a user's may point elsewhere) and its
-//    other markers' offsets (a glove's middle marker: its lift off the bone and its place along it)
-//    together, fitted so that the finger's markers, on
-//    the finger posed to reach the tip marker within its limits, come nearest where they were seen
-//    (30 to 59 frames spread evenly over the run; the other markers' misses weigh a quarter of the
-//    tip's, whose miss is what the tracker shows; a knuckle or an offset moved far costs, so one
-//    the motion does not pin down stays).
+//    the knuckle: a user's finger may point elsewhere at rest than the reference's) and its other
+//    markers' offsets (a glove's middle marker: its lift off the bone and its place along it)
+//    together, fitted so that the finger's markers, on the finger fitted to them within its limits
+//    as the tracker fits it (FingerFit.h), come nearest where they were seen (30 to 59 frames
+//    spread evenly over the run; the other markers' misses weigh HandTracker::kOtherMarkerWeight
+//    of the tip's, whose miss is what the tracker shows; a knuckle or an offset moved far costs,
+//    so one the motion does not pin down stays).
 // The finger's whole ray moves with its knuckle. Nothing when no fingertip was seen in 20 frames.
 struct LabelledCalibration {
   int frames = 0;                                                   // frames with the back of the hand seen

@@ -147,9 +147,12 @@ std::array<Eigen::Quaterniond, 3> finger_bone_frames(const FingerChain& chain, c
 }
 
 std::array<Eigen::Quaterniond, kHandJointCount> marker_frames(const HandPose& pose, HandSide side) {
+  return marker_frames(pose, hand_chains(reference_open_hand(side), side));
+}
+
+std::array<Eigen::Quaterniond, kHandJointCount> marker_frames(const HandPose& pose, const std::array<FingerChain, kFingerCount>& chains) {
   std::array<Eigen::Quaterniond, kHandJointCount> out;
   out.fill(Eigen::Quaterniond::Identity());
-  const auto chains = hand_chains(reference_open_hand(side), side);
   for (int f = 0; f < kFingerCount; ++f) {
     const auto joints = chain_joints(static_cast<Finger>(f));
     std::array<Eigen::Vector3d, 4> at;
@@ -159,14 +162,6 @@ std::array<Eigen::Quaterniond, kHandJointCount> marker_frames(const HandPose& po
     out[static_cast<std::size_t>(joints[3])] = frames[2];
   }
   return out;
-}
-
-Eigen::Vector3d finger_marker(const LayoutMarker& marker, const FingerChain& reference_chain,
-                              const std::array<Eigen::Vector3d, 4>& joints) {
-  const auto chain = chain_joints(finger_of_bone(marker.bone));
-  const auto k = static_cast<std::size_t>(std::find(chain.begin(), chain.end(), marker.bone) - chain.begin());
-  const auto frames = finger_bone_frames(reference_chain, joints);
-  return joints[std::min<std::size_t>(k, 3)] + frames[std::min<std::size_t>(k, 2)] * marker.offset_m;
 }
 
 Eigen::Vector3d layout_marker_in_hand(const LayoutMarker& marker, const HandPose& pose,

@@ -132,16 +132,16 @@ Eigen::Vector3d layout_marker_in_hand(const LayoutMarker& marker, const HandPose
                                       const std::array<Eigen::Quaterniond, kHandJointCount>& frames);
 // The frame of every joint a marker is given in (hand frame): the wrist's and palm's are the hand
 // frame's axes; a finger joint's -Z runs along its bone toward the fingertip and +Y out of the back
-// of the finger, square to the bone in the finger's flexion plane (bone_back_normal, with the
-// reference hand's chains), X = Y x Z; a tip's is its distal joint's. For the fingers these are
-// OpenXR's joint frames (JointFrames.h) up to the finger's abduction; unlike those, the thumb's
-// turn with the thumb as it flexes, so a thumbnail's marker stays on the thumbnail.
+// of the finger, square to the bone in the finger's flexion plane (bone_back_normal with the
+// finger's chain: `chains`, the hand's own, a calibrated hand's turned as its fingers are; by
+// `side`, the reference hand's), X = Y x Z; a tip's is its distal joint's. For the fingers these
+// are OpenXR's joint frames (JointFrames.h) up to the finger's abduction; unlike those, the
+// thumb's turn with the thumb as it flexes, so a thumbnail's marker stays on the thumbnail.
+// FingerFit.h places a finger's markers alike.
 std::array<Eigen::Quaterniond, kHandJointCount> marker_frames(const HandPose& pose, HandSide side);
-// The same for one finger's three bones, from its joints (root, two hinges, tip; hand frame) and its
-// chain of the reference hand.
-std::array<Eigen::Quaterniond, 3> finger_bone_frames(const FingerChain& reference_chain, const std::array<Eigen::Vector3d, 4>& joints);
-// Where a marker on a finger's bone is (hand frame) for the finger's joints.
-Eigen::Vector3d finger_marker(const LayoutMarker& marker, const FingerChain& reference_chain, const std::array<Eigen::Vector3d, 4>& joints);
+std::array<Eigen::Quaterniond, kHandJointCount> marker_frames(const HandPose& pose, const std::array<FingerChain, kFingerCount>& chains);
+// The same for one finger's three bones, from its joints (root, two hinges, tip; hand frame) and its chain.
+std::array<Eigen::Quaterniond, 3> finger_bone_frames(const FingerChain& chain, const std::array<Eigen::Vector3d, 4>& joints);
 // Every marker of a layout on a hand in `pose` (its markers in order, then the segment stars'), world.
 std::vector<Eigen::Vector3d> layout_markers(const HandLayout& layout, const Rigid3d& world_from_hand, const HandPose& pose);
 // Their names: the markers', then "<bone>_star_<k>" for a segment star's k-th marker.

@@ -47,7 +47,12 @@ std::array<FingerChain, kFingerCount> hand_chains(const HandPose& skeleton, Hand
     // Both hands flex toward the palm (-Y); positive abduction is toward +X, the little finger's
     // side on a right hand and the thumb's on a left one (the limits are symmetric).
     (void)side;
-    if (f == static_cast<int>(Finger::kMiddle)) c.limits.abduction_max_rad = 0.0;
+    // The fingers' knuckles extend past straight (30 degrees, actively) and their last joints a
+    // little (15 degrees, pressed on a surface); the middle finger abducts both ways as the others
+    // do. Seed 002 allows neither (its knuckles 0-90 degrees, the middle finger's abduction
+    // fixed), and on a real take (../shared/data/glove-take) that put seen middle fingertips
+    // 10.9 mm off on average, where these limits reach them within 1.8 mm.
+    if (f != static_cast<int>(Finger::kThumb)) c.limits.flexion_min_rad = {-30.0 * kDeg, 0.0, -15.0 * kDeg};
     if (f == static_cast<int>(Finger::kThumb)) {
       c.limits.abduction_max_rad = 45.0 * kDeg;
       c.limits.flexion_min_rad = {-20.0 * kDeg, -20.0 * kDeg, -20.0 * kDeg};
@@ -113,24 +118,69 @@ FingerAngles angles_from_bones(const FingerChain& c, const std::array<Eigen::Vec
 const HandState& HandSolver::update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips,
                                     const std::array<std::optional<FingerAngles>, kFingerCount>& measured,
                                     const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& predicted) {
+  std::array<FingerEvidence, kFingerCount> fingers{};
+  for (std::size_t f = 0; f < kFingerCount; ++f) {
+    FingerEvidence& e = fingers[f];
+    if (measured[f]) {
+      e.kind = FingerEvidence::Kind::kMeasured;
+      e.angles = *measured[f];
+    } else if (tips[f]) {
+      e.kind = FingerEvidence::Kind::kTip;
+      e.tip_m = *tips[f];
+    } else if (predicted[f]) {
+      e.kind = FingerEvidence::Kind::kPredictedTip;
+      e.tip_m = *predicted[f];
+    }
+  }
+  return update(time_s, fingers);
+}
+
+namespace {
+
+bool finite_angles(const FingerAngles& a) {
+  return std::isfinite(a.abduction_rad) && std::ranges::all_of(a.flexion_rad, [](double v) { return std::isfinite(v); });
+}
+
+// Evidence that is not finite is none.
+FingerEvidence::Kind usable(const FingerEvidence& e) {
+  switch (e.kind) {
+    case FingerEvidence::Kind::kTip:
+    case FingerEvidence::Kind::kPredictedTip:
+      return e.tip_m.allFinite() ? e.kind : FingerEvidence::Kind::kHidden;
+    case FingerEvidence::Kind::kFitted:
+    case FingerEvidence::Kind::kMeasured:
+    case FingerEvidence::Kind::kPredictedFit:
+      return finite_angles(e.angles) ? e.kind : FingerEvidence::Kind::kHidden;
+    case FingerEvidence::Kind::kHidden:
+      break;
+  }
+  return FingerEvidence::Kind::kHidden;
+}
+
+}  // namespace
+
+const HandState& HandSolver::update(double time_s, const std::array<FingerEvidence, kFingerCount>& fingers) {
+  using Kind = FingerEvidence::Kind;
   const double dt = started_ && std::isfinite(time_s) && time_s > time_s_ ? time_s - time_s_ : 0.0;
   if (std::isfinite(time_s)) time_s_ = std::max(time_s_, time_s);
   started_ = true;
   state_.confidence[static_cast<std::size_t>(HandJoint::kPalm)] = 1.0;
   state_.confidence[static_cast<std::size_t>(HandJoint::kWrist)] = 1.0;
-  // The seen fingers first: measured bones win, else IK to the tip; how fast each one bends.
+  // The seen fingers first: measured bones win, else their fit or IK to the tip; how fast each one bends.
   const std::array<FingerAngles, kFingerCount> before = state_.angles;
+  std::array<Kind, kFingerCount> kind{};
+  for (std::size_t fi = 0; fi < kFingerCount; ++fi) kind[fi] = usable(fingers[fi]);
   std::array<bool, kFingerCount> bones_seen{};
   double closing_sum = 0.0;  // the seen fingers' flexion rates (sum of the three hinges), rad/s
   int closing_count = 0;
   for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
     const FingerChain& chain = chains_[fi];
-    bones_seen[fi] = measured[fi].has_value();
-    const bool seen = bones_seen[fi] || (tips[fi].has_value() && tips[fi]->allFinite());
+    bones_seen[fi] = kind[fi] == Kind::kMeasured;
+    const bool seen = kind[fi] == Kind::kMeasured || kind[fi] == Kind::kFitted || kind[fi] == Kind::kTip;
     state_.tip_seen[fi] = seen;
     if (!seen) continue;
     FingerAngles& a = state_.angles[fi];
-    a = bones_seen[fi] ? clamp_to_limits(chain.limits, *measured[fi]) : solve_fabrik(chain, *tips[fi], a).angles;
+    a = kind[fi] == Kind::kTip ? solve_fabrik(chain, fingers[fi].tip_m, a).angles : clamp_to_limits(chain.limits, fingers[fi].angles);
     last_seen_s_[fi] = time_s_;
     if (dt <= 0.0) continue;
     // The finger's own motion, smoothed over a few frames (for when it is hidden next).
@@ -153,11 +203,12 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
     FingerAngles& a = state_.angles[fi];
     FingerAngles& r = rate_[fi];
     const double unseen_s = time_s_ - last_seen_s_[fi];
-    predicted_[fi] = predicted[fi].has_value() && predicted[fi]->allFinite();
+    predicted_[fi] = kind[fi] == Kind::kPredictedTip || kind[fi] == Kind::kPredictedFit;
     if (predicted_[fi]) {
       // Where the hand's other markers say this tip is; its rate kept for when the prediction stops.
       const FingerAngles from = a;
-      a = solve_fabrik(chain, *predicted[fi], a).angles;
+      a = kind[fi] == Kind::kPredictedTip ? solve_fabrik(chain, fingers[fi].tip_m, a).angles
+                                          : clamp_to_limits(chain.limits, fingers[fi].angles);
       if (dt > 0.0) {
         r.abduction_rad = (a.abduction_rad - from.abduction_rad) / dt;
         for (std::size_t k = 0; k < 3; ++k) r.flexion_rad[k] = (a.flexion_rad[k] - from.flexion_rad[k]) / dt;

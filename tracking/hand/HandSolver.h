@@ -15,6 +15,7 @@
 // unseen for t seconds with no finger seen, 0.9 exp(-t / 0.5 s).
 
 #include <array>
+#include <cstdint>
 #include <optional>
 
 #include "tracking/hand/FingerIK.h"
@@ -26,9 +27,12 @@ enum class Finger : std::uint8_t { kThumb = 0, kIndex, kMiddle, kRing, kLittle }
 inline constexpr int kFingerCount = 5;
 
 // The five chains of a hand with the bone lengths and knuckle positions of `skeleton` (a calibrated
-// hand, or reference_open_hand), with the anatomical limits: seed 002's for the fingers (the middle
-// finger's abduction fixed), and for the thumb (which seed 002 does not give; estimates that let
-// it oppose the fingers) CMC abduction +-45, flexion -20..60, MCP -20..60, IP -20..80 degrees.
+// hand, or reference_open_hand), with the anatomical limits: for the fingers seed 002's flexion
+// ranges (knuckle 90, middle joint 110, last joint 90 degrees) and abduction (+-15 degrees, less as
+// the knuckle flexes), but with the knuckle extending to -30 and the last joint to -15 degrees, and
+// the middle finger abducting as the others (a real take needs both: HandSolver.cpp); for the thumb
+// (which seed 002 does not give; estimates that let it oppose the fingers) CMC abduction +-45,
+// flexion -20..60, MCP -20..60, IP -20..80 degrees.
 std::array<FingerChain, kFingerCount> hand_chains(const HandPose& skeleton, HandSide side);
 
 // The joints of each chain: root, two hinges, tip.
@@ -64,14 +68,36 @@ struct HandState {
   Gesture grip;
 };
 
+// What is known of one finger this frame (hand frame), for HandSolver::update.
+struct FingerEvidence {
+  enum class Kind : std::uint8_t {
+    kHidden,        // nothing: the rules above (bend with the seen fingers, hold, relax)
+    kTip,           // its tip joint seen at tip_m: FABRIK toward it
+    kFitted,        // `angles` fitted to its seen markers (FingerFit.h)
+    kMeasured,      // `angles` from every bone measured (segment stars): they win
+    kPredictedTip,  // hidden: its tip joint predicted at tip_m (HiddenMarkers.h): FABRIK toward it
+    kPredictedFit,  // hidden tip: `angles` fitted to its predicted tip marker and the finger's seen markers
+  };
+  Kind kind = Kind::kHidden;
+  Eigen::Vector3d tip_m = Eigen::Vector3d::Zero();
+  FingerAngles angles;
+
+  bool seen() const { return kind == Kind::kTip || kind == Kind::kFitted || kind == Kind::kMeasured; }
+  bool predicted() const { return kind == Kind::kPredictedTip || kind == Kind::kPredictedFit; }
+};
+
 class HandSolver {
  public:
   HandSolver(HandSide side, const HandPose& skeleton, GestureSettings gestures = {});
 
-  // One frame: fingertip positions in the hand frame (nothing for a tip not seen), and, where a
+  // One frame: each finger's evidence. A seen finger takes its angles from it (confidence 0.9,
+  // its tip 1, every joint 1 where its bones were measured); a predicted one too, with
+  // kPredictedConfidence; a hidden one follows the rules above. Evidence that is not finite
+  // counts as none.
+  const HandState& update(double time_s, const std::array<FingerEvidence, kFingerCount>& fingers);
+  // The same from fingertip positions in the hand frame (nothing for a tip not seen), and, where a
   // finger's every bone was measured (stars on the segments), its angles, which then win. A hidden
-  // tip's `predicted` place (hand frame: a model of how the hand's fingertips lie together,
-  // HiddenMarkers.h) is reached by IK in place of the rule below, with kPredictedConfidence.
+  // tip's `predicted` place is reached by IK in place of the rules, with kPredictedConfidence.
   const HandState& update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips_hand_m,
                           const std::array<std::optional<FingerAngles>, kFingerCount>& measured = {},
                           const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& predicted = {});

@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "tracking/hand/FingerFit.h"
+
 namespace rhot {
 
 HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, HandTrackerSettings settings)
@@ -12,13 +14,11 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
       settings_(settings),
       star_(layout.has_hand_star() ? std::make_unique<StarTracker>(StarLibrary(layout.hand_star_set())) : nullptr),
       hand_filter_(settings.position, settings.rotation),
-      solver_(layout.side, skeleton),
-      reference_chains_(hand_chains(reference_open_hand(layout.side), layout.side)) {
+      solver_(layout.side, skeleton) {
   tip_filters_.fill(OneEuroFilter<3>(settings.position));
   if (!layout.segment_stars.empty()) segments_.emplace(StarLibrary(layout.segment_star_set()));
   const std::size_t n = layout.markers.size();
   predicted_marker_.assign(n, Eigen::Vector3d::Zero());
-  tip_to_marker_.assign(n, Eigen::Vector3d::Zero());
   gate_m_.assign(n, kFingertipGateMax_m);
   marker_found_s_.assign(n, std::nullopt);
   reappearing_.assign(n, {});
@@ -124,13 +124,9 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
   out_.world_from_hand = settings_.filter ? hand_filter_.filter(world_from_hand, time_s) : world_from_hand;
   // Each finger marker where the last solve puts it.
   const HandPose& last = solver_.state().pose;
-  const auto frames = marker_frames(last, layout_.side);
+  const auto frames = marker_frames(last, solver_.chains());
   for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
     predicted_marker_[m] = layout_marker_in_hand(layout_.markers[m], last, frames);
-    const auto f = static_cast<std::size_t>(layout_.finger_of_marker(m));
-    if (layout_.fingertip_marker[f] == static_cast<int>(m)) {
-      tip_to_marker_[m] = predicted_marker_[m] - last.position_m[static_cast<std::size_t>(chain_joints(static_cast<Finger>(f))[3])];
-    }
     gate_m_[m] = marker_found_s_[m] ? std::min(kFingertipGateMax_m, kFingertipGate_m + kGateGrowth_mps * (time_s - *marker_found_s_[m]))
                                     : kFingertipGateMax_m;
   }
@@ -169,26 +165,9 @@ std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(s
   return out;
 }
 
-Eigen::Vector3d HandTracker::tip_for_marker(int finger, std::size_t marker, const Eigen::Vector3d& seen) const {
-  Eigen::Vector3d tip = seen - tip_to_marker_[marker];
-  const LayoutMarker& m = layout_.markers[marker];
-  if (m.offset_m.head<2>().norm() < 1e-6 && m.bone == chain_joints(static_cast<Finger>(finger))[3]) return tip;  // along the bone
-  // A marker off the bone's axis (a nail's): the way from the tip to it turns with the finger, so
-  // the finger is posed toward the tip, the way taken from that pose, twice.
-  const auto f = static_cast<std::size_t>(finger);
-  const FingerChain& chain = solver_.chains()[f];
-  FingerAngles angles = solver_.state().angles[f];
-  for (int pass = 0; pass < 2; ++pass) {
-    angles = solve_fabrik(chain, tip, angles).angles;
-    const auto joints = finger_forward(chain, angles);
-    tip = seen - (finger_marker(m, reference_chains_[f], joints) - joints[3]);
-  }
-  return tip;
-}
-
 std::vector<Eigen::Vector3d> HandTracker::markers_in_hand() const {
   const HandPose& pose = solver_.state().pose;
-  const auto frames = marker_frames(pose, layout_.side);
+  const auto frames = marker_frames(pose, solver_.chains());
   std::vector<Eigen::Vector3d> out;
   for (const LayoutMarker& m : layout_.markers) out.push_back(layout_marker_in_hand(m, pose, frames));
   return out;
@@ -196,84 +175,114 @@ std::vector<Eigen::Vector3d> HandTracker::markers_in_hand() const {
 
 const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
                                        std::span<const int> marker_point) {
-  std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips{};
-  std::vector<std::optional<Eigen::Vector3d>> other(layout_.markers.size());  // finger markers other than the tips, hand frame
+  // Each finger marker found this frame (hand frame; NaN where not).
+  std::vector<Eigen::Vector3d> found(layout_.markers.size(), Eigen::Vector3d::Constant(std::nan("")));
   reappearing_ = reappearing_now_;
   if (out_.hand_seen) {
     const Rigid3d hand_from_world = out_.world_from_hand.inverse();
     for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size() && m < marker_point.size(); ++m) {
       const int p = marker_point[m];
-      if (p < 0 || static_cast<std::size_t>(p) >= points.size()) continue;
+      if (p < 0 || static_cast<std::size_t>(p) >= points.size() || !points[static_cast<std::size_t>(p)].allFinite()) continue;
       out_.marker_point[m] = p;
       marker_found_s_[m] = time_s;
-      const Eigen::Vector3d at = hand_from_world * points[static_cast<std::size_t>(p)];
-      const auto f = static_cast<std::size_t>(layout_.finger_of_marker(m));
-      if (layout_.fingertip_marker[f] == static_cast<int>(m)) {
-        out_.fingertip_point[f] = p;
-        tips[f] = tip_for_marker(static_cast<int>(f), m, at);
-      } else {
-        other[m] = at;
-      }
+      found[m] = hand_from_world * points[static_cast<std::size_t>(p)];
+      const int f = layout_.finger_of_marker(m);
+      if (layout_.fingertip_marker[static_cast<std::size_t>(f)] == static_cast<int>(m))
+        out_.fingertip_point[static_cast<std::size_t>(f)] = p;
     }
     for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
       if (!settings_.filter) break;
-      if (tips[fi]) {
-        tips[fi] = tip_filters_[fi].filter(*tips[fi], time_s);
+      const int m = layout_.fingertip_marker[fi];
+      if (m >= 0 && found[static_cast<std::size_t>(m)].allFinite()) {
+        found[static_cast<std::size_t>(m)] = tip_filters_[fi].filter(found[static_cast<std::size_t>(m)], time_s);
       } else {
         tip_filters_[fi].reset();  // a tip seen again starts afresh, not from where it was lost
       }
     }
   }
-  // Stars on finger bones: each seen star places its bone; a finger whose three bones are placed
-  // has its angles measured, and a seen last bone gives its tip.
-  std::array<std::optional<FingerAngles>, kFingerCount> measured{};
-  out_.segment_stars_seen = 0;
-  if (segments_ && !labelled_) {
-    const auto& stars = segments_->update(time_s, points, sigma_m);
-    if (out_.hand_seen) {
-      const Rigid3d hand_from_world = out_.world_from_hand.inverse();
-      const HandPose& skeleton = solver_.state().pose;
-      std::array<std::array<std::optional<Eigen::Vector3d>, 3>, kFingerCount> bone{};
-      for (std::size_t s = 0; s < stars.size(); ++s) {
-        if (!stars[s].seen_now()) continue;
-        ++out_.segment_stars_seen;
-        const HandJoint first = layout_.segment_stars[s].bone;
-        const auto f = static_cast<std::size_t>(finger_of_bone(first));
-        const auto joints = chain_joints(static_cast<Finger>(f));
-        const auto k = static_cast<std::size_t>(std::find(joints.begin(), joints.end(), first) - joints.begin());
-        if (k > 2) continue;  // not a bone of the chain (a finger's metacarpal)
-        const Rigid3d hand_from_star = hand_from_world * stars[s].world_from_star;
-        bone[f][k] = hand_from_star.rotation * Eigen::Vector3d::UnitY();
-        if (k == 2) {
-          const double length = solver_.chains()[f].length_m[k];
-          tips[f] = hand_from_star * Eigen::Vector3d(0.0, 0.5 * length, -segment_star_lift_m(skeleton, first));
-        }
-      }
-      for (int f = 0; f < kFingerCount; ++f) {
-        const auto& b = bone[static_cast<std::size_t>(f)];
-        const FingerChain& chain = solver_.chains()[static_cast<std::size_t>(f)];
-        if (b[0] && b[1] && b[2]) {
-          measured[static_cast<std::size_t>(f)] = angles_from_bones(chain, {*b[0], *b[1], *b[2]});
-        } else if (b[0] && b[1] && !tips[static_cast<std::size_t>(f)]) {
-          // The last bone's star hidden: the first two bones measured, the last hinge coupled.
-          FingerAngles a = angles_from_bones(chain, {*b[0], *b[1], *b[1]});
-          a.flexion_rad[2] = chain.limits.coupling * a.flexion_rad[1];
-          measured[static_cast<std::size_t>(f)] = clamp_to_limits(chain.limits, a);
-        }
-      }
-    }
-  }
+  std::array<FingerEvidence, kFingerCount> evidence{};
+  const auto segment_tips = measure_segments(time_s, points, sigma_m, found, evidence);
   const auto start = std::chrono::steady_clock::now();
   std::vector<std::optional<Eigen::Vector3d>> seen(modelled_.size());
   for (std::size_t k = 0; k < modelled_.size(); ++k) {
-    const auto m = static_cast<std::size_t>(modelled_[k]);
-    seen[k] = k < kFingerCount ? tips[k] : other[m];
+    const Eigen::Vector3d& at = found[static_cast<std::size_t>(modelled_[k])];
+    if (at.allFinite()) seen[k] = at;
   }
   const auto predicted = predict_hidden_tips(time_s, seen);
-  out_.state = solver_.update(time_s, tips, measured, predicted);
+  for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
+    FingerEvidence& e = evidence[fi];
+    if (e.kind == FingerEvidence::Kind::kMeasured) continue;
+    const int tip = layout_.fingertip_marker[fi];
+    const bool tip_seen = tip >= 0 && found[static_cast<std::size_t>(tip)].allFinite();
+    if (tip_seen || (!segment_tips[fi] && predicted[fi])) {
+      // The finger's markers fitted together: its tip's (seen, or predicted where hidden), weighing
+      // most, and its others seen.
+      std::vector<FingerPoint> finger;
+      const Eigen::Vector3d tip_at = tip_seen ? found[static_cast<std::size_t>(tip)] : *predicted[fi];
+      finger.push_back(finger_point(layout_.markers[static_cast<std::size_t>(tip)], tip_at, 1.0));
+      for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
+        if (static_cast<int>(m) != tip && layout_.finger_of_marker(m) == static_cast<int>(fi) && found[m].allFinite())
+          finger.push_back(finger_point(layout_.markers[m], found[m], kOtherMarkerWeight));
+      }
+      e.kind = tip_seen ? FingerEvidence::Kind::kFitted : FingerEvidence::Kind::kPredictedFit;
+      e.angles = fit_finger(solver_.chains()[fi], finger, solver_.state().angles[fi], finger_fit_settings(static_cast<Finger>(fi))).angles;
+    } else if (segment_tips[fi]) {
+      e.kind = FingerEvidence::Kind::kTip;
+      e.tip_m = *segment_tips[fi];
+    }
+  }
+  out_.state = solver_.update(time_s, evidence);
   last_ik_us_ = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   for (std::size_t j = 0; j < kHandJointCount; ++j) out_.joints_world[j] = out_.world_from_hand * out_.state.pose.position_m[j];
   return out_;
+}
+
+std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::measure_segments(double time_s,
+                                                                                       std::span<const Eigen::Vector3d> points,
+                                                                                       std::span<const double> sigma_m,
+                                                                                       std::span<const Eigen::Vector3d> found,
+                                                                                       std::array<FingerEvidence, kFingerCount>& evidence) {
+  // Stars on finger bones: each seen star places its bone; a finger whose three bones are placed
+  // has its angles measured, and a seen last bone gives its tip.
+  std::array<std::optional<Eigen::Vector3d>, kFingerCount> tips{};
+  out_.segment_stars_seen = 0;
+  if (!segments_ || labelled_) return tips;
+  const auto& stars = segments_->update(time_s, points, sigma_m);
+  if (!out_.hand_seen) return tips;
+  const Rigid3d hand_from_world = out_.world_from_hand.inverse();
+  const HandPose& skeleton = solver_.state().pose;
+  std::array<std::array<std::optional<Eigen::Vector3d>, 3>, kFingerCount> bone{};
+  for (std::size_t s = 0; s < stars.size(); ++s) {
+    if (!stars[s].seen_now()) continue;
+    ++out_.segment_stars_seen;
+    const HandJoint first = layout_.segment_stars[s].bone;
+    const auto f = static_cast<std::size_t>(finger_of_bone(first));
+    const auto joints = chain_joints(static_cast<Finger>(f));
+    const auto k = static_cast<std::size_t>(std::find(joints.begin(), joints.end(), first) - joints.begin());
+    if (k > 2) continue;  // not a bone of the chain (a finger's metacarpal)
+    const Rigid3d hand_from_star = hand_from_world * stars[s].world_from_star;
+    bone[f][k] = hand_from_star.rotation * Eigen::Vector3d::UnitY();
+    if (k == 2) {
+      const double length = solver_.chains()[f].length_m[k];
+      tips[f] = hand_from_star * Eigen::Vector3d(0.0, 0.5 * length, -segment_star_lift_m(skeleton, first));
+    }
+  }
+  for (std::size_t f = 0; f < kFingerCount; ++f) {
+    const auto& b = bone[f];
+    const FingerChain& chain = solver_.chains()[f];
+    if (b[0] && b[1] && b[2]) {
+      evidence[f].kind = FingerEvidence::Kind::kMeasured;
+      evidence[f].angles = angles_from_bones(chain, {*b[0], *b[1], *b[2]});
+    } else if (const int tip = layout_.fingertip_marker[f];
+               b[0] && b[1] && !tips[f] && (tip < 0 || !found[static_cast<std::size_t>(tip)].allFinite())) {
+      // The last bone's star hidden: the first two bones measured, the last hinge coupled.
+      FingerAngles a = angles_from_bones(chain, {*b[0], *b[1], *b[1]});
+      a.flexion_rad[2] = chain.limits.coupling * a.flexion_rad[1];
+      evidence[f].kind = FingerEvidence::Kind::kMeasured;
+      evidence[f].angles = clamp_to_limits(chain.limits, a);
+    }
+  }
+  return tips;
 }
 
 void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_star, const std::vector<TrackedStar>& stars, double time_s,

@@ -85,7 +85,8 @@ class HandTracker {
   const TrackedHand& finish(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m,
                             std::span<const int> marker_point);
   const HandLayout& layout() const { return layout_; }
-  // Where the last solve puts each of the layout's markers (hand frame): a hidden marker's estimate.
+  // Where the last solve puts each of the layout's markers (hand frame; their frames the solver's
+  // own fingers', HandLayout.h marker_frames): a hidden marker's estimate.
   std::vector<Eigen::Vector3d> markers_in_hand() const;
   const HandSolver& solver() const { return solver_; }
   const TrackedHand& last() const { return out_; }  // the last update's result
@@ -103,6 +104,10 @@ class HandTracker {
   static constexpr double kGateGrowth_mps = 0.25;
   static constexpr double kFingertipGateMax_m = 0.04;
   static constexpr double kColourGate_m = 0.08;
+  // A finger's markers other than its tip's weigh this much in its fit (FingerFit.h) against the
+  // tip's: the tip's miss is what a user sees, the others pin the knuckle down. The per-user
+  // calibration (HandCalibration.h) weighs them alike.
+  static constexpr double kOtherMarkerWeight = 0.25;
   // The fingertip model: frames with all five tips seen before it is used, how often it is refitted
   // (frames), how long a hidden tip's last offset from the prediction is kept (HiddenMarkerModel::
   // memory_s, the value fitted to the real glove take) and the ridge on its seen tips.
@@ -121,10 +126,8 @@ class HandTracker {
   PoseFilter hand_filter_;
   std::array<OneEuroFilter<3>, kFingerCount> tip_filters_;
   // This frame's, from begin(), per layout marker (the back of the hand's unused): each finger
-  // marker's predicted place and its gate (hand frame), and for a fingertip marker the way from its
-  // tip joint to it in the last solve.
+  // marker's predicted place and its gate (hand frame).
   std::vector<Eigen::Vector3d> predicted_marker_;
-  std::vector<Eigen::Vector3d> tip_to_marker_;
   std::vector<double> gate_m_;
   std::vector<std::optional<double>> marker_found_s_;  // when each marker last had a point
   // Per marker, the free points outside its tight gate but inside its widened one, last frame and
@@ -132,9 +135,8 @@ class HandTracker {
   std::vector<std::vector<Eigen::Vector3d>> reappearing_, reappearing_now_;
   // The model's markers (layout indices): each fingertip marker, then the other finger markers.
   std::vector<int> modelled_;
-  // Each hidden fingertip's place from the model (hand frame), fitting it first with this frame's
-  // markers when every modelled one is seen (`seen`: each modelled marker's measured place, its tip
-  // joint for a fingertip marker).
+  // Each hidden fingertip marker's place from the model (hand frame), fitting it first with this
+  // frame's markers when every modelled one is seen (`seen`: each modelled marker's measured place).
   std::array<std::optional<Eigen::Vector3d>, kFingerCount> predict_hidden_tips(double time_s,
                                                                                const std::vector<std::optional<Eigen::Vector3d>>& seen);
   bool every_tip_marked_ = false;
@@ -142,9 +144,13 @@ class HandTracker {
   std::optional<MarkerStatistics> tip_statistics_;
   std::optional<HiddenMarkerEstimator> tip_estimator_;
   HandSolver solver_;
-  std::array<FingerChain, kFingerCount> reference_chains_;  // the marker frames' (HandLayout.h, marker_frames)
-  // A fingertip's place from its marker seen at `seen` (hand frame).
-  Eigen::Vector3d tip_for_marker(int finger, std::size_t marker, const Eigen::Vector3d& seen) const;
+  // The layout's segment stars this frame: fingers whose bones they measure get kMeasured evidence
+  // (unless `found`, each marker's place this frame, NaN where not found, has their tip marker),
+  // and a seen last bone's star gives its finger's tip (returned).
+  std::array<std::optional<Eigen::Vector3d>, kFingerCount> measure_segments(double time_s, std::span<const Eigen::Vector3d> points,
+                                                                            std::span<const double> sigma_m,
+                                                                            std::span<const Eigen::Vector3d> found,
+                                                                            std::array<FingerEvidence, kFingerCount>& evidence);
   TrackedHand out_;
   double last_ik_us_ = 0.0;
 };
