@@ -357,7 +357,7 @@ TEST(EvalCli, ATakesLabelledMarkersDriveTheHandTrackerThroughALayout) {
   // as the hand closes, the thumb's tip for half a second after; the rest seen.
   const auto named =
       run_eval("hands --take " + take + " --layout " + layout +
-               " --labelled --map IndexTip=index_tip --hide index_tip@5-6 --hide index_middle@5-6 --hide thumb_tip@7-7.5 --json");
+               " --labelled --map IndexTip=index_tip --hide index_tip@5-6 --hide index_middle@5-6 --hide thumb_tip@7000e-3-7.5 --json");
   ASSERT_EQ(named.exit_code, 0) << named.output;
   const auto n = nlohmann::json::parse(named.output);
   SCOPED_TRACE(named.output);
@@ -365,6 +365,8 @@ TEST(EvalCli, ATakesLabelledMarkersDriveTheHandTrackerThroughALayout) {
   EXPECT_EQ(n.at("fingers").at("index_tip").at("hidden_frames").get<int>(), 100);
   EXPECT_EQ(n.at("fingers").at("thumb_tip").at("hidden_frames").get<int>(), 50);
   EXPECT_EQ(n.at("hidden_markers").at("index_middle").at("hidden_frames").get<int>(), 100);
+  // The middle marker hidden with its tip: placed from the other fingers alone (measured 2.2 mm).
+  EXPECT_LT(n.at("hidden_markers").at("index_middle").at("hidden_mean_mm").get<double>(), 5.0);
   EXPECT_EQ(n.at("hide").size(), 3u);
   EXPECT_LT(n.at("hidden_tip_mean_mm").get<double>(), 0.5 * n.at("held_tip_mean_mm").get<double>());
 
@@ -399,6 +401,8 @@ TEST(EvalCli, ATakesLabelledMarkersDriveTheHandTrackerThroughALayout) {
             "rhot-eval: --hide index_tip@5-nan: the window's times must be seconds from 0 on, e.g. index_tip@12.5-13\n");
   EXPECT_EQ(refused(mapped + " --hide index_tip@19-21"),
             "rhot-eval: --hide index_tip@19-21: the window ends after the take's end (20.00 s)\n");
+  EXPECT_EQ(refused(mapped + " --hide index_tip@5.001-5.009"),
+            "rhot-eval: --hide index_tip@5.001-5.009: the window holds no frame of the take\n");
   const std::string metres = write_simulated_glove_take("eval_cli_sim_glove_metres.tsv", 1000.0);
   EXPECT_EQ(refused(metres + " --layout " + layout + " --map IndexTip=index_tip"),
             "rhot-eval: " + metres +

@@ -120,13 +120,12 @@ struct HideWindow {
 
 // Each --hide MARKER@T0-T1: a finger marker of the layout, 0 <= T0 < T1 <= the take's length.
 std::expected<std::vector<HideWindow>, std::string> parse_hides(const std::vector<std::string>& hides, const HandLayout& layout,
-                                                                double take_s) {
+                                                                double take_s, double frame_rate_hz) {
   std::vector<HideWindow> out;
   for (const std::string& h : hides) {
     const std::string what = "--hide " + h + ": ";
     const std::size_t at = h.rfind('@');
-    const std::size_t dash = at == std::string::npos ? std::string::npos : h.find('-', at + 2);
-    if (at == std::string::npos || dash == std::string::npos)
+    if (at == std::string::npos || h.find('-', at + 1) == std::string::npos)
       return std::unexpected(what + "expected MARKER@T0-T1 (seconds into the take), e.g. index_tip@12.5-13");
     const int marker = layout.marker_index(h.substr(0, at));
     if (marker < 0) {
@@ -142,8 +141,13 @@ std::expected<std::vector<HideWindow>, std::string> parse_hides(const std::vecto
       const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
       return error == std::errc() && end == text.data() + text.size() ? v : std::nan("");
     };
-    const double from = number(h.substr(at + 1, dash - at - 1));
-    const double to = number(h.substr(dash + 1));
+    // T0 and T1 either side of a '-' (the first one that leaves two numbers: "1e-3-2" is 0.001 to 2).
+    double from = std::nan(""), to = std::nan("");
+    for (std::size_t dash = h.find('-', at + 1); dash != std::string::npos && !(std::isfinite(from) && std::isfinite(to));
+         dash = h.find('-', dash + 1)) {
+      from = number(h.substr(at + 1, dash - at - 1));
+      to = number(h.substr(dash + 1));
+    }
     if (!std::isfinite(from) || !std::isfinite(to) || from < 0.0)
       return std::unexpected(what + "the window's times must be seconds from 0 on, e.g. index_tip@12.5-13");
     if (!(to > from)) return std::unexpected(what + "the window ends before it starts");
@@ -152,6 +156,8 @@ std::expected<std::vector<HideWindow>, std::string> parse_hides(const std::vecto
       std::snprintf(length.data(), length.size(), "%.2f", take_s);
       return std::unexpected(what + "the window ends after the take's end (" + length.data() + " s)");
     }
+    if (std::ceil(from * frame_rate_hz - 1e-9) >= to * frame_rate_hz - 1e-9)
+      return std::unexpected(what + "the window holds no frame of the take");
     out.push_back({static_cast<std::size_t>(marker), from, to});
   }
   return out;
@@ -255,12 +261,12 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
       HideSchedule::make({.gap_s = args.hide_gap_s, .together = args.hide_together, .seed = args.seed, .first_frame = first},
                          take.frame_rate_hz, kFingerCount);
   if (!schedule) return fail("--hide-gap-s: expected a positive number of seconds");
-  const auto windows = parse_hides(args.hides, *layout, take.frame_count() / take.frame_rate_hz);
+  const auto windows = parse_hides(args.hides, *layout, take.frame_count() / take.frame_rate_hz, take.frame_rate_hz);
   if (!windows) return fail(windows.error());
   for (const HideWindow& w : *windows) {
     if (w.to_s <= first / take.frame_rate_hz)
-      return fail("--hide " + layout->markers[w.marker].name +
-                  ": the window ends before the judged part begins (the calibration's frames)");
+      return fail("--hide " + layout->markers[w.marker].name + ": the window ends before the judged part begins (" +
+                  std::to_string(first / take.frame_rate_hz) + " s: --calibrate-seconds, --evaluate-from-s)");
   }
   // The rule's gaps (each fingertip in turn), or the windows named.
   const auto hidden_at = [&](int f) {

@@ -165,6 +165,7 @@ FingerFit levenberg_marquardt(const Problem& problem, const FingerAngles& start,
     }
     bool improved = false;
     double moved = 0.0;
+    const double cost_before = cost;
     for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
       Eigen::Matrix4d a = jtj;
       a.diagonal() += lambda * (jtj.diagonal() + Params::Constant(1e-12));
@@ -184,7 +185,10 @@ FingerFit levenberg_marquardt(const Problem& problem, const FingerAngles& start,
         lambda *= 10.0;
       }
     }
-    if (!improved || moved < s.tolerance_rad) break;
+    // Converged once a near Gauss-Newton step (little damping) barely moves (a step kept small by
+    // heavy damping after rejected tries is not convergence), or a step gains almost nothing (a
+    // point out of reach: the nearest pose is found, the miss stays).
+    if (!improved || (moved < s.tolerance_rad && lambda <= 1e-2) || cost > (1.0 - 1e-6) * cost_before) break;
   }
   out.angles = angles_of(q);
   out.rms_m = problem.points_rms(r);
@@ -226,8 +230,12 @@ FingerFit fit_finger(const FingerChain& chain, std::span<const FingerPoint> poin
   FingerFit best = levenberg_marquardt(problem, start, s);
   if (best.rms_m <= s.restart_m) return best;
   // A poor fit from the last pose: again from FABRIK's pose toward the tip joint where the most
-  // distal point puts it (its offset turned as in the last pose).
+  // distal point puts it (its offset turned as in the last pose), unless that point is out of the
+  // finger's reach, where no start would do better (a skeleton too small for its user's markers).
   const auto distal = std::ranges::max_element(problem.points(), {}, &FingerPoint::joint);
+  double reach = distal->offset_m.norm();
+  for (int k = 0; k < std::min(distal->joint, 3); ++k) reach += chain.length_m[static_cast<std::size_t>(k)];
+  if ((distal->at_m - chain.root_m).norm() > reach) return best;
   const FingerAngles from = clamp_to_limits(chain.limits, start);
   const Eigen::Vector3d tip = distal->at_m - (finger_point_at(chain, from, *distal) - finger_forward(chain, from)[3]);
   IkSettings fabrik;

@@ -27,7 +27,7 @@ Eigen::Vector3d straight_tip_to_marker(const LayoutMarker& marker, const FingerC
 // the tip marker weighing 1, the others HandTracker::kOtherMarkerWeight), are from where they were
 // seen: the weighted RMS over every seen marker of `seen` (hand frame; per frame, the finger's
 // markers in `markers`' order, the tip marker first, NaN where not seen). `warm`: each frame's
-// angles from the last call (a fit that moved the finger a little starts there), updated.
+// angles to start its fit from (none: straight), the fitted ones on return.
 double reach_rms(std::span<const LayoutMarker* const> markers, const FingerChain& chain, std::span<const std::vector<Eigen::Vector3d>> seen,
                  std::vector<FingerAngles>& warm) {
   double sum = 0.0, n = 0.0;
@@ -99,12 +99,18 @@ ReachFit fit_reach(std::span<const LayoutMarker* const> markers, const FingerCha
   };
   std::vector<LayoutMarker> moved;
   std::vector<const LayoutMarker*> moved_ptr;
-  std::vector<FingerAngles> warm;
+  // Every evaluation starts each frame's fit from the angles fitted at the starting parameters
+  // (found by the first evaluation, from the straight finger): the score of a set of parameters does
+  // not depend on what was tried before it.
+  std::vector<FingerAngles> start_angles, warm;
   const auto rms_at = [&](const Eigen::VectorXd& q) {
     const FingerChain c = apply(q, moved);
     moved_ptr.clear();
     for (const LayoutMarker& m : moved) moved_ptr.push_back(&m);
-    return reach_rms(moved_ptr, c, seen, warm);
+    warm = start_angles;
+    const double rms = reach_rms(moved_ptr, c, seen, warm);
+    if (start_angles.empty()) start_angles = warm;
+    return rms;
   };
   const auto cost = [&](const Eigen::VectorXd& q) {
     if (!(q(3) >= 60.0 && q(3) <= 200.0)) return std::numeric_limits<double>::infinity();

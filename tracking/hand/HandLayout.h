@@ -142,7 +142,10 @@ std::array<Eigen::Quaterniond, kHandJointCount> marker_frames(const HandPose& po
 std::array<Eigen::Quaterniond, kHandJointCount> marker_frames(const HandPose& pose, const std::array<FingerChain, kFingerCount>& chains);
 // The same for one finger's three bones, from its joints (root, two hinges, tip; hand frame) and its chain.
 std::array<Eigen::Quaterniond, 3> finger_bone_frames(const FingerChain& chain, const std::array<Eigen::Vector3d, 4>& joints);
-// Every marker of a layout on a hand in `pose` (its markers in order, then the segment stars'), world.
+// Every marker of a layout on a hand in `pose` (its markers in order, then the segment stars'), world;
+// the fingers' marker frames the reference hand's (marker_frames(pose, side)): where the
+// simulation puts a hand's markers. A tracker's own (HandTracker::markers_in_hand) turn with its
+// calibrated fingers.
 std::vector<Eigen::Vector3d> layout_markers(const HandLayout& layout, const Rigid3d& world_from_hand, const HandPose& pose);
 // Their names: the markers', then "<bone>_star_<k>" for a segment star's k-th marker.
 std::vector<std::string> layout_marker_names(const HandLayout& layout);

@@ -115,19 +115,28 @@ FingerAngles angles_from_bones(const FingerChain& c, const std::array<Eigen::Vec
   return clamp_to_limits(c.limits, a);
 }
 
+namespace {
+
+bool finite_angles(const FingerAngles& a) {
+  return std::isfinite(a.abduction_rad) && std::ranges::all_of(a.flexion_rad, [](double v) { return std::isfinite(v); });
+}
+
+}  // namespace
+
 const HandState& HandSolver::update(double time_s, const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& tips,
                                     const std::array<std::optional<FingerAngles>, kFingerCount>& measured,
                                     const std::array<std::optional<Eigen::Vector3d>, kFingerCount>& predicted) {
   std::array<FingerEvidence, kFingerCount> fingers{};
   for (std::size_t f = 0; f < kFingerCount; ++f) {
+    // The first evidence that is there and finite: measured bones, the tip, its prediction.
     FingerEvidence& e = fingers[f];
-    if (measured[f]) {
+    if (measured[f] && finite_angles(*measured[f])) {
       e.kind = FingerEvidence::Kind::kMeasured;
       e.angles = *measured[f];
-    } else if (tips[f]) {
+    } else if (tips[f] && tips[f]->allFinite()) {
       e.kind = FingerEvidence::Kind::kTip;
       e.tip_m = *tips[f];
-    } else if (predicted[f]) {
+    } else if (predicted[f] && predicted[f]->allFinite()) {
       e.kind = FingerEvidence::Kind::kPredictedTip;
       e.tip_m = *predicted[f];
     }
@@ -136,10 +145,6 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
 }
 
 namespace {
-
-bool finite_angles(const FingerAngles& a) {
-  return std::isfinite(a.abduction_rad) && std::ranges::all_of(a.flexion_rad, [](double v) { return std::isfinite(v); });
-}
 
 // Evidence that is not finite is none.
 FingerEvidence::Kind usable(const FingerEvidence& e) {

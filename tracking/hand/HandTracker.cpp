@@ -15,9 +15,9 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
       star_(layout.has_hand_star() ? std::make_unique<StarTracker>(StarLibrary(layout.hand_star_set())) : nullptr),
       hand_filter_(settings.position, settings.rotation),
       solver_(layout.side, skeleton) {
-  tip_filters_.fill(OneEuroFilter<3>(settings.position));
   if (!layout.segment_stars.empty()) segments_.emplace(StarLibrary(layout.segment_star_set()));
   const std::size_t n = layout.markers.size();
+  marker_filters_.assign(n, OneEuroFilter<3>(settings.position));
   predicted_marker_.assign(n, Eigen::Vector3d::Zero());
   gate_m_.assign(n, kFingertipGateMax_m);
   marker_found_s_.assign(n, std::nullopt);
@@ -190,13 +190,11 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
       if (layout_.fingertip_marker[static_cast<std::size_t>(f)] == static_cast<int>(m))
         out_.fingertip_point[static_cast<std::size_t>(f)] = p;
     }
-    for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
-      if (!settings_.filter) break;
-      const int m = layout_.fingertip_marker[fi];
-      if (m >= 0 && found[static_cast<std::size_t>(m)].allFinite()) {
-        found[static_cast<std::size_t>(m)] = tip_filters_[fi].filter(found[static_cast<std::size_t>(m)], time_s);
+    for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size() && settings_.filter; ++m) {
+      if (found[m].allFinite()) {
+        found[m] = marker_filters_[m].filter(found[m], time_s);
       } else {
-        tip_filters_[fi].reset();  // a tip seen again starts afresh, not from where it was lost
+        marker_filters_[m].reset();  // a marker seen again starts afresh, not from where it was lost
       }
     }
   }
@@ -224,6 +222,8 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
         if (static_cast<int>(m) != tip && layout_.finger_of_marker(m) == static_cast<int>(fi) && found[m].allFinite())
           finger.push_back(finger_point(layout_.markers[m], found[m], kOtherMarkerWeight));
       }
+      // A last bone's segment star seen too gives the tip joint itself.
+      if (segment_tips[fi]) finger.push_back(FingerPoint{3, Eigen::Vector3d::Zero(), *segment_tips[fi], 1.0});
       e.kind = tip_seen ? FingerEvidence::Kind::kFitted : FingerEvidence::Kind::kPredictedFit;
       e.angles = fit_finger(solver_.chains()[fi], finger, solver_.state().angles[fi], finger_fit_settings(static_cast<Finger>(fi))).angles;
     } else if (segment_tips[fi]) {

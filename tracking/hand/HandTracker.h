@@ -37,7 +37,7 @@ struct TrackedHand {
 };
 
 struct HandTrackerSettings {
-  // 1-euro filtering of the hand frame and of each fingertip target (hand frame) before the IK.
+  // 1-euro filtering of the hand frame and of each finger marker (hand frame) before the fit.
   bool filter = false;
   OneEuroSettings position;  // for the hand's origin and the fingertips, metres
   OneEuroSettings rotation{1.0, 2.0, 1.0};
@@ -124,7 +124,7 @@ class HandTracker {
   std::unique_ptr<StarTracker> star_;    // for update(): the hand star alone (layouts with one)
   std::optional<StarTracker> segments_;  // the layout's segment stars, if any
   PoseFilter hand_filter_;
-  std::array<OneEuroFilter<3>, kFingerCount> tip_filters_;
+  std::vector<OneEuroFilter<3>> marker_filters_;  // per layout marker (the fingers' used)
   // This frame's, from begin(), per layout marker (the back of the hand's unused): each finger
   // marker's predicted place and its gate (hand frame).
   std::vector<Eigen::Vector3d> predicted_marker_;

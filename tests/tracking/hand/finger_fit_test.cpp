@@ -170,10 +170,20 @@ TEST(FingerFit, OutOfReachItStaysWithinTheLimitsAndNothingFiniteIsNothing) {
   FingerPoint infinite_weight{3, Eigen::Vector3d::Zero(), c.root_m, std::numeric_limits<double>::infinity()};
   FingerAngles start;
   start.flexion_rad = {3.0, -1.0, 0.5};
-  const FingerFit none = fit_finger(c, std::array{nan, infinite_weight}, start);
+  FingerPoint nan_offset{3, Eigen::Vector3d(0.0, std::nan(""), 0.0), c.root_m, 1.0};
+  const FingerFit none = fit_finger(c, std::array{nan, infinite_weight, nan_offset}, start);
   EXPECT_EQ(none.iterations, 0);
   EXPECT_TRUE(within_limits(c.limits, none.angles));
   EXPECT_DOUBLE_EQ(none.angles.flexion_rad[2], 0.5);
+  // A start that is not finite starts from zero: the fit still reaches a point within reach.
+  FingerAngles broken;
+  broken.abduction_rad = std::nan("");
+  broken.flexion_rad = {std::numeric_limits<double>::infinity(), std::nan(""), 0.2};
+  FingerAngles curled;
+  curled.flexion_rad = {0.6, 0.7, 0.45};
+  const FingerFit from_nan = fit_finger(c, std::array{nail(c, curled)}, broken);
+  EXPECT_TRUE(within_limits(c.limits, from_nan.angles));
+  EXPECT_LT(from_nan.rms_m, 1e-4);
 }
 
 }  // namespace
