@@ -47,12 +47,12 @@ std::array<FingerChain, kFingerCount> hand_chains(const HandPose& skeleton, Hand
     // Both hands flex toward the palm (-Y); positive abduction is toward +X, the little finger's
     // side on a right hand and the thumb's on a left one (the limits are symmetric).
     (void)side;
-    // The fingers' knuckles extend past straight (30 degrees, actively) and their last joints a
-    // little (15 degrees, pressed on a surface); the middle finger abducts both ways as the others
-    // do. Seed 002 allows neither (its knuckles 0-90 degrees, the middle finger's abduction
-    // fixed), and on a real take (../shared/data/glove-take) that put seen middle fingertips
-    // 10.9 mm off on average, where these limits reach them within 1.8 mm.
-    if (f != static_cast<int>(Finger::kThumb)) c.limits.flexion_min_rad = {-30.0 * kDeg, 0.0, -15.0 * kDeg};
+    // The fingers' last joints extend a little past straight (15 degrees, pressed on a surface),
+    // and the middle finger abducts as the others do. Seed 002 allows neither (its middle finger's
+    // abduction fixed), and on a real take (../shared/data/glove-take) that put seen middle
+    // fingertips 10.9 mm off on average, where these limits reach them within 1.8 mm. Knuckles
+    // extending too (to -30 degrees) gained nothing there and let simulated fingers fold back.
+    if (f != static_cast<int>(Finger::kThumb)) c.limits.flexion_min_rad = {0.0, 0.0, -15.0 * kDeg};
     if (f == static_cast<int>(Finger::kThumb)) {
       c.limits.abduction_max_rad = 45.0 * kDeg;
       c.limits.flexion_min_rad = {-20.0 * kDeg, -20.0 * kDeg, -20.0 * kDeg};

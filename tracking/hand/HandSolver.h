@@ -29,8 +29,8 @@ inline constexpr int kFingerCount = 5;
 // The five chains of a hand with the bone lengths and knuckle positions of `skeleton` (a calibrated
 // hand, or reference_open_hand), with the anatomical limits: for the fingers seed 002's flexion
 // ranges (knuckle 90, middle joint 110, last joint 90 degrees) and abduction (+-15 degrees, less as
-// the knuckle flexes), but with the knuckle extending to -30 and the last joint to -15 degrees, and
-// the middle finger abducting as the others (a real take needs both: HandSolver.cpp); for the thumb
+// the knuckle flexes), but with the last joint extending to -15 degrees and the middle finger
+// abducting as the others (a real take needs it: HandSolver.cpp); for the thumb
 // (which seed 002 does not give; estimates that let it oppose the fingers) CMC abduction +-45,
 // flexion -20..60, MCP -20..60, IP -20..80 degrees.
 std::array<FingerChain, kFingerCount> hand_chains(const HandPose& skeleton, HandSide side);
