@@ -1,7 +1,8 @@
 #pragma once
-// A whole hand from its fingertips: the hand frame (from the marker star on the back of the hand)
-// fixes the palm, wrist and metacarpals; each finger's joints come from FABRIK toward its tip
-// marker (FingerIK.h); pinch and grip gestures with hysteresis.
+// A whole hand from what is known of each finger: the hand frame (from the marker star on the back
+// of the hand) fixes the palm, wrist and metacarpals; each finger's joints come from its evidence
+// (FingerEvidence below: angles fitted to its markers, FingerFit.h, as HandTracker gives them;
+// FABRIK toward a tip, FingerIK.h; or bones measured); pinch and grip gestures with hysteresis.
 //
 // A finger whose tip is hidden (a curling finger hides its own marker) is estimated, not dropped:
 // while other fingers are seen, it bends as they do, at their mean flexion rate shared over its
@@ -10,8 +11,8 @@
 // kHold_s eases toward a relaxed pose.
 //
 // Joint confidence: 1 for joints fixed by the hand frame and for a seen fingertip; 0.9 for joints
-// placed by IK from a seen tip; kPredictedConfidence for a hidden finger placed by IK at its
-// predicted tip; kEstimatedConfidence for a hidden finger bent at the seen ones' rate; for a finger
+// fitted to seen markers or placed by IK from a seen tip; kPredictedConfidence for a hidden finger
+// fitted to (or placed by IK at) its predicted tip; kEstimatedConfidence for a hidden finger bent at the seen ones' rate; for a finger
 // unseen for t seconds with no finger seen, 0.9 exp(-t / 0.5 s).
 
 #include <array>
