@@ -11,7 +11,9 @@
 
 #include <charconv>
 #include <cmath>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <system_error>
 
 #include <CLI/CLI.hpp>
@@ -19,6 +21,14 @@
 namespace rhot {
 
 enum class NumberBound { kAny, kPositive, kNonNegative };
+
+// The text as one finite number (the rules above), or nothing.
+inline std::optional<double> finite_number(std::string_view text) {
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
 
 inline CLI::Validator number_check(NumberBound bound) {
   return CLI::Validator(

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -17,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tools/common/NumberChecks.h"
 #include "tools/eval/Eval.h"
 #include "tracking/hand/HandCalibration.h"
 #include "tracking/hand/HandTracker.h"
@@ -136,17 +136,12 @@ std::expected<std::vector<HideWindow>, std::string> parse_hides(const std::vecto
     }
     if (static_cast<std::size_t>(marker) < layout.hand_frame_markers)
       return std::unexpected(what + "a marker on the back of the hand gives the hand its frame: hide finger markers");
-    const auto number = [](const std::string& text) {
-      double v = std::nan("");
-      const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
-      return error == std::errc() && end == text.data() + text.size() ? v : std::nan("");
-    };
     // T0 and T1 either side of a '-' (the first one that leaves two numbers: "1e-3-2" is 0.001 to 2).
     double from = std::nan(""), to = std::nan("");
     for (std::size_t dash = h.find('-', at + 1); dash != std::string::npos && !(std::isfinite(from) && std::isfinite(to));
          dash = h.find('-', dash + 1)) {
-      from = number(h.substr(at + 1, dash - at - 1));
-      to = number(h.substr(dash + 1));
+      from = finite_number(std::string_view(h).substr(at + 1, dash - at - 1)).value_or(std::nan(""));
+      to = finite_number(std::string_view(h).substr(dash + 1)).value_or(std::nan(""));
     }
     if (!std::isfinite(from) || !std::isfinite(to) || from < 0.0)
       return std::unexpected(what + "the window's times must be seconds from 0 on, e.g. index_tip@12.5-13");

@@ -1,6 +1,7 @@
 #include "tracking/hand/HandTracker.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 
 #include <cmath>
@@ -215,15 +216,21 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
     if (tip_seen || (!segment_tips[fi] && predicted[fi])) {
       // The finger's markers fitted together: its tip's (seen, or predicted where hidden), weighing
       // most, and its others seen.
-      std::vector<FingerPoint> finger;
+      // On the stack (the fit takes kMaxFingerPoints at most): nothing allocated per finger and frame.
+      std::array<FingerPoint, kMaxFingerPoints> on_finger;
+      std::size_t count = 0;
+      const auto add = [&](const FingerPoint& point) {
+        if (count < on_finger.size()) on_finger[count++] = point;
+      };
       const Eigen::Vector3d tip_at = tip_seen ? found[static_cast<std::size_t>(tip)] : *predicted[fi];
-      finger.push_back(finger_point(layout_.markers[static_cast<std::size_t>(tip)], tip_at, 1.0));
+      add(finger_point(layout_.markers[static_cast<std::size_t>(tip)], tip_at, 1.0));
+      // A last bone's segment star seen too gives the tip joint itself.
+      if (segment_tips[fi]) add(FingerPoint{3, Eigen::Vector3d::Zero(), *segment_tips[fi], 1.0});
       for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
         if (static_cast<int>(m) != tip && layout_.finger_of_marker(m) == static_cast<int>(fi) && found[m].allFinite())
-          finger.push_back(finger_point(layout_.markers[m], found[m], kOtherMarkerWeight));
+          add(finger_point(layout_.markers[m], found[m], kOtherMarkerWeight));
       }
-      // A last bone's segment star seen too gives the tip joint itself.
-      if (segment_tips[fi]) finger.push_back(FingerPoint{3, Eigen::Vector3d::Zero(), *segment_tips[fi], 1.0});
+      const std::span<const FingerPoint> finger(on_finger.data(), count);
       e.kind = tip_seen ? FingerEvidence::Kind::kFitted : FingerEvidence::Kind::kPredictedFit;
       e.angles = fit_finger(solver_.chains()[fi], finger, solver_.state().angles[fi], finger_fit_settings(static_cast<Finger>(fi))).angles;
     } else if (segment_tips[fi]) {
