@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tracking/media/Media.h"
 #include "tests/support/TempDir.h"
 #include <nlohmann/json.hpp>
 
@@ -20,7 +21,6 @@
 #include "tracking/sim/SyntheticImages.h"
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 namespace {
 
@@ -229,7 +229,7 @@ TEST(CalibCli, LearnsTheMarkerColoursFromImagesAndDrawsWhatItClassifies) {
     rhot::ColourImageSettings settings;
     settings.seed = seed;
     const fs::path file = dir / ("held_up_" + std::to_string(seed) + ".png");
-    ASSERT_TRUE(cv::imwrite(file.string(), rhot::draw_colour_markers(640, 480, held_up, settings)));
+    ASSERT_TRUE(rhot::write_image(file.string(), rhot::draw_colour_markers(640, 480, held_up, settings)).has_value());
     images += " " + file.string();
   }
   const fs::path out = dir / "colours.json";

@@ -22,6 +22,9 @@ fi
 test -f "${work}/prefix/include/rhot/engine/launch/Launch.h"
 test ! -e "${work}/prefix/include/rhot/engine/render/vk"
 test -f "${work}/prefix/share/rhot/assets/scenes/default.json"
+# The module that holds OpenCV's image files and capture (tracking/media/Media.h), where the
+# applications' run path finds it.
+test -f "${work}/prefix/lib/rhot/librhot_media.so"
 
 # The linker is the user's choice; this build's (lld where there is one, as cmake/RhotOptions.cmake
 # picks) links the two examples in a second instead of ld.bfd's several.
@@ -34,6 +37,11 @@ for example in track headless; do
   cmake -S "${work}/${example}" -B "${work}/${example}/build" -G Ninja -DCMAKE_CXX_COMPILER="${cxx}" \
     -DCMAKE_PREFIX_PATH="${work}/prefix" "${linker[@]}" >"${work}/${example}.configure.log" || { cat "${work}/${example}.configure.log"; exit 1; }
   cmake --build "${work}/${example}/build" || exit 1
+done
+
+for program in track/build/track_example headless/build/headless_example; do
+  readelf -d "${work}/${program}" | grep -q "path: \[.*${work}/prefix/lib/rhot" || {
+    echo "examples_test: ${program} has no run path to the installed media module:" >&2; readelf -d "${work}/${program}" | grep -i path >&2; exit 1; }
 done
 
 echo "== track_example"

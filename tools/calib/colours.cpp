@@ -9,15 +9,14 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 #include <spdlog/spdlog.h>
 
 #include "tools/calib/Calib.h"
 #include "tracking/core/MarkerColour.h"
 #include "tracking/detect/ColourDetector.h"
 #include "tracking/detect/ColourModel.h"
+#include "tracking/media/Media.h"
 #include "tracking/source/VideoSource.h"
 
 namespace rhot::calib_tool {
@@ -39,23 +38,25 @@ struct ColoursOptions {
 std::expected<std::vector<cv::Mat>, std::string> read_images(const ColoursOptions& o) {
   std::vector<cv::Mat> out;
   for (const std::string& file : o.images) {
-    cv::Mat image = cv::imread(file, cv::IMREAD_COLOR);
-    if (image.empty()) return std::unexpected(file + ": cannot read the image (missing, or not an image OpenCV reads)");
-    out.push_back(image);
+    auto image = read_image(file, ImageRead::kColour);
+    if (!image) return std::unexpected(image.error());
+    out.push_back(std::move(*image));
   }
   if (o.source.empty()) return out;
   if (o.source.rfind("video:", 0) != 0) return std::unexpected("--source: expected video:DEV[,DEV...], got \"" + o.source + "\"");
   auto devices = parse_video_devices(o.source.substr(6));
   if (!devices) return std::unexpected("--source: " + devices.error());
   for (const std::string& device : *devices) {
-    cv::VideoCapture capture;
-    const bool index = !device.empty() && device.find_first_not_of("0123456789") == std::string::npos;
-    if (index ? !capture.open(std::stoi(device)) : !capture.open(device))
+    const bool index = !device.empty() && device.size() <= 6 && device.find_first_not_of("0123456789") == std::string::npos;
+    std::optional<VideoCapture> capture = VideoCapture::open(device, index ? VideoCapture::Kind::kDevice : VideoCapture::Kind::kAny);
+    if (!capture) {
+      if (auto module = media_module(); !module) return std::unexpected("--source: " + module.error());
       return std::unexpected("--source: cannot open \"" + device + "\"");
+    }
     int taken = 0;
     for (int read = 0; taken < o.frames; ++read) {
       cv::Mat frame;
-      if (!capture.read(frame) || frame.empty()) break;
+      if (!capture->read(frame) || frame.empty()) break;
       if (read % o.every != 0) continue;
       out.push_back(frame.clone());
       ++taken;
@@ -93,12 +94,12 @@ int run(const ColoursOptions& o) {
   }
   std::vector<cv::Mat> masks;
   for (const std::string& file : o.masks) {
-    cv::Mat mask = cv::imread(file, cv::IMREAD_GRAYSCALE);
-    if (mask.empty()) {
-      spdlog::error("{}: cannot read the mask", file);
+    auto read = read_image(file, ImageRead::kGrey);
+    if (!read) {
+      spdlog::error("--mask: {}", read.error());
       return 1;
     }
-    masks.push_back(mask);
+    masks.push_back(std::move(*read));
   }
   if (!masks.empty() && masks.size() != images->size()) {
     spdlog::error("--mask: one per image ({} images, {} masks)", images->size(), masks.size());
@@ -129,11 +130,13 @@ int run(const ColoursOptions& o) {
   }
   // What the model takes for which colour in a test image (the first learning image by default),
   // and what the detector finds there: a bad model shows before tracking with it.
-  cv::Mat test = o.test_image.empty() ? images->front() : cv::imread(o.test_image, cv::IMREAD_COLOR);
-  if (test.empty()) {
-    spdlog::error("{}: cannot read the test image", o.test_image);
+  auto test_read =
+      o.test_image.empty() ? std::expected<cv::Mat, std::string>(images->front()) : read_image(o.test_image, ImageRead::kColour);
+  if (!test_read) {
+    spdlog::error("--test-image: {}", test_read.error());
     return 1;
   }
+  const cv::Mat test = std::move(*test_read);
   ColourDetector detector(report->model);
   const auto detections = detector.detect(test);
   const std::filesystem::path dir = pictures_dir(o.pictures, o.out);
@@ -146,8 +149,8 @@ int run(const ColoursOptions& o) {
                static_cast<int>(std::lround(std::sqrt(static_cast<double>(d.area_px) / 3.14159) + 4.0)), cv::Scalar(255, 255, 255), 1,
                cv::LINE_AA);
   }
-  if (!cv::imwrite(picture.string(), shown)) {
-    spdlog::error("{}: cannot write the picture", picture.string());
+  if (auto written = write_image(picture, shown); !written) {
+    spdlog::error("{}", written.error());
     return 1;
   }
   spdlog::info("{}: {} colours; {} markers found in the test image, shown in {}", o.out, report->model.classes.size(),

@@ -11,10 +11,9 @@
 #include "tools/calib/Calib.h"
 #include "tracking/calib/Detections.h"
 #include "tracking/camera/RigFile.h"
+#include "tracking/media/Media.h"
 #include "tracking/sim/CalibrationSessions.h"
 #include "tracking/sim/SyntheticImages.h"
-
-#include <opencv2/imgcodecs.hpp>
 
 namespace rhot::calib_tool {
 
@@ -122,8 +121,8 @@ int write_images(const Detections& d, const CameraRig& rig, int frames, const st
       look.seed = static_cast<std::uint64_t>(f) * 131 + c;
       char name[64];
       std::snprintf(name, sizeof name, "/cam%zu_%04d.png", c, f);
-      if (!cv::imwrite(dir + name, draw_blobs(rig.cameras[c].intrinsics, cameras[c], look))) {
-        spdlog::error("{}{}: cannot write the image", dir, name);
+      if (auto written = write_image(dir + name, draw_blobs(rig.cameras[c].intrinsics, cameras[c], look)); !written) {
+        spdlog::error("{}", written.error());
         return 1;
       }
     }

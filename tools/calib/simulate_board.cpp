@@ -16,12 +16,12 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <spdlog/spdlog.h>
 
 #include "tools/calib/Calib.h"
 #include "tracking/calib/Intrinsics.h"
 #include "tracking/camera/RigFile.h"
+#include "tracking/media/Media.h"
 #include "tracking/sim/BoardImages.h"
 
 namespace rhot::calib_tool {
@@ -134,13 +134,7 @@ int run_simulate_board(const SimulateBoardOptions& o) {
     render.seed = o.seed * 1000 + i;
     const cv::Mat image = render_board(camera, poses[i], *layout, render);
     const fs::path file = fs::path(o.out) / file_name;
-    bool ok = false;
-    try {
-      ok = cv::imwrite(file.string(), image);
-    } catch (const cv::Exception&) {
-      ok = false;
-    }
-    if (!ok) return fail(file.string() + ": cannot write the picture");
+    if (auto ok = write_image(file, image); !ok) return fail(ok.error());
     written.push_back(file.string());
   }
   const fs::path truth_file = fs::path(o.out) / "truth.yaml";

@@ -36,7 +36,6 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "engine/scene/SceneLoader.h"
@@ -45,6 +44,7 @@
 #include "engine/tracked/LiveTracking.h"
 #include "tools/eval/Eval.h"
 #include "tracking/camera/RigFile.h"
+#include "tracking/media/Media.h"
 #include "tracking/core/MarkerColour.h"
 #include "tracking/hand/HandJoints.h"
 
@@ -150,9 +150,10 @@ bool write_pictures(const ColourArgs& a, const RigFrame& frame, const ColourCame
       cv::circle(annotated, cv::Point(static_cast<int>(std::lround(d.pixel.x())), static_cast<int>(std::lround(d.pixel.y()))), 9,
                  cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
     }
-    if (!cv::imwrite(base + ".png", annotated) ||
-        !cv::imwrite(base + "_colours.png", classification_picture(ColourTable(model), src.last_images()[c]))) {
-      std::cerr << "rhot-eval: cannot write " << base << ".png\n";
+    auto written = write_image(base + ".png", annotated);
+    if (written) written = write_image(base + "_colours.png", classification_picture(ColourTable(model), src.last_images()[c]));
+    if (!written) {
+      std::cerr << "rhot-eval: " << written.error() << "\n";
       return false;
     }
   }

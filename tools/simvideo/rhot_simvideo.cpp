@@ -17,10 +17,10 @@
 #pragma GCC diagnostic ignored "-Wnull-dereference"
 #include <CLI/CLI.hpp>
 #pragma GCC diagnostic pop
-#include <opencv2/imgcodecs.hpp>
 
 #include "engine/sim/Demo.h"
 #include "engine/scene/SceneLoader.h"
+#include "tracking/media/Media.h"
 #include "tracking/sim/SyntheticImages.h"
 #include "tools/common/CliExit.h"
 
@@ -92,8 +92,8 @@ bool write_frames(rhot::LiveTracking& p, Options& o, double rate_hz) {
       const cv::Mat image = colour_source != nullptr
                                 ? colour_source->last_images()[c]
                                 : rhot::draw_blobs(p.source().rig().cameras[c].intrinsics, p.frame().cameras[c], o.draw);
-      if (!cv::imwrite(file, image, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
-        std::fprintf(stderr, "rhot-simvideo: cannot write %s\n", file.c_str());
+      if (auto written = rhot::write_image(file, image, 1); !written) {
+        std::fprintf(stderr, "rhot-simvideo: %s\n", written.error().c_str());
         return false;
       }
     }

@@ -5,8 +5,9 @@
 #include <cstdio>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "tracking/media/Media.h"
 
 namespace rhot {
 
@@ -14,14 +15,7 @@ namespace {
 
 constexpr int kGrid = 16;
 
-std::expected<void, std::string> write_png(const std::filesystem::path& file, const cv::Mat& image) {
-  try {
-    if (!cv::imwrite(file.string(), image)) return std::unexpected(file.string() + ": cannot write the picture");
-  } catch (const cv::Exception& e) {
-    return std::unexpected(file.string() + ": cannot write the picture: " + e.msg);
-  }
-  return {};
-}
+std::expected<void, std::string> write_png(const std::filesystem::path& file, const cv::Mat& image) { return write_image(file, image); }
 
 cv::Scalar error_colour(double error_px) {
   const double t = std::clamp(error_px / 2.0, 0.0, 1.0);  // 0 px green -> 2 px red (BGR)

@@ -15,10 +15,10 @@
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "tracking/calib/CalibPictures.h"
+#include "tracking/media/Media.h"
 
 namespace rhot {
 
@@ -518,15 +518,9 @@ std::expected<BoardPicture, std::string> board_picture(const BoardSpec& board, i
 }
 
 std::expected<BoardView, std::string> detect_board(const std::filesystem::path& image, const BoardSpec& board) {
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(image, error)) return std::unexpected(image.string() + ": no such file");
-  cv::Mat grey;
-  try {
-    grey = cv::imread(image.string(), cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception&) {
-    grey.release();
-  }
-  if (grey.empty()) return std::unexpected(image.string() + ": cannot read the image (not a format OpenCV reads, or damaged)");
+  auto read = read_image(image, ImageRead::kGrey);
+  if (!read) return std::unexpected(read.error());
+  cv::Mat grey = std::move(*read);
   BoardView view;
   view.name = image.filename().string();
   view.width_px = grey.cols;

@@ -5,23 +5,16 @@
 #include <fmt/format.h>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "base/Check.h"
+#include "tracking/media/Media.h"
 
 namespace rhot {
 
 namespace {
 
-std::expected<void, std::string> write_png(const std::filesystem::path& file, const cv::Mat& image) {
-  try {
-    if (!cv::imwrite(file.string(), image)) return std::unexpected(file.string() + ": cannot write the picture");
-  } catch (const cv::Exception& e) {
-    return std::unexpected(file.string() + ": cannot write the picture: " + e.msg);
-  }
-  return {};
-}
+std::expected<void, std::string> write_png(const std::filesystem::path& file, const cv::Mat& image) { return write_image(file, image); }
 
 // The grid row (y index) nearest a height.
 int slice_of(const CoverageGrid& g, double height_m) {

@@ -5,7 +5,8 @@
 #include <cmath>
 
 #include <opencv2/core.hpp>
-#include <opencv2/videoio.hpp>
+
+#include "tracking/media/Media.h"
 
 namespace rhot {
 
@@ -30,7 +31,7 @@ struct VideoSource::Impl {
   CameraRig rig;
   std::vector<std::string> devices;
   VideoSourceSettings settings;
-  std::vector<cv::VideoCapture> captures;
+  std::vector<VideoCapture> captures;
   std::vector<bool> live;
   std::vector<cv::Mat> pending;  // the first frames, read by open() to check their size
   std::vector<VideoCameraStats> stats;
@@ -84,24 +85,18 @@ std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, 
   if (settings.colours) impl->colour_detectors.assign(devices.size(), ColourDetector(*settings.colours, settings.colour_detector));
   for (std::size_t c = 0; c < devices.size(); ++c) {
     const std::string& device = devices[c];
-    cv::VideoCapture capture;
     const bool live = is_device_index(device);
-    bool opened = false;
-    if (live) {
-      opened = capture.open(std::stoi(device));
-    } else if (device.find('%') != std::string::npos) {
-      opened = capture.open(device, cv::CAP_IMAGES);
-    } else {
-      // Video files through the backends that read files, not CAP_ANY: its probe also wakes camera
-      // plugins (USB enumeration and the like), which a file has no use for.
-      opened = capture.open(device, cv::CAP_FFMPEG) || capture.open(device, cv::CAP_GSTREAMER);
-    }
-    if (!opened || !capture.isOpened()) {
+    const VideoCapture::Kind kind = live                                    ? VideoCapture::Kind::kDevice
+                                    : device.find('%') != std::string::npos ? VideoCapture::Kind::kImageSequence
+                                                                            : VideoCapture::Kind::kVideoFile;
+    std::optional<VideoCapture> capture = VideoCapture::open(device, kind);
+    if (!capture) {
+      if (auto module = media_module(); !module) return std::unexpected("video source: " + module.error());
       return std::unexpected("video source: " + camera_text(rig, c) + ": cannot open " +
                              (live ? "capture device " + device : "\"" + device + "\""));
     }
     cv::Mat first;
-    if (!capture.read(first) || first.empty()) {
+    if (!capture->read(first) || first.empty()) {
       return std::unexpected("video source: " + camera_text(rig, c) + ": \"" + device + "\" gives no image");
     }
     const CameraIntrinsics& k = rig.cameras[c].intrinsics;
@@ -109,7 +104,7 @@ std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, 
       return std::unexpected("video source: " + camera_text(rig, c) + ": \"" + device + "\" gives " + size_text(first.cols, first.rows) +
                              " images, the rig calibrates it at " + size_text(k.width_px, k.height_px));
     }
-    impl->captures.push_back(std::move(capture));
+    impl->captures.push_back(std::move(*capture));
     impl->live.push_back(live);
     impl->pending.push_back(std::move(first));
   }

@@ -1,12 +1,12 @@
 // Calibration pictures: coverage counted on the grid, pictures written at the promised size.
 
+#include "tracking/media/Media.h"
 #include "tracking/calib/CalibPictures.h"
 
 #include <cmath>
 #include <filesystem>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include "tracking/camera/RigFile.h"
 
@@ -27,17 +27,17 @@ TEST(CalibPictures, ResidualAndTopViewPicturesAreWritten) {
   std::vector<rhot::ResidualSample> samples;
   for (int i = 0; i < 100; ++i) samples.push_back({{i * 25.0, i * 7.0}, {0.3, -0.2}, i % 10 != 0});
   ASSERT_TRUE(rhot::write_residual_picture(dir / "residuals.png", 2560, 1440, samples, 50.0, "cam"));
-  const cv::Mat residuals = cv::imread((dir / "residuals.png").string());
+  const cv::Mat residuals = rhot::read_image((dir / "residuals.png"), rhot::ImageRead::kColour).value_or(cv::Mat());
   EXPECT_EQ(residuals.cols, 1280);  // halved until at most 1280 wide
   EXPECT_EQ(residuals.rows, 720);
   const auto rig = rhot::load_rig(std::string(RHOT_ASSET_DIR) + "/rigs/room-8.yaml");
   ASSERT_TRUE(rig) << rig.error();
   ASSERT_TRUE(rhot::write_rig_top_view(dir / "top.png", *rig, {{0, 1, 0}, {0.5, 1, 0.5}}, "room-8"));
-  const cv::Mat top = cv::imread((dir / "top.png").string());
+  const cv::Mat top = rhot::read_image((dir / "top.png"), rhot::ImageRead::kColour).value_or(cv::Mat());
   EXPECT_EQ(top.cols, 800);
   const auto bad = rhot::write_residual_picture(dir / "no-such-folder" / "x.png", 640, 480, samples, 1.0, "x");
   ASSERT_FALSE(bad);
-  EXPECT_EQ(bad.error().rfind((dir / "no-such-folder" / "x.png").string() + ": cannot write the picture", 0), 0u) << bad.error();
+  EXPECT_EQ(bad.error().rfind((dir / "no-such-folder" / "x.png").string() + ": cannot write the image", 0), 0u) << bad.error();
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Intrinsics from rendered board pictures (tracking/sim/BoardImages) against the camera they were
 // rendered with, and the messages bad input gets.
 
+#include "tracking/media/Media.h"
 #include "tracking/calib/Intrinsics.h"
 
 #include <cmath>
@@ -12,7 +13,6 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "tracking/sim/BoardImages.h"
 
@@ -61,7 +61,7 @@ std::vector<fs::path> render_views(const fs::path& dir, const CameraIntrinsics& 
     char name[32];
     std::snprintf(name, sizeof name, "view_%02zu.png", i);
     files.push_back(dir / name);
-    EXPECT_TRUE(cv::imwrite(files.back().string(), render_board(camera, poses[i], layout, settings)));
+    EXPECT_TRUE(rhot::write_image(files.back().string(), render_board(camera, poses[i], layout, settings)).has_value());
   }
   return files;
 }
@@ -208,11 +208,11 @@ TEST(Intrinsics, PoorViewsAreCalibratedButWarnedAbout) {
         Eigen::AngleAxisd(0.06 * i, Eigen::Vector3d(1, 1, 0).normalized()) * Eigen::AngleAxisd(0.1 * i, Eigen::Vector3d::UnitZ());
     camera_from_board.translation = Eigen::Vector3d(-0.1 + 0.005 * i, -0.06, 0.9);
     files.push_back(dir / ("v" + std::to_string(i) + ".png"));
-    ASSERT_TRUE(cv::imwrite(files.back().string(), render_board(truth, camera_from_board, layout)));
+    ASSERT_TRUE(rhot::write_image(files.back().string(), render_board(truth, camera_from_board, layout)).has_value());
   }
   // And one without the board.
   files.push_back(dir / "empty.png");
-  ASSERT_TRUE(cv::imwrite(files.back().string(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(128))));
+  ASSERT_TRUE(rhot::write_image(files.back().string(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(128))).has_value());
   const auto views = detect_boards(files, *parse_board_spec("chess:9x6:25"));
   ASSERT_TRUE(views.has_value()) << views.error();
   const auto report = calibrate_intrinsics(*views);
@@ -256,7 +256,7 @@ TEST(Intrinsics, BadPicturesGetMessagesNamingTheFile) {
             "chess:9x6)");
 
   // Two resolutions.
-  ASSERT_TRUE(cv::imwrite((dir / "small.png").string(), cv::Mat(240, 320, CV_8UC1, cv::Scalar(128))));
+  ASSERT_TRUE(rhot::write_image((dir / "small.png").string(), cv::Mat(240, 320, CV_8UC1, cv::Scalar(128))).has_value());
   r = detect_boards({files[0], dir / "small.png"}, board);
   ASSERT_FALSE(r.has_value());
   EXPECT_EQ(r.error(),
@@ -289,7 +289,7 @@ TEST(Intrinsics, ABoardInNoneOfTheFirstPicturesStopsTheSearchThere) {
 
   // The board in a later picture only: every picture is searched, and those without it are skipped.
   const fs::path empty = dir / "empty.png";
-  ASSERT_TRUE(cv::imwrite(empty.string(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(128))));
+  ASSERT_TRUE(rhot::write_image(empty.string(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(128))).has_value());
   const auto later = detect_boards({empty, files[0], files[1], files[2]}, *parse_board_spec("chess:9x6:25"));
   ASSERT_TRUE(later.has_value()) << later.error();
   EXPECT_EQ(later->size(), 4u);

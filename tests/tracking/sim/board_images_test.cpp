@@ -1,6 +1,7 @@
 // Rendered board pictures against the camera model they were rendered with: OpenCV finds the
 // corners where the model projects them.
 
+#include "tracking/media/Media.h"
 #include "tracking/sim/BoardImages.h"
 
 #include <cmath>
@@ -11,7 +12,6 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "tracking/calib/CalibPictures.h"
 #include "tracking/calib/Intrinsics.h"
@@ -66,7 +66,7 @@ TEST(BoardImages, OpenCvFindsTheCornersWhereTheModelProjectsThem) {
   int count = 0;
   for (std::size_t v = 0; v < poses.size(); ++v) {
     const fs::path file = dir / ("b" + std::to_string(v) + ".png");
-    ASSERT_TRUE(cv::imwrite(file.string(), render_board(k, poses[v], layout)));
+    ASSERT_TRUE(rhot::write_image(file.string(), render_board(k, poses[v], layout)).has_value());
     const auto view = detect_board(file, spec);
     ASSERT_TRUE(view.has_value()) << view.error();
     ASSERT_EQ(view->corners_px.size(), 54u) << "view " << v;

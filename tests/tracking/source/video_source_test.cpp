@@ -2,6 +2,7 @@
 // simulated rig's detections (sigma 0, so each drawn spot sits exactly at its marker's projection),
 // read back through OpenCV's CAP_IMAGES and the blob detector, matched and triangulated.
 
+#include "tracking/media/Media.h"
 #include "tracking/source/VideoSource.h"
 
 #include <algorithm>
@@ -11,7 +12,6 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
@@ -60,7 +60,8 @@ std::vector<RigFrame> write_sequence(const CameraRig& rig, const fs::path& dir, 
       SyntheticImageSettings draw;
       draw.noise_sigma = 2.0;
       draw.seed = static_cast<std::uint64_t>(f * 16) + c;
-      EXPECT_TRUE(cv::imwrite(frame_file(dir, c, f), draw_blobs(rig.cameras[c].intrinsics, truth.back().cameras[c], draw)));
+      EXPECT_TRUE(
+          rhot::write_image(frame_file(dir, c, f), draw_blobs(rig.cameras[c].intrinsics, truth.back().cameras[c], draw)).has_value());
     }
   }
   return truth;
@@ -134,8 +135,8 @@ TEST(VideoSource, ABadImageFromOneCameraCostsThatCameraThatFrameOnly) {
   const fs::path dir = fresh_dir("rhot_video_source_bad_image");
   write_sequence(rig, dir, 3);
   // Camera 1's second image becomes 16-bit (CAP_IMAGES reads it unchanged), camera 2's the wrong size.
-  ASSERT_TRUE(cv::imwrite(frame_file(dir, 1, 1), cv::Mat(720, 1280, CV_16UC1, cv::Scalar(1000))));
-  ASSERT_TRUE(cv::imwrite(frame_file(dir, 2, 1), cv::Mat(240, 320, CV_8UC1, cv::Scalar(0))));
+  ASSERT_TRUE(rhot::write_image(frame_file(dir, 1, 1), cv::Mat(720, 1280, CV_16UC1, cv::Scalar(1000))).has_value());
+  ASSERT_TRUE(rhot::write_image(frame_file(dir, 2, 1), cv::Mat(240, 320, CV_8UC1, cv::Scalar(0))).has_value());
   auto source = VideoSource::open(rig, patterns(dir, rig.cameras.size()));
   ASSERT_TRUE(source.has_value()) << source.error();
   for (int f = 0; f < 3; ++f) {
@@ -194,7 +195,7 @@ TEST(VideoSource, WrongDeviceCountUnopenableDeviceAndWrongImageSizeAreErrors) {
       << garbage;
 
   const fs::path small = fresh_dir("rhot_video_source_small");
-  ASSERT_TRUE(cv::imwrite((small / "cam_0000.png").string(), cv::Mat(240, 320, CV_8UC1, cv::Scalar(0))));
+  ASSERT_TRUE(rhot::write_image((small / "cam_0000.png").string(), cv::Mat(240, 320, CV_8UC1, cv::Scalar(0))).has_value());
   devices = patterns(dir, rig.cameras.size());
   devices[3] = (small / "cam_%04d.png").string();
   EXPECT_EQ(VideoSource::open(rig, devices).error(), "video source: camera 3 (" + rig.cameras[3].name + "): \"" + devices[3] +
