@@ -40,8 +40,11 @@ for example in track headless; do
 done
 
 for program in track/build/track_example headless/build/headless_example; do
-  readelf -d "${work}/${program}" | grep -q "path: \[.*${work}/prefix/lib/rhot" || {
-    echo "examples_test: ${program} has no run path to the installed media module:" >&2; readelf -d "${work}/${program}" | grep -i path >&2; exit 1; }
+  # Read whole first: grep -q stops at the first match, and under pipefail readelf's broken pipe
+  # would fail the check.
+  dynamic=$(readelf -d "${work}/${program}")
+  grep -q "path: \[.*${work}/prefix/lib/rhot" <<<"${dynamic}" || {
+    echo "examples_test: ${program} has no run path to the installed media module:" >&2; grep -i path <<<"${dynamic}" >&2; exit 1; }
 done
 
 echo "== track_example"

@@ -81,6 +81,9 @@ struct HandsArgs {
   bool layout_given = false;
   std::vector<std::string> maps;
   double calibrate_seconds = 0.0;
+  // Through a rig (--rig with --take): the calibration's markers, the take's labelled ones or those
+  // the tracker found through the cameras on the reference hand.
+  std::string calibrate_from = "labelled";
   // --hide MARKER@T0-T1 (a layout marker hidden from T0 to T1 seconds of the take; repeat): in place
   // of the rule's gaps.
   std::vector<std::string> hides;

@@ -196,10 +196,6 @@ int hands(const HandsArgs& args) {
     std::cerr << "rhot-eval: " << layout.error() << "\n";
     return 1;
   }
-  if (!layout->has_hand_star()) {
-    std::cerr << "rhot-eval: " << args.layout_file << ": " << rhot::camera_hand_star_problem(*layout) << " (hands --take --labelled)\n";
-    return 1;
-  }
   std::vector<std::string_view> motions;
   for (const std::string_view name : rhot::hand_motion_names()) {
     if (args.motion == "all" || args.motion == name) motions.push_back(name);

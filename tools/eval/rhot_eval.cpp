@@ -5,6 +5,9 @@
 //   rhot-eval demo [--scene FILE] [--placements N] [--seed S] [--hands tracked|perfect] [world flags] --json
 //   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--calibrate-hand] [world flags] [--frames N] --json
 //   rhot-eval hands --take FILE --labelled [--model FILE | --fit-fraction F] [--hide-gap-s S] [--hide-together N] [--seed K] --json
+//   rhot-eval hands --take FILE --layout FILE [--map TAKE=LAYOUT ...] [--labelled | --rig FILE [world flags]]
+//                   [--calibrate-seconds S [--calibrate-from labelled|cameras]] [--hide-gap-s S --hide-together N --seed K] [--hide
+//                   MARKER@T0-T1 ...] --json
 //   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
 //   rhot-eval calibration --rig FILE [--wand-mm 500] [--sigma PX] [--frames 2000] [--seed S] [--dropout P] --json
 //   rhot-eval nodes [--nodes N] [--markers M] [--rate-hz R] [--seconds S] [--kill-node-at T --restart-node-at T2]
@@ -67,7 +70,8 @@ struct DemoArgs {
 CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
   auto* cmd = app.add_subcommand("hands", "scripted hand motions with a hand layout: every joint against the truth");
   a.layout_file = std::string(RHOT_ASSET_DIR) + "/hands/low-cost-right.json";
-  cmd->add_option("--rig", a.rig_file, "camera rig (OpenCV YAML; needed but with --take)");
+  cmd->add_option("--rig", a.rig_file,
+                  "camera rig (OpenCV YAML); with --take and --layout: the rig that photographs the take (or --labelled)");
   cmd->add_option("--take", a.take_file, "a labelled marker take (C3D or Qualisys TSV): hide its fingertips by rule and estimate them")
       ->check(CLI::ExistingFile);
   cmd->add_option("--model", a.model_file,
@@ -98,6 +102,11 @@ CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
                   "with --take and --layout: fit the fingers' lengths to the take's first S seconds (judged after them)")
       ->check(rhot::number_check(rhot::NumberBound::kNonNegative))
       ->check(CLI::Range(0.0, 600.0));
+  cmd->add_option("--calibrate-from", a.calibrate_from,
+                  "with --take --rig and --calibrate-seconds: the markers fitted, the take's labelled ones (a labelled calibration "
+                  "session) or those the tracker found through the cameras on the reference hand")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"labelled", "cameras"}));
   cmd->add_option("--motion", a.motion, "open, fist, pinch, wave, power-grasp, precision-grasp or all")->capture_default_str();
   add_world_flags(*cmd, a.world, true);
   cmd->add_option("--frames", a.frames, "frames per motion")->capture_default_str()->check(CLI::Range(1, 1000000));

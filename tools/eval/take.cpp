@@ -1,7 +1,11 @@
 // rhot-eval hands --take: a recorded take's fingertips hidden by rule and estimated from the rest,
 // against the recorded positions: by the hidden-marker estimator alone (tracking/hand/
-// HiddenMarkers.h), or, with --layout, by the hand tracker fed the take's labelled markers
-// (HandTracker::update_labelled: its fingertip model, IK and skeleton).
+// HiddenMarkers.h), or, with --layout, by the hand tracker: fed the take's labelled markers
+// (--labelled: HandTracker::update_labelled, its fingertip model, IK and skeleton), or the take
+// photographed by a simulated rig's cameras (--rig, with the world flags' noise, dropout, strays and
+// calibration error: the whole camera path, the hand found by its back's markers among unlabelled
+// points; --calibrate-seconds fitted to the take's labelled markers, or with --calibrate-from cameras
+// to those the tracker found through the cameras).
 
 #include <algorithm>
 #include <array>
@@ -11,6 +15,8 @@
 #include <iostream>
 #include <map>
 #include <numeric>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -18,13 +24,23 @@
 
 #include "tools/common/NumberChecks.h"
 #include "tools/eval/Eval.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/geometry/Matching.h"
 #include "tracking/hand/HandCalibration.h"
 #include "tracking/hand/HandTracker.h"
 #include "tracking/hand/HiddenMarkers.h"
+#include "tracking/sim/Realism.h"
+#include "tracking/sim/SimulatedRig.h"
 #include "tracking/take/MarkerTake.h"
 
 namespace rhot::eval {
 namespace {
+
+// A refusal: said on stderr, exit status 1.
+int fail(const std::string& what) {
+  std::cerr << "rhot-eval: " << what << "\n";
+  return 1;
+}
 
 // The glove's names (assets/hands: three on the back of the hand, a tip and a middle per finger).
 
@@ -167,6 +183,8 @@ struct TrackerErrors {
   std::map<std::string, std::vector<double>> hidden_by_finger, visible_by_finger, hidden_other;
   int frames_judged = 0, hand_seen = 0, hidden_frames = 0;
   double ik_sum_us = 0.0;
+  // Through a rig: finger markers in view, found by the tracker, and found somewhere else.
+  long markers_in_view = 0, markers_found = 0, markers_wrong = 0;
 };
 
 TrackerErrors run_tracker_over_take(HandTracker& tracker, const MarkerTake& take, const std::vector<int>& index, int first,
@@ -217,77 +235,79 @@ TrackerErrors run_tracker_over_take(HandTracker& tracker, const MarkerTake& take
   return out;
 }
 
-int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
-  const auto fail = [&](const std::string& what) {
-    std::cerr << "rhot-eval: " << what << "\n";
-    return 1;
-  };
-  const auto layout = load_hand_layout(args.layout_file);
-  if (!layout) return fail(layout.error());
-  if (!layout->segment_stars.empty())
-    return fail(args.layout_file + ": a layout with segment stars is not read from takes (their stars' markers have no names there)");
-  if (!std::ranges::all_of(layout->fingertip_marker, [](int m) { return m >= 0; }))
-    return fail(args.layout_file + ": the take's fingertips are hidden in turn: the layout must mark all five");
-  if (take.frame_rate_hz < 20.0 || take.frame_rate_hz > 2000.0) {
-    return fail(args.take_file + ": frame rate " + std::to_string(take.frame_rate_hz) + " Hz: the hand tracker takes 20 to 2,000 Hz");
-  }
-  const auto index = take_indices(take, *layout, args.maps);
-  if (!index) return fail(args.take_file + ": " + index.error());
-  if (const std::string units = units_problem(take, *layout, *index); !units.empty()) return fail(args.take_file + ": " + units);
+// What both ways of feeding a take to the tracker (labelled, or through a rig) share: the layout,
+// the take's marker of each layout marker, the first judged frame and which markers are hidden when.
+struct TakePlan {
+  HandLayout layout;
+  std::vector<int> index;  // per layout marker, the take's
+  int calibration_frames = 0;
+  int first = 0;  // the first judged frame of the take
+  std::optional<HideSchedule> schedule;
+  std::vector<HideWindow> windows;
 
-  HandPose skeleton = reference_open_hand(layout->side);
-  LabelledCalibration calibration;
-  HandLayout fitted_layout = *layout;
-  const int calibration_frames = static_cast<int>(std::lround(args.calibrate_seconds * take.frame_rate_hz));
-  if (calibration_frames >= take.frame_count())
-    return fail("--calibrate-seconds: the take is only " + std::to_string(take.frame_count() / take.frame_rate_hz) + " s long");
-  if (calibration_frames > 0) {
-    std::cerr << "rhot-eval: fitting the fingers' lengths to frames 1-" << calibration_frames << "\n";
-    std::vector<std::vector<Eigen::Vector3d>> frames;
-    for (int f = 0; f < calibration_frames; ++f) frames.push_back(layout_frame(take, *index, f));
-    const auto calibrated = calibrate_from_labelled(*layout, skeleton, frames, &calibration);
-    if (!calibrated) return fail("--calibrate-seconds: no finger could be fitted from the calibration frames");
-    skeleton = *calibrated;
-    fitted_layout = calibration.layout;
-  }
-  const int first = std::max(calibration_frames, static_cast<int>(std::lround(args.evaluate_from_s * take.frame_rate_hz)));
-  if (first >= take.frame_count()) return fail("--evaluate-from-s: after the take's end");
-  const auto schedule =
-      HideSchedule::make({.gap_s = args.hide_gap_s, .together = args.hide_together, .seed = args.seed, .first_frame = first},
-                         take.frame_rate_hz, kFingerCount);
-  if (!schedule) return fail("--hide-gap-s: expected a positive number of seconds");
-  const auto windows = parse_hides(args.hides, *layout, take.frame_count() / take.frame_rate_hz, take.frame_rate_hz);
-  if (!windows) return fail(windows.error());
-  for (const HideWindow& w : *windows) {
-    if (w.to_s <= first / take.frame_rate_hz)
-      return fail("--hide " + layout->markers[w.marker].name + ": the window ends before the judged part begins (" +
-                  std::to_string(first / take.frame_rate_hz) + " s: --calibrate-seconds, --evaluate-from-s)");
-  }
-  // The rule's gaps (each fingertip in turn), or the windows named.
-  const auto hidden_at = [&](int f) {
+  // The layout markers hidden at the take's frame f: the rule's gaps, or the windows named.
+  std::vector<std::size_t> hidden_at(const MarkerTake& take, int f) const {
     std::vector<std::size_t> out;
-    if (windows->empty()) {
-      for (const std::size_t k : schedule->hidden(f)) out.push_back(static_cast<std::size_t>(layout->fingertip_marker[k]));
+    if (f < first) return out;
+    if (windows.empty()) {
+      for (const std::size_t k : schedule->hidden(f)) out.push_back(static_cast<std::size_t>(layout.fingertip_marker[k]));
       return out;
     }
     const double t = take.time_s(f);
-    for (const HideWindow& w : *windows) {
+    for (const HideWindow& w : windows) {
       if (t >= w.from_s && t < w.to_s && std::ranges::find(out, w.marker) == out.end()) out.push_back(w.marker);
     }
     return out;
-  };
+  }
+};
 
-  HandTrackerSettings settings;
-  settings.fingertip_model = true;
-  HandTracker tracker(fitted_layout, skeleton, settings);
-  const TrackerErrors e = run_tracker_over_take(tracker, take, *index, first, hidden_at);
+std::expected<TakePlan, std::string> plan_take(const HandsArgs& args, const MarkerTake& take) {
+  TakePlan plan;
+  auto layout = load_hand_layout(args.layout_file);
+  if (!layout) return std::unexpected(layout.error());
+  plan.layout = std::move(*layout);
+  if (!plan.layout.segment_stars.empty())
+    return std::unexpected(args.layout_file +
+                           ": a layout with segment stars is not read from takes (their stars' markers have no names there)");
+  if (!std::ranges::all_of(plan.layout.fingertip_marker, [](int m) { return m >= 0; }))
+    return std::unexpected(args.layout_file + ": the take's fingertips are hidden in turn: the layout must mark all five");
+  if (take.frame_rate_hz < 20.0 || take.frame_rate_hz > 2000.0)
+    return std::unexpected(args.take_file + ": frame rate " + std::to_string(take.frame_rate_hz) +
+                           " Hz: the hand tracker takes 20 to 2,000 Hz");
+  auto index = take_indices(take, plan.layout, args.maps);
+  if (!index) return std::unexpected(args.take_file + ": " + index.error());
+  plan.index = std::move(*index);
+  if (const std::string units = units_problem(take, plan.layout, plan.index); !units.empty())
+    return std::unexpected(args.take_file + ": " + units);
+  plan.calibration_frames = static_cast<int>(std::lround(args.calibrate_seconds * take.frame_rate_hz));
+  if (plan.calibration_frames >= take.frame_count())
+    return std::unexpected("--calibrate-seconds: the take is only " + std::to_string(take.frame_count() / take.frame_rate_hz) + " s long");
+  plan.first = std::max(plan.calibration_frames, static_cast<int>(std::lround(args.evaluate_from_s * take.frame_rate_hz)));
+  if (plan.first >= take.frame_count()) return std::unexpected("--evaluate-from-s: after the take's end");
+  plan.schedule =
+      HideSchedule::make({.gap_s = args.hide_gap_s, .together = args.hide_together, .seed = args.seed, .first_frame = plan.first},
+                         take.frame_rate_hz, kFingerCount);
+  if (!plan.schedule) return std::unexpected("--hide-gap-s: expected a positive number of seconds");
+  auto windows = parse_hides(args.hides, plan.layout, take.frame_count() / take.frame_rate_hz, take.frame_rate_hz);
+  if (!windows) return std::unexpected(windows.error());
+  plan.windows = std::move(*windows);
+  for (const HideWindow& w : plan.windows) {
+    if (w.to_s <= plan.first / take.frame_rate_hz)
+      return std::unexpected("--hide " + plan.layout.markers[w.marker].name + ": the window ends before the judged part begins (" +
+                             std::to_string(plan.first / take.frame_rate_hz) + " s: --calibrate-seconds, --evaluate-from-s)");
+  }
+  return plan;
+}
+
+// The report of a tracker's run over a take, in the keys both ways share.
+nlohmann::json tracker_report(const HandsArgs& args, const MarkerTake& take, const TakePlan& plan, const TrackerErrors& e,
+                              const LabelledCalibration& calibration, const HandTracker& tracker) {
   nlohmann::json j;
   j["take"] = args.take_file;
   j["layout"] = args.layout_file;
-  j["through"] = "hand tracker, labelled markers";
   j["frames"] = take.frame_count();
   j["frame_rate_hz"] = take.frame_rate_hz;
-  j["evaluated_frames"] = {first + 1, take.frame_count()};
+  j["evaluated_frames"] = {plan.first + 1, take.frame_count()};
   j["hide_gap_s"] = args.hide_gap_s;
   j["hide_together"] = args.hide_together;
   j["seed"] = args.seed;
@@ -309,7 +329,6 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
     j["calibration"]["knuckle_moved_mm"].push_back({1e3 * moved.x(), 1e3 * moved.y(), 1e3 * moved.z()});
     j["calibration"]["reach_rms_mm"].push_back({1e3 * calibration.reach_rms_m[k][0], 1e3 * calibration.reach_rms_m[k][1]});
   }
-
   for (const auto& [name, errors] : e.hidden_by_finger) {
     j["fingers"][name] = {{"hidden_mean_mm", take_mean(errors)},
                           {"hidden_p95_mm", percentile(errors, 0.95)},
@@ -321,6 +340,213 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
         {"hidden_mean_mm", take_mean(errors)}, {"hidden_p95_mm", percentile(errors, 0.95)}, {"hidden_frames", errors.size()}};
   }
   for (const std::string& h : args.hides) j["hide"].push_back(h);
+  return j;
+}
+
+// The skeleton and layout the tracker runs with: the reference hand's, or fitted to the markers of
+// the calibration frames (calibrate_from_labelled) where there are any.
+struct FittedHand {
+  HandPose skeleton;
+  HandLayout layout;
+  LabelledCalibration calibration;
+
+  // The tracker, its fingertip model on (the take's fingertips are hidden in turn).
+  HandTracker tracker() const {
+    HandTrackerSettings settings;
+    settings.fingertip_model = true;
+    return HandTracker(layout, skeleton, settings);
+  }
+};
+
+std::expected<FittedHand, std::string> fit_hand(const TakePlan& plan, const std::vector<std::vector<Eigen::Vector3d>>& frames) {
+  FittedHand out{reference_open_hand(plan.layout.side), plan.layout, {}};
+  if (plan.calibration_frames == 0) return out;
+  const auto calibrated = calibrate_from_labelled(plan.layout, out.skeleton, frames, &out.calibration);
+  if (!calibrated) return std::unexpected(std::string("--calibrate-seconds: no finger could be fitted from the calibration frames"));
+  out.skeleton = *calibrated;
+  out.layout = out.calibration.layout;
+  return out;
+}
+
+int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
+  const auto plan = plan_take(args, take);
+  if (!plan) return fail(plan.error());
+  std::vector<std::vector<Eigen::Vector3d>> frames;
+  if (plan->calibration_frames > 0) std::cerr << "rhot-eval: fitting the fingers' lengths to frames 1-" << plan->calibration_frames << "\n";
+  for (int f = 0; f < plan->calibration_frames; ++f) frames.push_back(layout_frame(take, plan->index, f));
+  const auto fitted = fit_hand(*plan, frames);
+  if (!fitted) return fail(fitted.error());
+  HandTracker tracker = fitted->tracker();
+  const TrackerErrors e = run_tracker_over_take(tracker, take, plan->index, plan->first, [&](int f) { return plan->hidden_at(take, f); });
+  nlohmann::json j = tracker_report(args, take, *plan, e, fitted->calibration, tracker);
+  j["through"] = "hand tracker, labelled markers";
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
+// A take's marker at any time between its frames (linear; NaN where either frame is in a gap, and
+// past the last frame).
+Eigen::Vector3d take_at_time(const MarkerTake& take, int marker, double t_s) {
+  const double u = t_s * take.frame_rate_hz;
+  const auto f0 = static_cast<int>(std::floor(u));
+  if (f0 < 0 || f0 >= take.frame_count()) return Eigen::Vector3d::Constant(std::nan(""));
+  if (f0 + 1 == take.frame_count()) return u == f0 ? take.at(f0, marker) : Eigen::Vector3d::Constant(std::nan(""));
+  const Eigen::Vector3d& a = take.at(f0, marker);
+  const Eigen::Vector3d& b = take.at(f0 + 1, marker);
+  const double w = u - f0;
+  return (1.0 - w) * a + w * b;  // NaN if either is
+}
+
+// The rig that photographs a take: where the take is moved to (its back of the hand's mean place
+// onto the rig's volume centre) and the world's noise, dropout, strays and calibration error.
+struct TakeRig {
+  CameraRig truth;
+  CameraRig tracker_rig;  // as an imperfect calibration has it
+  SimulatedRigSettings settings;
+  Eigen::Vector3d shift_m{0, 0, 0};
+};
+
+// The tracker run over the take's first end_s seconds through the rig's cameras: every take marker
+// photographed (the layout's, then the others: an object's, points the hand must leave alone),
+// but those the plan hides when `hide`. each(t, take frame, hand, points) after every frame.
+void run_through_rig(const MarkerTake& take, const TakePlan& plan, const TakeRig& r, HandTracker& tracker, double end_s, bool hide,
+                     const std::function<void(double, int, const TrackedHand&, std::span<const Eigen::Vector3d>)>& each) {
+  std::vector<int> order = plan.index;
+  for (int i = 0; i < take.marker_count(); ++i) {
+    if (std::ranges::find(order, i) == order.end()) order.push_back(i);
+  }
+  std::vector<std::size_t> hidden;
+  SimulatedRig sim(r.truth, {}, r.settings);
+  sim.set_scripted_markers([&](double t) {
+    std::vector<Eigen::Vector3d> out;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const bool off = std::ranges::find(hidden, k) != hidden.end();
+      out.push_back(off ? Eigen::Vector3d::Constant(std::nan("")) : Eigen::Vector3d(take_at_time(take, order[k], t) + r.shift_m));
+    }
+    return out;
+  });
+  PixelSigmaEstimate pixel_sigma;
+  const auto frames = static_cast<int>(std::floor(end_s * r.settings.rate_hz));
+  std::vector<Eigen::Vector3d> points;
+  for (int f = 0; f < frames; ++f) {
+    const double t = f / r.settings.rate_hz;
+    const int take_frame = std::clamp(static_cast<int>(std::lround(t * take.frame_rate_hz)), 0, take.frame_count() - 1);
+    hidden = hide ? plan.hidden_at(take, take_frame) : std::vector<std::size_t>{};
+    const RigFrame frame = sim.next();
+    const auto matched = match_and_triangulate(r.tracker_rig, frame, match_settings_for(pixel_sigma.sigma_px()));
+    points.clear();
+    for (const MatchedPoint& m : matched) points.push_back(m.point.position_world);
+    const TrackedHand& hand = tracker.update(frame.time_s, points, point_sigmas_m(matched, pixel_sigma.update(matched)));
+    if (f % 900 == 0) std::cerr << "rhot-eval: " << (hide ? "" : "calibration: ") << "frame " << f + 1 << " of " << frames << "\n";
+    each(frame.time_s, take_frame, hand, points);
+  }
+}
+
+// The errors through the rig, judged from the plan's first frame: each fingertip's estimate
+// against the take's marker at the rig frame's time, as run_tracker_over_take judges labelled ones.
+TrackerErrors judge_through_rig(const MarkerTake& take, const TakePlan& plan, const TakeRig& r, HandTracker& tracker) {
+  const HandLayout& layout = tracker.layout();
+  TrackerErrors out;
+  std::vector<Eigen::Vector3d> last_seen_hand(layout.markers.size(), Eigen::Vector3d::Constant(std::nan("")));
+  const auto judge = [&](double t, int take_frame, const TrackedHand& hand, std::span<const Eigen::Vector3d> points) {
+    const std::vector<std::size_t> hidden = plan.hidden_at(take, take_frame);
+    const auto is_hidden = [&](std::size_t m) { return std::ranges::find(hidden, m) != hidden.end(); };
+    const auto truth = [&](std::size_t m) { return Eigen::Vector3d(take_at_time(take, plan.index[m], t) + r.shift_m); };
+    const bool judged = take_frame >= plan.first;
+    out.frames_judged += judged ? 1 : 0;
+    if (!hand.hand_seen) return;
+    if (judged) {
+      ++out.hand_seen;
+      out.ik_sum_us += tracker.last_ik_us();
+      const auto estimated = tracker.markers_in_hand();
+      for (std::size_t m = layout.hand_frame_markers; m < layout.markers.size(); ++m) {
+        const Eigen::Vector3d at = truth(m);
+        if (!at.allFinite()) continue;
+        if (!is_hidden(m)) {
+          // A finger marker in view: found by the tracker, and found where it is (a point within
+          // 10 mm of it; else another marker's, a ghost or a stray taken for it).
+          ++out.markers_in_view;
+          const int p = hand.marker_point[m];
+          out.markers_found += p >= 0 ? 1 : 0;
+          out.markers_wrong += p >= 0 && (points[static_cast<std::size_t>(p)] - at).norm() > 0.010 ? 1 : 0;
+        }
+        const auto tip = std::ranges::find(layout.fingertip_marker, static_cast<int>(m));
+        if (tip == layout.fingertip_marker.end()) continue;
+        const double e = 1e3 * (hand.world_from_hand * estimated[m] - at).norm();
+        const std::string& name = layout.markers[m].name;
+        if (!is_hidden(m)) {
+          out.visible_mm.push_back(e);
+          out.visible_by_finger[name].push_back(e);
+          continue;
+        }
+        ++out.hidden_frames;
+        out.hidden_mm.push_back(e);
+        out.hidden_by_finger[name].push_back(e);
+        if (last_seen_hand[m].allFinite()) out.held_mm.push_back(1e3 * (hand.world_from_hand * last_seen_hand[m] - at).norm());
+      }
+    }
+    const Rigid3d hand_from_world = hand.world_from_hand.inverse();
+    for (std::size_t m = 0; m < layout.markers.size(); ++m) {
+      const Eigen::Vector3d at = truth(m);
+      if (at.allFinite() && !is_hidden(m)) last_seen_hand[m] = hand_from_world * at;
+    }
+  };
+  run_through_rig(take, plan, r, tracker, take.time_s(take.frame_count() - 1), true, judge);
+  return out;
+}
+
+int take_through_rig(const HandsArgs& args, const MarkerTake& take) {
+  const auto plan = plan_take(args, take);
+  if (!plan) return fail(plan.error());
+  const auto world = world_settings(args.world);
+  if (!world) return fail(world.error());
+  const auto rig = load_rig(args.rig_file);
+  if (!rig) return fail(rig.error());
+  TakeRig r{*rig, perturbed_rig(*rig, world->calib_error_px, args.seed), world->rig_settings(args.seed), {}};
+  // The take's back of the hand, on average, onto the volume's centre (its axes as recorded).
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (int f = 0; f < take.frame_count(); ++f) {
+    for (std::size_t m = 0; m < plan->layout.hand_frame_markers; ++m) {
+      const Eigen::Vector3d& at = take.at(f, plan->index[m]);
+      if (!at.allFinite()) continue;
+      sum += at;
+      ++n;
+    }
+  }
+  const Box box = evaluation_box(*rig, {}, args.volume_centre);
+  r.shift_m = box.centre - sum / std::max(n, 1);
+
+  // The per-user calibration: from the take's labelled markers (a labelled calibration session),
+  // or through the cameras, from the markers the tracker found on the reference hand.
+  std::vector<std::vector<Eigen::Vector3d>> frames;
+  if (plan->calibration_frames > 0 && args.calibrate_from == "cameras") {
+    HandTracker finder(plan->layout, reference_open_hand(plan->layout.side));
+    run_through_rig(take, *plan, r, finder, take.time_s(plan->calibration_frames), false,
+                    [&](double, int, const TrackedHand& hand, std::span<const Eigen::Vector3d> points) {
+                      if (!hand.hand_seen) return;
+                      std::vector<Eigen::Vector3d>& found = frames.emplace_back();
+                      for (const int p : hand.marker_point)
+                        found.push_back(p >= 0 ? points[static_cast<std::size_t>(p)] : Eigen::Vector3d::Constant(std::nan("")));
+                    });
+    std::cerr << "rhot-eval: fitting the fingers to the markers found in " << frames.size() << " frames\n";
+  } else {
+    for (int f = 0; f < plan->calibration_frames; ++f) frames.push_back(layout_frame(take, plan->index, f));
+  }
+  const auto fitted = fit_hand(*plan, frames);
+  if (!fitted) return fail(fitted.error());
+  HandTracker tracker = fitted->tracker();
+  const TrackerErrors e = judge_through_rig(take, *plan, r, tracker);
+  nlohmann::json j = tracker_report(args, take, *plan, e, fitted->calibration, tracker);
+  j["through"] = "the rig's cameras";
+  j["calibrate_from"] = args.calibrate_from;
+  j["finger_markers_found_fraction"] =
+      e.markers_in_view > 0 ? static_cast<double>(e.markers_found) / static_cast<double>(e.markers_in_view) : 0.0;
+  j["finger_markers_wrong_fraction"] =
+      e.markers_found > 0 ? static_cast<double>(e.markers_wrong) / static_cast<double>(e.markers_found) : 0.0;
+  j["rig"] = args.rig_file;
+  j["world"] = world_json(*world, args.world.world);
+  j["shift_m"] = {r.shift_m.x(), r.shift_m.y(), r.shift_m.z()};
   std::cout << j.dump(2) << "\n";
   return 0;
 }
@@ -328,17 +554,16 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
 }  // namespace
 
 int hands_take(const HandsArgs& args) {
-  const auto fail = [](const std::string& what) {
-    std::cerr << "rhot-eval: " << what << "\n";
-    return 1;
-  };
-  if (!args.labelled) return fail("hands --take: only --labelled is built so far (the take's 3D points, no cameras)");
+  const bool through_rig = !args.rig_file.empty();
+  if (args.labelled == through_rig)
+    return fail("hands --take: --labelled (the take's 3D points) or --rig FILE (the take photographed by the rig's cameras), one of them");
+  if (through_rig && !args.layout_given) return fail("hands --take --rig: needs --layout (the markers the cameras follow)");
   const auto take = read_marker_take(args.take_file);
   if (!take) return fail(take.error());
   if (args.layout_given) {
     if (!args.model_file.empty())
       return fail("hands --take: --model is the estimator's alone (without --layout); the tracker fits its own");
-    return take_through_tracker(args, *take);
+    return through_rig ? take_through_rig(args, *take) : take_through_tracker(args, *take);
   }
   if (!args.maps.empty() || args.calibrate_seconds > 0.0 || !args.hides.empty())
     return fail("hands --take: --map, --calibrate-seconds and --hide need --layout");

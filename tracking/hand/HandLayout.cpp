@@ -71,8 +71,8 @@ std::optional<Rigid3d> labelled_hand_frame(const HandLayout& layout, std::span<c
 std::string camera_hand_star_problem(const HandLayout& layout) {
   if (layout.has_hand_star()) return "";
   return "the layout \"" + layout.name + "\" has " + std::to_string(layout.hand_frame_markers) +
-         " markers on the back of the hand; following a hand through cameras needs four (a marker star): this layout serves labelled "
-         "takes only";
+         " markers on the back of the hand; the runtime follows hands through cameras by a marker star of four: this layout serves "
+         "takes and rhot-eval's single hands only";
 }
 
 StarSet HandLayout::segment_star_set() const {

@@ -20,8 +20,9 @@
 // at the joint, toward the fingertip; +Y out of the back of the finger; a tip joint's frame is its
 // distal joint's. "wrist" is the hand frame itself: the markers on it (three
 // or four) are the back of the hand, which gives the hand its frame; four of them are followed
-// through cameras as a marker star (StarTracker), three only where the markers come labelled (a
-// take's). Each other marker is on a finger's bone: the finger's root (a finger's proximal joint,
+// through cameras as a marker star (StarTracker); three as a triangle (TriangleTracker), by a lone
+// HandTracker only (the runtime shares its stars out among a scene's and needs four), or labelled
+// (a take's). Each other marker is on a finger's bone: the finger's root (a finger's proximal joint,
 // the thumb's metacarpal), its two hinges or its tip. A finger's marker on its tip joint or its
 // distal bone is its fingertip marker (at most one), which the fingers' IK reaches for; its other
 // markers (a glove's middle markers) are matched and followed as well, and tell where a hidden
@@ -110,8 +111,9 @@ struct HandLayout {
 // of four). Nothing with fewer seen, or non-finite.
 std::optional<Rigid3d> labelled_hand_frame(const HandLayout& layout, std::span<const Eigen::Vector3d> markers_world);
 
-// Why a layout's hand cannot be followed through cameras (fewer than four markers on the back of
-// the hand: no marker star), for a message; empty when it can.
+// Why the runtime cannot follow a layout's hands through cameras (fewer than four markers on the
+// back of the hand: no marker star to share out among the stars of a scene), for a message; empty
+// when it can. A lone HandTracker follows three as a triangle (TriangleTracker.h).
 std::string camera_hand_star_problem(const HandLayout& layout);
 
 // Whether two hands and the objects' stars can be told apart from any three of their markers: every

@@ -16,11 +16,13 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
       star_(layout.has_hand_star() ? std::make_unique<StarTracker>(StarLibrary(layout.hand_star_set())) : nullptr),
       hand_filter_(settings.position, settings.rotation),
       solver_(layout.side, skeleton) {
+  if (layout.hand_frame_markers == 3)
+    triangle_.emplace(std::array{layout.markers[0].offset_m, layout.markers[1].offset_m, layout.markers[2].offset_m});
   if (!layout.segment_stars.empty()) segments_.emplace(StarLibrary(layout.segment_star_set()));
   const std::size_t n = layout.markers.size();
   marker_filters_.assign(n, OneEuroFilter<3>(settings.position));
   predicted_marker_.assign(n, Eigen::Vector3d::Zero());
-  gate_m_.assign(n, kFingertipGateMax_m);
+  gate_m_.assign(n, kUnfoundMarkerGate_m);
   marker_found_s_.assign(n, std::nullopt);
   reappearing_.assign(n, {});
   reappearing_now_.assign(n, {});
@@ -81,12 +83,20 @@ std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::predict_hi
 
 const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
                                        std::span<const int> colour) {
-  if (!star_) {
-    // No star to follow the hand by (three markers on its back): only labelled markers place it.
-    begin(time_s, false, {});
-    return finish(time_s, points, sigma_m, {});
+  std::vector<TrackedStar> triangle_star;
+  if (triangle_) {
+    // Three markers on the back of the hand: followed as a triangle (TriangleTracker.h), handed on
+    // as a star whose fourth marker is never seen.
+    const TrackedTriangle& t = triangle_->update(time_s, points, sigma_m);
+    TrackedStar& star = triangle_star.emplace_back();
+    star.world_from_star = t.world_from_body;
+    star.velocity_m_s = t.velocity_m_s;
+    star.markers_seen = t.markers_seen;
+    for (std::size_t k = 0; k < 3; ++k) star.point[k] = t.point[k];
+    star.confirmed = t.followed;
+    star.frames_since_seen = t.seen ? 0 : 1;
   }
-  const std::vector<TrackedStar>& stars = star_->update(time_s, points, sigma_m);
+  const std::vector<TrackedStar>& stars = star_ ? star_->update(time_s, points, sigma_m) : triangle_star;
   std::vector<bool> taken(points.size(), false);
   HandTracker* const self = this;
   const int star = 0;
@@ -129,7 +139,7 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
   for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
     predicted_marker_[m] = layout_marker_in_hand(layout_.markers[m], last, frames);
     gate_m_[m] = marker_found_s_[m] ? std::min(kFingertipGateMax_m, kFingertipGate_m + kGateGrowth_mps * (time_s - *marker_found_s_[m]))
-                                    : kFingertipGateMax_m;
+                                    : kUnfoundMarkerGate_m;
   }
 }
 

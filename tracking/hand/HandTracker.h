@@ -7,7 +7,8 @@
 // matching: update_labelled takes them by the layout's order, the hand frame from the back of the
 // hand's three or four.
 //
-// Alone, a HandTracker follows its hand star with a StarTracker of its own. With other hands and
+// Alone, a HandTracker follows its hand star with a StarTracker of its own, or, with three markers
+// on the back of the hand (a glove's), follows them as a triangle (TriangleTracker.h). With other hands and
 // objects in view (track_hands below), the hand stars are followed by one StarTracker with every
 // other star, so that a point is one star's marker at most, and the points left are shared out to
 // every hand's fingertips at once, nearest first: two hands passing each other cannot claim the
@@ -23,6 +24,7 @@
 #include "tracking/hand/HandSolver.h"
 #include "tracking/hand/HiddenMarkers.h"
 #include "tracking/rigid/StarTracker.h"
+#include "tracking/rigid/TriangleTracker.h"
 
 namespace rhot {
 
@@ -103,6 +105,13 @@ class HandTracker {
   static constexpr double kFingertipGate_m = 0.025;
   static constexpr double kGateGrowth_mps = 0.25;
   static constexpr double kFingertipGateMax_m = 0.04;
+  // A marker never yet found is looked for within kUnfoundMarkerGate_m: a finger the skeleton
+  // starts far from (a glove on a hand unlike the reference one: this take's thumb markers 50 mm
+  // and more from where the reference hand holds them) finds its markers. The persistence rule
+  // still holds, the other markers take theirs first (nearest first), and once found a marker is
+  // followed within the gates above: a marker lost later, while the hand holds an object whose
+  // markers stay put beside the fingers, does not reach that far for them.
+  static constexpr double kUnfoundMarkerGate_m = 0.08;
   static constexpr double kColourGate_m = 0.08;
   // A finger's markers other than its tip's weigh this much in its fit (FingerFit.h) against the
   // tip's: the tip's miss is what a user sees, the others pin the knuckle down. The per-user
@@ -121,8 +130,9 @@ class HandTracker {
  private:
   HandLayout layout_;
   HandTrackerSettings settings_;
-  std::unique_ptr<StarTracker> star_;    // for update(): the hand star alone (layouts with one)
-  std::optional<StarTracker> segments_;  // the layout's segment stars, if any
+  std::unique_ptr<StarTracker> star_;        // for update(): the hand star alone (layouts with one)
+  std::optional<TriangleTracker> triangle_;  // for update(): three markers on the back of the hand instead
+  std::optional<StarTracker> segments_;      // the layout's segment stars, if any
   PoseFilter hand_filter_;
   std::vector<OneEuroFilter<3>> marker_filters_;  // per layout marker (the fingers' used)
   // This frame's, from begin(), per layout marker (the back of the hand's unused): each finger

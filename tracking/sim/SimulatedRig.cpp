@@ -102,6 +102,7 @@ SimulatedRig::SimulatedRig(CameraRig rig, std::vector<Trajectory> markers, Simul
 }
 
 bool SimulatedRig::visible(int camera, const Eigen::Vector3d& p_world) const {
+  if (!p_world.allFinite()) return false;  // a scripted marker in a gap of its take
   const Camera& c = rig_.cameras[static_cast<std::size_t>(camera)];
   const auto pixel = c.project(p_world);
   if (!pixel || !c.in_image(*pixel)) return false;

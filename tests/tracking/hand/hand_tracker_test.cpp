@@ -639,8 +639,8 @@ TEST(HandLayout, TheGloveLayoutNamesTheMarkersOfARealGlove) {
   EXPECT_EQ(right.hand_frame_markers, 3U);
   EXPECT_FALSE(right.has_hand_star());
   EXPECT_EQ(camera_hand_star_problem(right),
-            "the layout \"glove-13\" has 3 markers on the back of the hand; following a hand through cameras needs four (a marker star): "
-            "this layout serves labelled takes only");
+            "the layout \"glove-13\" has 3 markers on the back of the hand; the runtime follows hands through cameras by a marker star "
+            "of four: this layout serves takes and rhot-eval's single hands only");
   // The shared take's names (../shared/data/glove-take), back of the hand and fingertips first.
   EXPECT_EQ(layout_marker_names(right),
             (std::vector<std::string>{"hand_top", "hand_left", "hand_right", "thumb_tip", "index_tip", "middle_tip", "ring_tip",
