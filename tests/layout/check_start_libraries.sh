@@ -6,7 +6,12 @@
 set -euo pipefail
 status=0
 for program in "$@"; do
-  heavy=$(ldd "${program}" | grep -oE 'lib(opencv_imgcodecs|opencv_videoio|gdal|gstreamer-1\.0|avcodec)[^ ]*' | sort -u | tr '\n' ' ' || true)
+  if ! libraries=$(ldd "${program}" 2>&1); then
+    echo "${program}: ldd cannot read it: ${libraries}"
+    status=1
+    continue
+  fi
+  heavy=$(grep -oE 'lib(opencv_imgcodecs|opencv_videoio|gdal|gstreamer-1\.0|avcodec)[^ ]*' <<<"${libraries}" | sort -u | tr '\n' ' ' || true)
   if [[ -n "${heavy}" ]]; then
     echo "${program} maps at start: ${heavy}(call them through tracking/media/Media.h)"
     status=1

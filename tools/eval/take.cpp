@@ -183,8 +183,9 @@ struct TrackerErrors {
   std::map<std::string, std::vector<double>> hidden_by_finger, visible_by_finger, hidden_other;
   int frames_judged = 0, hand_seen = 0, hidden_frames = 0;
   double ik_sum_us = 0.0;
-  // Through a rig: finger markers in view, found by the tracker, and found somewhere else.
-  long markers_in_view = 0, markers_found = 0, markers_wrong = 0;
+  // Through a rig: finger markers in view and found by the tracker; markers given a point, and
+  // given another marker's (or, hidden, any).
+  long markers_in_view = 0, markers_found = 0, markers_given = 0, markers_wrong = 0;
 };
 
 TrackerErrors run_tracker_over_take(HandTracker& tracker, const MarkerTake& take, const std::vector<int>& index, int first,
@@ -462,14 +463,14 @@ TrackerErrors judge_through_rig(const MarkerTake& take, const TakePlan& plan, co
       for (std::size_t m = layout.hand_frame_markers; m < layout.markers.size(); ++m) {
         const Eigen::Vector3d at = truth(m);
         if (!at.allFinite()) continue;
-        if (!is_hidden(m)) {
-          // A finger marker in view: found by the tracker, and found where it is (a point within
-          // 10 mm of it; else another marker's, a ghost or a stray taken for it).
-          ++out.markers_in_view;
-          const int p = hand.marker_point[m];
-          out.markers_found += p >= 0 ? 1 : 0;
-          out.markers_wrong += p >= 0 && (points[static_cast<std::size_t>(p)] - at).norm() > 0.010 ? 1 : 0;
-        }
+        // A finger marker in view: found by the tracker, and found where it is (a point within 10 mm
+        // of it; else another marker's, a ghost or a stray taken for it). A hidden one given a point
+        // took some other marker's.
+        const int p = hand.marker_point[m];
+        out.markers_in_view += is_hidden(m) ? 0 : 1;
+        out.markers_found += p >= 0 && !is_hidden(m) ? 1 : 0;
+        out.markers_given += p >= 0 ? 1 : 0;
+        out.markers_wrong += p >= 0 && (is_hidden(m) || (points[static_cast<std::size_t>(p)] - at).norm() > 0.010) ? 1 : 0;
         const auto tip = std::ranges::find(layout.fingertip_marker, static_cast<int>(m));
         if (tip == layout.fingertip_marker.end()) continue;
         const double e = 1e3 * (hand.world_from_hand * estimated[m] - at).norm();
@@ -543,7 +544,7 @@ int take_through_rig(const HandsArgs& args, const MarkerTake& take) {
   j["finger_markers_found_fraction"] =
       e.markers_in_view > 0 ? static_cast<double>(e.markers_found) / static_cast<double>(e.markers_in_view) : 0.0;
   j["finger_markers_wrong_fraction"] =
-      e.markers_found > 0 ? static_cast<double>(e.markers_wrong) / static_cast<double>(e.markers_found) : 0.0;
+      e.markers_given > 0 ? static_cast<double>(e.markers_wrong) / static_cast<double>(e.markers_given) : 0.0;
   j["rig"] = args.rig_file;
   j["world"] = world_json(*world, args.world.world);
   j["shift_m"] = {r.shift_m.x(), r.shift_m.y(), r.shift_m.z()};
@@ -558,6 +559,8 @@ int hands_take(const HandsArgs& args) {
   if (args.labelled == through_rig)
     return fail("hands --take: --labelled (the take's 3D points) or --rig FILE (the take photographed by the rig's cameras), one of them");
   if (through_rig && !args.layout_given) return fail("hands --take --rig: needs --layout (the markers the cameras follow)");
+  if (args.calibrate_from != "labelled" && (!through_rig || args.calibrate_seconds <= 0.0))
+    return fail("hands --take: --calibrate-from cameras needs --rig and --calibrate-seconds (the markers found through the cameras)");
   const auto take = read_marker_take(args.take_file);
   if (!take) return fail(take.error());
   if (args.layout_given) {

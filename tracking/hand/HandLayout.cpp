@@ -410,6 +410,17 @@ HandLayout read_layout(const JsonNode& j, const std::filesystem::path& folder) {
       }
     }
   }
+  if (layout.hand_frame_markers == 3) {
+    // Three markers are told apart by their edges (TriangleTracker.h): no two within 3 mm.
+    const auto& mk = layout.markers;
+    const std::array<double, 3> edge{(mk[0].offset_m - mk[1].offset_m).norm(), (mk[1].offset_m - mk[2].offset_m).norm(),
+                                     (mk[0].offset_m - mk[2].offset_m).norm()};
+    if (std::min({std::abs(edge[0] - edge[1]), std::abs(edge[1] - edge[2]), std::abs(edge[0] - edge[2])}) < 0.003) {
+      where.fail("the back of the hand's three markers make a triangle with two edges within 3 mm of each other (" +
+                 std::to_string(std::lround(1e3 * edge[0])) + ", " + std::to_string(std::lround(1e3 * edge[1])) + " and " +
+                 std::to_string(std::lround(1e3 * edge[2])) + " mm): through cameras its markers cannot be told apart");
+    }
+  }
   if (auto list = j.optional("segment_stars")) {
     if (!j.has("star_set")) j.fail("missing \"star_set\", the path of the segment stars' set");
     const JsonNode set_node = j["star_set"];

@@ -132,6 +132,8 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
   out_.fingertip_point.fill(-1);
   std::ranges::fill(out_.marker_point, -1);
   if (!out_.hand_seen) return;
+  if (!hand_first_seen_s_) hand_first_seen_s_ = time_s;
+  const double unfound_gate_m = time_s - *hand_first_seen_s_ <= kUnfoundSearch_s ? kUnfoundMarkerGate_m : kFingertipGateMax_m;
   out_.world_from_hand = settings_.filter ? hand_filter_.filter(world_from_hand, time_s) : world_from_hand;
   // Each finger marker where the last solve puts it.
   const HandPose& last = solver_.state().pose;
@@ -139,7 +141,7 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
   for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
     predicted_marker_[m] = layout_marker_in_hand(layout_.markers[m], last, frames);
     gate_m_[m] = marker_found_s_[m] ? std::min(kFingertipGateMax_m, kFingertipGate_m + kGateGrowth_mps * (time_s - *marker_found_s_[m]))
-                                    : kUnfoundMarkerGate_m;
+                                    : unfound_gate_m;
   }
 }
 
@@ -153,7 +155,7 @@ std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(s
   for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
     const int want = layout_.markers[m].colour;
     for (std::size_t q = 0; q < points.size(); ++q) {
-      if (taken[q]) continue;
+      if (taken[q] || !points[q].allFinite()) continue;  // a NaN distance would pass every gate
       const Eigen::Vector3d p = hand_from_world * points[q];
       const double d = (p - predicted_marker_[m]).norm();
       if (want >= 0 && q < colour.size()) {

@@ -105,13 +105,15 @@ class HandTracker {
   static constexpr double kFingertipGate_m = 0.025;
   static constexpr double kGateGrowth_mps = 0.25;
   static constexpr double kFingertipGateMax_m = 0.04;
-  // A marker never yet found is looked for within kUnfoundMarkerGate_m: a finger the skeleton
-  // starts far from (a glove on a hand unlike the reference one: this take's thumb markers 50 mm
-  // and more from where the reference hand holds them) finds its markers. The persistence rule
-  // still holds, the other markers take theirs first (nearest first), and once found a marker is
-  // followed within the gates above: a marker lost later, while the hand holds an object whose
-  // markers stay put beside the fingers, does not reach that far for them.
+  // A marker never yet found is looked for within kUnfoundMarkerGate_m over the first
+  // kUnfoundSearch_s after the hand is first seen: a finger the skeleton starts far from (a glove on
+  // a hand unlike the reference one: the shared take's thumb markers 50 mm and more from where the
+  // reference hand holds them) finds its markers. The persistence rule still holds, the other
+  // markers take theirs first (nearest first), and after that search, or once found, a marker is
+  // followed within the gates above: a marker hidden from the start, or lost later, while the hand
+  // holds an object whose markers stay put beside the fingers, does not reach that far for them.
   static constexpr double kUnfoundMarkerGate_m = 0.08;
+  static constexpr double kUnfoundSearch_s = 3.0;
   static constexpr double kColourGate_m = 0.08;
   // A finger's markers other than its tip's weigh this much in its fit (FingerFit.h) against the
   // tip's: the tip's miss is what a user sees, the others pin the knuckle down. The per-user
@@ -140,6 +142,7 @@ class HandTracker {
   std::vector<Eigen::Vector3d> predicted_marker_;
   std::vector<double> gate_m_;
   std::vector<std::optional<double>> marker_found_s_;  // when each marker last had a point
+  std::optional<double> hand_first_seen_s_;
   // Per marker, the free points outside its tight gate but inside its widened one, last frame and
   // this frame (hand frame): where a lost marker may be reappearing.
   std::vector<std::vector<Eigen::Vector3d>> reappearing_, reappearing_now_;

@@ -23,7 +23,7 @@ struct Loaded {
 };
 
 // One attempt: the handle is kept for the life of the process (never dlclose'd: OpenCV's
-// back-ends keep threads and static state).
+// back-ends keep threads and static state), a module refused for its version included.
 const MediaModuleApi* try_load(const std::string& file, std::string& why) {
   void* handle = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (handle == nullptr) {
@@ -56,8 +56,12 @@ Loaded load() {
     const std::filesystem::path program = std::filesystem::read_symlink("/proc/self/exe", ec);
     if (!ec) {
       candidates.push_back((program.parent_path() / kMediaModuleFile).string());
+      candidates.push_back((program.parent_path() / "lib" / "rhot" / kMediaModuleFile).string());  // the build tree's tools
       candidates.push_back((program.parent_path() / ".." / "lib" / "rhot" / kMediaModuleFile).string());
     }
+    // Where this build installs it, for a program whose run path was not set (an application on
+    // a CMake that drops the package's link options: policy CMP0099 before 3.17).
+    candidates.emplace_back(RHOT_MEDIA_INSTALL_DIR "/" + std::string(kMediaModuleFile));
   }
   Loaded loaded;
   std::string reasons;

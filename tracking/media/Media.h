@@ -11,7 +11,8 @@
 // Where the module is looked for, in order: the file named by the environment variable
 // RHOT_MEDIA_MODULE (and only there, when it is set); then by name, through the program's run path,
 // which linking rhot::tracking_media sets (the build tree's lib/rhot, or the installed package's
-// PREFIX/lib/rhot); then beside the program and in ../lib/rhot from it. When it cannot be loaded,
+// PREFIX/lib/rhot); then beside the program, in lib/rhot and ../lib/rhot from it, and where this
+// build installs it. When it cannot be loaded,
 // media_module() says why and every call below fails with that reason; nothing aborts.
 //
 // Thread safety: the module is loaded once, under a lock; the functions may be called from any

@@ -37,6 +37,9 @@ bool read_image(const char* file, int imread_flags, cv::Mat* image, char* error,
   } catch (const std::exception& e) {
     image->release();
     tell(e.what(), error, error_size);
+  } catch (...) {
+    image->release();
+    tell("an exception that is not a std::exception", error, error_size);
   }
   return !image->empty();
 }
@@ -49,6 +52,8 @@ bool write_image(const char* file, const cv::Mat* image, const int* params, std:
     tell(e.msg, error, error_size);
   } catch (const std::exception& e) {
     tell(e.what(), error, error_size);
+  } catch (...) {
+    tell("an exception that is not a std::exception", error, error_size);
   }
   return false;
 }
@@ -74,7 +79,7 @@ void* open_capture(const char* device, int kind) {
     auto capture = std::make_unique<cv::VideoCapture>();
     if (!open(*capture, device, static_cast<VideoCapture::Kind>(kind)) || !capture->isOpened()) return nullptr;
     return capture.release();
-  } catch (const std::exception&) {
+  } catch (...) {
     return nullptr;  // OpenCV's exceptions, or stoi's on a device that is not a number
   }
 }
@@ -84,7 +89,7 @@ void close_capture(void* capture) { delete static_cast<cv::VideoCapture*>(captur
 bool grab(void* capture) {
   try {
     return static_cast<cv::VideoCapture*>(capture)->grab();
-  } catch (const std::exception&) {
+  } catch (...) {
     return false;
   }
 }
@@ -92,7 +97,7 @@ bool grab(void* capture) {
 bool retrieve(void* capture, cv::Mat* image) {
   try {
     if (static_cast<cv::VideoCapture*>(capture)->retrieve(*image)) return !image->empty();
-  } catch (const std::exception&) {
+  } catch (...) {
   }
   image->release();
   return false;

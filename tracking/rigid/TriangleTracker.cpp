@@ -45,12 +45,12 @@ bool TriangleTracker::edge_fits(int edge, std::span<const Eigen::Vector3d> point
   return std::abs(d - edge_m_[static_cast<std::size_t>(edge)]) <= tolerance;
 }
 
-// Every assignment of points to the three markers whose edges all fit, cheapest first (at most
-// kMaxMatches). Followed (`predicted`), each marker's points are those within the follow gate of its
+// Every assignment of points to the three markers whose edges all fit, cheapest first (the
+// kMaxMatches cheapest). Followed (`predicted`), each marker's points are those within the follow gate of its
 // predicted place and the cost is the squared distance from the prediction; found anew, every point
 // is a candidate and the cost is the edges' squared misfit.
 std::vector<TriangleTracker::Match> TriangleTracker::matches(std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
-                                                            const std::array<Eigen::Vector3d, 3>* predicted) const {
+                                                             const std::array<Eigen::Vector3d, 3>* predicted) const {
   std::array<std::vector<int>, 3> near;
   for (int p = 0; p < static_cast<int>(points.size()); ++p) {
     const Eigen::Vector3d& at = points[static_cast<std::size_t>(p)];
@@ -78,11 +78,12 @@ std::vector<TriangleTracker::Match> TriangleTracker::matches(std::span<const Eig
             m.cost += (d - edge_m_[k]) * (d - edge_m_[k]);
           }
         }
-        if (out.size() < kMaxMatches) out.push_back(m);
+        out.push_back(m);
       }
     }
   }
   std::ranges::sort(out, {}, &Match::cost);
+  if (out.size() > kMaxMatches) out.resize(kMaxMatches);
   return out;
 }
 
@@ -150,6 +151,12 @@ const TrackedTriangle& TriangleTracker::update(double time_s, std::span<const Ei
   out_.seen = false;
   out_.point = {-1, -1, -1};
   out_.markers_seen = 0;
+  if (time_s < last_seen_s_ || time_s < pending_time_s_) {
+    // Time ran backwards (a replay started over): nothing followed or pending holds.
+    confirmed_ = false;
+    pending_.clear();
+    last_seen_s_ = pending_time_s_ = time_s;
+  }
   out_.followed = confirmed_ && time_s - last_seen_s_ <= settings_.lost_after_s;
   if (out_.followed) {
     Rigid3d predicted = out_.world_from_body;
@@ -173,13 +180,21 @@ const TrackedTriangle& TriangleTracker::update(double time_s, std::span<const Ei
   // frames in a row is the body, unless another has lasted two frames or more beside it (a second
   // glove, or three markers of it and another's: nothing tells them apart).
   confirmed_ = false;
+  if (time_s - pending_time_s_ > settings_.lost_after_s) pending_.clear();  // not frames in a row
+  pending_time_s_ = time_s;
+  const auto near = [&](const std::array<Eigen::Vector3d, 3>& a, const std::array<Eigen::Vector3d, 3>& b) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      if ((a[k] - b[k]).norm() > settings_.follow_gate_m) return false;
+    }
+    return true;
+  };
   std::vector<Pending> next;
   for (const Match& m : matches(points_world, sigma_m, nullptr)) {
     Pending p{places(points_world, m), m.point, 1};
+    // A near-copy of a cheaper match (a doubled point) is that match, not a rival.
+    if (std::ranges::any_of(next, [&](const Pending& cheaper) { return near(cheaper.at, p.at); })) continue;
     for (const Pending& before : pending_) {
-      bool same = true;
-      for (std::size_t k = 0; k < 3 && same; ++k) same = (p.at[k] - before.at[k]).norm() <= settings_.follow_gate_m;
-      if (same) p.frames = std::max(p.frames, before.frames + 1);
+      if (near(p.at, before.at)) p.frames = std::max(p.frames, before.frames + 1);
     }
     next.push_back(p);
   }

@@ -6,11 +6,14 @@
 // give the body's pose (a triangle seen from behind is the same triangle turned over; it has no
 // mirror image to confuse it with).
 //
-// Finding it anew (never seen, or lost for longer than lost_after_s): a frame counts only where
-// exactly one set of points matches the three edges, and the body is believed once that match has
-// come back, each point within follow_gate_m of the last frame's, confirm_frames frames in a row.
-// A hand's ten finger markers make a chance match of three edges to a few millimetres rare, not
-// impossible; a chance match does not stay put frame after frame.
+// Finding it anew (never seen, or lost for longer than lost_after_s): every set of points that
+// matches the three edges is a candidate (near-copies of a cheaper one, as doubled points give,
+// count as that one), and one that comes back (each point within follow_gate_m of the last
+// frame's, a frame apart at most lost_after_s) confirm_frames frames in a row is believed, unless
+// another candidate has lasted two frames or more beside it. A hand's ten finger markers make a
+// chance match of three edges now and then; a chance match does not stay put, while a second body
+// of the same edges (the other hand's glove: a left glove's triangle is the right's turned over)
+// does, and then neither is believed. Time running backwards starts the search afresh.
 // Following it: each marker is looked for near where the last pose and velocity put it, and the
 // match nearest the prediction whose edges fit wins. With one marker missing (hidden, or seen by
 // one camera only), the two left place the body: the prediction turned by the least rotation that
@@ -80,7 +83,7 @@ class TriangleTracker {
   TriangleTrackerSettings settings_;
   TrackedTriangle out_;
   bool confirmed_ = false;
-  double last_seen_s_ = 0.0;
+  double last_seen_s_ = -1e300;
   // While finding it anew: the last frame's matches, each with how many frames in a row it has
   // come back.
   struct Pending {
@@ -89,6 +92,7 @@ class TriangleTracker {
     int frames = 1;
   };
   std::vector<Pending> pending_;
+  double pending_time_s_ = -1e300;  // the frame pending_ is from
 };
 
 }  // namespace rhot

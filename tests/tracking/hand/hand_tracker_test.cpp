@@ -597,6 +597,11 @@ TEST(HandLayout, MarkersOnBonesAreCheckedWithExactErrors) {
       {"name": "b", "bone": "wrist", "offset_mm": [0, 18, -35]}, {"name": "c", "bone": "wrist", "offset_mm": [2, 18, -55]}]})"),
             "/markers: the back of the hand's markers \"a\", \"b\" and \"c\" are nearly in a line (each must be 5 mm off the line "
             "through the others)");
+  // An isosceles back: its two equal edges would let the cameras take one marker for the other.
+  EXPECT_EQ(layout_error("{" + head + R"(, "markers": [{"name": "a", "bone": "wrist", "offset_mm": [0, 18, -80]},
+      {"name": "b", "bone": "wrist", "offset_mm": [-20, 18, -35]}, {"name": "c", "bone": "wrist", "offset_mm": [20, 18, -35]}]})"),
+            "/markers: the back of the hand's three markers make a triangle with two edges within 3 mm of each other (49, 40 and 49 mm): "
+            "through cameras its markers cannot be told apart");
   EXPECT_EQ(layout_error("{" + head + R"(, "markers": [{"name": "a", "bone": "wrist", "offset_mm": [0, 18, -80], "colour": "blue"},
       {"name": "b", "bone": "wrist", "offset_mm": [-27, 18, -35]}, {"name": "c", "bone": "wrist", "offset_mm": [6, 18, -35]}]})"),
             "/markers: the back of the hand's markers share one colour: \"b\" differs from \"a\"");
