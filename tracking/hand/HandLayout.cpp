@@ -329,6 +329,43 @@ std::vector<LayoutMarker> read_markers(const JsonNode& list) {
   return markers;
 }
 
+// The back of the hand's markers, as the layout places them: four must be a star, three a triangle
+// whose markers the cameras can tell apart. `where` is the node a problem is reported against.
+void check_back_of_hand(const HandLayout& layout, const JsonNode& where) {
+  // Four markers must be a star: edges distinct, markers apart, faces apart (it sits in the hand's
+  // frame, not in a box of its own, so the box rule does not apply).
+  for (const std::string& problem : check_star_set(layout.hand_star_set())) {
+    if (problem.find("is not inside the box") != std::string::npos) continue;
+    where.fail(problem.substr(problem.find(": ") + 2));
+  }
+  // Three markers give a frame only where they make a triangle: each at least 5 mm off the line
+  // through the other two.
+  for (std::size_t a = 0; a < layout.hand_frame_markers; ++a) {
+    for (std::size_t b = a + 1; b < layout.hand_frame_markers; ++b) {
+      for (std::size_t c = b + 1; c < layout.hand_frame_markers; ++c) {
+        const Eigen::Vector3d p = layout.markers[a].offset_m, q = layout.markers[b].offset_m, r = layout.markers[c].offset_m;
+        const double area2 = (q - p).cross(r - p).norm();
+        const double longest = std::max({(q - p).norm(), (r - p).norm(), (r - q).norm()});
+        if (longest < 1e-9 || area2 / longest < 0.005) {
+          where.fail("the back of the hand's markers \"" + layout.markers[a].name + "\", \"" + layout.markers[b].name + "\" and \"" +
+                     layout.markers[c].name + "\" are nearly in a line (each must be 5 mm off the line through the others)");
+        }
+      }
+    }
+  }
+  if (layout.hand_frame_markers == 3) {
+    // Three markers are told apart by their edges (TriangleTracker.h): no two within 3 mm.
+    const auto& mk = layout.markers;
+    const std::array<double, 3> edge{(mk[0].offset_m - mk[1].offset_m).norm(), (mk[1].offset_m - mk[2].offset_m).norm(),
+                                     (mk[0].offset_m - mk[2].offset_m).norm()};
+    if (std::min({std::abs(edge[0] - edge[1]), std::abs(edge[1] - edge[2]), std::abs(edge[0] - edge[2])}) < 0.003) {
+      where.fail("the back of the hand's three markers make a triangle with two edges within 3 mm of each other (" +
+                 std::to_string(std::lround(1e3 * edge[0])) + ", " + std::to_string(std::lround(1e3 * edge[1])) + " and " +
+                 std::to_string(std::lround(1e3 * edge[2])) + " mm): through cameras its markers cannot be told apart");
+    }
+  }
+}
+
 HandLayout read_layout(const JsonNode& j, const std::filesystem::path& folder) {
   j.expect_object({"format", "version", "name", "side", "marker_diameter_mm", "markers", "hand_star_mm", "fingertip_markers", "star_set",
                    "segment_stars", "description", "marker_colours"});
@@ -389,38 +426,7 @@ HandLayout read_layout(const JsonNode& j, const std::filesystem::path& folder) {
     layout.markers.push_back(markers[*tip[f]]);
   }
   for (const std::size_t k : rest) layout.markers.push_back(markers[k]);
-  // Four markers must be a star: edges distinct, markers apart, faces apart (it sits in the hand's
-  // frame, not in a box of its own, so the box rule does not apply).
-  for (const std::string& problem : check_star_set(layout.hand_star_set())) {
-    if (problem.find("is not inside the box") != std::string::npos) continue;
-    where.fail(problem.substr(problem.find(": ") + 2));
-  }
-  // Three markers give a frame only where they make a triangle: each at least 5 mm off the line
-  // through the other two.
-  for (std::size_t a = 0; a < layout.hand_frame_markers; ++a) {
-    for (std::size_t b = a + 1; b < layout.hand_frame_markers; ++b) {
-      for (std::size_t c = b + 1; c < layout.hand_frame_markers; ++c) {
-        const Eigen::Vector3d p = layout.markers[a].offset_m, q = layout.markers[b].offset_m, r = layout.markers[c].offset_m;
-        const double area2 = (q - p).cross(r - p).norm();
-        const double longest = std::max({(q - p).norm(), (r - p).norm(), (r - q).norm()});
-        if (longest < 1e-9 || area2 / longest < 0.005) {
-          where.fail("the back of the hand's markers \"" + layout.markers[a].name + "\", \"" + layout.markers[b].name + "\" and \"" +
-                     layout.markers[c].name + "\" are nearly in a line (each must be 5 mm off the line through the others)");
-        }
-      }
-    }
-  }
-  if (layout.hand_frame_markers == 3) {
-    // Three markers are told apart by their edges (TriangleTracker.h): no two within 3 mm.
-    const auto& mk = layout.markers;
-    const std::array<double, 3> edge{(mk[0].offset_m - mk[1].offset_m).norm(), (mk[1].offset_m - mk[2].offset_m).norm(),
-                                     (mk[0].offset_m - mk[2].offset_m).norm()};
-    if (std::min({std::abs(edge[0] - edge[1]), std::abs(edge[1] - edge[2]), std::abs(edge[0] - edge[2])}) < 0.003) {
-      where.fail("the back of the hand's three markers make a triangle with two edges within 3 mm of each other (" +
-                 std::to_string(std::lround(1e3 * edge[0])) + ", " + std::to_string(std::lround(1e3 * edge[1])) + " and " +
-                 std::to_string(std::lround(1e3 * edge[2])) + " mm): through cameras its markers cannot be told apart");
-    }
-  }
+  check_back_of_hand(layout, where);
   if (auto list = j.optional("segment_stars")) {
     if (!j.has("star_set")) j.fail("missing \"star_set\", the path of the segment stars' set");
     const JsonNode set_node = j["star_set"];
