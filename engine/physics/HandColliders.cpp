@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "engine/physics/BulletMath.h"
+#include "tracking/core/Solvers.h"
 
 namespace rhot {
 
@@ -26,8 +27,7 @@ bool input_finite(const HandInput& in) {
 btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const Eigen::Vector3d d = b - a;
   const double n = d.norm();
-  const Eigen::Quaterniond q =
-      n > 1e-9 ? Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), d / n) : Eigen::Quaterniond::Identity();
+  const Eigen::Quaterniond q = n > 1e-9 ? rotation_between(Eigen::Vector3d::UnitY(), d / n) : Eigen::Quaterniond::Identity();
   return btTransform(to_bt(q), to_bt(0.5 * (a + b)));
 }
 

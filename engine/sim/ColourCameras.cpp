@@ -215,27 +215,26 @@ std::vector<cv::Mat> ColourCameras::render(const ColourShot& shot, std::uint64_t
   for (std::size_t c = 0; c < images.size(); ++c) {
     const Image& img = images[c];
     cv::Mat rgba(img.height, img.width, CV_8UC4, const_cast<std::uint8_t*>(img.rgba.data()));
-    cv::Mat distorted;
-    cv::remap(rgba, distorted, map_x_[c], map_y_[c], cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    cv::remap(rgba, distorted_, map_x_[c], map_y_[c], cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     // Linear light, the light's colour and the exposure, the blur, then back to sRGB with noise.
-    cv::Mat light(img.height, img.width, CV_32FC3);
+    light_.create(img.height, img.width, CV_32FC3);
     for (int y = 0; y < img.height; ++y) {
-      const auto* p = distorted.ptr<cv::Vec4b>(y);
-      auto* l = light.ptr<cv::Vec3f>(y);
+      const auto* p = distorted_.ptr<cv::Vec4b>(y);
+      auto* l = light_.ptr<cv::Vec3f>(y);
       for (int x = 0; x < img.width; ++x) {
         for (int ch = 0; ch < 3; ++ch) {
           l[x][ch] = to_linear[p[x][ch]] * static_cast<float>(gain[static_cast<std::size_t>(ch)] * settings_.exposure);
         }
       }
     }
-    if (settings_.blur_sigma_px > 0.0) cv::GaussianBlur(light, light, cv::Size(0, 0), settings_.blur_sigma_px);
-    cv::Mat noise(img.height, img.width, CV_32FC3);
+    if (settings_.blur_sigma_px > 0.0) cv::GaussianBlur(light_, light_, cv::Size(0, 0), settings_.blur_sigma_px);
+    noise_.create(img.height, img.width, CV_32FC3);
     cv::RNG rng(settings_.seed * 1000003ULL + frame * 131ULL + c);
-    rng.fill(noise, cv::RNG::NORMAL, 0.0, settings_.noise_sigma);
+    rng.fill(noise_, cv::RNG::NORMAL, 0.0, settings_.noise_sigma);
     cv::Mat bgr(img.height, img.width, CV_8UC3);
     for (int y = 0; y < img.height; ++y) {
-      const auto* l = light.ptr<cv::Vec3f>(y);
-      const auto* n = noise.ptr<cv::Vec3f>(y);
+      const auto* l = light_.ptr<cv::Vec3f>(y);
+      const auto* n = noise_.ptr<cv::Vec3f>(y);
       auto* o = bgr.ptr<cv::Vec3b>(y);
       for (int x = 0; x < img.width; ++x) {
         for (int ch = 0; ch < 3; ++ch) {

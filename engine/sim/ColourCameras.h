@@ -103,6 +103,9 @@ class ColourCameras {
   MeshHandle sphere_, box_;
   double render_f_scale_ = 0.9;         // the pinhole image's focal length over the camera's, for a margin to distort into
   std::vector<cv::Mat> map_x_, map_y_;  // per camera: distorted pixel -> pinhole image pixel
+  // render's working images, kept from frame to frame (about 9 MB a camera at 640 x 480, which
+  // allocated anew each frame cost a page fault per page).
+  cv::Mat distorted_, light_, noise_;
 };
 
 // A frame source of simulated colour cameras: at each moment the shot the world gives is rendered

@@ -29,7 +29,7 @@ std::optional<Similarity3> fit_similarity(const std::vector<Eigen::Vector3d>& fr
   const Eigen::Matrix3Xd centred = a.colwise() - a.rowwise().mean();
   const Eigen::Vector3d ev = symmetric_eigenvalues(centred * centred.transpose());  // ascending: squared singular values
   if (!(ev[1] > 1e-18 * std::max(ev[2], 1e-300))) return std::nullopt;
-  const Eigen::Matrix4d m = Eigen::umeyama(a, b, with_scale);
+  const Eigen::Matrix4d m = umeyama_transform(a, b, with_scale);
   if (!m.allFinite()) return std::nullopt;
   Similarity3 s;
   s.scale = with_scale ? m.block<3, 3>(0, 0).col(0).norm() : 1.0;

@@ -64,4 +64,12 @@ Svd3 svd(const Eigen::Matrix3d& m) {
   return {s.matrixU(), s.singularValues(), s.matrixV()};
 }
 
+Eigen::Matrix4d umeyama_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, bool with_scale) {
+  return Eigen::umeyama(from, to, with_scale);
+}
+
+Eigen::Quaterniond rotation_between(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+  return Eigen::Quaterniond::FromTwoVectors(from, to);
+}
+
 }  // namespace rhot

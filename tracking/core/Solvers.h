@@ -8,6 +8,7 @@
 #include <array>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace rhot {
 
@@ -38,5 +39,16 @@ struct Svd3 {
   Eigen::Matrix3d v;
 };
 Svd3 svd(const Eigen::Matrix3d& m);
+
+// Quaterniond::FromTwoVectors(from, to): the smallest rotation taking from's direction to to's
+// (for opposite directions, a half turn about an axis found by a 2 x 3 JacobiSVD). Each expression
+// type it is called with instantiates that SVD anew: 6 s of compile time per call site under the
+// sanitizers, measured in engine_physics_test's unit.
+Eigen::Quaterniond rotation_between(const Eigen::Vector3d& from, const Eigen::Vector3d& to);
+
+// Eigen::umeyama(from, to, with_scale): the similarity (4 x 4, homogeneous; a rigid motion
+// without the scale) taking the columns of `from` nearest the columns of `to` in least squares.
+// Its 3 x 3 SVD made it the costliest call to compile of tracking/hand's and tracking/calib's units.
+Eigen::Matrix4d umeyama_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, bool with_scale);
 
 }  // namespace rhot

@@ -1,6 +1,7 @@
 #include "tracking/hand/HandLayout.h"
 
 #include "tracking/core/MarkerColour.h"
+#include "tracking/core/Solvers.h"
 
 #include "tracking/hand/HandSolver.h"
 
@@ -60,7 +61,7 @@ std::optional<Rigid3d> labelled_hand_frame(const HandLayout& layout, std::span<c
     from.col(static_cast<Eigen::Index>(k)) = layout.markers[back[k]].offset_m;
     to.col(static_cast<Eigen::Index>(k)) = markers_world[back[k]];
   }
-  const Eigen::Matrix4d t = Eigen::umeyama(from, to, false);
+  const Eigen::Matrix4d t = umeyama_transform(from, to, false);
   if (!t.allFinite()) return std::nullopt;
   Rigid3d out;
   out.rotation = Eigen::Quaterniond(Eigen::Matrix3d(t.block<3, 3>(0, 0))).normalized();

@@ -178,6 +178,50 @@ std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(s
   return out;
 }
 
+void HandTracker::untangle_neighbours(std::span<const Eigen::Vector3d> points, std::span<int> marker_point) const {
+  if (!out_.hand_seen || marker_point.size() != layout_.markers.size()) return;
+  const Rigid3d hand_from_world = out_.world_from_hand.inverse();
+  const auto in_hand = [&](int p) { return hand_from_world * points[static_cast<std::size_t>(p)]; };
+  const auto usable = [&](int p) {
+    return p >= 0 && static_cast<std::size_t>(p) < points.size() && points[static_cast<std::size_t>(p)].allFinite();
+  };
+  const auto others_found = [&](std::size_t f) {
+    for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
+      if (layout_.finger_of_marker(m) == static_cast<int>(f) && static_cast<int>(m) != layout_.fingertip_marker[f] &&
+          usable(marker_point[m]))
+        return true;
+    }
+    return false;
+  };
+  // Finger f's fit miss with its tip's marker on point p and its other markers on theirs.
+  const auto miss = [&](std::size_t f, int p) {
+    std::array<FingerPoint, kMaxFingerPoints> on_finger;
+    std::size_t count = 0;
+    const auto tip = static_cast<std::size_t>(layout_.fingertip_marker[f]);
+    on_finger[count++] = finger_point(layout_.markers[tip], in_hand(p), 1.0);
+    for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size() && count < on_finger.size(); ++m) {
+      if (m != tip && layout_.finger_of_marker(m) == static_cast<int>(f) && usable(marker_point[m]))
+        on_finger[count++] = finger_point(layout_.markers[m], in_hand(marker_point[m]), kOtherMarkerWeight);
+    }
+    return fit_finger(solver_.chains()[f], std::span<const FingerPoint>(on_finger.data(), count), solver_.state().angles[f],
+                      finger_fit_settings(static_cast<Finger>(f)))
+        .rms_m;
+  };
+  for (std::size_t f = 0; f + 1 < kFingerCount; ++f) {
+    const int ta = layout_.fingertip_marker[f], tb = layout_.fingertip_marker[f + 1];
+    if (ta < 0 || tb < 0) continue;
+    if (layout_.markers[static_cast<std::size_t>(ta)].colour >= 0 || layout_.markers[static_cast<std::size_t>(tb)].colour >= 0) continue;
+    int& pa = marker_point[static_cast<std::size_t>(ta)];
+    int& pb = marker_point[static_cast<std::size_t>(tb)];
+    const bool a = usable(pa), b = usable(pb);
+    if (!others_found(f) || !others_found(f + 1)) continue;
+    if (!a || !b || (in_hand(pa) - in_hand(pb)).norm() > kUntangleReach_m) continue;
+    const double kept = miss(f, pa) + miss(f + 1, pb);
+    if (kept < kUntangleMiss_m) continue;
+    if (miss(f, pb) + miss(f + 1, pa) + kUntangleMargin_m < kept) std::swap(pa, pb);
+  }
+}
+
 std::vector<Eigen::Vector3d> HandTracker::markers_in_hand() const {
   const HandPose& pose = solver_.state().pose;
   const auto frames = marker_frames(pose, solver_.chains());
@@ -338,7 +382,10 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
     slot = p.point;
     taken[static_cast<std::size_t>(p.point)] = true;
   }
-  for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->finish(time_s, points, sigma_m, tip[h]);
+  for (std::size_t h = 0; h < hands.size(); ++h) {
+    hands[h]->untangle_neighbours(points, tip[h]);
+    hands[h]->finish(time_s, points, sigma_m, tip[h]);
+  }
 }
 
 }  // namespace rhot

@@ -84,6 +84,14 @@ class HandTracker {
   // names the marker, so a finger lost for a while is found again at once.
   std::vector<FingertipCandidate> fingertip_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken,
                                                        std::span<const int> colour = {});
+  // Between fingertip_candidates and finish: neighbouring fingers' tips that took each other's
+  // points put right. Nearest first keeps a swap once two fingers' predictions have crossed (where
+  // fingertips crowd, the prediction follows the last solve, which followed the swapped points);
+  // a finger's other markers (a glove's middle markers) are not fooled, so where both fingers have
+  // one found, each tip's point is fitted with them (FingerFit.h), and the points change fingers
+  // when that fits by kUntangleMargin_m better. A lone point between two fingers goes to the one
+  // it fits. Coloured tips, named by their colour, are left as they are.
+  void untangle_neighbours(std::span<const Eigen::Vector3d> points_world, std::span<int> marker_point) const;
   const TrackedHand& finish(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m,
                             std::span<const int> marker_point);
   const HandLayout& layout() const { return layout_; }
@@ -119,6 +127,13 @@ class HandTracker {
   // tip's: the tip's miss is what a user sees, the others pin the knuckle down. The per-user
   // calibration (HandCalibration.h) weighs them alike.
   static constexpr double kOtherMarkerWeight = 0.25;
+  // untangle_neighbours: tips' points within kUntangleReach_m of each other (or a lone point of
+  // the other finger's predicted tip) are checked when the two fits miss by kUntangleMiss_m
+  // together (weighted RMS, FingerFit::rms_m), and swapped when the swap misses by kUntangleMargin_m
+  // less.
+  static constexpr double kUntangleReach_m = 0.04;
+  static constexpr double kUntangleMiss_m = 0.004;
+  static constexpr double kUntangleMargin_m = 0.002;
   // The fingertip model: frames with all five tips seen before it is used, how often it is refitted
   // (frames), how long a hidden tip's last offset from the prediction is kept (HiddenMarkerModel::
   // memory_s, the value fitted to the real glove take) and the ridge on its seen tips.

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "tracking/core/Solvers.h"
 #include "tracking/rigid/RigidFit.h"
 
 namespace rhot {
@@ -120,8 +121,7 @@ std::optional<Rigid3d> TriangleTracker::place_by_two(const Rigid3d& predicted, s
   const Eigen::Vector3d& pb = points[static_cast<std::size_t>(best_b)];
   Rigid3d pose;
   pose.rotation =
-      (Eigen::Quaterniond::FromTwoVectors(q[static_cast<std::size_t>(j)] - q[static_cast<std::size_t>(i)], pb - pa) * predicted.rotation)
-          .normalized();
+      (rotation_between(q[static_cast<std::size_t>(j)] - q[static_cast<std::size_t>(i)], pb - pa) * predicted.rotation).normalized();
   const Eigen::Vector3d mid_body = 0.5 * (markers_m_[static_cast<std::size_t>(i)] + markers_m_[static_cast<std::size_t>(j)]);
   pose.translation = 0.5 * (pa + pb) - pose.rotation * mid_body;
   if (!pose.translation.allFinite() || !pose.rotation.coeffs().allFinite()) return std::nullopt;

@@ -13,6 +13,7 @@
 #include "engine/physics/BulletMath.h"
 #include "engine/sim/ScriptedHands.h"
 #include "tests/engine/physics/PhysicsTestScenes.h"
+#include "tracking/core/Solvers.h"
 
 namespace rhot {
 namespace {
@@ -155,7 +156,7 @@ HandInput pointing_at(const Eigen::Vector3d& tip) {
   const HandPose pose = pointing_hand(HandSide::kRight);
   const Eigen::Vector3d dir = pose.position_m[static_cast<std::size_t>(HandJoint::kIndexTip)] -
                               pose.position_m[static_cast<std::size_t>(HandJoint::kIndexProximal)];
-  const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(dir, -Eigen::Vector3d::UnitY());
+  const Eigen::Quaterniond q = rotation_between(dir, -Eigen::Vector3d::UnitY());
   const Eigen::Vector3d t = tip - q * pose.position_m[static_cast<std::size_t>(HandJoint::kIndexTip)];
   return hand_input(Rigid3d{q, t}, pose);
 }
@@ -165,11 +166,10 @@ HandInput pointing_at(const Eigen::Vector3d& tip) {
 HandInput palm_at(const Eigen::Vector3d& palm) {
   const HandPose pose = pointing_hand(HandSide::kRight);
   const auto at = [&](HandJoint j) { return pose.position_m[static_cast<std::size_t>(j)]; };
-  const Eigen::Quaterniond along =
-      Eigen::Quaterniond::FromTwoVectors(at(HandJoint::kIndexTip) - at(HandJoint::kIndexProximal), Eigen::Vector3d::UnitX());
+  const Eigen::Quaterniond along = rotation_between(at(HandJoint::kIndexTip) - at(HandJoint::kIndexProximal), Eigen::Vector3d::UnitX());
   Eigen::Vector3d up = along * (at(HandJoint::kMiddleTip) - at(HandJoint::kPalm));
   up.x() = 0.0;
-  const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(up, Eigen::Vector3d::UnitY()) * along;
+  const Eigen::Quaterniond q = rotation_between(up, Eigen::Vector3d::UnitY()) * along;
   return hand_input(Rigid3d{q, palm - q * at(HandJoint::kPalm)}, pose);
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -70,6 +71,42 @@ TEST(SymmetricEigenvaluesDirect, NaNOrInfinityInGivesNaNOut) {
   for (const std::array<double, 6>& m : {std::array<double, 6>{1, nan, 0, 1, 0, 1}, std::array<double, 6>{nan, 0, 0, 1, 0, 1},
                                          std::array<double, 6>{1, 0, 0, 1, std::numeric_limits<double>::infinity(), 1}}) {
     for (const double x : symmetric_eigenvalues_packed(m)) EXPECT_TRUE(std::isnan(x));
+  }
+}
+
+// rotation_between is Eigen's FromTwoVectors: it takes the first direction onto the second, for
+// any lengths, for the same and for opposite directions (a half turn), and is a unit quaternion.
+TEST(RotationBetween, TakesTheFirstDirectionOntoTheSecond) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal;
+  const auto random_vector = [&] { return Eigen::Vector3d{normal(rng), normal(rng), normal(rng)}; };
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d from = random_vector(), to = 3.0 * random_vector();
+    const Eigen::Quaterniond q = rotation_between(from, to);
+    EXPECT_NEAR(q.norm(), 1.0, 1e-12);
+    EXPECT_LT((q * from.normalized() - to.normalized()).norm(), 1e-12) << i;
+  }
+  const Eigen::Vector3d a(0.3, -1.2, 0.5);
+  EXPECT_LT(rotation_between(a, 2.0 * a).angularDistance(Eigen::Quaterniond::Identity()), 1e-12);
+  const Eigen::Quaterniond half = rotation_between(a, -a);
+  EXPECT_NEAR(half.angularDistance(Eigen::Quaterniond::Identity()), std::numbers::pi, 1e-9);
+  EXPECT_LT((half * a + a).norm(), 1e-12);
+}
+
+// umeyama_transform is Eigen's umeyama: a rigid motion (and a scale, when asked) of points comes
+// back exactly.
+TEST(UmeyamaTransform, GivesBackTheMotionThatMovedThePoints) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal;
+  Eigen::Matrix3Xd from(3, 6);
+  for (Eigen::Index i = 0; i < from.cols(); ++i) from.col(i) = Eigen::Vector3d{normal(rng), normal(rng), normal(rng)};
+  const Eigen::Quaterniond q = Eigen::Quaterniond{normal(rng), normal(rng), normal(rng), normal(rng)}.normalized();
+  const Eigen::Vector3d t(0.4, -2.0, 1.5);
+  for (const double scale : {1.0, 2.5}) {
+    const Eigen::Matrix3Xd to = ((scale * q.toRotationMatrix()) * from).colwise() + t;
+    const Eigen::Matrix4d m = umeyama_transform(from, to, scale != 1.0);
+    EXPECT_LT((m.topLeftCorner<3, 3>() - scale * q.toRotationMatrix()).norm(), 1e-10) << scale;
+    EXPECT_LT((m.topRightCorner<3, 1>() - t).norm(), 1e-10) << scale;
   }
 }
 

@@ -748,6 +748,52 @@ TEST(HandTracker, AGloveFromLabelledMarkersPlacesAHiddenTipByItsOwnMiddleMarkerA
   EXPECT_FALSE(tracker.last().hand_seen);
 }
 
+// Neighbouring tips that took each other's points are exchanged back by their fingers' other
+// markers (HandTracker::untangle_neighbours). The real glove take through the seated rig showed
+// it: middle and ring fingers curled together, tips 15 mm apart, and once their predictions had
+// crossed, nearest first kept the swap for up to 1.3 s (docs/tracking.md).
+TEST(HandTracker, NeighbouringTipsThatTookEachOthersPointsAreExchangedBackByTheirMiddleMarkers) {
+  const HandLayout glove = shipped_layout("glove-13-right");
+  HandTracker tracker(glove, reference_open_hand(HandSide::kRight));
+  // Middle and ring curled and leaning together.
+  std::array<FingerAngles, kFingerCount> angles{};
+  const auto middle = static_cast<std::size_t>(Finger::kMiddle), ring = static_cast<std::size_t>(Finger::kRing);
+  for (std::size_t f = 0; f < kFingerCount; ++f) angles[f].flexion_rad = {0.3, 0.4, 0.25};
+  angles[middle] = {0.15, {1.0, 1.2, 0.8}};
+  angles[ring] = {-0.15, {1.0, 1.2, 0.8}};
+  const HandPose pose = hand_pose_from_angles(reference_open_hand(HandSide::kRight), tracker.solver().chains(), angles);
+  const Rigid3d world_from_hand{Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY())), {0.05, 1.05, -0.4}};
+  const std::vector<Eigen::Vector3d> points = markers(glove, world_from_hand, pose);
+  for (int k = 0; k < 20; ++k) tracker.update_labelled(0.01 * k, points);
+  const int middle_tip = glove.fingertip_marker[middle], ring_tip = glove.fingertip_marker[ring];
+  ASSERT_LT((points[static_cast<std::size_t>(middle_tip)] - points[static_cast<std::size_t>(ring_tip)]).norm(), 0.025)
+      << "the two tips crowd, as on the take";
+
+  std::vector<int> right(glove.markers.size());
+  for (std::size_t m = 0; m < right.size(); ++m) right[m] = m < glove.hand_frame_markers ? -1 : static_cast<int>(m);
+  std::vector<int> swapped = right;
+  std::swap(swapped[static_cast<std::size_t>(middle_tip)], swapped[static_cast<std::size_t>(ring_tip)]);
+  tracker.begin(0.2, true, world_from_hand);
+  std::vector<int> got = swapped;
+  tracker.untangle_neighbours(points, got);
+  EXPECT_EQ(got, right) << "the swap is put right";
+  got = right;
+  tracker.untangle_neighbours(points, got);
+  EXPECT_EQ(got, right) << "the right assignment stays";
+  // Without the middle markers nothing tells the two apart: the points stay where they were given.
+  std::vector<int> no_middle = swapped;
+  no_middle[static_cast<std::size_t>(glove.marker_index("middle_middle"))] = -1;
+  got = no_middle;
+  tracker.untangle_neighbours(points, got);
+  EXPECT_EQ(got, no_middle);
+  // A point that is not finite is never fitted.
+  std::vector<Eigen::Vector3d> bad = points;
+  bad[static_cast<std::size_t>(ring_tip)] = Eigen::Vector3d::Constant(std::nan(""));
+  got = swapped;
+  tracker.untangle_neighbours(bad, got);
+  EXPECT_EQ(got, swapped);
+}
+
 // A fingertip whose layout gives it a colour takes only a point of that colour, and takes it at
 // once wherever near the finger it reappears; without colours, the nearest point in the gate.
 TEST(HandTracker, AColouredFingertipIsKnownByItsColourAlone) {
