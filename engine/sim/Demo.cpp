@@ -5,6 +5,7 @@
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "engine/math/EigenGlm.h"
+#include "engine/scene/Components.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/sim/Realism.h"
@@ -67,6 +68,40 @@ WorldSnapshot DemoWorld::at(double t_s) {
     const Rigid3d world_from_star = at->second * star.object_from_star;
     for (const Eigen::Vector3d& m : star.markers_m) out.markers_m.push_back(world_from_star * m);
   }
+  for (const Occluder& o : body_occluders()) out.occluders.push_back(o);
+  return out;
+}
+
+std::vector<Occluder> DemoWorld::body_occluders() const {
+  std::vector<Occluder> out;
+  if (bodies_ == nullptr || !truth_) return out;
+  bodies_->view<Mesh, PhysicsBody, WorldTransform>().each([&](Entity e, const Mesh& mesh, const PhysicsBody&, const WorldTransform& wt) {
+    if (bodies_->has<Disabled>(e)) return;
+    const glm::mat4& m = wt.world_from_local;
+    // The pose without the scale (each axis's length is its scale), and the scale kept apart.
+    const Eigen::Vector3d scale(static_cast<double>(glm::length(glm::vec3(m[0]))), static_cast<double>(glm::length(glm::vec3(m[1]))),
+                                static_cast<double>(glm::length(glm::vec3(m[2]))));
+    if (!(scale.minCoeff() > 1e-9) || !scale.allFinite()) return;
+    Eigen::Matrix3d rotation;
+    for (int c = 0; c < 3; ++c) rotation.col(c) = to_eigen(glm::vec3(m[c])) / scale(c);
+    Rigid3d pose{Eigen::Quaterniond(rotation).normalized(), to_eigen(glm::vec3(m[3]))};
+    if (const TrackedBy* tracked = bodies_->find<TrackedBy>(e)) {
+      // A star-tracked object's world pose is the tracker's: the cameras see the true one.
+      const auto at = truth_->world_from_object.find(tracked->star_id);
+      if (at != truth_->world_from_object.end()) pose = at->second;
+    }
+    if (!pose.translation.allFinite() || !pose.rotation.coeffs().allFinite()) return;
+    if (const auto* box = std::get_if<BoxShape>(&mesh.shape)) {
+      out.push_back(Occluder::box(pose.translation, pose.rotation, 0.5 * to_eigen(box->size_m).cwiseProduct(scale)));
+    } else if (const auto* sphere = std::get_if<SphereShape>(&mesh.shape)) {
+      out.push_back({pose.translation, pose.translation, static_cast<double>(sphere->radius_m) * scale.maxCoeff()});
+    } else if (const auto* capsule = std::get_if<CapsuleShape>(&mesh.shape)) {
+      const double radius = static_cast<double>(capsule->radius_m);
+      const double half = std::max(0.0, 0.5 * static_cast<double>(capsule->height_m) - radius) * scale.y();
+      const Eigen::Vector3d axis = pose.rotation * Eigen::Vector3d::UnitY();
+      out.push_back({pose.translation - half * axis, pose.translation + half * axis, radius * std::max(scale.x(), scale.z())});
+    }
+  });
   return out;
 }
 
@@ -147,6 +182,7 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
   auto launched = Launch::create(scene, renderer, settings, simulated);
   if (!launched) return std::unexpected(launched.error());
   d->launch_ = std::move(*launched);
+  if (d->world_ && settings.world.occluding_bodies) d->world_->hide_behind_bodies(d->world());
   d->add_stages(settings);
   return d;
 }

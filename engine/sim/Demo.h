@@ -73,6 +73,14 @@ class DemoWorld final : public SimulatedWorld {
   static constexpr int kStarColour = 5;  // blue (tracking/core/MarkerColour.h)
   // The truth at the time last asked for (with unsynchronised cameras, the last camera's moment).
   const std::optional<SceneTruth>& truth() const { return truth_; }
+  // The scene's bodies hide markers too (WorldSettings::occluding_bodies, the realistic world): from
+  // now on every entity of `world` with a box, sphere or capsule mesh and a physics body (the table,
+  // the objects, a door, a drawer) is an occluder where the world has it (WorldTransform) when a
+  // snapshot is taken, a star-tracked object where the truth has it. Planes (the floor) and glTF
+  // meshes hide nothing. `world` must outlive this.
+  void hide_behind_bodies(World& world) { bodies_ = &world; }
+  // The occluders hide_behind_bodies adds at the truth last asked for (empty without it).
+  std::vector<Occluder> body_occluders() const;
 
  private:
   const DemoScript& script_;
@@ -85,6 +93,7 @@ class DemoWorld final : public SimulatedWorld {
   };
   std::vector<Star> stars_;
   std::optional<SceneTruth> truth_;
+  World* bodies_ = nullptr;
 };
 
 // The demo's simulated world on its own, without a runtime: what a camera node simulating the

@@ -42,6 +42,7 @@ struct WorldFlags {
   std::optional<double> sigma, dropout, calib_error_px, skew_ms, marker_mm;
   std::optional<int> strays;
   std::optional<std::string> truth_hand;
+  std::optional<std::string> bodies_hide;  // yes or no
 };
 void add_world_flags(CLI::App& command, WorldFlags& flags, bool hands);
 std::expected<rhot::WorldSettings, std::string> world_settings(const WorldFlags& flags);

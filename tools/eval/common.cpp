@@ -66,6 +66,10 @@ void add_world_flags(CLI::App& command, WorldFlags& flags, bool hands) {
       ->check(CLI::Range(-100.0, 100.0));
   command.add_option("--marker-mm", flags.marker_mm, "marker diameter: blobs merge when their discs overlap (0: never)")
       ->check(CLI::Range(0.0, 100.0));
+  command
+      .add_option("--bodies-hide", flags.bodies_hide,
+                  "yes: the table and the objects hide markers too, not only the hands (realistic: yes)")
+      ->check(CLI::IsMember({"yes", "no"}));
   if (hands) {
     command.add_option("--truth-hand", flags.truth_hand, "model (the solver's own hand) or independent (a user's own bones and angles)")
         ->check(CLI::IsMember({"model", "independent"}));
@@ -90,6 +94,7 @@ std::expected<rhot::WorldSettings, std::string> world_settings(const WorldFlags&
   if (flags.skew_ms) world->camera_skew_s = *flags.skew_ms * 1e-3;
   if (flags.marker_mm) world->marker_diameter_m = *flags.marker_mm * 1e-3;
   if (flags.truth_hand) world->independent_hands = *flags.truth_hand == "independent";
+  if (flags.bodies_hide) world->occluding_bodies = *flags.bodies_hide == "yes";
   if (auto ok = world->check(); !ok) return std::unexpected(ok.error());
   return world;
 }

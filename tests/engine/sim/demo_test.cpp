@@ -10,10 +10,12 @@
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "engine/math/EigenGlm.h"
+#include "engine/scene/Components.h"
 #include "engine/sim/Demo.h"
 #include "engine/sim/DemoPickups.h"
 #include "engine/tracked/Recording.h"
 #include "engine/scene/SceneLoader.h"
+#include "tracking/sim/Realism.h"
 
 namespace rhot {
 namespace {
@@ -97,6 +99,59 @@ TEST(Demo, TheTrackedMugStaysWithinFiveMillimetresWithOtherSeedsOfTheNoise) {
     EXPECT_GT(r.mug_seen_frames, 1080 * 9 / 10) << "seed " << seed;
     EXPECT_LT(r.mug_worst_error_m, 0.005) << "seed " << seed;
   }
+}
+
+// In the realistic world the scene's bodies hide markers, as a desk does (issue 37): the table, its
+// legs and every object with a shape are occluders where the cameras see them, a star-tracked
+// object where it truly is. Its own markers stay in view. (The block is then not lifted in this
+// seed's first 4 s, where it is without them: the cube hides a grasping fingertip, the failure
+// issue 37's grasps from evidence are to mend; docs/PERFORMANCE.md.)
+TEST(Demo, InTheRealisticWorldTheTableAndTheObjectsHideMarkers) {
+  const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
+  ASSERT_TRUE(scene.has_value());
+  const auto realistic = world_named("realistic");
+  ASSERT_TRUE(realistic.has_value());
+  DemoSettings settings;
+  settings.asset_dir = RHOT_ASSET_DIR;
+  settings.world = *realistic;
+  settings.sigma_px = realistic->sigma_px;
+  auto created = Demo::create(*scene, nullptr, settings);
+  ASSERT_TRUE(created.has_value()) << created.error();
+  Demo& demo = **created;
+  World& world = demo.world();
+  int mug_seen = 0;
+  constexpr int kFrames = 360;  // the right hand reaches for the block and closes on it
+  for (int f = 0; f < kFrames; ++f) {
+    demo.runtime().run_frame(f / 90.0);
+    const auto& seen_ids = demo.runtime().tracking().results().counts.seen_star_ids;
+    mug_seen += std::find(seen_ids.begin(), seen_ids.end(), 0) != seen_ids.end() ? 1 : 0;
+  }
+  // One occluder for each body with a box, sphere or capsule (not the floor's plane).
+  int bodies = 0;
+  world.view<Mesh, PhysicsBody>().each(
+      [&](const Mesh& m, const PhysicsBody&) { bodies += std::holds_alternative<PlaneShape>(m.shape) ? 0 : 1; });
+  const std::vector<Occluder> occluders = demo.simulated()->body_occluders();
+  EXPECT_EQ(static_cast<int>(occluders.size()), bodies);
+  EXPECT_GE(bodies, 18);
+  const auto blocked = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+    return std::any_of(occluders.begin(), occluders.end(), [&](const Occluder& o) { return o.blocks(p, q); });
+  };
+  // The table top (0.7-0.74 m, centred at z -0.5): a marker under it is hidden from a camera
+  // above, one on it is not (a clear spot of the table, right front).
+  const Eigen::Vector3d above(0.5, 1.8, -0.3);
+  EXPECT_TRUE(blocked({0.5, 0.68, -0.2}, above));
+  EXPECT_FALSE(blocked({0.5, 0.76, -0.2}, above));
+  // The mug (a capsule 8 cm across) where the truth has it: a point at its centre is inside.
+  const Eigen::Vector3d mug = demo.simulated()->truth()->world_from_object.at(0).translation;
+  EXPECT_TRUE(blocked(mug, above));
+  EXPECT_GT(mug_seen, kFrames * 8 / 10) << "its own body does not hide its star";
+  // The ideal world hides markers behind the hands' bones only.
+  DemoSettings ideal;
+  ideal.asset_dir = RHOT_ASSET_DIR;
+  auto plain = Demo::create(*scene, nullptr, ideal);
+  ASSERT_TRUE(plain.has_value()) << plain.error();
+  (*plain)->runtime().run_frame(0.0);
+  EXPECT_TRUE((*plain)->simulated()->body_occluders().empty());
 }
 
 TEST(Demo, WithPerfectHandsTooTheBlockIsLifted) {
