@@ -89,8 +89,9 @@ class HandTracker {
   // fingertips crowd, the prediction follows the last solve, which followed the swapped points);
   // a finger's other markers (a glove's middle markers) are not fooled, so where both fingers have
   // one found, each tip's point is fitted with them (FingerFit.h), and the points change fingers
-  // when that fits by kUntangleMargin_m better. A lone point between two fingers goes to the one
-  // it fits. Coloured tips, named by their colour, are left as they are.
+  // when that fits by kUntangleMargin_m better. A lone point between two fingers stays where it was
+  // given (moved by the fits, it gave a hidden finger its neighbour's point: docs/tracking.md).
+  // Coloured tips, named by their colour, are left as they are.
   void untangle_neighbours(std::span<const Eigen::Vector3d> points_world, std::span<int> marker_point) const;
   const TrackedHand& finish(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m,
                             std::span<const int> marker_point);
