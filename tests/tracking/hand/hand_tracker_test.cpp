@@ -66,7 +66,10 @@ TEST(HandLayout, TheHighFidelityLayoutPutsAStarOnEveryFingerBone) {
 }
 
 std::string layout_error(const std::string& text) {
-  const fs::path file = fs::path(::testing::TempDir()) / "rhot_bad_layout.json";
+  // A file of this test's own: the tests of this program run side by side, each in its process.
+  const fs::path dir = fs::path(::testing::TempDir()) / "rhot_bad_layout" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  fs::create_directories(dir);
+  const fs::path file = dir / "layout.json";
   std::ofstream(file) << text;
   const auto r = load_hand_layout(file);
   if (r) return "loaded";
