@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/TempDir.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/core/MarkerColour.h"
 #include "tracking/geometry/Matching.h"
@@ -66,10 +67,9 @@ TEST(HandLayout, TheHighFidelityLayoutPutsAStarOnEveryFingerBone) {
 }
 
 std::string layout_error(const std::string& text) {
-  // A file of this test's own: the tests of this program run side by side, each in its process.
-  const fs::path dir = fs::path(::testing::TempDir()) / "rhot_bad_layout" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  fs::create_directories(dir);
-  const fs::path file = dir / "layout.json";
+  // A folder of this test's own (tests/support/TempDir.h): the tests of this program run side by
+  // side, each in its process.
+  const fs::path file = test::fresh_test_dir("rhot_bad_layout") / "layout.json";
   std::ofstream(file) << text;
   const auto r = load_hand_layout(file);
   if (r) return "loaded";
