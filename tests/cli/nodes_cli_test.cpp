@@ -50,8 +50,17 @@ TEST(NodesCli, FourNodesDeliverEveryFrameAndTheMarkersAreFoundAsFromLocalCameras
   EXPECT_LE(j["frames_lost"].get<int>(), kSchedulingSlackFrames) << j.dump(2);
   EXPECT_GT(j["found_fraction"].get<double>(), kFoundFloor) << j.dump(2);
   EXPECT_EQ(j["bad_messages"], 0);
-  EXPECT_LT(j["clock_residual_us"].get<double>(), 100.0);
-  for (const auto& n : j["per_node"]) EXPECT_GT(n["frames"].get<int>(), 300) << n.dump();
+  // A round trip's sample is at most half its round trip off, so neither the offset (checked
+  // against the truth: the nodes share this host's clock) nor the fit's residual can honestly be
+  // held below that: 100 us where round trips take 60-100 us (the release build), half the
+  // fastest round trip under AddressSanitizer, whose round trips take 360-470 us on a loaded
+  // machine.
+  const auto bound_us = [](const nlohmann::json& node) { return std::max(100.0, 0.5 * node["min_rtt_us"].get<double>()); };
+  EXPECT_LT(j["clock_offset_error_us"].get<double>(), bound_us(j["per_node"][0])) << j.dump(2);
+  for (const auto& n : j["per_node"]) {
+    EXPECT_GT(n["frames"].get<int>(), 300) << n.dump();
+    EXPECT_LT(n["clock_residual_us"].get<double>(), bound_us(n)) << n.dump();
+  }
 }
 
 TEST(NodesCli, AKilledNodeLeavesTrackingToTheOthersAndComesBackWhenRestarted) {

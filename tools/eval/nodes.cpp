@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -59,10 +60,36 @@ class HeldFrames final : public FrameSource {
   void hold(RigFrame frame) { frame_ = std::move(frame); }
   const CameraRig& rig() const override { return rig_; }
   std::optional<RigFrame> next(double) override { return frame_; }
+  const RigFrame& held() const { return frame_; }
 
  private:
   CameraRig rig_;
   RigFrame frame_;
+};
+
+// The in-process rig's frames with the cameras the nodes' frame of the same moment lacked (late
+// to the assembly deadline) left out too: the two trackers then compare the transport (decoding,
+// clock mapping) on equal views, while cameras that miss the deadline are counted on their own
+// (frames_complete, late).
+class SameCamerasAs final : public FrameSource {
+ public:
+  SameCamerasAs(std::unique_ptr<FrameSource> source, const HeldFrames& nodes) : source_(std::move(source)), nodes_(nodes) {}
+  const CameraRig& rig() const override { return source_->rig(); }
+  std::optional<RigFrame> next(double t_s) override {
+    std::optional<RigFrame> frame = source_->next(t_s);
+    if (!frame) return frame;
+    const std::vector<CameraFrame>& seen = nodes_.held().cameras;
+    for (std::size_t c = 0; c < frame->cameras.size() && c < seen.size(); ++c) {
+      if (seen[c].delivered) continue;
+      frame->cameras[c].delivered = false;
+      frame->cameras[c].detections.clear();
+    }
+    return frame;
+  }
+
+ private:
+  std::unique_ptr<FrameSource> source_;
+  const HeldFrames& nodes_;
 };
 
 // Both hands tracked from one source, against the script's truth.
@@ -195,7 +222,7 @@ NodeSourceSettings source_settings(const NodesArgs& a, std::int64_t start_ns) {
 
 // With the demo's world: the hands tracked from the nodes' frames and, at the same moments, from
 // an in-process simulated rig of the same world (its own noise: the same seed gives other
-// draws than the nodes', which each seed their own cameras).
+// draws than the nodes', which each seed their own cameras) seeing the same cameras.
 struct DemoHands {
   std::unique_ptr<LiveTracking> from_nodes, in_process;
   HeldFrames* held = nullptr;
@@ -212,7 +239,8 @@ void set_up_demo_hands(const NodesArgs& a, const CameraRig& rig, const DemoSimul
   local.seed = a.seed;
   auto local_rig = std::make_unique<SimulatedRig>(rig, std::vector<Trajectory>{}, local);
   local_rig->set_world(demo.world);
-  hands.in_process = std::make_unique<LiveTracking>(std::move(local_rig), demo.objects, demo.layouts);
+  hands.in_process =
+      std::make_unique<LiveTracking>(std::make_unique<SameCamerasAs>(std::move(local_rig), *hands.held), demo.objects, demo.layouts);
   hands.nodes_hands.live = hands.from_nodes.get();
   hands.local_hands.live = hands.in_process.get();
 }
