@@ -27,12 +27,20 @@ std::expected<std::unique_ptr<HandPhysics>, std::string> HandPhysics::create(Wor
   p->hands_[1] = std::make_unique<HandColliders>(*p->physics_, HandSide::kRight, hand_settings);
   p->grasp_ = std::make_unique<GraspSystem>(*p->physics_, std::array<HandColliders*, 2>{p->hands_[0].get(), p->hands_[1].get()},
                                             scene.settings.grasp);
+  FingerContactSettings contact;
+  contact.confident = scene.settings.grasp.confident;
+  contact.max_curl_rad = scene.settings.grasp.hidden_finger_curl_rad;
+  contact.hover_distance_m = scene.settings.grasp.hover_distance_m;
+  p->finger_contact_ = std::make_unique<FingerContact>(*p->physics_, *p->grasp_, contact);
   return p;
 }
 
 void HandPhysics::step(World& world, const std::array<HandInput, 2>& hands) {
-  hands_[0]->drive(hands[0]);
-  hands_[1]->drive(hands[1]);
+  std::array<HandInput, 2> placed = hands;
+  for (std::size_t h = 0; h < 2; ++h) {
+    placements_[h] = finger_contact_->place(h == 0 ? HandSide::kLeft : HandSide::kRight, physics_->time_s(), placed[h]);
+    hands_[h]->drive(placed[h]);
+  }
   grasp_->pre_step(world);
   physics_->step(world);
   grasp_->post_step(world);

@@ -2,7 +2,8 @@
 // Everything physical in a scene, stepped together once per frame: the Bullet world with the
 // scene's bodies, a collider per tracked hand, the grasp system and the scene's interactions.
 // One step():
-//   hand colliders aimed at the tracked hands -> held objects aimed at their grips -> Bullet
+//   hidden fingers placed against what each hand holds or touches (FingerContact.h) -> hand
+//   colliders aimed at the hands -> held objects aimed at their grips -> Bullet
 //   steps (with substeps) -> contacts read, grasps begun and ended -> buttons, sockets
 //   (Mechanisms.h) -> interactions checked -> the scene's rules (SceneRules.h).
 
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/interact/FingerContact.h"
 #include "engine/interact/GraspSystem.h"
 #include "engine/physics/HandColliders.h"
 #include "engine/interact/Interactions.h"
@@ -50,12 +52,16 @@ class HandPhysics {
   Mechanisms& mechanisms() { return *mechanisms_; }
   const Mechanisms& mechanisms() const { return *mechanisms_; }
   const SceneRules& rules() const { return rules_; }
+  // What the last step did to each hand's hidden fingers (left, right).
+  const std::array<FingerPlacement, 2>& placements() const { return placements_; }
 
  private:
   HandPhysics() = default;
   std::unique_ptr<PhysicsWorld> physics_;
   std::array<std::unique_ptr<HandColliders>, 2> hands_;
   std::unique_ptr<GraspSystem> grasp_;
+  std::unique_ptr<FingerContact> finger_contact_;
+  std::array<FingerPlacement, 2> placements_;
   Interactions interactions_;
   std::unique_ptr<Mechanisms> mechanisms_;
   SceneRules rules_;

@@ -50,6 +50,9 @@ struct GraspSettings {
   double max_hold_error_m = 0.1;      // a held object kept this far from the hand (stuck) is dropped
   double max_object_speed_mps = 20.0;
   double hover_distance_m = 0.05;  // the palm this close to an object's bounding box: hovering
+  // A hidden finger is curled at most this much further to meet what its hand holds or touches
+  // (engine/interact/FingerContact.h); 0: hidden fingers stay where the tracker puts them.
+  double hidden_finger_curl_rad = 1.0;
 };
 
 struct SceneSettings {

@@ -204,7 +204,8 @@ HeadsetSettings read_headset(const Node& n) {
 
 GraspSettings read_grasp(const Node& n) {
   n.expect_object({"contact_distance_m", "opposing_cos", "min_curl_rad", "release_distance_m", "confident", "regrasp_delay_s",
-                   "throw_window_s", "throw_window_end_s", "max_hold_error_m", "max_object_speed_mps", "hover_distance_m"});
+                   "throw_window_s", "throw_window_end_s", "max_hold_error_m", "max_object_speed_mps", "hover_distance_m",
+                   "hidden_finger_curl_rad"});
   GraspSettings g;
   const auto set = [&](const char* key, double& value, double lo, double hi, const char* what) {
     if (auto v = n.optional(key)) value = v->number_in(lo, hi, what);
@@ -220,6 +221,7 @@ GraspSettings read_grasp(const Node& n) {
   set("max_hold_error_m", g.max_hold_error_m, 0.01, 10.0, "a distance from 0.01 to 10 m");
   set("max_object_speed_mps", g.max_object_speed_mps, 0.1, 100.0, "a speed from 0.1 to 100 m/s");
   set("hover_distance_m", g.hover_distance_m, 0.0, 1.0, "a distance from 0 to 1 m");
+  set("hidden_finger_curl_rad", g.hidden_finger_curl_rad, 0.0, 2.0, "an angle from 0 to 2 rad");
   return g;
 }
 

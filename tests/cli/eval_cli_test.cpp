@@ -146,6 +146,16 @@ TEST(EvalCli, GraspPrintsTheScenarioJson) {
   EXPECT_EQ(j["lift_success_fraction"].get<double>(), 1.0);
   EXPECT_LT(j["max_slip_mm"].get<double>(), 5.0);
   EXPECT_TRUE(j["scenarios"]["lift"]["grasped"].get<bool>());
+  // Through tracked hands, against the same scenario with perfect hands: its one grasp made, never
+  // let go early.
+  const EvalRun tracked = run_eval("grasp --scenario lift --hands tracked --json");
+  ASSERT_EQ(tracked.exit_code, 0) << tracked.output;
+  const nlohmann::json g = nlohmann::json::parse(tracked.output);
+  EXPECT_EQ(g["grasp_cycles"].get<int>(), 1) << g.dump(2);
+  EXPECT_EQ(g["tracked_grasps"].get<int>(), 1);
+  EXPECT_EQ(g["missed_grasp_count"].get<int>(), 0);
+  EXPECT_EQ(g["unintended_release_count"].get<int>(), 0);
+  EXPECT_EQ(g["unintended_grasp_count"].get<int>(), 0);
   const EvalRun t = run_eval("grasp --scenario throw --json");
   ASSERT_EQ(t.exit_code, 0) << t.output;
   EXPECT_LT(nlohmann::json::parse(t.output)["throw_velocity_error_pct"].get<double>(), 10.0);

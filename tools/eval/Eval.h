@@ -3,6 +3,7 @@
 // grasp.cpp, frame.cpp, demo.cpp), and what they share. Each prints one JSON object on stdout and returns
 // the process's exit code.
 
+#include <cstdint>
 #include <expected>
 #include <optional>
 #include <string>
@@ -13,10 +14,15 @@
 
 #include "engine/render/Renderer.h"
 #include "tracking/camera/Camera.h"
+#include "tracking/hand/HandJoints.h"
 #include "tracking/sim/Realism.h"
 
 namespace CLI {
 class App;
+}
+
+namespace rhot {
+struct InteractionEvent;
 }
 
 namespace rhot::eval {
@@ -48,6 +54,35 @@ void add_world_flags(CLI::App& command, WorldFlags& flags, bool hands);
 std::expected<rhot::WorldSettings, std::string> world_settings(const WorldFlags& flags);
 // The world's settings, for a report.
 nlohmann::json world_json(const rhot::WorldSettings& world, const std::string& name);
+
+// A grasp of one run: which hand held which object (its entity's index), from when to when (the
+// run's end when it never let go).
+struct GraspSpan {
+  rhot::HandSide hand;
+  std::uint32_t object;
+  double begin_s;
+  double end_s;
+  bool released;  // false: still held at the end
+};
+// The grasps in a run's events (grasp and release events; the others are skipped).
+std::vector<GraspSpan> grasp_spans(const std::vector<rhot::InteractionEvent>& events, double end_s);
+
+// How a run's grasps through tracked hands compare with the perfect hands' of the same script:
+// grasps the perfect hands made that the tracked ones never made (missed), releases the tracked
+// hands made while the perfect ones held on (unintended releases), grasps the perfect hands did
+// not make (unintended grasps). A grasp or release within kSameMoment_s of the perfect hands' is
+// theirs.
+struct GraspComparison {
+  int cycles = 0;  // the perfect hands' grasps: the cycles the script asks for
+  int tracked_grasps = 0;
+  int missed = 0;
+  int unintended_releases = 0;
+  int unintended_grasps = 0;
+  void add(const GraspComparison& o);
+  void put(nlohmann::json& j) const;  // grasp_cycles, missed_grasp_count, unintended_release_count, ...
+};
+inline constexpr double kSameMoment_s = 0.25;
+GraspComparison compare_grasps(const std::vector<GraspSpan>& tracked, const std::vector<GraspSpan>& perfect);
 
 // uniform: markers standing still, spread uniformly through the box (else wandering through it).
 int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,

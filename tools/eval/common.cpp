@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <map>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -28,6 +29,7 @@
 #include "tracking/rigid/StarTracker.h"
 #include "tracking/sim/SimulatedRig.h"
 
+#include "engine/interact/GraspSystem.h"
 #include "tools/eval/Eval.h"
 
 namespace rhot::eval {
@@ -109,6 +111,65 @@ nlohmann::json world_json(const rhot::WorldSettings& w, const std::string& name)
           {"calib_error_px", w.calib_error_px},
           {"truth_hand", w.independent_hands ? "independent" : "model"},
           {"occluding_bodies", w.occluding_bodies}};
+}
+
+std::vector<GraspSpan> grasp_spans(const std::vector<rhot::InteractionEvent>& events, double end_s) {
+  std::vector<GraspSpan> spans;
+  std::map<std::pair<int, std::uint32_t>, std::size_t> open;  // (hand, object) -> its span
+  for (const rhot::InteractionEvent& e : events) {
+    if (!e.hand || (e.type != rhot::InteractionEventType::kGrasp && e.type != rhot::InteractionEventType::kRelease)) continue;
+    const std::pair<int, std::uint32_t> key{*e.hand == rhot::HandSide::kLeft ? 0 : 1, e.object.index};
+    if (e.type == rhot::InteractionEventType::kGrasp) {
+      open[key] = spans.size();
+      spans.push_back({*e.hand, e.object.index, e.time_s, end_s, false});
+    } else if (const auto it = open.find(key); it != open.end()) {
+      spans[it->second].end_s = e.time_s;
+      spans[it->second].released = true;
+      open.erase(it);
+    }
+  }
+  return spans;
+}
+
+GraspComparison compare_grasps(const std::vector<GraspSpan>& tracked, const std::vector<GraspSpan>& perfect) {
+  GraspComparison c;
+  c.cycles = static_cast<int>(perfect.size());
+  c.tracked_grasps = static_cast<int>(tracked.size());
+  const auto same = [](const GraspSpan& a, const GraspSpan& b) { return a.hand == b.hand && a.object == b.object; };
+  for (const GraspSpan& p : perfect) {
+    const bool made = std::any_of(tracked.begin(), tracked.end(), [&](const GraspSpan& g) {
+      return same(g, p) && g.begin_s <= p.end_s && g.end_s >= p.begin_s - kSameMoment_s;
+    });
+    c.missed += made ? 0 : 1;
+  }
+  for (const GraspSpan& g : tracked) {
+    const bool meant = std::any_of(perfect.begin(), perfect.end(), [&](const GraspSpan& p) {
+      return same(g, p) && g.begin_s >= p.begin_s - kSameMoment_s && g.begin_s <= p.end_s;
+    });
+    c.unintended_grasps += meant ? 0 : 1;
+    if (!g.released) continue;
+    const bool held_on = std::any_of(perfect.begin(), perfect.end(), [&](const GraspSpan& p) {
+      return same(g, p) && p.begin_s <= g.end_s && p.end_s > g.end_s + kSameMoment_s;
+    });
+    c.unintended_releases += held_on ? 1 : 0;
+  }
+  return c;
+}
+
+void GraspComparison::add(const GraspComparison& o) {
+  cycles += o.cycles;
+  tracked_grasps += o.tracked_grasps;
+  missed += o.missed;
+  unintended_releases += o.unintended_releases;
+  unintended_grasps += o.unintended_grasps;
+}
+
+void GraspComparison::put(nlohmann::json& j) const {
+  j["grasp_cycles"] = cycles;
+  j["tracked_grasps"] = tracked_grasps;
+  j["missed_grasp_count"] = missed;
+  j["unintended_release_count"] = unintended_releases;
+  j["unintended_grasp_count"] = unintended_grasps;
 }
 
 }  // namespace rhot::eval

@@ -73,6 +73,7 @@ int grasp(const GraspArgs& args) {
   long seen = 0, wrong = 0, confusion = 0;
   double max_slip = 0.0;
   std::optional<double> throw_error;
+  GraspComparison grasps;
   for (const std::string_view name : names) {
     std::cerr << "rhot-eval: grasp scenario " << name << "\n";
     const auto r = rhot::run_grasp_scenario(name, nullptr, cameras ? &*cameras : nullptr);
@@ -81,6 +82,18 @@ int grasp(const GraspArgs& args) {
       return 1;
     }
     nlohmann::json s;
+    if (cameras) {
+      // The same scenario with perfect hands: the grasps the tracked ones should have made.
+      const auto reference = rhot::run_grasp_scenario(name, nullptr, nullptr);
+      if (!reference) {
+        std::cerr << "rhot-eval: " << reference.error() << "\n";
+        return 1;
+      }
+      const double end_s = static_cast<double>(std::max(r->frames, reference->frames)) / 90.0;  // the scenarios step at 90 Hz
+      const GraspComparison c = compare_grasps(grasp_spans(r->events, end_s), grasp_spans(reference->events, end_s));
+      grasps.add(c);
+      c.put(s);
+    }
     s["grasped"] = r->grasped;
     s["lift_mm"] = 1000.0 * r->lift_m;
     s["max_slip_mm"] = 1000.0 * r->max_slip_m;
@@ -134,6 +147,7 @@ int grasp(const GraspArgs& args) {
     j["world"] = world_json(cameras->world, args.world.world);
     j["seed"] = args.seed;
     j["hand_confusion_frames"] = confusion;
+    grasps.put(j);
     j["reported_wrong_fraction"] = static_cast<double>(wrong) / static_cast<double>(std::max(1L, seen));
   }
   j["max_slip_mm"] = max_slip;

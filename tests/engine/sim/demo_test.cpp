@@ -120,12 +120,24 @@ TEST(Demo, InTheRealisticWorldTheTableAndTheObjectsHideMarkers) {
   Demo& demo = **created;
   World& world = demo.world();
   int mug_seen = 0;
-  constexpr int kFrames = 360;  // the right hand reaches for the block and closes on it
+  const Entity block = named(world, "cube-red");
+  bool grasped = false;
+  const auto rest_y = static_cast<double>(world.get<Transform>(block).position.y);
+  double lift_m = 0.0;
+  constexpr int kFrames = 360;  // the right hand reaches for the block, closes on it and lifts it
   for (int f = 0; f < kFrames; ++f) {
     demo.runtime().run_frame(f / 90.0);
     const auto& seen_ids = demo.runtime().tracking().results().counts.seen_star_ids;
     mug_seen += std::find(seen_ids.begin(), seen_ids.end(), 0) != seen_ids.end() ? 1 : 0;
+    for (const InteractionEvent& e : demo.runtime().physics().events())
+      grasped = grasped || (e.object == block && e.hand == HandSide::kRight && e.type == InteractionEventType::kGrasp);
+    lift_m = std::max(lift_m, static_cast<double>(world.get<Transform>(block).position.y) - rest_y);
   }
+  // The block hides the right thumb's and index's tips as they close on it; placed against it
+  // (engine/interact/FingerContact.h) they grasp it all the same (with hidden_finger_curl_rad 0
+  // this grasp never began).
+  EXPECT_TRUE(grasped);
+  EXPECT_GE(lift_m, kPickupLift_m);
   // One occluder for each body with a box, sphere or capsule (not the floor's plane).
   int bodies = 0;
   world.view<Mesh, PhysicsBody>().each(

@@ -1,0 +1,262 @@
+#include "engine/interact/FingerContact.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+#include <vector>
+
+#include <BulletCollision/CollisionShapes/btCapsuleShape.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkPairDetector.h>
+#include <BulletCollision/NarrowPhaseCollision/btPointCollector.h>
+#include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
+#include <Eigen/Geometry>
+
+#include "engine/interact/GraspSystem.h"
+#include "engine/physics/HandColliders.h"
+#include "engine/physics/BulletMath.h"
+#include "engine/physics/PhysicsWorld.h"
+
+namespace rhot {
+
+namespace {
+
+// A digit's joints from its first knuckle that can bend to its tip, and how much each knuckle
+// bends for one unit of curl (a finger's last knuckle follows the middle one at about two
+// thirds, as real fingers' do).
+struct DigitChain {
+  std::array<int, 4> joints;  // knuckles then the tip; -1 past the end
+  std::array<double, 3> weight;
+  int count;  // joints used (3 for the thumb: two knuckles and its tip; 4 for a finger)
+};
+
+DigitChain digit_chain(int digit) {
+  if (digit == 0) {
+    return {{static_cast<int>(HandJoint::kThumbProximal), static_cast<int>(HandJoint::kThumbDistal), static_cast<int>(HandJoint::kThumbTip),
+             -1},
+            {1.0, 1.0, 0.0},
+            3};
+  }
+  const int base = static_cast<int>(HandJoint::kIndexProximal) + 5 * (digit - 1);
+  return {{base, base + 1, base + 2, base + 3}, {1.0, 1.0, 0.7}, 4};
+}
+
+bool all_finite(const HandInput& hand) {
+  for (const Eigen::Vector3d& j : hand.joints_world)
+    if (!j.allFinite()) return false;
+  return hand.world_from_hand.translation.allFinite() && hand.world_from_hand.rotation.coeffs().allFinite();
+}
+
+}  // namespace
+
+double capsule_distance_m(const btCollisionObject& object, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius_m) {
+  const btCollisionShape* shape = object.getCollisionShape();
+  if (!shape || !shape->isConvex()) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d axis = b - a;
+  const double length = axis.norm();
+  btCapsuleShape capsule(static_cast<btScalar>(radius_m), static_cast<btScalar>(length));
+  btTransform pose = btTransform::getIdentity();
+  pose.setOrigin(to_bt(0.5 * (a + b)));
+  if (length > 1e-9) pose.setRotation(shortestArcQuat(btVector3(0, 1, 0), to_bt(axis / length)));
+  btVoronoiSimplexSolver simplex;
+  btGjkEpaPenetrationDepthSolver depth;
+  btGjkPairDetector gjk(&capsule, static_cast<const btConvexShape*>(shape), &simplex, &depth);
+  btGjkPairDetector::ClosestPointInput in;
+  in.m_transformA = pose;
+  in.m_transformB = object.getWorldTransform();
+  btPointCollector out;
+  gjk.getClosestPoints(in, out, nullptr);
+  return out.m_hasResult ? static_cast<double>(out.m_distance) : std::numeric_limits<double>::infinity();
+}
+
+double digit_curl_rad(const HandInput& hand, int digit) {
+  const DigitChain chain = digit_chain(digit);
+  const auto joint = [&](int index) { return hand.joints_world[static_cast<std::size_t>(index)]; };
+  const int root = chain.joints[0] - 1;  // the metacarpal joint behind the first knuckle
+  const Eigen::Vector3d first = joint(chain.joints[0]) - joint(root);
+  const Eigen::Vector3d last =
+      joint(chain.joints[static_cast<std::size_t>(chain.count - 1)]) - joint(chain.joints[static_cast<std::size_t>(chain.count - 2)]);
+  if (first.norm() < 1e-9 || last.norm() < 1e-9) return 0.0;
+  return std::acos(std::clamp(first.normalized().dot(last.normalized()), -1.0, 1.0));
+}
+
+void FingerContact::follow(std::size_t side, double t_s, const HandInput& hand) {
+  for (int digit = 0; digit < 5; ++digit) {
+    DigitMotion& m = motion_[side][static_cast<std::size_t>(digit)];
+    const DigitChain chain = digit_chain(digit);
+    const bool measured = hand.seen && hand.confidence[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)])] >=
+                                           settings_.confident;
+    if (!measured) {
+      m.hidden = true;  // its rate stays what it was when last seen
+      continue;
+    }
+    const double curl = digit_curl_rad(hand, digit);
+    const double dt = t_s - m.t_s;
+    if (!m.hidden && m.t_s >= 0.0 && dt > 0.0) {
+      const double blend = std::min(1.0, dt / 0.1);
+      m.rate_rad_s += blend * ((curl - m.curl_rad) / dt - m.rate_rad_s);
+    } else {
+      m.rate_rad_s = 0.0;
+    }
+    m.curl_rad = curl;
+    m.t_s = t_s;
+    m.hidden = false;
+  }
+}
+
+std::optional<Entity> FingerContact::object_for(HandSide side, const HandInput& hand, bool closing) const {
+  if (const auto held = grasp_.holding(side)) return held;
+  // The body (not a static one) that the most bones of measured digits touched.
+  const auto& touched = grasp_.contacts()[side == HandSide::kLeft ? 0 : 1];
+  std::optional<Entity> best;
+  std::size_t most = 0;
+  for (const auto& [object, contacts] : touched) {
+    const btRigidBody* body = physics_.body(object);
+    if (!body || body->isStaticObject()) continue;
+    std::size_t measured = 0;
+    for (const GraspSystem::Contact& c : contacts) {
+      const int group = hand_bones()[static_cast<std::size_t>(c.bone)].group;
+      if (group == kPalmGroup) {
+        ++measured;
+        continue;
+      }
+      const DigitChain chain = digit_chain(group);
+      if (hand.confidence[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)])] >= settings_.confident)
+        ++measured;
+    }
+    if (measured > most) {
+      most = measured;
+      best = object;
+    }
+  }
+  if (best || !closing) return best;
+  // The hand closing within reach: the body whose bounding box is nearest the palm.
+  const btVector3 palm = to_bt(hand.joints_world[static_cast<std::size_t>(HandJoint::kPalm)]);
+  double nearest = settings_.hover_distance_m;
+  for (const Entity e : physics_.entities()) {
+    const btRigidBody* body = physics_.body(e);
+    if (!body || body->isStaticObject()) continue;
+    btVector3 lo, hi;
+    body->getAabb(lo, hi);
+    btVector3 gap(0, 0, 0);
+    for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - palm[a], palm[a] - hi[a], btScalar(0)});
+    const double d = static_cast<double>(gap.length());
+    if (d <= nearest) {
+      nearest = d;
+      best = e;
+    }
+  }
+  return best;
+}
+
+FingerPlacement FingerContact::place(HandSide side, double t_s, HandInput& hand) {
+  FingerPlacement result;
+  const std::size_t s = side == HandSide::kLeft ? 0 : 1;
+  if (!all_finite(hand)) return result;
+  follow(s, t_s, hand);
+  if (!hand.seen || settings_.max_curl_rad <= 0.0) return result;
+  // Which hidden digits are closing: they were when last seen, or a measured digit is now.
+  bool measured_closing = false, any_hidden = false;
+  std::array<bool, 5> closing{};
+  for (std::size_t digit = 0; digit < 5; ++digit) {
+    const DigitMotion& m = motion_[s][digit];
+    if (!m.hidden) measured_closing = measured_closing || m.rate_rad_s > settings_.closing_rad_s;
+    any_hidden = any_hidden || m.hidden;
+  }
+  if (!any_hidden) return result;
+  bool any_closing = false;
+  for (std::size_t digit = 0; digit < 5; ++digit) {
+    const DigitMotion& m = motion_[s][digit];
+    closing[digit] = m.hidden && (measured_closing || m.rate_rad_s > settings_.closing_rad_s);
+    any_closing = any_closing || closing[digit];
+  }
+  result.object = object_for(side, hand, any_closing);
+  if (!result.object) return result;
+  const btRigidBody* body = physics_.body(*result.object);
+  if (!body) {
+    result.object.reset();
+    return result;
+  }
+  // Held or touched: every hidden digit goes to the object; within reach only the closing ones.
+  const bool in_hand = grasp_.holding(side) == result.object || grasp_.contacts()[s].contains(*result.object);
+  const Eigen::Vector3d centre = to_eigen(body->getWorldTransform().getOrigin());
+  const Eigen::Matrix3d hand_rotation = hand.world_from_hand.rotation.toRotationMatrix();
+  const Eigen::Vector3d palm_normal = -hand_rotation.col(1);  // the palm faces the hand frame's -Y
+  for (int digit = 0; digit < 5; ++digit) {
+    const DigitChain chain = digit_chain(digit);
+    const auto at = [&](int k) { return static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)]); };
+    if (hand.confidence[at(chain.count - 1)] >= settings_.confident) continue;
+    if (!in_hand && !closing[static_cast<std::size_t>(digit)]) continue;
+    // Bend from the first knuckle whose next joint is not measured.
+    int first = 0;
+    while (first < chain.count - 2 && hand.confidence[at(first + 1)] >= settings_.confident) ++first;
+    // Fingers bend about the hand's lateral axis; the thumb about the axis across it and the palm's
+    // normal (toward the palm).
+    Eigen::Vector3d axis = -hand_rotation.col(0);
+    if (digit == 0) {
+      // The thumb turns about its first knuckle toward the object (or, with the object straight
+      // ahead of it, toward the palm).
+      const Eigen::Vector3d along = hand.joints_world[at(chain.count - 1)] - hand.joints_world[at(first)];
+      Eigen::Vector3d across = along.cross(centre - hand.joints_world[at(first)]);
+      if (across.norm() < 1e-6 * along.norm()) across = along.cross(palm_normal);
+      if (across.norm() > 1e-9) axis = across.normalized();
+    }
+    // The digit's joints after curling by theta (negative: uncurling).
+    const auto curled = [&](double theta) {
+      std::array<Eigen::Vector3d, 4> p;
+      for (int k = 0; k < chain.count; ++k) p[static_cast<std::size_t>(k)] = hand.joints_world[at(k)];
+      for (int k = first; k < chain.count - 1; ++k) {
+        const Eigen::AngleAxisd turn(chain.weight[static_cast<std::size_t>(k)] * theta, axis);
+        for (int m = k + 1; m < chain.count; ++m)
+          p[static_cast<std::size_t>(m)] =
+              p[static_cast<std::size_t>(k)] + turn * (p[static_cast<std::size_t>(m)] - p[static_cast<std::size_t>(k)]);
+      }
+      return p;
+    };
+    // How far the curled digit's bones are out of the object, less the press: <= 0 is in contact.
+    const auto gap = [&](double theta) {
+      const auto p = curled(theta);
+      double d = std::numeric_limits<double>::infinity();
+      for (int k = first; k < chain.count - 1; ++k) {
+        const double r =
+            std::max(HandColliderSettings{}.min_radius_m, std::min(hand.radius_m[at(k)], hand.radius_m[at(k + 1)]));  // as the collider's
+        d = std::min(d, capsule_distance_m(*body, p[static_cast<std::size_t>(k)], p[static_cast<std::size_t>(k + 1)], r));
+      }
+      return d + settings_.press_m;
+    };
+    // March toward contact (curling when clear, uncurling when inside), then halve the last step.
+    constexpr double kStep_rad = 0.1;
+    const double g0 = gap(0.0);
+    if (!std::isfinite(g0)) continue;
+    const bool inside = g0 <= -settings_.press_m;  // deeper than a resting finger
+    if (g0 <= 0.0 && !inside) {
+      result.placed[static_cast<std::size_t>(digit)] = true;  // already resting on it
+      continue;
+    }
+    const double direction = inside ? -1.0 : 1.0, limit = inside ? settings_.max_uncurl_rad : settings_.max_curl_rad;
+    double before = 0.0, after = -1.0;
+    for (double theta = kStep_rad; theta <= limit + 1e-9; theta += kStep_rad) {
+      const bool touching = gap(direction * theta) <= 0.0;
+      if (touching != inside) {
+        after = theta;
+        break;
+      }
+      before = theta;
+    }
+    if (after < 0.0) continue;  // it never meets (or leaves) the object within reach
+    for (int i = 0; i < 5; ++i) {
+      const double mid = 0.5 * (before + after);
+      ((gap(direction * mid) <= 0.0) != inside ? after : before) = mid;
+    }
+    // Curling: the first angle touching; uncurling: the last one still touching.
+    const double theta = direction * (inside ? before : after);
+    const auto p = curled(theta);
+    for (int k = first + 1; k < chain.count; ++k) hand.joints_world[at(k)] = p[static_cast<std::size_t>(k)];
+    result.placed[static_cast<std::size_t>(digit)] = true;
+    result.curl_rad[static_cast<std::size_t>(digit)] = theta;
+  }
+  return result;
+}
+
+}  // namespace rhot

@@ -1,0 +1,87 @@
+#pragma once
+// Hidden fingers against what the hand holds or closes on (docs/grasping.md, "Hidden fingers").
+//
+// A finger whose tip marker is hidden (its tip's confidence below `confident`) has only the
+// tracker's estimate, which knows nothing of objects: curled at the other fingers' rate, held, or
+// relaxed. Where the hand holds an object, or closes on one, such a finger is curled about its
+// own knuckles until its bones meet that object's surface: so an object in the hand is held
+// between the measured digits and the hidden ones, never with a hidden finger inside it or
+// relaxed away from it. A hand closes on an object when a measured digit of it touched the object
+// in the last step, or when its palm is within `hover_distance_m` of the object and the hidden
+// finger was closing when it was last seen (or a measured finger of the hand is closing now). A
+// finger bends in its own plane (about the hand's lateral axis); the thumb turns toward the
+// object. A hidden finger whose curl does not meet the object within `max_curl_rad` is left
+// where the tracker put it (it points elsewhere); one already inside is uncurled to the surface.
+//
+// This lives in the engine, not in the tracker, because it needs the physics world's shapes:
+// tracking stays free of engine types (docs/tracking.md, "Hidden fingers and objects"). The
+// tracked hand (Hand::tracked) is left as the tracker made it; only the colliders, and so the
+// drawn hand and the grasps, follow the placed fingers. A placed joint keeps its low confidence.
+
+#include <array>
+#include <optional>
+
+#include "engine/core/Entity.h"
+#include "engine/hand/HandInput.h"
+
+class btCollisionObject;
+
+namespace rhot {
+
+class GraspSystem;
+class PhysicsWorld;
+
+struct FingerContactSettings {
+  double confident = 0.95;         // a tip with confidence below this is hidden (GraspSettings::confident)
+  double max_curl_rad = 1.0;       // a hidden finger is curled at most this much further at each knuckle
+  double max_uncurl_rad = 0.6;     // ... and uncurled at most this much out of an object
+  double press_m = 0.001;          // a placed finger rests this far into the surface (so its bone touches)
+  double hover_distance_m = 0.05;  // the palm this close to an object's bounding box: within reach
+  double closing_rad_s = 0.3;      // a finger curling faster than this is closing
+};
+
+// What place() did to one hand.
+struct FingerPlacement {
+  std::optional<Entity> object;      // the object the hidden fingers were placed against
+  std::array<bool, 5> placed{};      // per digit (thumb .. little)
+  std::array<double, 5> curl_rad{};  // how far each placed digit was curled (negative: uncurled)
+};
+
+class FingerContact {
+ public:
+  FingerContact(const PhysicsWorld& physics, const GraspSystem& grasp, FingerContactSettings settings = {})
+      : physics_(physics), grasp_(grasp), settings_(settings) {}
+
+  // One hand's input at time t_s, before its colliders are driven: its hidden digits placed against
+  // the object it holds or closes on. The hand is left as it is when it holds nothing and closes
+  // on nothing, or is not seen.
+  FingerPlacement place(HandSide side, double t_s, HandInput& hand);
+
+  const FingerContactSettings& settings() const { return settings_; }
+
+ private:
+  // A digit's curl over time, while it is measured.
+  struct DigitMotion {
+    double curl_rad = 0.0;
+    double rate_rad_s = 0.0;  // smoothed over about 0.1 s
+    double t_s = -1.0;        // when last measured (negative: never)
+    bool hidden = true;
+  };
+  void follow(std::size_t side, double t_s, const HandInput& hand);
+  std::optional<Entity> object_for(HandSide side, const HandInput& hand, bool closing) const;
+
+  const PhysicsWorld& physics_;
+  const GraspSystem& grasp_;
+  FingerContactSettings settings_;
+  std::array<std::array<DigitMotion, 5>, 2> motion_{};
+};
+
+// A digit's curl (radians): the angle between its root bone (a finger's metacarpal, the thumb's
+// metacarpal) and its last bone.
+double digit_curl_rad(const HandInput& hand, int digit);
+
+// The signed distance (metres, negative: overlapping) between a capsule from a to b of radius r
+// and a convex collision object at its current pose; +infinity for a non-convex one.
+double capsule_distance_m(const btCollisionObject& object, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius_m);
+
+}  // namespace rhot
