@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -42,10 +43,77 @@ DigitChain digit_chain(int digit) {
   return {{base, base + 1, base + 2, base + 3}, {1.0, 1.0, 0.7}, 4};
 }
 
+constexpr double kFlicker_s = 0.3;  // a digit hidden no longer than this was only flickering
+
 bool all_finite(const HandInput& hand) {
   for (const Eigen::Vector3d& j : hand.joints_world)
     if (!j.allFinite()) return false;
   return hand.world_from_hand.translation.allFinite() && hand.world_from_hand.rotation.coeffs().allFinite();
+}
+
+// A contact by the palm or by a digit whose tip is measured (confidence at least `confident`).
+bool measured_contact_of(const HandInput& hand, const GraspSystem::Contact& c, double confident) {
+  const int group = hand_bones()[static_cast<std::size_t>(c.bone)].group;
+  if (group == kPalmGroup) return true;
+  const DigitChain chain = digit_chain(group);
+  return hand.confidence[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)])] >= confident;
+}
+
+// Curls a digit of `hand` (its joints after knuckle `first`) about `axis` until its bones rest
+// `rest_m` off the body's surface (negative: into it), each knuckle turning by its weight: the
+// angle turned (negative: uncurled out of the body), or nothing where the digit cannot reach the
+// body (or leave it) within the limits. The hand is changed only when it returns an angle.
+std::optional<double> rest_digit(HandInput& hand, const DigitChain& chain, int first, const Eigen::Vector3d& axis, const btRigidBody& body,
+                                 double rest_m, double max_curl_rad, double max_uncurl_rad) {
+  const auto at = [&](int k) { return static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)]); };
+  const auto curled = [&](double theta) {
+    std::array<Eigen::Vector3d, 4> p;
+    for (int k = 0; k < chain.count; ++k) p[static_cast<std::size_t>(k)] = hand.joints_world[at(k)];
+    for (int k = first; k < chain.count - 1; ++k) {
+      const Eigen::AngleAxisd turn(chain.weight[static_cast<std::size_t>(k)] * theta, axis);
+      for (int m = k + 1; m < chain.count; ++m)
+        p[static_cast<std::size_t>(m)] =
+            p[static_cast<std::size_t>(k)] + turn * (p[static_cast<std::size_t>(m)] - p[static_cast<std::size_t>(k)]);
+    }
+    return p;
+  };
+  // How far the curled digit's bones are out of the body, less the rest: <= 0 is resting on it.
+  const auto gap = [&](double theta) {
+    const auto p = curled(theta);
+    double d = std::numeric_limits<double>::infinity();
+    for (int k = first; k < chain.count - 1; ++k) {
+      // The collider's radius (HandColliders: the smaller of its joints', at least min_radius_m).
+      const double r = std::max(HandColliderSettings{}.min_radius_m, std::min(hand.radius_m[at(k)], hand.radius_m[at(k + 1)]));
+      d = std::min(d, capsule_distance_m(body, p[static_cast<std::size_t>(k)], p[static_cast<std::size_t>(k + 1)], r));
+    }
+    return d - rest_m;
+  };
+  // March toward the rest (curling when clear of it, uncurling when deeper), then halve the last
+  // step five times.
+  constexpr double kStep_rad = 0.1, kTolerance_m = 0.0005;
+  const double g0 = gap(0.0);
+  if (!std::isfinite(g0)) return std::nullopt;
+  if (g0 <= 0.0 && g0 >= -kTolerance_m) return 0.0;  // resting already
+  const bool inside = g0 < 0.0;
+  const double direction = inside ? -1.0 : 1.0, limit = inside ? max_uncurl_rad : max_curl_rad;
+  double before = 0.0, after = -1.0;
+  for (double theta = kStep_rad; theta <= limit + 1e-9; theta += kStep_rad) {
+    if ((gap(direction * theta) <= 0.0) != inside) {
+      after = theta;
+      break;
+    }
+    before = theta;
+  }
+  if (after < 0.0) return std::nullopt;
+  for (int i = 0; i < 5; ++i) {
+    const double mid = 0.5 * (before + after);
+    ((gap(direction * mid) <= 0.0) != inside ? after : before) = mid;
+  }
+  // Curling: the first angle resting; uncurling: the last one still on it.
+  const double theta = direction * (inside ? before : after);
+  const auto p = curled(theta);
+  for (int k = first + 1; k < chain.count; ++k) hand.joints_world[at(k)] = p[static_cast<std::size_t>(k)];
+  return theta;
 }
 
 }  // namespace
@@ -93,7 +161,9 @@ void FingerContact::follow(std::size_t side, double t_s, const HandInput& hand) 
     }
     const double curl = digit_curl_rad(hand, digit);
     const double dt = t_s - m.t_s;
-    if (!m.hidden && m.t_s >= 0.0 && dt > 0.0) {
+    // Measured again after a short gap (a marker that flickers), the rate goes on across the gap;
+    // after a long one it starts afresh.
+    if (m.t_s >= 0.0 && dt > 0.0 && dt <= kFlicker_s) {
       const double blend = std::min(1.0, dt / 0.1);
       m.rate_rad_s += blend * ((curl - m.curl_rad) / dt - m.rate_rad_s);
     } else {
@@ -114,19 +184,11 @@ std::optional<Entity> FingerContact::object_for(HandSide side, const HandInput& 
   for (const auto& [object, contacts] : touched) {
     const btRigidBody* body = physics_.body(object);
     if (!body || body->isStaticObject()) continue;
-    std::size_t measured = 0;
-    for (const GraspSystem::Contact& c : contacts) {
-      const int group = hand_bones()[static_cast<std::size_t>(c.bone)].group;
-      if (group == kPalmGroup) {
-        ++measured;
-        continue;
-      }
-      const DigitChain chain = digit_chain(group);
-      if (hand.confidence[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)])] >= settings_.confident)
-        ++measured;
-    }
-    if (measured > most) {
-      most = measured;
+    // Touched by a measured digit counts first; by a hidden one (its estimate already on it), next.
+    std::size_t score = 0;
+    for (const GraspSystem::Contact& c : contacts) score += measured_contact_of(hand, c, settings_.confident) ? 1000 : 1;
+    if (score > most) {
+      most = score;
       best = object;
     }
   }
@@ -178,11 +240,20 @@ FingerPlacement FingerContact::place(HandSide side, double t_s, HandInput& hand)
     result.object.reset();
     return result;
   }
-  // Held or touched: every hidden digit goes to the object; within reach only the closing ones.
-  const bool in_hand = grasp_.holding(side) == result.object || grasp_.contacts()[s].contains(*result.object);
+  // Held, or touched by a measured digit or the palm: every hidden digit goes to the object; else
+  // only the closing ones.
+  bool in_hand = grasp_.holding(side) == result.object;
+  if (const auto touched = grasp_.contacts()[s].find(*result.object); touched != grasp_.contacts()[s].end()) {
+    for (const GraspSystem::Contact& c : touched->second) in_hand = in_hand || measured_contact_of(hand, c, settings_.confident);
+  }
   const Eigen::Vector3d centre = to_eigen(body->getWorldTransform().getOrigin());
   const Eigen::Matrix3d hand_rotation = hand.world_from_hand.rotation.toRotationMatrix();
   const Eigen::Vector3d palm_normal = -hand_rotation.col(1);  // the palm faces the hand frame's -Y
+  struct Bend {
+    int first = 0;
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitX();
+  };
+  std::array<Bend, 5> bends;
   for (int digit = 0; digit < 5; ++digit) {
     const DigitChain chain = digit_chain(digit);
     const auto at = [&](int k) { return static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)]); };
@@ -202,60 +273,32 @@ FingerPlacement FingerContact::place(HandSide side, double t_s, HandInput& hand)
       if (across.norm() < 1e-6 * along.norm()) across = along.cross(palm_normal);
       if (across.norm() > 1e-9) axis = across.normalized();
     }
-    // The digit's joints after curling by theta (negative: uncurling).
-    const auto curled = [&](double theta) {
-      std::array<Eigen::Vector3d, 4> p;
-      for (int k = 0; k < chain.count; ++k) p[static_cast<std::size_t>(k)] = hand.joints_world[at(k)];
-      for (int k = first; k < chain.count - 1; ++k) {
-        const Eigen::AngleAxisd turn(chain.weight[static_cast<std::size_t>(k)] * theta, axis);
-        for (int m = k + 1; m < chain.count; ++m)
-          p[static_cast<std::size_t>(m)] =
-              p[static_cast<std::size_t>(k)] + turn * (p[static_cast<std::size_t>(m)] - p[static_cast<std::size_t>(k)]);
-      }
-      return p;
-    };
-    // How far the curled digit's bones are out of the object, less the press: <= 0 is in contact.
-    const auto gap = [&](double theta) {
-      const auto p = curled(theta);
-      double d = std::numeric_limits<double>::infinity();
-      for (int k = first; k < chain.count - 1; ++k) {
-        const double r =
-            std::max(HandColliderSettings{}.min_radius_m, std::min(hand.radius_m[at(k)], hand.radius_m[at(k + 1)]));  // as the collider's
-        d = std::min(d, capsule_distance_m(*body, p[static_cast<std::size_t>(k)], p[static_cast<std::size_t>(k + 1)], r));
-      }
-      return d + settings_.press_m;
-    };
-    // March toward contact (curling when clear, uncurling when inside), then halve the last step.
-    constexpr double kStep_rad = 0.1;
-    const double g0 = gap(0.0);
-    if (!std::isfinite(g0)) continue;
-    const bool inside = g0 <= -settings_.press_m;  // deeper than a resting finger
-    if (g0 <= 0.0 && !inside) {
-      result.placed[static_cast<std::size_t>(digit)] = true;  // already resting on it
-      continue;
-    }
-    const double direction = inside ? -1.0 : 1.0, limit = inside ? settings_.max_uncurl_rad : settings_.max_curl_rad;
-    double before = 0.0, after = -1.0;
-    for (double theta = kStep_rad; theta <= limit + 1e-9; theta += kStep_rad) {
-      const bool touching = gap(direction * theta) <= 0.0;
-      if (touching != inside) {
-        after = theta;
-        break;
-      }
-      before = theta;
-    }
-    if (after < 0.0) continue;  // it never meets (or leaves) the object within reach
-    for (int i = 0; i < 5; ++i) {
-      const double mid = 0.5 * (before + after);
-      ((gap(direction * mid) <= 0.0) != inside ? after : before) = mid;
-    }
-    // Curling: the first angle touching; uncurling: the last one still touching.
-    const double theta = direction * (inside ? before : after);
-    const auto p = curled(theta);
-    for (int k = first + 1; k < chain.count; ++k) hand.joints_world[at(k)] = p[static_cast<std::size_t>(k)];
+    bends[static_cast<std::size_t>(digit)] = {first, axis};
+    const auto theta = rest_digit(hand, chain, first, axis, *body, 0.0, settings_.max_curl_rad, settings_.max_uncurl_rad);
+    if (!theta) continue;  // it never meets (or leaves) the object within reach
     result.placed[static_cast<std::size_t>(digit)] = true;
-    result.curl_rad[static_cast<std::size_t>(digit)] = theta;
+    result.curl_rad[static_cast<std::size_t>(digit)] = *theta;
   }
+  // Held between both sides (the thumb or palm, and a finger, each placed or touching it measured),
+  // the placed digits squeeze, as a grasping hand does; on one side only they rest on the surface
+  // (a light peg pushed by a hidden index slid away from the thumb still closing on it).
+  bool anchor = result.placed[0], finger = false;
+  if (const auto touched = grasp_.contacts()[s].find(*result.object); touched != grasp_.contacts()[s].end()) {
+    for (const GraspSystem::Contact& c : touched->second) {
+      if (!measured_contact_of(hand, c, settings_.confident)) continue;
+      const int group = hand_bones()[static_cast<std::size_t>(c.bone)].group;
+      (group == 0 || group == kPalmGroup ? anchor : finger) = true;
+    }
+  }
+  for (std::size_t digit = 1; digit < 5; ++digit) finger = finger || result.placed[digit];
+  if (!anchor || !finger || settings_.squeeze_m <= 0.0) return result;
+  for (std::size_t digit = 0; digit < 5; ++digit) {
+    if (!result.placed[digit]) continue;
+    const auto more = rest_digit(hand, digit_chain(static_cast<int>(digit)), bends[digit].first, bends[digit].axis, *body,
+                                 -settings_.squeeze_m, settings_.max_curl_rad, settings_.max_uncurl_rad);
+    if (more) result.curl_rad[digit] += *more;
+  }
+  result.squeezing = true;
   return result;
 }
 

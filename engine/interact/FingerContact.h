@@ -32,10 +32,12 @@ class GraspSystem;
 class PhysicsWorld;
 
 struct FingerContactSettings {
-  double confident = 0.95;         // a tip with confidence below this is hidden (GraspSettings::confident)
-  double max_curl_rad = 1.0;       // a hidden finger is curled at most this much further at each knuckle
-  double max_uncurl_rad = 0.6;     // ... and uncurled at most this much out of an object
-  double press_m = 0.001;          // a placed finger rests this far into the surface (so its bone touches)
+  double confident = 0.95;      // a tip with confidence below this is hidden (GraspSettings::confident)
+  double max_curl_rad = 1.0;    // a hidden finger is curled at most this much further at each knuckle
+  double max_uncurl_rad = 0.6;  // ... and uncurled at most this much out of an object
+  // Placed fingers rest on the surface; held between both sides (the thumb or palm, and a
+  // finger) they squeeze this far into it, so their bones press as a grasping hand's do.
+  double squeeze_m = 0.001;
   double hover_distance_m = 0.05;  // the palm this close to an object's bounding box: within reach
   double closing_rad_s = 0.3;      // a finger curling faster than this is closing
 };
@@ -45,6 +47,7 @@ struct FingerPlacement {
   std::optional<Entity> object;      // the object the hidden fingers were placed against
   std::array<bool, 5> placed{};      // per digit (thumb .. little)
   std::array<double, 5> curl_rad{};  // how far each placed digit was curled (negative: uncurled)
+  bool squeezing = false;            // held between both sides: the placed digits squeeze
 };
 
 class FingerContact {

@@ -14,6 +14,14 @@ namespace {
 
 HandSide side_of(int hand) { return hand == 0 ? HandSide::kLeft : HandSide::kRight; }
 
+// A bone group's name in events' reasons.
+const char* digit_name(int group) {
+  static constexpr std::array<const char*, 6> kNames{"thumb", "index", "middle", "ring", "little", "palm"};
+  return kNames[static_cast<std::size_t>(std::clamp(group, 0, 5))];
+}
+
+std::string millimetres(double m) { return std::to_string(static_cast<int>(std::lround(1000.0 * m))) + " mm"; }
+
 // Distance from a point to an axis-aligned box (0 inside).
 double box_distance(const btVector3& p, const btVector3& lo, const btVector3& hi) {
   btVector3 d(0, 0, 0);
@@ -138,7 +146,7 @@ std::optional<btTransform> GraspSystem::grip_target(Entity object) const {
 }
 
 void GraspSystem::emit(InteractionEventType type, Entity object, std::optional<int> hand) {
-  InteractionEvent e{type, physics_.time_s(), object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), Entity{}, 0.0};
+  InteractionEvent e{type, physics_.time_s(), object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), Entity{}, 0.0, {}};
   if (hand) e.hand = side_of(*hand);
   events_.push_back(std::move(e));
 }
@@ -208,6 +216,20 @@ void GraspSystem::pre_step(World& world) {
   }
 }
 
+std::string GraspSystem::grasp_reason(const HandGrip& grip) {
+  // "thumb against index, middle (index estimated)": the anchor, the opposing fingers, and those
+  // of them whose tips were not measured (estimated, or placed against the object).
+  std::string anchor, fingers, estimated;
+  const auto add = [](std::string& list, const char* name) {
+    if (list.find(name) == std::string::npos) list += std::string(list.empty() ? "" : ", ") + name;
+  };
+  for (const GripPoint& g : grip.grip) {
+    add(g.group == 0 || g.group == kPalmGroup ? anchor : fingers, digit_name(g.group));
+    if (!g.measured) add(estimated, digit_name(g.group));
+  }
+  return anchor + " against " + fingers + (estimated.empty() ? "" : " (" + estimated + " not measured)");
+}
+
 void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::vector<Contact>& contacts, const std::vector<int>& groups) {
   btRigidBody* body = physics_.body(object);
   HandColliders* h = hands_[static_cast<std::size_t>(hand)];
@@ -221,7 +243,7 @@ void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::
   centre_now /= static_cast<btScalar>(std::max<std::size_t>(1, contacts.size()));
   if (it != held_.end() &&
       (!options.two_handed || static_cast<double>((grip_centre(it->second, it->second.first()) - centre_now).length()) < kMinPairSpan_m)) {
-    release(object, it->second.first(), LetGo::kTaken);
+    release(object, it->second.first(), LetGo::kTaken, std::string("taken by the ") + (hand == 0 ? "left" : "right") + " hand");
     it = held_.end();
   }
   const bool joining = it != held_.end();
@@ -274,16 +296,17 @@ void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::
   ignore_hand(body, hand, true);
   std::erase_if(reenable_, [&](const auto& r) { return r.first == object && r.second == hand; });
   emit(InteractionEventType::kGrasp, object, hand);
+  events_.back().reason = grasp_reason(*held_[object].by[static_cast<std::size_t>(hand)]);
 }
 
-void GraspSystem::release(Entity object, int hand, LetGo how) {
+void GraspSystem::release(Entity object, int hand, LetGo how, std::string reason) {
   const auto it = held_.find(object);
   if (it == held_.end() || !it->second.by[static_cast<std::size_t>(hand)]) return;
   Held& held = it->second;
   const bool handed_over = how == LetGo::kTaken || (how == LetGo::kOpened && held.both());
   btRigidBody* body = physics_.body(object);
-  InteractionEvent e{InteractionEventType::kRelease, physics_.time_s(), object, side_of(hand), {}, handed_over,
-                     Eigen::Vector3d::Zero(),        Entity{},          0.0};
+  InteractionEvent e{InteractionEventType::kRelease, physics_.time_s(), object, side_of(hand),    {}, handed_over,
+                     Eigen::Vector3d::Zero(),        Entity{},          0.0,    std::move(reason)};
   if (held.both()) {
     // The other hand carries on from where the pair had the object.
     // Its grip points are taken afresh where its fingers are now: while paired the object moved
@@ -424,7 +447,12 @@ void GraspSystem::update_hover_and_contact(const HandContacts& contacts) {
 
 // Releases: fingers opened, or the object stuck far from its grip.
 void GraspSystem::release_opened() {
-  std::vector<std::pair<Entity, int>> to_release;  // (object, hand)
+  struct LetGoOf {
+    Entity object;
+    int hand;
+    std::string reason;
+  };
+  std::vector<LetGoOf> to_release;
   for (auto& [object, held] : held_) {
     btRigidBody* body = physics_.body(object);
     const btTransform target = target_of(held);
@@ -433,7 +461,8 @@ void GraspSystem::release_opened() {
       if (held.stuck_since_s < 0.0) held.stuck_since_s = physics_.time_s();
       if (physics_.time_s() - held.stuck_since_s > 0.1) {
         for (int hand = 0; hand < 2; ++hand) {
-          if (held.by[static_cast<std::size_t>(hand)]) to_release.emplace_back(object, hand);
+          if (held.by[static_cast<std::size_t>(hand)])
+            to_release.push_back({object, hand, "pulled out of the grip (kept " + millimetres(error) + " from it)"});
         }
         continue;
       }
@@ -446,6 +475,8 @@ void GraspSystem::release_opened() {
       if (!grip || !h->active()) continue;  // a lost hand keeps holding
       bool anchor_open = false, any_anchor = false;
       bool fingers_open = true, any_finger = false;
+      std::string anchor_reason, finger_names;
+      double finger_out_m = 0.0;
       const btScalar grown = static_cast<btScalar>(physics_.scale(object) / grip->scale);  // the object's scale since the grip points
       for (GripPoint& g : grip->grip) {
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
@@ -457,23 +488,32 @@ void GraspSystem::release_opened() {
         }
         const btVector3 on_object = target * (g.on_object * grown);
         const btVector3 normal = target.getBasis() * g.normal;
-        const bool open = trusted && static_cast<double>((on_bone - on_object).dot(normal)) > settings_.release_distance_m;
+        const double out_m = static_cast<double>((on_bone - on_object).dot(normal));
+        const bool open = trusted && out_m > settings_.release_distance_m;
         if (g.group == 0 || g.group == kPalmGroup) {
           any_anchor = true;
+          if (open && !anchor_open) anchor_reason = std::string(digit_name(g.group)) + " opened " + millimetres(out_m) + " (measured)";
           anchor_open = anchor_open || open;
         } else {
           any_finger = true;
           fingers_open = fingers_open && open;
+          if (finger_names.find(digit_name(g.group)) == std::string::npos)
+            finger_names += std::string(finger_names.empty() ? "" : ", ") + digit_name(g.group);
+          finger_out_m = std::max(finger_out_m, out_m);
         }
       }
       // The anchor opens when any of its grip points left; fingers when all of theirs did.
-      if ((any_anchor && anchor_open) || (any_finger && fingers_open)) to_release.emplace_back(object, hand);
+      if (any_anchor && anchor_open) {
+        to_release.push_back({object, hand, anchor_reason});
+      } else if (any_finger && fingers_open) {
+        to_release.push_back({object, hand, finger_names + " opened " + millimetres(finger_out_m) + " (measured)"});
+      }
     }
   }
   for (std::size_t i = 0; i < to_release.size(); ++i) {
-    const auto [object, hand] = to_release[i];
-    const bool both = (i + 1 < to_release.size() && to_release[i + 1].first == object) || (i > 0 && to_release[i - 1].first == object);
-    release(object, hand, both ? LetGo::kBoth : LetGo::kOpened);
+    auto& [object, hand, reason] = to_release[i];
+    const bool both = (i + 1 < to_release.size() && to_release[i + 1].object == object) || (i > 0 && to_release[i - 1].object == object);
+    release(object, hand, both ? LetGo::kBoth : LetGo::kOpened, std::move(reason));
   }
 }
 

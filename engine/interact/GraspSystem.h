@@ -77,6 +77,9 @@ struct InteractionEvent {
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  // kRelease: what the object was given
   Entity subject;                                          // kPress.., kSnap.., kValue..: the button, socket or joint's entity
   double value = 0.0;                                      // kValueAbove, kValueBelow: the threshold crossed
+  // kGrasp: which digits grasp ("thumb against index, middle", with those only estimated);
+  // kRelease: the evidence that ended it ("thumb opened 14 mm", "pulled out of the grip", ...).
+  std::string reason;
 };
 
 class GraspSystem {
@@ -156,7 +159,8 @@ class GraspSystem {
   enum class LetGo { kOpened, kTaken, kBoth };
   // Two grips closer than this do not make a pair: the second hand takes the object over.
   static constexpr double kMinPairSpan_m = 0.05;
-  void release(Entity object, int hand, LetGo how);
+  void release(Entity object, int hand, LetGo how, std::string reason);
+  static std::string grasp_reason(const HandGrip& grip);
   btTransform target_of(const Held& held) const;
   btVector3 grip_centre(const Held& held, int hand) const;  // world
   btTransform pair_frame(const Held& held) const;

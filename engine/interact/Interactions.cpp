@@ -67,8 +67,16 @@ void Interactions::update(World& world, const PhysicsWorld& physics, const Grasp
     }
     if (happened) {
       item.done = true;
-      events.push_back({InteractionEventType::kSuccess, physics.time_s(), item.object, std::nullopt, item.desc.name, false,
-                        Eigen::Vector3d::Zero(), Entity{}, 0.0});
+      events.push_back({InteractionEventType::kSuccess,
+                        physics.time_s(),
+                        item.object,
+                        std::nullopt,
+                        item.desc.name,
+                        false,
+                        Eigen::Vector3d::Zero(),
+                        Entity{},
+                        0.0,
+                        {}});
     }
   }
 }

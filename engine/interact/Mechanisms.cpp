@@ -264,7 +264,7 @@ bool Mechanisms::pressed(Entity button) const {
 void Mechanisms::update(World& world, const GraspSystem& grasp, std::vector<InteractionEvent>& events) {
   const double now = physics_->time_s();
   const auto raise = [&](InteractionEventType type, Entity subject, Entity object) {
-    InteractionEvent ev{type, now, object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), subject, 0.0};
+    InteractionEvent ev{type, now, object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), subject, 0.0, {}};
     events.push_back(std::move(ev));
   };
   const std::size_t grasp_events = events.size();

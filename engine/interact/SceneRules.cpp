@@ -112,7 +112,8 @@ void SceneRules::update(World& world, PhysicsWorld& physics, Mechanisms& mechani
                          false,
                          Eigen::Vector3d::Zero(),
                          r.entity,
-                         t};
+                         t,
+                         {}};
       events.push_back(std::move(e));
     }
     r.last_value = *v;
@@ -131,7 +132,7 @@ void SceneRules::update(World& world, PhysicsWorld& physics, Mechanisms& mechani
     }
     if (zones_seen_) {
       const auto raise = [&](InteractionEventType type, Entity object) {
-        events.push_back({type, physics.time_s(), object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), zones_[z], 0.0});
+        events.push_back({type, physics.time_s(), object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), zones_[z], 0.0, {}});
       };
       for (const Entity e : now) {
         if (std::find(inside_[z].begin(), inside_[z].end(), e) == inside_[z].end()) raise(InteractionEventType::kEnter, e);
@@ -156,8 +157,16 @@ void SceneRules::update(World& world, PhysicsWorld& physics, Mechanisms& mechani
 void SceneRules::apply(World& world, PhysicsWorld& physics, Mechanisms& mechanisms, const RuleAction& action, Entity target,
                        std::vector<InteractionEvent>& events) {
   if (action.action == "succeed") {
-    events.push_back({InteractionEventType::kSuccess, physics.time_s(), Entity{}, std::nullopt, action.name, false, Eigen::Vector3d::Zero(),
-                      Entity{}, 0.0});
+    events.push_back({InteractionEventType::kSuccess,
+                      physics.time_s(),
+                      Entity{},
+                      std::nullopt,
+                      action.name,
+                      false,
+                      Eigen::Vector3d::Zero(),
+                      Entity{},
+                      0.0,
+                      {}});
     return;
   }
   if (!world.alive(target)) return;

@@ -156,15 +156,30 @@ void Overlay::grasp_panel() {
   for (const HandSide side : {HandSide::kLeft, HandSide::kRight}) {
     const auto held = physics.grasp().holding(side);
     ImGui::Text("%s hand holds: %s", side_name(side), held ? object_name(*held).c_str() : "nothing");
+    // Each fingertip's confidence, and which hidden ones rest on an object (FingerContact.h).
+    const HandInput& tracked = demo_.hand(side).tracked;
+    if (!tracked.seen) continue;
+    const FingerPlacement& placed = physics.placements()[side == HandSide::kLeft ? 0 : 1];
+    static constexpr std::array<HandJoint, 5> kTips{HandJoint::kThumbTip, HandJoint::kIndexTip, HandJoint::kMiddleTip, HandJoint::kRingTip,
+                                                    HandJoint::kLittleTip};
+    static constexpr std::array<const char*, 5> kDigits{"T", "I", "M", "R", "L"};
+    std::string line = "  tips:";
+    for (std::size_t d = 0; d < 5; ++d) {
+      char one[32];
+      std::snprintf(one, sizeof(one), " %s %.2f%s", kDigits[d], tracked.confidence[static_cast<std::size_t>(kTips[d])],
+                    placed.placed[d] ? " (on object)" : "");
+      line += one;
+    }
+    ImGui::TextUnformatted(line.c_str());
   }
   // This frame's events, once per frame the demo ran.
   if (events_frame_ != demo_.frames()) {
     events_frame_ = demo_.frames();
     for (const InteractionEvent& e : physics.events()) {
       if (e.type == InteractionEventType::kHoverBegin || e.type == InteractionEventType::kHoverEnd) continue;
-      char line[160];
-      std::snprintf(line, sizeof(line), "%6.2f s  %s %s%s%s", e.time_s, event_name(e.type), object_name(e.object).c_str(),
-                    e.hand ? " by the " : "", e.hand ? side_name(*e.hand) : "");
+      char line[256];
+      std::snprintf(line, sizeof(line), "%6.2f s  %s %s%s%s%s%s", e.time_s, event_name(e.type), object_name(e.object).c_str(),
+                    e.hand ? " by the " : "", e.hand ? side_name(*e.hand) : "", e.reason.empty() ? "" : ": ", e.reason.c_str());
       events_.emplace_front(line);
       if (events_.size() > kEventLines) events_.pop_back();
     }

@@ -73,7 +73,6 @@ std::expected<std::unique_ptr<Runtime>, std::string> Runtime::create(const Scene
                            }
                          }}});
   r->hand_motion_.assign(2, MotionPredictor(kHandJointCount));
-  if (r->recorder_) r->stages_.push_back({{"record", [self](double) { self->recorder_->record(self->tracking_->results()); }}});
   if (r->stream_) {
     r->stages_.push_back({{"stream", [self](double) { self->stream_->send(self->tracking_->results(), self->stream_names_); }}});
   }
@@ -82,6 +81,8 @@ std::expected<std::unique_ptr<Runtime>, std::string> Runtime::create(const Scene
                            self->physics_->step(self->world_);
                            update_world_transforms(self->world_);  // dynamic bodies moved; children follow
                          }}});
+  // After the physics: the recording has what the hands held and why they grasped or let go.
+  if (r->recorder_) r->stages_.push_back({{"record", [self](double) { self->record(); }}});
   r->renderer_ = renderer;
   if (renderer) {
     r->scene_renderer_ = std::make_unique<SceneRenderer>(*renderer);
@@ -144,6 +145,23 @@ Entity Runtime::hand_entity(HandSide side) {
 
 const Hand& Runtime::hand(HandSide side) { return world_.get<Hand>(hand_entity(side)); }
 const HandBody* Runtime::hand_body(HandSide side) { return world_.find<HandBody>(hand_entity(side)); }
+
+void Runtime::record() {
+  const auto name_of = [&](Entity e) {
+    const Name* name = world_.alive(e) ? world_.find<Name>(e) : nullptr;
+    return name ? name->value : std::string("entity ") + std::to_string(e.index);
+  };
+  std::array<std::string, 2> holding;
+  for (const HandSide side : {HandSide::kLeft, HandSide::kRight}) {
+    if (const auto held = physics_->grasp().holding(side)) holding[side == HandSide::kLeft ? 0 : 1] = name_of(*held);
+  }
+  std::vector<RecordedGraspEvent> events;
+  for (const InteractionEvent& e : physics_->events()) {
+    if ((e.type != InteractionEventType::kGrasp && e.type != InteractionEventType::kRelease) || !e.hand) continue;
+    events.push_back({event_name(e.type), *e.hand == HandSide::kLeft ? "left" : "right", name_of(e.object), e.reason});
+  }
+  recorder_->record(tracking_->results(), holding, events);
+}
 
 void Runtime::render() {
   collect_displayed();

@@ -156,6 +156,7 @@ class Runtime {
   };
   void advance(const FrameContext& f);
   void render();
+  void record();  // the "record" stage: this frame's tracking and grasps into the recording
   // Frames the renderer has finished since the last call: displayed, measured, observed.
   void collect_displayed();
   Entity hand_entity(HandSide side);

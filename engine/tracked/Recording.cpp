@@ -57,7 +57,7 @@ Header read_header(const JsonNode& j) {
 }
 
 RecordedFrame read_frame(const JsonNode& j) {
-  j.expect_object({"t", "hands", "objects"});
+  j.expect_object({"t", "hands", "objects", "holding", "grasp_events"});
   RecordedFrame f;
   f.t_s = j["t"].number();
   const JsonNode hands = j["hands"];
@@ -82,6 +82,22 @@ RecordedFrame read_frame(const JsonNode& j) {
   if (auto objects = j.optional("objects")) {
     if (!objects->raw().is_object()) objects->fail("expected {name: pose}, got " + describe_json(objects->raw()));
     for (const auto& [name, pose] : objects->raw().items()) f.objects[name] = pose_from((*objects)[name.c_str()]);
+  }
+  if (auto holding = j.optional("holding")) {
+    if (!holding->raw().is_array() || holding->raw().size() != 2) holding->fail("expected [left, right] object names");
+    const auto names = holding->elements();
+    for (std::size_t h = 0; h < 2; ++h) f.holding[h] = names[h].string();
+  }
+  if (auto events = j.optional("grasp_events")) {
+    for (const JsonNode& e : events->elements()) {
+      e.expect_object({"type", "hand", "object", "reason"});
+      RecordedGraspEvent ev{e["type"].string(), e["hand"].string(), e["object"].string(), ""};
+      if (ev.type != "grasp" && ev.type != "release")
+        e["type"].fail("expected \"grasp\" or \"release\", got " + describe_json(e["type"].raw()));
+      if (ev.hand != "left" && ev.hand != "right") e["hand"].fail("expected \"left\" or \"right\", got " + describe_json(e["hand"].raw()));
+      if (auto reason = e.optional("reason")) ev.reason = reason->string();
+      f.grasp_events.push_back(std::move(ev));
+    }
   }
   return f;
 }
@@ -118,7 +134,15 @@ std::expected<void, std::string> RecordingWriter::write(const RecordedFrame& fra
   }
   json objects = json::object();
   for (const auto& [name, pose] : frame.objects) objects[name] = pose_json(pose);
-  *out_ << json{{"t", frame.t_s}, {"hands", hands}, {"objects", objects}}.dump() << '\n';
+  json line{{"t", frame.t_s}, {"hands", hands}, {"objects", objects}};
+  if (!frame.holding[0].empty() || !frame.holding[1].empty()) line["holding"] = frame.holding;
+  if (!frame.grasp_events.empty()) {
+    json events = json::array();
+    for (const RecordedGraspEvent& e : frame.grasp_events)
+      events.push_back({{"type", e.type}, {"hand", e.hand}, {"object", e.object}, {"reason", e.reason}});
+    line["grasp_events"] = events;
+  }
+  *out_ << line.dump() << '\n';
   out_->flush();
   if (!*out_) return std::unexpected(file_.string() + ": cannot write the recording");
   return {};

@@ -9,7 +9,8 @@
 // then one line per frame:
 //   {"t": 0.0111, "hands": [{"side": "left", "seen": true, "wrist_pose": [x, y, z, qx, qy, qz, qw],
 //     "joints": [[x, y, z] x 26], "radius": [26], "confidence": [26]}, {...right...}],
-//    "objects": {"tracked-mug": [x, y, z, qx, qy, qz, qw], ...}}
+//    "objects": {"tracked-mug": [x, y, z, qx, qy, qz, qw], ...},
+//    "holding": ["", "cube-red"], "grasp_events": [{"type": "grasp", "hand": "right", ...}]}
 // Metres, seconds, quaternions (x, y, z, w) as glTF writes them.
 
 #include <array>
@@ -26,10 +27,23 @@
 
 namespace rhot {
 
+// A grasp or release of the frame, as the physics raised it (engine/interact/GraspSystem.h).
+struct RecordedGraspEvent {
+  std::string type;    // "grasp" or "release"
+  std::string hand;    // "left" or "right"
+  std::string object;  // the entity's name
+  std::string reason;  // why (InteractionEvent::reason)
+  bool operator==(const RecordedGraspEvent&) const = default;
+};
+
 struct RecordedFrame {
   double t_s = 0.0;
   std::array<HandInput, 2> hands;  // 0 left, 1 right
   std::map<std::string, Rigid3d> objects;
+  // What each hand held after the frame's physics ("" for nothing), and its grasps and releases:
+  // empty in recordings made without the physics (and in version 1 files, which lack them).
+  std::array<std::string, 2> holding;
+  std::vector<RecordedGraspEvent> grasp_events;
 };
 
 struct Recording {

@@ -25,7 +25,8 @@ SessionRecorder::SessionRecorder(RecordingWriter writer, const TrackedObjects& o
   }
 }
 
-void SessionRecorder::record(const TrackingResults& results) {
+void SessionRecorder::record(const TrackingResults& results, const std::array<std::string, 2>& holding,
+                             const std::vector<RecordedGraspEvent>& grasp_events) {
   if (!writer_) return;
   for (const auto& [id, pose] : results.world_from_object) {
     if (const auto name = name_of_star_.find(id); name != name_of_star_.end()) last_pose_[name->second] = pose;
@@ -34,6 +35,8 @@ void SessionRecorder::record(const TrackingResults& results) {
   f.t_s = results.t_s;
   f.hands = results.hands;
   f.objects = last_pose_;
+  f.holding = holding;
+  f.grasp_events = grasp_events;
   if (auto written = writer_->write(f); !written) {
     spdlog::error("recording stopped: {}", written.error());
     writer_.reset();

@@ -3,9 +3,11 @@
 
 #include <expected>
 #include <filesystem>
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "engine/tracked/Recording.h"
 #include "engine/tracked/TrackedObjects.h"
@@ -19,8 +21,11 @@ class SessionRecorder {
  public:
   [[nodiscard]] static std::expected<SessionRecorder, std::string> open(const std::filesystem::path& file, double rate_hz,
                                                                         const TrackedObjects& objects);
-  // Appends one frame; after a write error it logs once and records nothing more.
-  void record(const TrackingResults& results);
+  // Appends one frame, with what the hands held after its physics and its grasps and releases
+  // (RecordedFrame::holding, grasp_events); after a write error it logs once and records nothing
+  // more.
+  void record(const TrackingResults& results, const std::array<std::string, 2>& holding = {},
+              const std::vector<RecordedGraspEvent>& grasp_events = {});
 
  private:
   SessionRecorder(RecordingWriter writer, const TrackedObjects& objects);

@@ -143,8 +143,10 @@ GraspComparison compare_grasps(const std::vector<GraspSpan>& tracked, const std:
     c.missed += made ? 0 : 1;
   }
   for (const GraspSpan& g : tracked) {
+    // Meant: the perfect hands held the same object with the same hand at some time during it (a
+    // grasp a little earlier or later than theirs is theirs).
     const bool meant = std::any_of(perfect.begin(), perfect.end(), [&](const GraspSpan& p) {
-      return same(g, p) && g.begin_s >= p.begin_s - kSameMoment_s && g.begin_s <= p.end_s;
+      return same(g, p) && g.begin_s <= p.end_s + kSameMoment_s && g.end_s >= p.begin_s - kSameMoment_s;
     });
     c.unintended_grasps += meant ? 0 : 1;
     if (!g.released) continue;

@@ -139,7 +139,7 @@ TEST(FingerContact, AHiddenFingerRestsOnWhatItsHandHoldsNeitherInsideNorAway) {
       b.step(1.0, 0.05 * i / 44.0);
       ASSERT_TRUE(b.physics->placements()[1].placed[1]) << "estimate " << estimate << ", step " << i;
       EXPECT_GT(b.digit_gap_m(1), -0.0025) << "never inside the held cube (estimate " << estimate << ", step " << i << ")";
-      EXPECT_LT(b.digit_gap_m(1), 0.001) << "never away from it (estimate " << estimate << ", step " << i << ")";
+      EXPECT_LT(b.digit_gap_m(1), 0.002) << "never away from it (estimate " << estimate << ", step " << i << ")";
     }
     EXPECT_EQ(b.physics->grasp().holding(HandSide::kRight), b.cube);
   }

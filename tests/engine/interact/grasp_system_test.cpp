@@ -4,6 +4,7 @@
 #include "engine/interact/GraspSystem.h"
 
 #include <algorithm>
+#include <regex>
 
 #include <gtest/gtest.h>
 
@@ -69,6 +70,7 @@ TEST(GraspSystem, ClosingThumbAndFingersOnAGrabbableObjectGraspsIt) {
   const InteractionEvent& grasp = b.events[b.first(InteractionEventType::kGrasp)];
   EXPECT_EQ(grasp.object, b.cube);
   EXPECT_EQ(grasp.hand, HandSide::kRight);
+  EXPECT_EQ(grasp.reason, "thumb against index") << "the middle finger touches a step later";
   const GraspSystem& g = b.physics->grasp();
   EXPECT_EQ(g.holding(HandSide::kRight), b.cube);
   EXPECT_EQ(g.held_by(b.cube), HandSide::kRight);
@@ -103,6 +105,7 @@ TEST(GraspSystem, OpeningReleasesAndTheHandCannotGraspAgainAtOnce) {
   ASSERT_EQ(b.count(InteractionEventType::kRelease), 1);
   const InteractionEvent& release = b.events[b.first(InteractionEventType::kRelease)];
   EXPECT_FALSE(release.handed_over);
+  EXPECT_TRUE(std::regex_match(release.reason, std::regex(R"((thumb|index, middle) opened 1\d mm \(measured\))"))) << release.reason;
   EXPECT_LT(release.velocity_mps.norm(), 0.05);
   EXPECT_FALSE(b.physics->grasp().holding(HandSide::kRight).has_value());
   // Closed again at once (within regrasp_delay_s, 0.2 s): no grasp; held closed past it: grasped.

@@ -76,10 +76,10 @@ TEST(Interactions, AHandOverSucceedsOnAReleaseTheOtherHandTook) {
   const Entity cube = find_named(world, "cube");
   auto interactions = Interactions::create(world, {{"pass", InteractionType::kHandOver, "cube", "", 0.0}});
   ASSERT_TRUE(interactions.has_value());
-  std::vector<InteractionEvent> events = {{InteractionEventType::kRelease, 0.5, cube, HandSide::kRight, {}, false, {}, {}, 0.0}};
+  std::vector<InteractionEvent> events = {{InteractionEventType::kRelease, 0.5, cube, HandSide::kRight, {}, false, {}, {}, 0.0, {}}};
   interactions->update(world, physics->physics(), physics->grasp(), events);
   EXPECT_EQ(events.size(), 1u) << "a plain release is no hand-over";
-  events = {{InteractionEventType::kRelease, 0.6, cube, HandSide::kRight, {}, true, {}, {}, 0.0}};
+  events = {{InteractionEventType::kRelease, 0.6, cube, HandSide::kRight, {}, true, {}, {}, 0.0, {}}};
   interactions->update(world, physics->physics(), physics->grasp(), events);
   ASSERT_EQ(events.size(), 2u);
   EXPECT_EQ(events[1].type, InteractionEventType::kSuccess);

@@ -258,6 +258,19 @@ TEST(Demo, ARecordingReplaysToThePosesItRecorded) {
   ASSERT_TRUE(recording.has_value()) << recording.error();
   EXPECT_EQ(recording->frames.size(), static_cast<std::size_t>(kFrames));
   EXPECT_EQ(recording->objects, (std::vector<std::string>{"tracked-mug", "tracked-screwdriver", "tracked-part"}));
+  // The right hand's grasp of the block is in it, with its reason, and the frames after it say so.
+  std::size_t grasped_at = 0;
+  for (std::size_t f = 0; f < recording->frames.size() && !grasped_at; ++f) {
+    for (const RecordedGraspEvent& e : recording->frames[f].grasp_events) {
+      if (e.type == "grasp" && e.hand == "right" && e.object == "cube-red") {
+        grasped_at = f;
+        EXPECT_EQ(e.reason.rfind("thumb against ", 0), 0u) << e.reason;
+      }
+    }
+  }
+  ASSERT_GT(grasped_at, 0u);
+  EXPECT_EQ(recording->frames[grasped_at].holding[1], "cube-red");
+  EXPECT_EQ(recording->frames[grasped_at - 1].holding[1], "");
 
   DemoSettings settings;
   settings.asset_dir = RHOT_ASSET_DIR;

@@ -3,6 +3,7 @@
 
 #include "engine/tracked/Recording.h"
 
+#include <array>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -12,6 +13,21 @@
 
 namespace rhot {
 namespace {
+
+// One frame's line as RecordingWriter writes it (no hands seen, no objects).
+std::string written_frame_line() {
+  const std::string file = ::testing::TempDir() + "rhot_one_frame.jsonl";
+  {
+    auto writer = RecordingWriter::open(file, 90.0, {});
+    EXPECT_TRUE(writer.has_value());
+    EXPECT_TRUE(writer->write(RecordedFrame{}).has_value());
+  }
+  std::ifstream in(file);
+  std::string header, line;
+  std::getline(in, header);
+  std::getline(in, line);
+  return line;
+}
 
 TEST(Recording, BrokenRecordingsAreRefusedNamingTheLine) {
   const std::string file = ::testing::TempDir() + "rhot_bad_recording.jsonl";
@@ -31,6 +47,17 @@ TEST(Recording, BrokenRecordingsAreRefusedNamingTheLine) {
         << "\n";
   }
   EXPECT_EQ(load_recording(file).error(), file + ":1: /version: expected an integer from 1 to 1, got 2");
+  // A grasp event of a kind recordings do not hold.
+  {
+    std::ofstream out(file);
+    out << R"({"format": "rhot-recording", "version": 1, "rate_hz": 90, "objects": []})"
+        << "\n";
+    out << written_frame_line() << "\n";
+    std::string line = written_frame_line();
+    line.replace(line.rfind('}'), 1, R"(, "grasp_events": [{"type": "squeeze", "hand": "right", "object": "cup", "reason": ""}]})");
+    out << line << "\n";
+  }
+  EXPECT_EQ(load_recording(file).error(), file + ":3: /grasp_events/0/type: expected \"grasp\" or \"release\", got \"squeeze\"");
   EXPECT_EQ(load_recording(file + ".missing").error(), file + ".missing: cannot read the recording");
 }
 
@@ -46,6 +73,10 @@ TEST(Recording, AWrittenRecordingReadsBackAndInterpolates) {
       frame.hands[1].world_from_hand.translation = Eigen::Vector3d(0.1 * f, 1.0, 0.0);
       for (auto& p : frame.hands[1].joints_world) p = Eigen::Vector3d(0.1 * f, 1.0, -0.5);
       frame.objects["cup"].translation = Eigen::Vector3d(0.0, 0.2 * f, 0.0);
+      if (f == 1) {
+        frame.holding[1] = "cup";
+        frame.grasp_events.push_back({"grasp", "right", "cup", "thumb against index (index not measured)"});
+      }
       ASSERT_TRUE(writer->write(frame).has_value());
     }
   }
@@ -55,6 +86,12 @@ TEST(Recording, AWrittenRecordingReadsBackAndInterpolates) {
   ASSERT_EQ(r->frames.size(), 3u);
   EXPECT_DOUBLE_EQ(r->rate_hz, 90.0);
   EXPECT_NEAR(r->duration_s(), 0.2, 1e-12);
+  // What the hands held, and why they grasped, only where there was something.
+  EXPECT_EQ(r->frames[0].holding, (std::array<std::string, 2>{"", ""}));
+  EXPECT_EQ(r->frames[1].holding, (std::array<std::string, 2>{"", "cup"}));
+  EXPECT_EQ(r->frames[1].grasp_events,
+            (std::vector<RecordedGraspEvent>{{"grasp", "right", "cup", "thumb against index (index not measured)"}}));
+  EXPECT_TRUE(r->frames[2].grasp_events.empty());
   // Halfway between frames 1 and 2: positions interpolated linearly.
   const RecordedFrame mid = r->at(0.15);
   EXPECT_NEAR(mid.hands[1].joints_world[0].x(), 0.15, 1e-12);
