@@ -262,8 +262,7 @@ FingerPlacement FingerContact::place(HandSide side, double t_s, HandInput& hand)
     // Bend from the first knuckle whose next joint is not measured.
     int first = 0;
     while (first < chain.count - 2 && hand.confidence[at(first + 1)] >= settings_.confident) ++first;
-    // Fingers bend about the hand's lateral axis; the thumb about the axis across it and the palm's
-    // normal (toward the palm).
+    // Fingers bend about the hand's lateral axis (in their own plane); the thumb turns below.
     Eigen::Vector3d axis = -hand_rotation.col(0);
     if (digit == 0) {
       // The thumb turns about its first knuckle toward the object (or, with the object straight
