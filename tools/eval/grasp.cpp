@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <expected>
 #include <iostream>
 #include <limits>
 #include <numbers>
@@ -31,6 +32,26 @@
 
 namespace rhot::eval {
 
+namespace {
+
+// Tracked hands: the rig, both hands' shipped layouts and the simulated world.
+std::expected<rhot::ScenarioCameras, std::string> scenario_cameras(const GraspArgs& args) {
+  const auto world = world_settings(args.world);
+  if (!world) return std::unexpected(world.error());
+  auto rig = rhot::load_rig(args.rig_file);
+  if (!rig) return std::unexpected(rig.error());
+  rhot::ScenarioCameras cameras{std::move(*rig), {}, *world, args.seed};
+  for (std::size_t h = 0; h < 2; ++h) {
+    auto layout =
+        rhot::load_hand_layout(std::string(RHOT_ASSET_DIR) + (h == 0 ? "/hands/low-cost-left.json" : "/hands/low-cost-right.json"));
+    if (!layout) return std::unexpected(layout.error());
+    cameras.layouts[h] = std::move(*layout);
+  }
+  return cameras;
+}
+
+}  // namespace
+
 // Scripted grasp scenarios through the real physics (engine/sim/GraspScenarios.h).
 int grasp(const GraspArgs& args) {
   std::vector<std::string_view> names;
@@ -43,29 +64,14 @@ int grasp(const GraspArgs& args) {
     std::cerr << "rhot-eval: --scenario " << args.scenario << ": no such scenario (" << list << "all)\n";
     return 1;
   }
-  // Tracked hands: the rig, both hands' shipped layouts and the simulated world.
   std::optional<rhot::ScenarioCameras> cameras;
   if (args.hands == "tracked") {
-    const auto world = world_settings(args.world);
-    if (!world) {
-      std::cerr << "rhot-eval: " << world.error() << "\n";
+    auto made = scenario_cameras(args);
+    if (!made) {
+      std::cerr << "rhot-eval: " << made.error() << "\n";
       return 1;
     }
-    auto rig = rhot::load_rig(args.rig_file);
-    if (!rig) {
-      std::cerr << "rhot-eval: " << rig.error() << "\n";
-      return 1;
-    }
-    cameras = rhot::ScenarioCameras{std::move(*rig), {}, *world, args.seed};
-    for (std::size_t h = 0; h < 2; ++h) {
-      auto layout =
-          rhot::load_hand_layout(std::string(RHOT_ASSET_DIR) + (h == 0 ? "/hands/low-cost-left.json" : "/hands/low-cost-right.json"));
-      if (!layout) {
-        std::cerr << "rhot-eval: " << layout.error() << "\n";
-        return 1;
-      }
-      cameras->layouts[h] = std::move(*layout);
-    }
+    cameras = std::move(*made);
   }
   nlohmann::json j;
   std::vector<double> steps;
