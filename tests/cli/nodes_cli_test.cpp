@@ -42,12 +42,23 @@ nlohmann::json run_nodes(const std::string& args) {
   }
 }
 
+// Frames lost on the way: at most `transport` (the machine's scheduling), however many exposures
+// the nodes themselves skipped (a node behind real time skips to the present; a whole-machine
+// stall of 100 ms skips the same nine exposures on every node, which no transport can deliver).
+// Those are few too: a tenth of the run at most.
+void expect_few_lost(const nlohmann::json& j, int transport) {
+  ASSERT_TRUE(j.contains("frames_lost_in_transport")) << j.dump(2);
+  EXPECT_LE(j["frames_lost_in_transport"].get<int>(), transport) << j.dump(2);
+  EXPECT_EQ(j["frames_lost"].get<int>(), j["frames_lost_in_transport"].get<int>() + j["frames_not_made"].get<int>());
+  EXPECT_LE(j["frames_lost"].get<int>(), j["frames_expected"].get<int>() / 10) << j.dump(2);
+}
+
 TEST(NodesCli, FourNodesDeliverEveryFrameAndTheMarkersAreFoundAsFromLocalCameras) {
   const nlohmann::json j = run_nodes("--nodes 4 --markers 40 --seconds 2");
   ASSERT_TRUE(j.contains("frames_expected")) << j.dump();
   EXPECT_EQ(j["frames_expected"], 180);
   // A loaded 2-core machine may lose a frame or two to scheduling, no more.
-  EXPECT_LE(j["frames_lost"].get<int>(), kSchedulingSlackFrames) << j.dump(2);
+  expect_few_lost(j, kSchedulingSlackFrames);
   EXPECT_GT(j["found_fraction"].get<double>(), kFoundFloor) << j.dump(2);
   EXPECT_EQ(j["bad_messages"], 0);
   // A round trip's sample is at most half its round trip off, so neither the offset (checked
@@ -69,7 +80,7 @@ TEST(NodesCli, AKilledNodeLeavesTrackingToTheOthersAndComesBackWhenRestarted) {
   ASSERT_TRUE(j.contains("rejoined")) << j.dump();
   EXPECT_GT(j["found_fraction_while_node_down"].get<double>(), 0.95) << j.dump(2);
   EXPECT_TRUE(j["rejoined"].get<bool>()) << j.dump(2);
-  EXPECT_LE(j["frames_lost"].get<int>(), 4) << "frames go on while the node is down" << j.dump(2);
+  expect_few_lost(j, 4);  // frames go on while the node is down
   EXPECT_EQ(j["per_node"][3]["lost"], 1);
   EXPECT_EQ(j["per_node"][3]["rejoined"], 1);
 }
@@ -78,10 +89,10 @@ TEST(NodesCli, ANodeClockFiftyMillisecondsAheadAndDriftingIsSynchronised) {
   const nlohmann::json j = run_nodes("--nodes 2 --markers 20 --seconds 3 --clock-offset-ms 50 --clock-drift-ppm 100");
   ASSERT_TRUE(j.contains("clock_offset_error_us")) << j.dump();
   EXPECT_LT(j["clock_offset_error_us"].get<double>(), 100.0) << j.dump(2);
-  EXPECT_NEAR(j["per_node"][0]["clock_offset_ms"].get<double>(), 50.3, 0.1);
+  EXPECT_NEAR(j["per_node"][0]["clock_offset_ms"].get<double>(), 50.3, 0.1) << j.dump(2);
   // Frames are assembled from both nodes (a 50 ms error would split every group in two).
   EXPECT_GT(j["found_fraction"].get<double>(), 0.95) << j.dump(2);
-  EXPECT_LE(j["frames_lost"].get<int>(), 3);
+  expect_few_lost(j, 3);
 }
 
 TEST(NodesCli, ANodeDelayedThirtyMillisecondsIsLeftOutOfFramesThatCannotWaitAndCounted) {
@@ -89,8 +100,8 @@ TEST(NodesCli, ANodeDelayedThirtyMillisecondsIsLeftOutOfFramesThatCannotWaitAndC
   ASSERT_TRUE(j.contains("late")) << j.dump();
   // Node 0's every frame arrives after its group closed: about one per frame, all counted.
   EXPECT_GT(j["late"].get<int>(), 150) << j.dump(2);
-  EXPECT_LE(j["frames_lost"].get<int>(), 2) << "no frame waits for it";
-  EXPECT_LT(j["frames_complete"].get<int>(), 5);
+  expect_few_lost(j, 2);  // no frame waits for it
+  EXPECT_LT(j["frames_complete"].get<int>(), 5) << j.dump(2);
 }
 
 TEST(NodesCli, FourNodesServingTheDemoTrackTheHandsAsWellAsTheInProcessSimulatedRig) {

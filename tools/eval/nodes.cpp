@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -267,6 +269,16 @@ struct NodesRun {
 // What the master's loop counts.
 struct NodesTally {
   std::set<std::int64_t> assembled;
+  // Per camera: the counter and exposure of its last message in a frame, and the exposures its
+  // node never made (behind real time it skips to the present, or it was not running): the
+  // counter counts the messages made, so a gap in exposures wider than the gap in counters is
+  // exposures never made.
+  struct CameraTrack {
+    std::optional<std::uint64_t> counter;
+    std::int64_t k = -1;
+  };
+  std::vector<CameraTrack> tracks;
+  std::vector<std::vector<bool>> not_made;  // [camera][exposure]
   std::vector<double> assembly_ms, latency_ms;
   long found = 0, truth_total = 0, found_down = 0, truth_down = 0;
   bool killed = false, restarted = false, rejoined = false;
@@ -288,12 +300,43 @@ void kill_or_restart_victim(const NodesRun& run, double t_now, NodesTally& tally
   }
 }
 
+// The exposure (frame index) of a capture time: 0 at start_ns.
+std::int64_t exposure_of(const NodesRun& run, std::int64_t capture_ns) {
+  const std::int64_t rel = capture_ns - run.start_ns;
+  return (rel >= 0 ? rel + run.period_ns / 2 : rel - run.period_ns / 2) / run.period_ns;
+}
+
+// Marks the exposures of f's cameras that their nodes never made (see NodesTally::CameraTrack).
+void track_cameras(const NodesRun& run, const AssembledFrame& f, NodesTally& tally) {
+  if (tally.tracks.size() < f.cameras.size()) {
+    tally.tracks.resize(f.cameras.size());
+    tally.not_made.assign(f.cameras.size(), std::vector<bool>(static_cast<std::size_t>(run.frames_expected), false));
+  }
+  for (std::size_t c = 0; c < f.cameras.size(); ++c) {
+    if (!f.cameras[c]) continue;
+    NodesTally::CameraTrack& t = tally.tracks[c];
+    const std::int64_t k = exposure_of(run, f.cameras[c]->capture_ns);
+    const std::uint64_t counter = f.cameras[c]->counter;
+    // A node's first message (counter 0, also after a restart) follows exposures it never made.
+    // Between two messages, counter - last counter - 1 were made and lost on the way (taken to
+    // be the exposures right after the last; the counts per camera are exact, not which ones),
+    // and the other exposures of the gap never made. A node's first message (counter 0, also
+    // after a restart) follows exposures it never made.
+    const std::int64_t made = !t.counter || counter == 0 || counter <= *t.counter ? 0 : static_cast<std::int64_t>(counter - *t.counter - 1);
+    for (std::int64_t i = std::max<std::int64_t>(0, t.k + 1 + made); i < std::min(k, run.frames_expected); ++i)
+      tally.not_made[c][static_cast<std::size_t>(i)] = true;
+    t.counter = counter;
+    t.k = std::max(t.k, k);
+  }
+}
+
 // Counts one frame the node source closed: its assembly, its cameras' latency and, from its
 // points or its hands, what was tracked.
 void tally_frame(const NodesRun& run, const AssembledFrame& f, NodesTally& tally) {
   const NodesArgs& a = run.a;
-  const std::int64_t k = (f.capture_ns - run.start_ns + run.period_ns / 2) / run.period_ns;
-  if (f.capture_ns < run.start_ns - run.period_ns / 2 || k >= run.frames_expected) return;
+  track_cameras(run, f, tally);
+  const std::int64_t k = exposure_of(run, f.capture_ns);
+  if (k < 0 || k >= run.frames_expected) return;
   const double t = static_cast<double>(k) / a.rate_hz;
   tally.assembled.insert(k);
   double cost_ns = static_cast<double>(f.close_cpu_ns);
@@ -384,6 +427,19 @@ nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSo
   j["frames_expected"] = run.frames_expected;
   j["frames_assembled"] = static_cast<std::int64_t>(tally.assembled.size());
   j["frames_lost"] = run.frames_expected - static_cast<std::int64_t>(tally.assembled.size());
+  // Of those, the exposures no node made (each was behind real time, or not running): the
+  // machine's doing, not the transport's. Cameras never in a frame (every message late) are not
+  // asked.
+  std::int64_t not_made = 0;
+  for (std::int64_t k = 0; k < run.frames_expected; ++k) {
+    if (tally.assembled.contains(k) || tally.not_made.empty()) continue;
+    bool none = true;  // of the cameras that were in frames (one whose every message came late made none)
+    for (std::size_t c = 0; c < tally.not_made.size(); ++c)
+      if (tally.tracks[c].counter) none = none && tally.not_made[c][static_cast<std::size_t>(k)];
+    not_made += none ? 1 : 0;
+  }
+  j["frames_not_made"] = not_made;
+  j["frames_lost_in_transport"] = run.frames_expected - static_cast<std::int64_t>(tally.assembled.size()) - not_made;
   j["frames_complete"] = tally.complete;
   j["assembly_p50_ms"] = percentile(tally.assembly_ms, 0.5);
   j["assembly_p99_ms"] = percentile(tally.assembly_ms, 0.99);
