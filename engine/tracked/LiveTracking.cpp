@@ -37,6 +37,8 @@ LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObj
     all.stars.push_back(hand);
   }
   star_tracker_ = std::make_unique<StarTracker>(StarLibrary(all));
+  for (const int s : hand_star_)
+    if (s >= 0) star_tracker_->set_motion(s, hand_star_motion());
   stars_ = star_tracker_->stars();  // the hands' stages may run before the stars' first
   // A colour some finger marker wears and no hand star does: such a point is a finger's, never a
   // star's marker. Only where both hand stars are coloured (the objects' stars wear the hand stars'
@@ -150,6 +152,7 @@ void LiveTracking::match() {
 
 void LiveTracking::track_stars(double t_s) {
   results_.world_from_object.clear();
+  results_.object_certain.clear();
   // The points a star's marker may be: all of them, less those whose colour only fingertips wear.
   // With two colour cameras, fingertip markers beside blue star markers were taken
   // for the other hand's star, half a metre from that hand (rhot-eval colour, 2026-11-26).
@@ -170,12 +173,13 @@ void LiveTracking::track_stars(double t_s) {
   }
   for (const auto& [id, object_from_star] : object_from_star_) {
     for (const TrackedStar& s : stars) {
-      if (s.id != id || !s.seen_now()) continue;
+      if (s.id != id || !s.measured_now()) continue;
       ++results_.counts.stars_seen;
       results_.counts.seen_star_ids.push_back(id);
       const Rigid3d world_from_object = s.world_from_star * object_from_star.inverse();
       if (!world_from_object.translation.allFinite() || !world_from_object.rotation.coeffs().allFinite()) continue;
       results_.world_from_object[id] = world_from_object;
+      results_.object_certain[id] = s.certain;
     }
   }
 }

@@ -38,8 +38,13 @@ struct TrackingResults {
   std::array<HandGesture, 2> pinch{};
   std::array<HandGesture, 2> grip{};
   bool gestures_measured = false;
-  // The objects seen this frame, by marker-star id: where each object is (finite poses only).
+  // The objects measured this frame, by marker-star id: where each object is (its star's filtered
+  // pose; finite poses only), and whether that pose is certain to within the star tracker's
+  // report bounds (StarTracker.h: 10 mm and 5 degrees by default). An uncertain pose is the best
+  // estimate there is; an application that must not act on a wrong one checks it (absent where
+  // the source does not know: a replay).
   std::map<int, Rigid3d> world_from_object;
+  std::map<int, bool> object_certain;
   std::vector<Eigen::Vector3d> points;          // triangulated markers, world
   std::vector<std::vector<int>> point_cameras;  // per point: the cameras that saw it
   std::vector<int> point_colours;               // per point: its marker colour (tracking/core/MarkerColour.h), -1 for none

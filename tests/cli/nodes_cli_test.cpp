@@ -108,13 +108,14 @@ TEST(NodesCli, FourNodesServingTheDemoTrackTheHandsAsWellAsTheInProcessSimulated
   // The demo's script photographed by four node processes (one camera each of the seated rig), its
   // hands tracked from their frames and, at the same moments, from the in-process simulated rig.
   const nlohmann::json j = run_nodes(std::string("--nodes 4 --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --scene " + RHOT_ASSET_DIR +
-                                     "/scenes/default.json --seconds 4");
+                                     "/scenes/default.json --seconds 6");
   ASSERT_TRUE(j.contains("hand_joint_mean_mm")) << j.dump();
   const double nodes = j["hand_joint_mean_mm"].get<double>(), local = j["in_process_hand_joint_mean_mm"].get<double>();
   EXPECT_GT(local, 1.0) << "a real error to compare with";
   EXPECT_LE(nodes, 1.10 * local) << j.dump(2);
   EXPECT_GT(j["hands_seen_fraction"].get<double>(), kHandsSeenFloor) << j.dump(2);
-  EXPECT_GT(j["in_process_hands_seen_fraction"].get<double>(), 0.99);
+  // The in-process rig sees the cameras each assembled frame had: a late camera hides a hand from both.
+  EXPECT_GT(j["in_process_hands_seen_fraction"].get<double>(), kHandsSeenFloor) << j.dump(2);
 }
 
 TEST(NodesCli, TheDemoRunsOnFourNodeProcesses) {

@@ -24,6 +24,7 @@
 #include "tracking/geometry/Matching.h"
 #include "tracking/sim/HandMotions.h"
 #include "tracking/hand/HandTracker.h"
+#include "tracking/filter/PoseKalman.h"
 #include "tracking/rigid/StarTracker.h"
 #include "tracking/sim/Realism.h"
 #include "tracking/sim/SimulatedRig.h"
@@ -97,6 +98,77 @@ bool at_its_own_markers(const rhot::TrackedStar& t, const rhot::RigFrame& frame,
   return own && !other;
 }
 
+// The reported pose's error against the truth, squared and weighed by its covariance (the
+// normalised estimation error squared): 6 on average where the covariance is honest.
+double pose_nees(const rhot::TrackedStar& t, const rhot::Rigid3d& truth) {
+  Eigen::Matrix<double, 6, 1> e;
+  e.head<3>() = t.world_from_star.translation - truth.translation;
+  const Eigen::AngleAxisd turn((t.world_from_star.rotation * truth.rotation.conjugate()).normalized());
+  const double angle = turn.angle() > std::numbers::pi ? turn.angle() - 2.0 * std::numbers::pi : turn.angle();
+  e.tail<3>() = turn.axis() * angle;
+  return e.dot(t.covariance.ldlt().solve(e));
+}
+
+// What rhot-eval stars counts: identities of every measured star, poses of every reported one.
+struct StarTally {
+  long identifiable = 0;    // body-frames with three or more of the body's markers triangulated
+  long correct = 0;         // ... among them, the body's star measured at the body's markers
+  long wrong = 0;           // a star measured at another body's markers
+  long measured = 0;        // body-frames measured (identified, certain or not)
+  long reported = 0;        // ... reported as seen (the filtered pose certain)
+  long reported_wrong = 0;  // ... more than 10 mm or 5 degrees from the truth
+  double fit_position2 = 0, fit_rotation2 = 0, filtered_position2 = 0, filtered_rotation2 = 0;  // every measured frame
+  double position2 = 0, rotation2 = 0, nees = 0;                                                // reported frames
+  std::vector<double> position_sigma, rotation_sigma;
+
+  void add(const rhot::TrackedStar& t, const rhot::RigFrame& frame, const LabelledPoints& labelled) {
+    if (!t.measured_now()) return;
+    ++measured;
+    if (!at_its_own_markers(t, frame, labelled.points, labelled.body)) {
+      ++wrong;
+      return;
+    }
+    if (labelled.clean[static_cast<std::size_t>(t.star)] >= 3) ++correct;
+    const rhot::Rigid3d& truth = frame.truth_world_from_body[static_cast<std::size_t>(t.star)];
+    const double angle = Eigen::AngleAxisd(t.world_from_star.rotation * truth.rotation.conjugate()).angle();
+    const double fit_angle = Eigen::AngleAxisd(t.measured.rotation * truth.rotation.conjugate()).angle();
+    const double position = (t.world_from_star.translation - truth.translation).norm();
+    fit_position2 += (t.measured.translation - truth.translation).squaredNorm();
+    fit_rotation2 += fit_angle * fit_angle;
+    filtered_position2 += position * position;
+    filtered_rotation2 += angle * angle;
+    position_sigma.push_back(rhot::largest_sigma(t.covariance.topLeftCorner<3, 3>()));
+    rotation_sigma.push_back(rhot::largest_sigma(t.covariance.bottomRightCorner<3, 3>()));
+    if (!t.seen_now()) return;
+    ++reported;
+    if (position > 0.010 || angle > 5.0 * std::numbers::pi / 180.0) ++reported_wrong;
+    position2 += position * position;
+    rotation2 += angle * angle;
+    nees += pose_nees(t, truth);
+  }
+
+  void put(nlohmann::json& j) const {
+    const auto per = [](double sum, long n) { return n > 0 ? sum / static_cast<double>(n) : 0.0; };
+    constexpr double kDeg = 180.0 / std::numbers::pi;
+    j["identifiable_body_frames"] = identifiable;
+    j["correct_id_fraction"] = per(static_cast<double>(correct), identifiable);
+    j["wrong_id_count"] = wrong;
+    j["measured_body_frames"] = measured;
+    j["reported_body_frames"] = reported;
+    j["certain_fraction"] = per(static_cast<double>(reported), measured);
+    j["reported_wrong_fraction"] = per(static_cast<double>(reported_wrong), reported);
+    j["position_rms_mm"] = 1000.0 * std::sqrt(per(position2, reported));
+    j["rotation_rms_deg"] = kDeg * std::sqrt(per(rotation2, reported));
+    j["pose_nees_mean"] = per(nees, reported);
+    j["measured_fit_position_rms_mm"] = 1000.0 * std::sqrt(per(fit_position2, measured));
+    j["measured_fit_rotation_rms_deg"] = kDeg * std::sqrt(per(fit_rotation2, measured));
+    j["measured_filtered_position_rms_mm"] = 1000.0 * std::sqrt(per(filtered_position2, measured));
+    j["measured_filtered_rotation_rms_deg"] = kDeg * std::sqrt(per(filtered_rotation2, measured));
+    j["position_sigma_median_mm"] = 1000.0 * percentile(position_sigma, 0.5);
+    j["rotation_sigma_median_deg"] = kDeg * percentile(rotation_sigma, 0.5);
+  }
+};
+
 }  // namespace
 
 // Marker stars moving through the volume (25 of a set by default), matched, triangulated and
@@ -142,15 +214,8 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   // The tracker's rig: the truth, or as an imperfect calibration has it.
   const rhot::CameraRig tracker_rig = rhot::perturbed_rig(*rig, world->calib_error_px, seed);
 
-  long identifiable = 0;  // body-frames with three or more of the body's markers triangulated
-  long correct = 0;       // ... among them, the body's star reported at the body's markers
-  long wrong = 0;         // a star reported at another body's markers
-  long posed = 0;
-  double sum_position2 = 0.0;
-  double sum_rotation2 = 0.0;
+  StarTally tally;
   std::vector<double> ms;
-  long reported = 0;        // body-frames reported as seen
-  long reported_wrong = 0;  // ... more than 10 mm or 5 degrees from the truth
   for (int f = 0; f < frames; ++f) {
     if (world->occluding_bodies) {
       // Each star stands on an object that hides markers: a 6 cm cube under the star's base.
@@ -166,29 +231,12 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
     const std::vector<rhot::MatchedPoint> matched =
         rhot::match_and_triangulate(tracker_rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
     const LabelledPoints labelled = label_points(frame, matched, bodies);
-    const std::vector<Eigen::Vector3d>& points = labelled.points;
-    const std::vector<int>& point_body = labelled.body;
-    const std::vector<int>& clean = labelled.clean;
     const auto start = std::chrono::steady_clock::now();
     const std::vector<double> sigmas = rhot::point_sigmas_m(matched, pixel_sigma.update(matched));
-    const auto& tracked = tracker.update(frame.time_s, points, sigmas);
+    const auto& tracked = tracker.update(frame.time_s, labelled.points, sigmas);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    for (int b = 0; b < bodies; ++b) identifiable += clean[static_cast<std::size_t>(b)] >= 3 ? 1 : 0;
-    for (const rhot::TrackedStar& t : tracked) {
-      if (!t.seen_now()) continue;
-      const rhot::Rigid3d& truth = frame.truth_world_from_body[static_cast<std::size_t>(t.star)];
-      const double angle = Eigen::AngleAxisd(t.world_from_star.rotation * truth.rotation.conjugate()).angle();
-      ++reported;
-      if ((t.world_from_star.translation - truth.translation).norm() > 0.010 || angle > 5.0 * std::numbers::pi / 180.0) ++reported_wrong;
-      if (!at_its_own_markers(t, frame, points, point_body)) {
-        ++wrong;
-        continue;
-      }
-      if (clean[static_cast<std::size_t>(t.star)] >= 3) ++correct;
-      sum_position2 += (t.world_from_star.translation - truth.translation).squaredNorm();
-      sum_rotation2 += angle * angle;
-      ++posed;
-    }
+    for (int b = 0; b < bodies; ++b) tally.identifiable += labelled.clean[static_cast<std::size_t>(b)] >= 3 ? 1 : 0;
+    for (const rhot::TrackedStar& t : tracked) tally.add(t, frame, labelled);
     if (frames >= 20 && (f + 1) % (frames / 10) == 0) std::cerr << "rhot-eval: frame " << f + 1 << " of " << frames << "\n";
   }
   nlohmann::json j;
@@ -200,14 +248,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   j["seed"] = seed;
   j["volume_centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
   j["volume_size_m"] = {box.size.x(), box.size.y(), box.size.z()};
-  j["identifiable_body_frames"] = identifiable;
-  j["correct_id_fraction"] = identifiable > 0 ? static_cast<double>(correct) / static_cast<double>(identifiable) : 0.0;
-  j["wrong_id_count"] = wrong;
-  j["reported_body_frames"] = reported;
-  j["reported_wrong_fraction"] = reported > 0 ? static_cast<double>(reported_wrong) / static_cast<double>(reported) : 0.0;
-  j["posed_body_frames"] = posed;
-  j["position_rms_mm"] = posed > 0 ? 1000.0 * std::sqrt(sum_position2 / static_cast<double>(posed)) : 0.0;
-  j["rotation_rms_deg"] = posed > 0 ? std::sqrt(sum_rotation2 / static_cast<double>(posed)) * 180.0 / std::numbers::pi : 0.0;
+  tally.put(j);
   j["median_ms"] = percentile(ms, 0.5);
   j["p99_ms"] = percentile(ms, 0.99);
   std::cout << j.dump(2) << "\n";

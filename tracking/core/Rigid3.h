@@ -8,6 +8,9 @@
 
 namespace rhot {
 
+// A pose's covariance: over its position (metres) and a small rotation (radians, world frame).
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
 struct Rigid3d {
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();  // kept unit length
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();         // metres

@@ -19,6 +19,8 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   if (layout.hand_frame_markers == 3)
     triangle_.emplace(std::array{layout.markers[0].offset_m, layout.markers[1].offset_m, layout.markers[2].offset_m});
   if (!layout.segment_stars.empty()) segments_.emplace(StarLibrary(layout.segment_star_set()));
+  if (star_) star_->set_motion(0, hand_star_motion());
+  for (std::size_t s = 0; segments_ && s < layout.segment_stars.size(); ++s) segments_->set_motion(static_cast<int>(s), hand_star_motion());
   const std::size_t n = layout.markers.size();
   marker_filters_.assign(n, OneEuroFilter<3>(settings.position));
   predicted_marker_.assign(n, Eigen::Vector3d::Zero());
@@ -90,6 +92,7 @@ const TrackedHand& HandTracker::update(double time_s, std::span<const Eigen::Vec
     const TrackedTriangle& t = triangle_->update(time_s, points, sigma_m);
     TrackedStar& star = triangle_star.emplace_back();
     star.world_from_star = t.world_from_body;
+    star.measured = t.world_from_body;
     star.velocity_m_s = t.velocity_m_s;
     star.markers_seen = t.markers_seen;
     for (std::size_t k = 0; k < 3; ++k) star.point[k] = t.point[k];
@@ -122,7 +125,8 @@ const TrackedHand& HandTracker::update_labelled(double time_s, std::span<const E
 }
 
 void HandTracker::begin(double time_s, const TrackedStar& star) {
-  begin(time_s, star.seen_now(), star.world_from_star);
+  // The fit of this frame: the hand solver weighs it itself (a filtered pose would lag the hand).
+  begin(time_s, star.measured_now(), star.measured);
   if (!out_.hand_seen) return;
   for (std::size_t m = 0; m < layout_.hand_frame_markers && m < star.point.size(); ++m) out_.marker_point[m] = star.point[m];
 }
@@ -316,14 +320,14 @@ std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::measure_se
   const HandPose& skeleton = solver_.state().pose;
   std::array<std::array<std::optional<Eigen::Vector3d>, 3>, kFingerCount> bone{};
   for (std::size_t s = 0; s < stars.size(); ++s) {
-    if (!stars[s].seen_now()) continue;
+    if (!stars[s].measured_now()) continue;
     ++out_.segment_stars_seen;
     const HandJoint first = layout_.segment_stars[s].bone;
     const auto f = static_cast<std::size_t>(finger_of_bone(first));
     const auto joints = chain_joints(static_cast<Finger>(f));
     const auto k = static_cast<std::size_t>(std::find(joints.begin(), joints.end(), first) - joints.begin());
     if (k > 2) continue;  // not a bone of the chain (a finger's metacarpal)
-    const Rigid3d hand_from_star = hand_from_world * stars[s].world_from_star;
+    const Rigid3d hand_from_star = hand_from_world * stars[s].measured;
     bone[f][k] = hand_from_star.rotation * Eigen::Vector3d::UnitY();
     if (k == 2) {
       const double length = solver_.chains()[f].length_m[k];

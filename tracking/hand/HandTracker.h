@@ -38,6 +38,17 @@ struct TrackedHand {
   int segment_stars_seen = 0;
 };
 
+// How a hand's own stars (its back's, its fingers' segments') move for their pose filter
+// (StarTracker::set_motion): hands turn and stop far quicker than the objects they carry, and
+// their solver weighs each frame's fit itself, so the filter is there to refuse the impossible,
+// not to smooth.
+inline PoseKalmanSettings hand_star_motion() {
+  PoseKalmanSettings s;
+  s.acceleration_density = 30.0;
+  s.angular_acceleration_density = 150.0;
+  return s;
+}
+
 struct HandTrackerSettings {
   // 1-euro filtering of the hand frame and of each finger marker (hand frame) before the fit.
   bool filter = false;

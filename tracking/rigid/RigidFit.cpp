@@ -2,7 +2,9 @@
 #include "tracking/core/Solvers.h"
 
 #include <cmath>
+#include <limits>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
 namespace rhot {
@@ -51,6 +53,27 @@ std::optional<RigidFit> fit_rigid(std::span<const Eigen::Vector3d> from, std::sp
   fit.rms_m = std::sqrt(sum / static_cast<double>(n));
   if (!fit.to_from_from.is_finite() || !std::isfinite(fit.rms_m) || !std::isfinite(fit.scale)) return std::nullopt;
   return fit;
+}
+
+}  // namespace rhot
+
+namespace rhot {
+
+Matrix6d rigid_fit_covariance(const Rigid3d& to_from_from, std::span<const Eigen::Vector3d> from, std::span<const double> sigma_m) {
+  Matrix6d information = Matrix6d::Zero();
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const double sigma = sigma_m.size() == from.size() ? sigma_m[i] : 0.001;
+    const Eigen::Vector3d r = to_from_from.rotation * from[i];
+    Eigen::Matrix<double, 3, 6> j;
+    j.leftCols<3>().setIdentity();
+    j.rightCols<3>() << 0, r.z(), -r.y(), -r.z(), 0, r.x(), r.y(), -r.x(), 0;  // -[r]x
+    information += j.transpose() * j / (sigma * sigma);
+  }
+  const Eigen::LDLT<Matrix6d> ldlt(information);
+  // Points in a line leave the turn about it unmeasured: a pivot at rounding level.
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * ldlt.vectorD().maxCoeff()))
+    return Matrix6d::Identity() * std::numeric_limits<double>::infinity();
+  return ldlt.solve(Matrix6d::Identity());
 }
 
 }  // namespace rhot

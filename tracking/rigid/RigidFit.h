@@ -25,4 +25,10 @@ struct RigidFit {
 std::optional<RigidFit> fit_rigid(std::span<const Eigen::Vector3d> from, std::span<const Eigen::Vector3d> to,
                                   std::span<const double> weight = {});
 
+// The covariance of a fitted pose (Rigid3.h's Matrix6d: position of the `from` frame's origin,
+// and a small rotation in the `to` frame) when each mapped `from` point is measured with isotropic
+// noise of sigma_m per axis: the inverse of the sum of J^T J / sigma^2, J = [I, -[R from]x], to
+// first order. Empty sigma: 1 mm each. Three or more points not in a line give a finite one.
+Matrix6d rigid_fit_covariance(const Rigid3d& to_from_from, std::span<const Eigen::Vector3d> from, std::span<const double> sigma_m = {});
+
 }  // namespace rhot

@@ -13,6 +13,8 @@
 namespace rhot {
 
 StarTracker::StarTracker(StarLibrary library, StarTrackerSettings settings) : library_(std::move(library)), settings_(settings) {
+  filters_.assign(library_.stars().size(), PoseKalman(settings_.filter));
+  refused_.assign(library_.stars().size(), 0);
   for (std::size_t s = 0; s < library_.stars().size(); ++s) {
     TrackedStar t;
     t.star = static_cast<int>(s);
@@ -24,6 +26,10 @@ StarTracker::StarTracker(StarLibrary library, StarTrackerSettings settings) : li
     for (const Eigen::Vector3d& m : markers) sum += (m - centre).squaredNorm();
     spread_m_.push_back(std::max(std::sqrt(sum / 4.0), 1e-3));
   }
+}
+
+void StarTracker::set_motion(int star, const PoseKalmanSettings& motion) {
+  if (star >= 0 && static_cast<std::size_t>(star) < filters_.size()) filters_[static_cast<std::size_t>(star)] = PoseKalman(motion);
 }
 
 namespace {
@@ -60,21 +66,10 @@ bool StarTracker::near_prediction(const TrackedStar& s, const Rigid3d& predicted
          turned <= settings_.turn_gate_rad + noise_rad + settings_.turn_rate_rad_s * (time_s - s.last_seen_s);
 }
 
-void StarTracker::accept(TrackedStar& s, const IdentifiedStar& fit, double time_s) {
-  const double dt = time_s - s.last_seen_s;
-  // Velocities from the last two poses: smoothed from frame to frame, the average across a gap.
-  if (recent(s) && dt > 1e-6) {
-    const Eigen::Vector3d v = (fit.world_from_star.translation - s.world_from_star.translation) / dt;
-    const Eigen::AngleAxisd turn(fit.world_from_star.rotation * s.world_from_star.rotation.conjugate());
-    const Eigen::Vector3d w = turn.axis() * (turn.angle() > std::numbers::pi ? turn.angle() - 2 * std::numbers::pi : turn.angle()) / dt;
-    const bool consecutive = s.frames_since_seen == 0;
-    s.velocity_m_s = consecutive ? Eigen::Vector3d(0.5 * (s.velocity_m_s + v)) : v;
-    s.angular_velocity_rad_s = consecutive ? Eigen::Vector3d(0.5 * (s.angular_velocity_rad_s + w)) : w;
-  } else {
-    s.velocity_m_s.setZero();
-    s.angular_velocity_rad_s.setZero();
-  }
-  s.world_from_star = fit.world_from_star;
+bool StarTracker::accept(TrackedStar& s, const IdentifiedStar& fit, double time_s, const StarPoints& points,
+                         const std::optional<StarMotion>& start) {
+  if (!filter(s, fit, time_s, points, start)) return false;
+  s.measured = fit.world_from_star;
   s.rms_m = fit.rms_m;
   s.markers_seen = fit.markers_seen;
   s.point = fit.point;
@@ -82,6 +77,41 @@ void StarTracker::accept(TrackedStar& s, const IdentifiedStar& fit, double time_
   s.confirmed = s.confirmed || fit.markers_seen == 4 || s.frames_followed >= settings_.confirm_frames;
   s.frames_since_seen = 0;
   s.last_seen_s = time_s;
+  return true;
+}
+
+bool StarTracker::filter(TrackedStar& s, const IdentifiedStar& fit, double time_s, const StarPoints& points,
+                         const std::optional<StarMotion>& start) {
+  PoseKalman& f = filters_[static_cast<std::size_t>(s.star)];
+  int& refused = refused_[static_cast<std::size_t>(s.star)];
+  std::array<Eigen::Vector3d, 4> model;
+  std::array<double, 4> sigma{};
+  std::size_t n = 0;
+  for (std::size_t m = 0; m < 4; ++m) {
+    if (fit.point[m] < 0) continue;
+    model[n] = library_.stars()[static_cast<std::size_t>(s.star)].markers_m[m];
+    sigma[n++] = points.sigma(static_cast<std::size_t>(fit.point[m]));
+  }
+  const Matrix6d measured = rigid_fit_covariance(fit.world_from_star, std::span(model.data(), n), std::span(sigma.data(), n));
+  // A star followed until now: a fit its filter finds impossible is refused, up to refuse_frames
+  // in a row (the star did what the model does not foresee: it starts again from the fit).
+  const bool followed = f.started() && recent(s) && s.confirmed;
+  const bool refuse = followed && f.mahalanobis2(time_s, fit.world_from_star, measured) > settings_.filter_gate_chi2;
+  if (refuse && ++refused < settings_.refuse_frames) return false;
+  if (start || !followed || refuse) {
+    const StarMotion motion = start ? *start : followed ? StarMotion{f.velocity_m_s(), f.angular_velocity_rad_s()} : StarMotion{};
+    f.reset(time_s, fit.world_from_star, measured, motion.velocity_m_s, motion.angular_velocity_rad_s);
+  } else {
+    f.update(time_s, fit.world_from_star, measured);
+  }
+  refused = 0;
+  s.world_from_star = f.pose();
+  s.covariance = f.pose_covariance();
+  s.velocity_m_s = f.velocity_m_s();
+  s.angular_velocity_rad_s = f.angular_velocity_rad_s();
+  s.certain = settings_.report_sigmas * largest_sigma(s.covariance.topLeftCorner<3, 3>()) <= settings_.report_position_m &&
+              settings_.report_sigmas * largest_sigma(s.covariance.bottomRightCorner<3, 3>()) <= settings_.report_rotation_rad;
+  return true;
 }
 
 StarTracker::Candidate StarTracker::start_candidate(const IdentifiedStar& found, const StarPoints& points, double time_s) const {
@@ -238,11 +268,25 @@ void StarTracker::follow_stars(double time_s, const StarPoints& points, std::vec
     }
   }
   std::sort(pairings.begin(), pairings.end(), [](const Pairing& a, const Pairing& b) { return a.d < b.d; });
+  // A point as near two stars' predicted markers as its own noise allows (two objects' markers
+  // passing within millimetres) could be either's: neither takes it, and each is fitted from its
+  // others.
+  std::vector<int> gated_star(n, -1);
+  std::vector<bool> contested(n, false);
+  for (const Pairing& p : pairings) {
+    if (p.d > settings_.gate_sigmas * std::sqrt(3.0) * points.sigma(static_cast<std::size_t>(p.point))) continue;
+    int& first = gated_star[static_cast<std::size_t>(p.point)];
+    if (first >= 0 && first != p.star) contested[static_cast<std::size_t>(p.point)] = true;
+    first = p.star;
+  }
+  // Nor does a fresh identification this frame (it would find one of the two in it).
+  for (std::size_t q = 0; q < n; ++q)
+    if (contested[q]) taken[q] = true;
   std::vector<std::array<int, 4>> assigned(stars_.size(), {-1, -1, -1, -1});
   std::vector<bool> point_claimed(n, false);
   for (const Pairing& p : pairings) {
     auto& slot = assigned[static_cast<std::size_t>(p.star)][static_cast<std::size_t>(p.marker)];
-    if (slot >= 0 || point_claimed[static_cast<std::size_t>(p.point)]) continue;
+    if (slot >= 0 || point_claimed[static_cast<std::size_t>(p.point)] || contested[static_cast<std::size_t>(p.point)]) continue;
     slot = p.point;
     point_claimed[static_cast<std::size_t>(p.point)] = true;
   }
@@ -269,9 +313,10 @@ void StarTracker::follow_stars(double time_s, const StarPoints& points, std::vec
       if (f && (!fit || f->chi2 < fit->chi2)) fit = f;
     }
     if (!fit) continue;
-    // A fit turned far from the prediction took the wrong markers for the right ones.
+    // A fit turned far from the prediction took the wrong markers for the right ones; so did one
+    // the star's filter finds impossible.
     if (!near_prediction(stars_[s], predicted[s], fit->world_from_star, time_s, mean_sigma(*fit, points))) continue;
-    accept(stars_[s], *fit, time_s);
+    if (!accept(stars_[s], *fit, time_s, points)) continue;
     updated[s] = true;
     for (const int p : fit->point) {
       if (p >= 0) taken[static_cast<std::size_t>(p)] = true;
@@ -291,7 +336,7 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
   follow_stars(time_s, points, taken, updated, predicted);
 
   // 2. Candidates: followed, weighed, and settled as a star once sure.
-  const auto settle = [&](const Candidate& c) {
+  const auto settle = [&](const Candidate& c) -> bool {
     const auto s = static_cast<std::size_t>(c.motion.star);
     IdentifiedStar fit;
     fit.star = c.motion.star;
@@ -299,22 +344,18 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
     fit.rms_m = c.motion.rms_m;
     fit.point = c.motion.point;
     fit.markers_seen = c.motion.markers_seen;
-    stars_[s].frames_since_seen = -1;  // velocities start from the candidate's, not a jump from the past
-    accept(stars_[s], fit, time_s);
-    stars_[s].velocity_m_s = c.motion.velocity_m_s;
-    stars_[s].angular_velocity_rad_s = c.motion.angular_velocity_rad_s;
+    if (!accept(stars_[s], fit, time_s, points, StarMotion{c.motion.velocity_m_s, c.motion.angular_velocity_rad_s})) return false;
     stars_[s].confirmed = true;
     stars_[s].confidence = c.confidence;
     stars_[s].frames_followed = c.frames;
     updated[s] = true;
+    return true;
   };
   std::vector<Candidate> kept;
   for (Candidate& c : candidates_) {
     if (c.frames >= settings_.max_candidate_frames || !follow(c, points, taken, time_s)) continue;
-    if (may_settle(c, updated, predicted, time_s)) {
-      settle(c);
-      continue;
-    }
+    // A settled reading the star's filter refuses stays a candidate.
+    if (may_settle(c, updated, predicted, time_s) && settle(c)) continue;
     kept.push_back(std::move(c));
   }
   candidates_ = std::move(kept);
@@ -337,16 +378,11 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
     // A star seen moments ago found again where it was heading: itself, its identity known.
     if (!updated[s] && recent_and_confirmed(stars_[s]) &&
         near_prediction(stars_[s], predicted[s], found.world_from_star, time_s, mean_sigma(found, points))) {
-      accept(stars_[s], found, time_s);
-      updated[s] = true;
+      if (accept(stars_[s], found, time_s, points)) updated[s] = true;
       continue;
     }
     Candidate c = start_candidate(found, points, time_s);
-    if (may_settle(c, updated, predicted, time_s)) {
-      settle(c);
-    } else {
-      candidates_.push_back(std::move(c));
-    }
+    if (!may_settle(c, updated, predicted, time_s) || !settle(c)) candidates_.push_back(std::move(c));
   }
 
   for (std::size_t s = 0; s < stars_.size(); ++s) {

@@ -17,13 +17,24 @@
 // A fresh identification that lands where another recently seen star is predicted is refused:
 // those are that star's markers, read as a similar star (a label swap); so is one farther from
 // where the star was last seen than it could have moved.
+//
+// Each star's pose is filtered over time (PoseKalman.h: constant velocity, each frame's fit
+// weighed by its covariance, rigid_fit_covariance), and a star counts as seen only while its
+// filtered pose is certain: within report_position_m and report_rotation_rad with
+// report_sigmas standard deviations of its worst direction (a few frames after it is found, and
+// not at all where its markers are too noisy for the bound). A fit the filter finds impossible
+// (a wrong correspondence, or a jerk the model did not foresee) is refused: the star is not
+// measured that frame; after refuse_frames in a row the filter starts again from the fit. Where the star is measured but not certain, it is
+// measured_now() but not seen_now(): the hands, which weigh each fit themselves, use the fit.
 
+#include <optional>
 #include <span>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "tracking/core/Rigid3.h"
+#include "tracking/filter/PoseKalman.h"
 #include "tracking/rigid/StarIdentification.h"
 
 namespace rhot {
@@ -51,12 +62,26 @@ struct StarTrackerSettings {
   int max_candidate_frames = 180;  // a candidate not settled by then is dropped (2 s at 90 Hz)
   // A gate in metres grows by gate_sigmas times a point's standard deviation (per axis) times sqrt(3).
   double gate_sigmas = 4.0;
+  // The pose filter, and what it takes for a star to count as seen: report_sigmas standard
+  // deviations of the filtered pose along its worst direction within report_position_m and
+  // report_rotation_rad (4.6: a 3-D Gaussian error is beyond that one time in 10,000).
+  PoseKalmanSettings filter;
+  double report_position_m = 0.010;
+  double report_rotation_rad = 0.0873;  // 5 degrees
+  double report_sigmas = 4.6;
+  // A fit farther than this from the filter's prediction (squared Mahalanobis distance, 6
+  // degrees of freedom: 1 in 10^6 by chance) is not folded in.
+  double filter_gate_chi2 = 36.0;
+  int refuse_frames = 3;  // fits refused in a row before the filter starts again from one
 };
 
 struct TrackedStar {
-  int star = 0;  // index into the library's stars()
-  int id = 0;    // the star's id in its set
-  Rigid3d world_from_star;
+  int star = 0;                                // index into the library's stars()
+  int id = 0;                                  // the star's id in its set
+  Rigid3d world_from_star;                     // filtered
+  Matrix6d covariance = Matrix6d::Identity();  // of world_from_star (Rigid3.h)
+  Rigid3d measured;                            // this frame's fit, when measured_now()
+  bool certain = false;                        // world_from_star is within the tracker's report bounds
   Eigen::Vector3d velocity_m_s{0, 0, 0};
   Eigen::Vector3d angular_velocity_rad_s{0, 0, 0};  // world frame
   double rms_m = 0.0;
@@ -68,8 +93,10 @@ struct TrackedStar {
   int frames_followed = 0;  // consecutive frames this star has been fitted
   double confidence = 0.0;  // the posterior of its identity when it was settled
 
-  // The pose is this frame's measurement of a confirmed star.
-  bool seen_now() const { return confirmed && frames_since_seen == 0; }
+  // A confirmed star measured this frame, its filtered pose certain: what objects follow.
+  bool seen_now() const { return measured_now() && certain; }
+  // A confirmed star measured this frame (`measured`), however sure its filtered pose is.
+  bool measured_now() const { return confirmed && frames_since_seen == 0; }
 };
 
 class StarTracker {
@@ -82,6 +109,9 @@ class StarTracker {
                                          std::span<const double> sigma_m = {});
   const std::vector<TrackedStar>& stars() const { return stars_; }
   const StarLibrary& library() const { return library_; }
+  // How one star is expected to move, where it is not an object carried by a hand (settings'
+  // filter): a hand's own star turns and jerks more. Starts its filter again.
+  void set_motion(int star, const PoseKalmanSettings& motion);
   // Constellations being weighed (not yet any star).
   std::size_t candidates() const { return candidates_.size(); }
 
@@ -90,7 +120,17 @@ class StarTracker {
   bool recent_and_confirmed(const TrackedStar& s) const { return s.confirmed && recent(s); }
   Rigid3d predict(const TrackedStar& s, double time_s) const;
   bool near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s, double sigma_m) const;
-  void accept(TrackedStar& s, const IdentifiedStar& fit, double time_s);
+  struct StarMotion {
+    Eigen::Vector3d velocity_m_s, angular_velocity_rad_s;
+  };
+  // Takes this frame's fit as the star's; `start`: its filter starts again with these velocities
+  // (a candidate settled as the star).
+  // False, changing nothing, where the star's filter refuses the fit.
+  bool accept(TrackedStar& s, const IdentifiedStar& fit, double time_s, const StarPoints& points,
+              const std::optional<StarMotion>& start = std::nullopt);
+  // Folds the fit into the star's filter (or starts it again) and says whether the star is certain;
+  // false where it refuses the fit.
+  bool filter(TrackedStar& s, const IdentifiedStar& fit, double time_s, const StarPoints& points, const std::optional<StarMotion>& start);
   // Step 1 of update: the recently seen stars followed; marks their points taken and them updated.
   void follow_stars(double time_s, const StarPoints& points, std::vector<bool>& taken, std::vector<bool>& updated,
                     std::vector<Rigid3d>& predicted);
@@ -118,7 +158,9 @@ class StarTracker {
   StarTrackerSettings settings_;
   std::vector<TrackedStar> stars_;
   std::vector<Candidate> candidates_;
-  std::vector<double> spread_m_;  // per star: RMS distance of its markers from their centre
+  std::vector<double> spread_m_;     // per star: RMS distance of its markers from their centre
+  std::vector<PoseKalman> filters_;  // per star
+  std::vector<int> refused_;         // per star: fits in a row the filter did not take
 };
 
 }  // namespace rhot

@@ -318,8 +318,11 @@ TEST(HandTracker, TwoHandsPassingEachOtherAreNeverConfused) {
 
 TEST(HandTracker, AMirroredLeftHandStarIsTakenForTheRightHand) {
   // The failure the shipped layouts fix: a face of the mirrored star is a face of the other's.
+  // (The star tracker's pose filter refuses some of it, not all: over three seeds it happens.)
   const std::array<HandLayout, 2> mirrored{mirrored_left(low_cost()), low_cost()};
-  EXPECT_GT(confusion_frames(mirrored, false, 1), 0);
+  int confused = 0;
+  for (const unsigned seed : {1U, 2U, 3U}) confused += confusion_frames(mirrored, false, seed);
+  EXPECT_GT(confused, 0);
 }
 
 // A scripted hand motion through the seated rig as `rhot-eval hands` runs it: the user's hand

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <numbers>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -60,6 +61,40 @@ void place(const StarLibrary& library, int star, const Rigid3d& pose, std::vecto
     points.push_back(p + (noise_m > 0.0 ? Eigen::Vector3d{g(rng), g(rng), g(rng)} : Eigen::Vector3d::Zero()));
     truth.emplace_back(star, m);
   }
+}
+
+TEST(RigidFitCovariance, IsTheSpreadOfFitsToNoisyPoints) {
+  // Four markers spanning 20 x 12 x 48 mm (a star of the seed-case set), 1 mm of noise per axis;
+  // 3 000 fits' pose errors against the formula's covariance.
+  const std::array<Eigen::Vector3d, 4> model{Eigen::Vector3d(0.010, 0.0, 0.0), Eigen::Vector3d(-0.010, 0.006, 0.0),
+                                             Eigen::Vector3d(0.0, -0.006, 0.024), Eigen::Vector3d(0.002, 0.001, -0.024)};
+  Rigid3d truth;
+  truth.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.8, Eigen::Vector3d(1, -1, 2).normalized()));
+  truth.translation = Eigen::Vector3d(0.1, 0.3, 0.9);
+  const std::array<double, 4> sigma{0.001, 0.001, 0.001, 0.001};
+  const Matrix6d expected = rigid_fit_covariance(truth, model, sigma);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0.0, 0.001);
+  Matrix6d spread = Matrix6d::Zero();
+  double nees = 0.0;
+  const int n = 3000;
+  for (int i = 0; i < n; ++i) {
+    std::array<Eigen::Vector3d, 4> seen;
+    for (std::size_t k = 0; k < 4; ++k) seen[k] = truth * model[k] + Eigen::Vector3d{g(rng), g(rng), g(rng)};
+    const auto fit = fit_rigid(model, seen);
+    ASSERT_TRUE(fit.has_value());
+    Eigen::Matrix<double, 6, 1> e;
+    e.head<3>() = fit->to_from_from.translation - truth.translation;
+    const Eigen::AngleAxisd turn((fit->to_from_from.rotation * truth.rotation.conjugate()).normalized());
+    e.tail<3>() = turn.axis() * turn.angle();
+    spread += e * e.transpose() / n;
+    nees += e.dot(expected.ldlt().solve(e)) / n;
+  }
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(spread(k, k), expected(k, k), 0.1 * expected(k, k)) << "axis " << k;
+  EXPECT_NEAR(nees, 6.0, 0.35);
+  // Three markers: finite; two: nothing to turn about, infinite.
+  EXPECT_TRUE(rigid_fit_covariance(truth, std::span(model.data(), 3), std::span(sigma.data(), 3)).allFinite());
+  EXPECT_FALSE(rigid_fit_covariance(truth, std::span(model.data(), 2), std::span(sigma.data(), 2)).allFinite());
 }
 
 TEST(RigidFit, RecoversATransformAndReportsShapeAndScale) {
@@ -227,7 +262,7 @@ TEST(StarTracker, CrowdedMovingStarsWithThreeMarkersAreNeverMixedUp) {
         place(library, stars[s], pose, points, truth, 0.0003, rng, static_cast<int>(s) % 4);
       }
       for (const TrackedStar& ts : tracker.update(t, points)) {
-        if (!ts.seen_now()) continue;
+        if (!ts.measured_now()) continue;
         ++confirmed;
         for (int m = 0; m < 4; ++m) {
           if (ts.point[static_cast<std::size_t>(m)] < 0) continue;
@@ -238,6 +273,59 @@ TEST(StarTracker, CrowdedMovingStarsWithThreeMarkersAreNeverMixedUp) {
     }
   }
   EXPECT_GT(confirmed, 10 * 8 * 30 / 2) << "most stars followed";
+}
+
+// A star moving and turning, its points drawn with `noise_m` per axis and given that uncertainty:
+// per frame whether it was measured and seen, and the filtered and fitted poses' errors.
+struct CertaintyRun {
+  int measured = 0, seen = 0, first_seen = -1;
+  double filtered_rotation2 = 0, fitted_rotation2 = 0, worst_seen_rad = 0;
+};
+
+CertaintyRun certainty_run(double noise_m, unsigned seed) {
+  const StarLibrary library(first(seed_case(), 5));
+  StarTracker tracker(library);
+  std::mt19937_64 rng(seed);
+  CertaintyRun run;
+  for (int f = 0; f < 180; ++f) {
+    const double t = f / 90.0;
+    Rigid3d pose;
+    pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.8 * t, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()));
+    pose.translation = Eigen::Vector3d(-0.2, 1.1, -0.45) + Eigen::Vector3d(0.2, 0.0, -0.1) * t;
+    std::vector<Eigen::Vector3d> points;
+    std::vector<std::pair<int, int>> truth;
+    place(library, 1, pose, points, truth, noise_m, rng);
+    const std::vector<double> sigma(points.size(), noise_m);
+    const TrackedStar& s = tracker.update(t, points, sigma)[1];
+    if (!s.measured_now()) continue;
+    ++run.measured;
+    const double filtered = s.world_from_star.rotation.angularDistance(pose.rotation);
+    run.filtered_rotation2 += filtered * filtered;
+    run.fitted_rotation2 += std::pow(s.measured.rotation.angularDistance(pose.rotation), 2);
+    if (!s.seen_now()) continue;
+    ++run.seen;
+    if (run.first_seen < 0) run.first_seen = f;
+    run.worst_seen_rad = std::max(run.worst_seen_rad, filtered);
+  }
+  return run;
+}
+
+TEST(StarTracker, AStarIsSeenOnlyOnceItsFilteredPoseIsCertainAndNeverWhereItCannotBe) {
+  for (const unsigned seed : {1U, 2U, 3U}) {
+    // Precise points (0.1 mm): certain within a few frames, and the reported poses within bounds.
+    const CertaintyRun precise = certainty_run(0.0001, seed);
+    EXPECT_EQ(precise.measured, 180) << "seed " << seed;
+    EXPECT_GE(precise.first_seen, 0) << "seed " << seed;
+    EXPECT_LT(precise.first_seen, 10) << "seed " << seed;
+    EXPECT_GT(precise.seen, 170) << "seed " << seed;
+    EXPECT_LT(precise.worst_seen_rad, 5.0 * std::numbers::pi / 180.0) << "seed " << seed;
+    // Noisy points (1.5 mm, a small star's fit turning by degrees): measured every frame, its
+    // filtered pose better than the fits, never certain within 5 degrees.
+    const CertaintyRun noisy = certainty_run(0.0015, seed);
+    EXPECT_GT(noisy.measured, 170) << "seed " << seed;
+    EXPECT_EQ(noisy.seen, 0) << "seed " << seed;
+    EXPECT_LT(noisy.filtered_rotation2, 0.8 * noisy.fitted_rotation2) << "seed " << seed;
+  }
 }
 
 TEST(StarTracker, KeepsAStarThroughAnOcclusionAndCountsTheFramesUnseen) {
@@ -256,11 +344,11 @@ TEST(StarTracker, KeepsAStarThroughAnOcclusionAndCountsTheFramesUnseen) {
     if (!hidden) place(library, 2, pose, points, truth, 0.0002, rng, f >= 20 ? 1 : -1);  // after the gap, only three markers
     const TrackedStar& s = tracker.update(t, points)[2];
     if (hidden) {
-      EXPECT_FALSE(s.seen_now());
+      EXPECT_FALSE(s.measured_now());
       EXPECT_EQ(s.frames_since_seen, f - 9);
       continue;
     }
-    ASSERT_TRUE(s.seen_now()) << "frame " << f;
+    ASSERT_TRUE(s.measured_now()) << "frame " << f;
     EXPECT_EQ(s.markers_seen, f >= 20 ? 3 : 4);
     EXPECT_LT((s.world_from_star.translation - pose.translation).norm(), 0.002) << "frame " << f;
     if (f > 3) {
@@ -283,7 +371,7 @@ TEST(StarTracker, AStarFoundFromThreeMarkersIsTentativeForThreeFrames) {
     std::vector<Eigen::Vector3d> points;
     std::vector<std::pair<int, int>> truth;
     place(library, 3, pose, points, truth, 0.0, rng, 0);
-    EXPECT_EQ(tracker.update(f / 90.0, points)[3].seen_now(), f >= 2) << "frame " << f;
+    EXPECT_EQ(tracker.update(f / 90.0, points)[3].measured_now(), f >= 2) << "frame " << f;
   }
 }
 
@@ -301,8 +389,8 @@ TEST(StarTracker, RefusesALabelSwapWhereAnotherStarIsPredicted) {
     const int shown = f >= 10 && f < 20 ? 1 : 0;
     place(library, shown, pose, points, truth, 0.0, rng);
     const auto& stars = tracker.update(f / 90.0, points);
-    EXPECT_FALSE(stars[1].seen_now()) << "frame " << f;
-    EXPECT_EQ(stars[0].seen_now(), shown == 0) << "frame " << f;
+    EXPECT_FALSE(stars[1].measured_now()) << "frame " << f;
+    EXPECT_EQ(stars[0].measured_now(), shown == 0) << "frame " << f;
   }
 }
 
@@ -320,7 +408,7 @@ TEST(StarTracker, RefusesAStarFoundAfreshFartherThanItCouldHaveMoved) {
   for (int f = 0; f < 10; ++f) {
     std::vector<Eigen::Vector3d> points;
     place(library, 0, here, points, truth, 0.0, rng);
-    ASSERT_TRUE(tracker.update(f / 90.0, points)[0].seen_now()) << "frame " << f;
+    ASSERT_TRUE(tracker.update(f / 90.0, points)[0].measured_now()) << "frame " << f;
   }
   // 40 cm in 1/90 s (36 m/s), then in the frames after: refused while 0.4 m is beyond
   // 4 mm + 5 m/s times the time since it was last seen (frame 9), that is up to frame 16.
@@ -329,14 +417,14 @@ TEST(StarTracker, RefusesAStarFoundAfreshFartherThanItCouldHaveMoved) {
     std::vector<Eigen::Vector3d> points;
     place(library, 0, there, points, truth, 0.0, rng);
     const TrackedStar& s = tracker.update(f / 90.0, points)[0];
-    EXPECT_FALSE(s.seen_now()) << "frame " << f;
+    EXPECT_FALSE(s.measured_now()) << "frame " << f;
     EXPECT_LT((s.world_from_star.translation - here.translation).norm(), 1e-9) << "frame " << f;
   }
   // 8/90 s after it was last seen 0.4 m is within reach (0.448 m): found there.
   std::vector<Eigen::Vector3d> points;
   place(library, 0, there, points, truth, 0.0, rng);
   tracker.update(f / 90.0, points);
-  EXPECT_TRUE(tracker.stars()[0].seen_now());
+  EXPECT_TRUE(tracker.stars()[0].measured_now());
   EXPECT_LT((tracker.stars()[0].world_from_star.translation - there.translation).norm(), 1e-6);
 }
 
@@ -369,7 +457,7 @@ TEST(StarTracker, NoisyPointsWeighedOverFramesAreNeverReportedAsTheWrongStar) {
       }
       const std::vector<double> sigmas(points.size(), sigma);
       for (const TrackedStar& ts : tracker.update(t, points, sigmas)) {
-        if (!ts.seen_now()) continue;
+        if (!ts.measured_now()) continue;
         ++seen;
         if (first_seen_frame < 0) first_seen_frame = f;
         EXPECT_GE(ts.confidence, 0.999);
@@ -389,7 +477,7 @@ TEST(StarTracker, NoisyPointsWeighedOverFramesAreNeverReportedAsTheWrongStar) {
       std::vector<Eigen::Vector3d> points;
       std::vector<std::pair<int, int>> truth;
       for (std::size_t s = 0; s < start.size(); ++s) place(library, static_cast<int>(s), start[s], points, truth, sigma, rng);
-      for (const TrackedStar& ts : naive.update(f / 90.0, points)) naive_seen += ts.seen_now() ? 1 : 0;
+      for (const TrackedStar& ts : naive.update(f / 90.0, points)) naive_seen += ts.measured_now() ? 1 : 0;
     }
     EXPECT_LT(naive_seen, 12 * 30 / 2) << "seed " << seed;
   }
