@@ -49,7 +49,8 @@ Rigid3d PoseKalman::predict(double time_s) const {
 PoseKalman::Matrix12d PoseKalman::propagated(double dt) const {
   // F = [I dt; 0 I] over (pose, velocities), six by six: F P F^T by blocks. Q: white-noise
   // acceleration, per axis q [dt^3/3, dt^2/2; dt^2/2, dt].
-  const Matrix6d xx = covariance_.topLeftCorner<6, 6>(), xv = covariance_.topRightCorner<6, 6>(), vv = covariance_.bottomRightCorner<6, 6>();
+  const Matrix6d xx = covariance_.topLeftCorner<6, 6>(), xv = covariance_.topRightCorner<6, 6>(),
+                 vv = covariance_.bottomRightCorner<6, 6>();
   Matrix12d p;
   p.topLeftCorner<6, 6>() = xx + dt * (xv + xv.transpose()) + dt * dt * vv;
   p.topRightCorner<6, 6>() = xv + dt * vv;
