@@ -6,8 +6,8 @@
 // (world frame). The orientation's uncertainty is a small rotation d in the world frame, the true
 // orientation being exp(d) q (an error-state filter), so the covariance is 12 x 12 over
 // (p, d, v, w). Between measurements the body keeps its velocities, and unforeseen accelerations
-// (white noise) make the prediction less sure the longer it runs. A measurement is a pose with its 6 x 6 covariance over (p, d): from a
-// rigid fit, rigid_fit_covariance in RigidFit.h.
+// (white noise) make the prediction less sure the longer it runs. A measurement is a pose with
+// its 6 x 6 covariance over (p, d): from a rigid fit, rigid_fit_covariance in RigidFit.h.
 //
 // A measurement far from the prediction (Mahalanobis distance against the sum of both
 // covariances) is not the body (a wrong correspondence of its markers) or the body did what the
