@@ -3,6 +3,7 @@
 // traffic stays on 127.0.0.1.
 
 #include <algorithm>
+#include <cstdio>
 #include <regex>
 #include <string>
 #include <utility>
@@ -31,7 +32,7 @@ constexpr double kFoundFloor = 0.98;
 constexpr double kHandsSeenFloor = 0.99;
 #endif
 
-nlohmann::json run_nodes(const std::string& args) {
+nlohmann::json run_nodes_once(const std::string& args) {
   const auto r = rhot::test::run_program("rhot-eval", "nodes " + args + " --json", "2>/dev/null");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   try {
@@ -40,6 +41,21 @@ nlohmann::json run_nodes(const std::string& args) {
     ADD_FAILURE() << e.what() << "\n" << r.output;
     return {};
   }
+}
+
+// These tests measure the transport, and need a machine that keeps real time. Whether it did is
+// measured too: exposures no node made (each skipped them, behind real time: a shared machine
+// stalled). A run where more than 1 % were not made is run again, up to three runs; the last is
+// returned whatever it measured, so a machine that never keeps time still fails.
+nlohmann::json run_nodes(const std::string& args) {
+  nlohmann::json j;
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    j = run_nodes_once(args);
+    if (!j.contains("frames_not_made") || j["frames_not_made"].get<int>() * 100 <= j["frames_expected"].get<int>()) return j;
+    std::fprintf(stderr, "run %d: the machine stalled (%d of %d exposures not made by any node); again\n", attempt + 1,
+                 j["frames_not_made"].get<int>(), j["frames_expected"].get<int>());
+  }
+  return j;
 }
 
 // Frames lost on the way: at most `transport` (the machine's scheduling), however many exposures

@@ -121,7 +121,8 @@ class StarTracker {
   Rigid3d predict(const TrackedStar& s, double time_s) const;
   bool near_prediction(const TrackedStar& s, const Rigid3d& predicted, const Rigid3d& fitted, double time_s, double sigma_m) const;
   struct StarMotion {
-    Eigen::Vector3d velocity_m_s, angular_velocity_rad_s;
+    Eigen::Vector3d velocity_m_s = Eigen::Vector3d::Zero();  // (Eigen leaves a vector uninitialised)
+    Eigen::Vector3d angular_velocity_rad_s = Eigen::Vector3d::Zero();
   };
   // Takes this frame's fit as the star's; `start`: its filter starts again with these velocities
   // (a candidate settled as the star).

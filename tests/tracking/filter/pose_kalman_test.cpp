@@ -30,8 +30,8 @@ Eigen::Matrix<double, 6, 1> error(const Rigid3d& estimate, const Rigid3d& truth)
 Rigid3d measure(const Rigid3d& truth, double sp, double sr, std::mt19937_64& rng) {
   std::normal_distribution<double> g(0.0, 1.0);
   Rigid3d m = truth;
-  m.translation += sp * Eigen::Vector3d(g(rng), g(rng), g(rng));
-  m.rotation = (exp_rotation(sr * Eigen::Vector3d(g(rng), g(rng), g(rng))) * truth.rotation).normalized();
+  m.translation += sp * Eigen::Vector3d{g(rng), g(rng), g(rng)};
+  m.rotation = (exp_rotation(sr * Eigen::Vector3d{g(rng), g(rng), g(rng)}) * truth.rotation).normalized();
   return m;
 }
 
