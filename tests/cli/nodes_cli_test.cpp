@@ -112,9 +112,11 @@ TEST(NodesCli, ANodeClockFiftyMillisecondsAheadAndDriftingIsSynchronised) {
 }
 
 TEST(NodesCli, ANodeDelayedThirtyMillisecondsIsLeftOutOfFramesThatCannotWaitAndCounted) {
-  const nlohmann::json j = run_nodes("--nodes 2 --markers 20 --seconds 2 --delay-ms 30 --deadline-ms 10");
+  const nlohmann::json j = run_nodes("--nodes 2 --markers 20 --seconds 2 --delay-ms 30 --deadline-ms 20");
   ASSERT_TRUE(j.contains("late")) << j.dump();
-  // Node 0's every frame arrives after its group closed: about one per frame, all counted.
+  // Node 0's every frame arrives after its group closed (30 ms against a 20 ms deadline, which
+  // leaves node 1's own messages room under AddressSanitizer on a loaded machine: at 10 ms, 15
+  // frames of node 1 came too late in one CI run): about one per frame, all counted.
   EXPECT_GT(j["late"].get<int>(), 150) << j.dump(2);
   expect_few_lost(j, 2);  // no frame waits for it
   EXPECT_LT(j["frames_complete"].get<int>(), 5) << j.dump(2);

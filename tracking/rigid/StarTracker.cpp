@@ -93,6 +93,7 @@ bool StarTracker::filter(TrackedStar& s, const IdentifiedStar& fit, double time_
     sigma[n++] = points.sigma(static_cast<std::size_t>(fit.point[m]));
   }
   const Matrix6d measured = rigid_fit_covariance(fit.world_from_star, std::span(model.data(), n), std::span(sigma.data(), n));
+  if (!measured.allFinite() || !fit.world_from_star.is_finite()) return false;  // a fit that measures nothing
   // A star followed until now: a fit its filter finds impossible is refused, up to refuse_frames
   // in a row (the star did what the model does not foresee: it starts again from the fit).
   const bool followed = f.started() && recent(s) && s.confirmed;
