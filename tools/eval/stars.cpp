@@ -101,11 +101,7 @@ bool at_its_own_markers(const rhot::TrackedStar& t, const rhot::RigFrame& frame,
 // The reported pose's error against the truth, squared and weighed by its covariance (the
 // normalised estimation error squared): 6 on average where the covariance is honest.
 double pose_nees(const rhot::TrackedStar& t, const rhot::Rigid3d& truth) {
-  Eigen::Matrix<double, 6, 1> e;
-  e.head<3>() = t.world_from_star.translation - truth.translation;
-  const Eigen::AngleAxisd turn((t.world_from_star.rotation * truth.rotation.conjugate()).normalized());
-  const double angle = turn.angle() > std::numbers::pi ? turn.angle() - 2.0 * std::numbers::pi : turn.angle();
-  e.tail<3>() = turn.axis() * angle;
+  const Eigen::Matrix<double, 6, 1> e = rhot::pose_error(t.world_from_star, truth);
   return e.dot(t.covariance.ldlt().solve(e));
 }
 

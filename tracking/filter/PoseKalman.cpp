@@ -70,14 +70,16 @@ PoseKalman::Matrix12d PoseKalman::propagated(double dt) const {
 
 Matrix6d PoseKalman::predicted_covariance(double time_s) const { return propagated(std::max(0.0, time_s - time_s_)).topLeftCorner<6, 6>(); }
 
+Eigen::Matrix<double, 6, 1> pose_error(const Rigid3d& estimate, const Rigid3d& reference) {
+  Eigen::Matrix<double, 6, 1> e;
+  e.head<3>() = estimate.translation - reference.translation;
+  const Eigen::AngleAxisd turn((estimate.rotation * reference.rotation.conjugate()).normalized());
+  e.tail<3>() = turn.axis() * (turn.angle() > std::numbers::pi ? turn.angle() - 2.0 * std::numbers::pi : turn.angle());
+  return e;
+}
+
 PoseKalman::Vector6d PoseKalman::residual(const Rigid3d& predicted, const Rigid3d& measured) const {
-  Vector6d r;
-  r.head<3>() = measured.translation - predicted.translation;
-  Eigen::AngleAxisd turn((measured.rotation * predicted.rotation.conjugate()).normalized());
-  double angle = turn.angle();
-  if (angle > std::numbers::pi) angle -= 2.0 * std::numbers::pi;
-  r.tail<3>() = turn.axis() * angle;
-  return r;
+  return pose_error(measured, predicted);
 }
 
 double PoseKalman::mahalanobis2(double time_s, const Rigid3d& measured, const Matrix6d& covariance) const {

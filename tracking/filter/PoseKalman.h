@@ -78,6 +78,10 @@ class PoseKalman {
   Matrix12d covariance_ = Matrix12d::Identity();
 };
 
+// How far `estimate` is from `reference`: the position difference and the world-frame rotation
+// vector taking reference to estimate (angle in [-pi, pi]), the space PoseKalman's covariance is in.
+Eigen::Matrix<double, 6, 1> pose_error(const Rigid3d& estimate, const Rigid3d& reference);
+
 // The largest standard deviation of a 3 x 3 covariance (the square root of its largest
 // eigenvalue): how far off, along its worst direction, the estimate may be.
 double largest_sigma(const Eigen::Matrix3d& covariance);

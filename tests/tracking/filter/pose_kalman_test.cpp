@@ -18,13 +18,7 @@ Eigen::Quaterniond exp_rotation(const Eigen::Vector3d& v) {
 }
 
 // The pose error (estimate against truth) over (position, world-frame rotation).
-Eigen::Matrix<double, 6, 1> error(const Rigid3d& estimate, const Rigid3d& truth) {
-  Eigen::Matrix<double, 6, 1> e;
-  e.head<3>() = estimate.translation - truth.translation;
-  const Eigen::AngleAxisd turn((estimate.rotation * truth.rotation.conjugate()).normalized());
-  e.tail<3>() = turn.axis() * (turn.angle() > std::numbers::pi ? turn.angle() - 2 * std::numbers::pi : turn.angle());
-  return e;
-}
+Eigen::Matrix<double, 6, 1> error(const Rigid3d& estimate, const Rigid3d& truth) { return pose_error(estimate, truth); }
 
 // A measurement of `truth` drawn from the covariance diag(sp^2 x3, sr^2 x3).
 Rigid3d measure(const Rigid3d& truth, double sp, double sr, std::mt19937_64& rng) {
