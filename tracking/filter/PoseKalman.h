@@ -14,6 +14,8 @@
 // model does not foresee; the caller decides which (mahalanobis2), and either updates the filter or
 // starts it again (reset).
 
+#include <limits>
+
 #include <Eigen/Core>
 
 #include "tracking/core/Rigid3.h"
@@ -53,8 +55,11 @@ class PoseKalman {
   // The squared Mahalanobis distance of a measurement from the prediction at time_s (chi-square
   // with 6 degrees of freedom when it is the body).
   double mahalanobis2(double time_s, const Rigid3d& measured, const Matrix6d& covariance) const;
-  // Folds in a measurement at time_s (>= the last). Non-finite input is ignored.
-  void update(double time_s, const Rigid3d& measured, const Matrix6d& covariance);
+  // Folds in a measurement at time_s (>= the last) unless its squared Mahalanobis distance exceeds
+  // gate_chi2, and returns that distance (the gate and the update share one propagation and one
+  // factorisation; 0 where the filter starts here). Non-finite input is ignored (infinity).
+  double update(double time_s, const Rigid3d& measured, const Matrix6d& covariance,
+                double gate_chi2 = std::numeric_limits<double>::infinity());
 
   // The state at the last measurement.
   double time_s() const { return time_s_; }

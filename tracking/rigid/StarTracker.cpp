@@ -96,14 +96,20 @@ bool StarTracker::filter(TrackedStar& s, const IdentifiedStar& fit, double time_
   if (!measured.allFinite() || !fit.world_from_star.is_finite()) return false;  // a fit that measures nothing
   // A star followed until now: a fit its filter finds impossible is refused, up to refuse_frames
   // in a row (the star did what the model does not foresee: it starts again from the fit).
+  // The usual case, a followed star's fit within the gate, is the filter's update itself.
   const bool followed = f.started() && recent(s) && s.confirmed;
-  const bool refuse = followed && f.mahalanobis2(time_s, fit.world_from_star, measured) > settings_.filter_gate_chi2;
+  bool refuse = false;
+  bool updated = false;
+  if (followed && start) {
+    refuse = f.mahalanobis2(time_s, fit.world_from_star, measured) > settings_.filter_gate_chi2;
+  } else if (followed) {
+    refuse = !(f.update(time_s, fit.world_from_star, measured, settings_.filter_gate_chi2) <= settings_.filter_gate_chi2);
+    updated = !refuse;
+  }
   if (refuse && ++refused < settings_.refuse_frames) return false;
-  if (start || !followed || refuse) {
+  if (!updated) {
     const StarMotion motion = start ? *start : followed ? StarMotion{f.velocity_m_s(), f.angular_velocity_rad_s()} : StarMotion{};
     f.reset(time_s, fit.world_from_star, measured, motion.velocity_m_s, motion.angular_velocity_rad_s);
-  } else {
-    f.update(time_s, fit.world_from_star, measured);
   }
   refused = 0;
   s.world_from_star = f.pose();

@@ -119,6 +119,18 @@ TEST(PoseKalman, AMeasurementTwoCentimetresOffIsFarOutsideThePredictionAndTheTru
   Rigid3d turned = truth;
   turned.rotation = exp_rotation(Eigen::Vector3d(0, 0, 0.3));
   EXPECT_GT(filter.mahalanobis2(t, turned, r), 100.0);
+
+  // A gated update returns the same distance, and leaves the filter as it was where it is over.
+  const double d2 = filter.mahalanobis2(t, off, r);
+  const Rigid3d before = filter.pose();
+  EXPECT_DOUBLE_EQ(filter.update(t, off, r, 36.0), d2);
+  EXPECT_EQ(filter.pose().translation, before.translation);
+  EXPECT_LT(filter.time_s(), t);
+  const Rigid3d on = measure(truth, 0.001, 0.001, rng);
+  const double d2_on = filter.mahalanobis2(t, on, r);
+  EXPECT_LT(d2_on, 36.0);
+  EXPECT_DOUBLE_EQ(filter.update(t, on, r, 36.0), d2_on);
+  EXPECT_DOUBLE_EQ(filter.time_s(), t);
 }
 
 TEST(PoseKalman, NonFiniteInputIsIgnored) {
