@@ -9,7 +9,7 @@
 // each hand carries its object back (12-26 s), and the 26 s script starts again. In other
 // scenes a hand whose object is missing rests above the table.
 //
-// A scene with rules or place interactions to exercise (assets/scenes/workbench.json) gets the
+// A scene with rules or interactions to exercise (assets/scenes/workbench.json, workshop.json) gets the
 // showcase script instead (engine/sim/ShowcaseScript.cpp), one task after another, each derived
 // from the scene's data:
 //   value_above on a hinge or slider   a hand grasps the joint's handle (a grabbable entity fixed
@@ -20,6 +20,9 @@
 //                                      socket accepts) over the socket's attach pose and lets go
 //   place interaction                  the object carried into its zone and put down; with both
 //                                      hands, near its ends, when it is 30 cm or longer
+//   hand_over interaction              the hand on the object's side takes it at its end and lifts
+//                                      it between the hands, the other takes the other end, the
+//                                      first lets go, and the second puts it down on its own side
 // The script plays once and then rests.
 
 #include <array>
@@ -58,7 +61,7 @@ class DemoScript {
   // One round of the script; at() repeats it (the showcase: plays once, then rests).
   double duration_s() const { return duration_s_; }
 
-  // A showcase task: what it works ("hinge", "slider", "poke", "socket", "place"), on which
+  // A showcase task: what it works ("hinge", "slider", "poke", "socket", "place", "hand_over"), on which
   // entity (the jointed entity, the button, the socket, the placed object), when.
   struct Task {
     std::string kind;

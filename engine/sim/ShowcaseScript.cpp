@@ -84,7 +84,8 @@ bool DemoScript::wants_showcase(const SceneDesc& scene) {
   for (const RuleDesc& r : scene.rules) {
     if (r.when.event == "value_above" || r.when.event == "press" || r.when.event == "snap") return true;
   }
-  return false;
+  return std::any_of(scene.interactions.begin(), scene.interactions.end(),
+                     [](const InteractionDesc& in) { return in.type == InteractionType::kHandOver; });
 }
 
 namespace {
@@ -269,6 +270,59 @@ struct DemoScript::Showcase {
     task("place", object->name, begin_s);
   }
 
+  // hand_over: one hand (the one on the object's side) takes the object at its own end, lifts it
+  // between the hands, the other hand takes the other end, the first lets go and leaves, and the
+  // second puts it down on its own side, mirrored across the middle of the table.
+  void hand_over_task(const InteractionDesc& in) {
+    const EntityDesc* object = named(scene, in.object);
+    if (!object || !object->grabbable) return;
+    const Rigid3d pose = world_pose(scene, *object);
+    const Eigen::Vector3d half = half_of(*object);
+    Eigen::Vector3d along = pose.rotation * (half.x() >= half.z() ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ());
+    along.y() = 0.0;
+    along = along.norm() > 1e-6 ? along.normalized() : Eigen::Vector3d::UnitX();
+    if (along.x() < 0.0) along = -along;
+    const double length = 2.0 * std::max(half.x(), half.z()), width = 2.0 * std::min(half.x(), half.z());
+    const Eigen::Vector3d across = kUp.cross(along).normalized();
+    const int giver = hand_for(pose.translation), taker = 1 - giver;
+    // Each hand at its own end, 35 % of the length out from the middle (left hand to -along).
+    const auto end_of = [&](int h, const Eigen::Vector3d& centre) {
+      return Grip{centre + (h == 0 ? -0.35 : 0.35) * length * along, across, width};
+    };
+    const Eigen::Vector3d middle(0.0, pose.translation.y() + 0.2, pose.translation.z() - 0.05);
+    const Eigen::Vector3d put(-pose.translation.x(), pose.translation.y() + 0.003, pose.translation.z());
+    const Grip give_at = end_of(giver, pose.translation), give_over = end_of(giver, middle), take_at = end_of(taker, middle),
+               put_at = end_of(taker, put);
+    const double begin_s = t;
+    // The giver: reach, take, lift to the middle, hold until the taker has closed, open, leave.
+    hold(giver, t);
+    add(giver, t + 1.0, give_at.point + 0.15 * kUp, 0.0, give_at, none());
+    add(giver, t + 1.7, give_at.point, 0.0, give_at, none());
+    add(giver, t + 2.3, give_at.point, 1.0, give_at, none());
+    add(giver, t + 2.8, give_at.point + 0.1 * kUp, 1.0, give_at, none());
+    add(giver, t + 4.0, give_over.point, 1.0, give_at, none());
+    const double taken = t + 6.2;  // the taker closed
+    hold(giver, taken + 0.3);
+    add(giver, taken + 0.8, give_over.point, 0.0, give_at, none());
+    add(giver, taken + 1.4, give_over.point + 0.1 * kUp, 0.0, give_at, none());
+    add(giver, taken + 2.4, kRest[static_cast<std::size_t>(giver)], 0.0, give_at, none());
+    // The taker: over its end while the object comes, down, close; after the giver let go, carry
+    // it to its side (up, over, down), open, lift off, rest.
+    hold(taker, t + 3.0);
+    add(taker, t + 4.2, take_at.point + 0.12 * kUp, 0.0, take_at, none());
+    add(taker, t + 5.4, take_at.point, 0.0, take_at, none());
+    add(taker, taken, take_at.point, 1.0, take_at, none());
+    hold(taker, taken + 1.6);
+    const Eigen::Vector3d carried = put_at.point + 0.1 * kUp;
+    add(taker, taken + 2.8, Eigen::Vector3d(carried.x(), std::max(carried.y(), take_at.point.y()), carried.z()), 1.0, take_at, none());
+    add(taker, taken + 3.6, put_at.point, 1.0, take_at, none());
+    add(taker, taken + 4.0, put_at.point, 0.0, take_at, none());
+    add(taker, taken + 4.6, put_at.point + 0.1 * kUp, 0.0, take_at, none());
+    add(taker, taken + 5.5, kRest[static_cast<std::size_t>(taker)], 0.0, take_at, none());
+    t = taken + 5.7;
+    task("hand_over", object->name, begin_s);
+  }
+
   // Both hands hold still at the end of their keys; the script ends a second later.
   void finish() {
     script.duration_s_ = t + 1.0;
@@ -297,6 +351,7 @@ void DemoScript::build_showcase(const SceneDesc& scene) {
   }
   for (const InteractionDesc& in : scene.interactions) {
     if (in.type == InteractionType::kPlace) showcase.place_task(in);
+    if (in.type == InteractionType::kHandOver) showcase.hand_over_task(in);
   }
   showcase.finish();
 }
