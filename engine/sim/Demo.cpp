@@ -1,9 +1,6 @@
 #include "engine/sim/Demo.h"
 
-#include <algorithm>
 #include <cmath>
-#include <optional>
-#include <utility>
 
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
@@ -71,62 +68,8 @@ WorldSnapshot DemoWorld::at(double t_s) {
     const Rigid3d world_from_star = at->second * star.object_from_star;
     for (const Eigen::Vector3d& m : star.markers_m) out.markers_m.push_back(world_from_star * m);
   }
-  follow_true_grips();
   for (const Occluder& o : body_occluders()) out.occluders.push_back(o);
   return out;
-}
-
-namespace {
-
-// A world transform's pose without its scale (each axis's length is its scale), and the scale.
-std::optional<std::pair<Rigid3d, Eigen::Vector3d>> pose_and_scale(const glm::mat4& m) {
-  const Eigen::Vector3d scale(static_cast<double>(glm::length(glm::vec3(m[0]))), static_cast<double>(glm::length(glm::vec3(m[1]))),
-                              static_cast<double>(glm::length(glm::vec3(m[2]))));
-  if (!(scale.minCoeff() > 1e-9) || !scale.allFinite()) return std::nullopt;
-  Eigen::Matrix3d rotation;
-  for (int c = 0; c < 3; ++c) rotation.col(c) = to_eigen(glm::vec3(m[c])) / scale(c);
-  return std::pair{Rigid3d{Eigen::Quaterniond(rotation).normalized(), to_eigen(glm::vec3(m[3]))}, scale};
-}
-
-// Half a mesh's bounding box along its own axes, scaled (a sphere's or capsule's radius about).
-Eigen::Vector3d mesh_half(const Mesh& mesh, const Eigen::Vector3d& scale) {
-  if (const auto* box = std::get_if<BoxShape>(&mesh.shape)) return 0.5 * to_eigen(box->size_m).cwiseProduct(scale);
-  if (const auto* sphere = std::get_if<SphereShape>(&mesh.shape))
-    return Eigen::Vector3d::Constant(static_cast<double>(sphere->radius_m)) * scale.maxCoeff();
-  if (const auto* capsule = std::get_if<CapsuleShape>(&mesh.shape)) {
-    const auto r = static_cast<double>(capsule->radius_m);
-    return Eigen::Vector3d(r, 0.5 * static_cast<double>(capsule->height_m), r).cwiseProduct(scale);
-  }
-  return Eigen::Vector3d::Zero();
-}
-
-bool truly_held(const SceneTruth& truth, const Rigid3d& pose, const Eigen::Vector3d& half) {
-  return std::any_of(truth.hands.begin(), truth.hands.end(), [&](const HandTruth& hand) { return hand_holds(hand, pose, half); });
-}
-
-}  // namespace
-
-bool hand_holds(const HandTruth& hand, const Rigid3d& box_pose, const Eigen::Vector3d& half_m) {
-  constexpr double kNear = 0.025;
-  const auto near = [&](HandJoint joint) {
-    const Eigen::Vector3d local = box_pose.inverse() * (hand.world_from_hand * hand.pose.position_m[static_cast<std::size_t>(joint)]);
-    return (local - local.cwiseMax(-half_m).cwiseMin(half_m)).norm() <= kNear;
-  };
-  return near(HandJoint::kThumbTip) &&
-         (near(HandJoint::kIndexTip) || near(HandJoint::kMiddleTip) || near(HandJoint::kRingTip) || near(HandJoint::kLittleTip));
-}
-
-void DemoWorld::follow_true_grips() {
-  if (bodies_ == nullptr || grasp_ == nullptr || !truth_) {
-    let_go_at_.clear();
-    return;
-  }
-  std::erase_if(let_go_at_, [&](const auto& kv) { return !bodies_->alive(kv.first) || !grasp_->held_by(kv.first); });
-  bodies_->view<Mesh, PhysicsBody, WorldTransform>().each([&](Entity e, const Mesh& mesh, const PhysicsBody&, const WorldTransform& wt) {
-    if (!grasp_->held_by(e) || let_go_at_.contains(e)) return;
-    const auto at = pose_and_scale(wt.world_from_local);
-    if (at && !truly_held(*truth_, at->first, mesh_half(mesh, at->second))) let_go_at_.emplace(e, at->first);
-  });
 }
 
 std::vector<Occluder> DemoWorld::body_occluders() const {
@@ -134,11 +77,14 @@ std::vector<Occluder> DemoWorld::body_occluders() const {
   if (bodies_ == nullptr || !truth_) return out;
   bodies_->view<Mesh, PhysicsBody, WorldTransform>().each([&](Entity e, const Mesh& mesh, const PhysicsBody&, const WorldTransform& wt) {
     if (bodies_->has<Disabled>(e)) return;
-    const auto placed = pose_and_scale(wt.world_from_local);
-    if (!placed) return;
-    Rigid3d pose = placed->first;
-    const Eigen::Vector3d& scale = placed->second;
-    if (const auto let_go = let_go_at_.find(e); let_go != let_go_at_.end()) pose = let_go->second;
+    const glm::mat4& m = wt.world_from_local;
+    // The pose without the scale (each axis's length is its scale), and the scale kept apart.
+    const Eigen::Vector3d scale(static_cast<double>(glm::length(glm::vec3(m[0]))), static_cast<double>(glm::length(glm::vec3(m[1]))),
+                                static_cast<double>(glm::length(glm::vec3(m[2]))));
+    if (!(scale.minCoeff() > 1e-9) || !scale.allFinite()) return;
+    Eigen::Matrix3d rotation;
+    for (int c = 0; c < 3; ++c) rotation.col(c) = to_eigen(glm::vec3(m[c])) / scale(c);
+    Rigid3d pose{Eigen::Quaterniond(rotation).normalized(), to_eigen(glm::vec3(m[3]))};
     if (const TrackedBy* tracked = bodies_->find<TrackedBy>(e)) {
       // A star-tracked object's world pose is the tracker's: the cameras see the true one.
       const auto at = truth_->world_from_object.find(tracked->star_id);
@@ -236,7 +182,7 @@ std::expected<std::unique_ptr<Demo>, std::string> Demo::create(const SceneDesc& 
   auto launched = Launch::create(scene, renderer, settings, simulated);
   if (!launched) return std::unexpected(launched.error());
   d->launch_ = std::move(*launched);
-  if (d->world_ && settings.world.occluding_bodies) d->world_->hide_behind_bodies(d->world(), &d->runtime().physics().grasp());
+  if (d->world_ && settings.world.occluding_bodies) d->world_->hide_behind_bodies(d->world());
   d->add_stages(settings);
   return d;
 }

@@ -25,10 +25,8 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
-#include "engine/interact/GraspSystem.h"
 #include "engine/launch/Launch.h"
 #include "engine/runtime/Runtime.h"
 #include "engine/sim/ColourCameras.h"
@@ -59,10 +57,6 @@ struct DemoSettings : LaunchSettings {
 
 // The demo script's world as the simulated rig sees it: both hands' markers (their layouts on the
 // script's hands) and the tracked objects' star markers, with the hands' bones as occluders.
-// Whether a true hand holds a box (its pose, half its size along its axes): the hand's thumb tip
-// and a finger's tip within 25 mm of it (DemoWorld::hide_behind_bodies).
-bool hand_holds(const HandTruth& hand, const Rigid3d& box_pose, const Eigen::Vector3d& half_m);
-
 class DemoWorld final : public SimulatedWorld {
  public:
   // independent_hands_seed: 0 for the script's hands as they are, else each hand's bones scaled as
@@ -84,15 +78,7 @@ class DemoWorld final : public SimulatedWorld {
   // the objects, a door, a drawer) is an occluder where the world has it (WorldTransform) when a
   // snapshot is taken, a star-tracked object where the truth has it. Planes (the floor) and glTF
   // meshes hide nothing. `world` must outlive this.
-  // With `grasp` (the runtime's), an object the runtime holds is where a real one would be: in the
-  // true hand while the true hand holds it (its thumb and a finger within 25 mm of it), and once
-  // the true hand has let go, where it let go, until the runtime releases it too. (The runtime's
-  // physics carries a held object with the tracked hand until the tracked fingers open; a real
-  // object stays where the real hand left it and stops hiding the fingers that left it.)
-  void hide_behind_bodies(World& world, const GraspSystem* grasp = nullptr) {
-    bodies_ = &world;
-    grasp_ = grasp;
-  }
+  void hide_behind_bodies(World& world) { bodies_ = &world; }
   // The occluders hide_behind_bodies adds at the truth last asked for (empty without it).
   std::vector<Occluder> body_occluders() const;
 
@@ -108,10 +94,6 @@ class DemoWorld final : public SimulatedWorld {
   std::vector<Star> stars_;
   std::optional<SceneTruth> truth_;
   World* bodies_ = nullptr;
-  const GraspSystem* grasp_ = nullptr;
-  // Held objects the true hand has let go of, and where (hide_behind_bodies).
-  std::unordered_map<Entity, Rigid3d> let_go_at_;
-  void follow_true_grips();
 };
 
 // The demo's simulated world on its own, without a runtime: what a camera node simulating the

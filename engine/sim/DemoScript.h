@@ -9,7 +9,7 @@
 // each hand carries its object back (12-26 s), and the 26 s script starts again. In other
 // scenes a hand whose object is missing rests above the table.
 //
-// A scene with rules or interactions to exercise (assets/scenes/workbench.json, workshop.json) gets the
+// A scene with value_above, press or snap rules (assets/scenes/workbench.json, workshop.json) gets the
 // showcase script instead (engine/sim/ShowcaseScript.cpp), one task after another, each derived
 // from the scene's data:
 //   value_above on a hinge or slider   a hand grasps the joint's handle (a grabbable entity fixed
@@ -23,6 +23,7 @@
 //   hand_over interaction              the hand on the object's side takes it at its end and lifts
 //                                      it between the hands, the other takes the other end, the
 //                                      first lets go, and the second puts it down on its own side
+//                                      (objects 16 cm or longer)
 // The script plays once and then rests.
 
 #include <array>

@@ -84,8 +84,7 @@ bool DemoScript::wants_showcase(const SceneDesc& scene) {
   for (const RuleDesc& r : scene.rules) {
     if (r.when.event == "value_above" || r.when.event == "press" || r.when.event == "snap") return true;
   }
-  return std::any_of(scene.interactions.begin(), scene.interactions.end(),
-                     [](const InteractionDesc& in) { return in.type == InteractionType::kHandOver; });
+  return false;
 }
 
 namespace {
@@ -270,9 +269,10 @@ struct DemoScript::Showcase {
     task("place", object->name, begin_s);
   }
 
-  // hand_over: one hand (the one on the object's side) takes the object at its own end, lifts it
-  // between the hands, the other hand takes the other end, the first lets go and leaves, and the
-  // second puts it down on its own side, mirrored across the middle of the table.
+  // hand_over: one hand (the one on the object's side of the table's middle) takes the object at
+  // its own end, lifts it between the hands, the other hand takes the other end, the first lets go
+  // and leaves, and the second puts it down on its own side, mirrored across the middle of the
+  // table. An object shorter than 16 cm has no room for two hands: no task.
   void hand_over_task(const InteractionDesc& in) {
     const EntityDesc* object = named(scene, in.object);
     if (!object || !object->grabbable) return;
@@ -283,8 +283,9 @@ struct DemoScript::Showcase {
     along = along.norm() > 1e-6 ? along.normalized() : Eigen::Vector3d::UnitX();
     if (along.x() < 0.0) along = -along;
     const double length = 2.0 * std::max(half.x(), half.z()), width = 2.0 * std::min(half.x(), half.z());
+    if (length < 0.16) return;
     const Eigen::Vector3d across = kUp.cross(along).normalized();
-    const int giver = hand_for(pose.translation), taker = 1 - giver;
+    const int giver = pose.translation.x() < 0.0 ? 0 : 1, taker = 1 - giver;
     // Each hand at its own end, 35 % of the length out from the middle (left hand to -along).
     const auto end_of = [&](int h, const Eigen::Vector3d& centre) {
       return Grip{centre + (h == 0 ? -0.35 : 0.35) * length * along, across, width};

@@ -186,8 +186,8 @@ TEST(EvalCli, InteractionsRunsTheWorkbenchShowcasePerSeed) {
   // A scene with nothing to exercise is refused.
   const auto none = rhot::test::run_program("rhot-eval", "interactions --scene " RHOT_ASSET_DIR "/scenes/default.json --json", "2>&1");
   EXPECT_EQ(none.exit_code, 1);
-  EXPECT_NE(none.output.find("default.json: nothing for the showcase script to exercise (no value_above, press or snap rules, no "
-                             "hand_over interaction; docs/scene-format.md)"),
+  EXPECT_NE(none.output.find("default.json: nothing for the showcase script to exercise (no value_above, press or snap rules; "
+                             "docs/scene-format.md)"),
             std::string::npos)
       << none.output;
 }

@@ -175,8 +175,7 @@ int interactions(const InteractionsArgs& args) {
   }
   if (!DemoScript::wants_showcase(*scene)) {
     std::cerr << "rhot-eval: " << args.scene_file
-              << ": nothing for the showcase script to exercise (no value_above, press or snap rules, no hand_over interaction; "
-                 "docs/scene-format.md)\n";
+              << ": nothing for the showcase script to exercise (no value_above, press or snap rules; docs/scene-format.md)\n";
     return 1;
   }
   const std::vector<Watched> watched = watched_interactions(*scene);

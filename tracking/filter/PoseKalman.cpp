@@ -90,12 +90,11 @@ double PoseKalman::mahalanobis2(double time_s, const Rigid3d& measured, const Ma
   return r.dot(s.solve(r));
 }
 
-double PoseKalman::update(double time_s, const Rigid3d& measured, const Matrix6d& covariance, double gate_chi2) {
-  constexpr double kNone = std::numeric_limits<double>::infinity();
-  if (!finite(measured, covariance) || !std::isfinite(time_s)) return kNone;
+PoseKalman::Update PoseKalman::update(double time_s, const Rigid3d& measured, const Matrix6d& covariance, double gate_chi2) {
+  if (!finite(measured, covariance) || !std::isfinite(time_s)) return {};
   if (!started_) {
     reset(time_s, measured, covariance);
-    return 0.0;
+    return {0.0, true};
   }
   const double dt = std::max(0.0, time_s - time_s_);
   const Rigid3d predicted = predict(time_s);
@@ -103,18 +102,18 @@ double PoseKalman::update(double time_s, const Rigid3d& measured, const Matrix6d
   const Vector6d r = residual(predicted, measured);
   Matrix6d weighed = covariance;
   Eigen::LDLT<Matrix6d> ldlt(p.topLeftCorner<6, 6>() + weighed);
-  if (ldlt.info() != Eigen::Success) return kNone;
+  if (ldlt.info() != Eigen::Success) return {};
   const double d2 = r.dot(ldlt.solve(r));
-  if (!(d2 <= gate_chi2)) return d2;
+  if (d2 > gate_chi2) return {d2, false};
   if (d2 > settings_.robust_chi2) {
     weighed *= d2 / settings_.robust_chi2;
     ldlt.compute(p.topLeftCorner<6, 6>() + weighed);
-    if (ldlt.info() != Eigen::Success) return kNone;
+    if (ldlt.info() != Eigen::Success) return {d2, false};
   }
   // K = P H^T S^-1 with H = [I 0]: P's first six columns.
   const Eigen::Matrix<double, 12, 6> k = ldlt.solve(p.leftCols<6>().transpose()).transpose();
   const Eigen::Matrix<double, 12, 1> dx = k * r;
-  if (!dx.allFinite()) return kNone;
+  if (!dx.allFinite()) return {d2, false};
   pose_.translation = predicted.translation + dx.segment<3>(0);
   pose_.rotation = (exp_rotation(dx.segment<3>(3)) * predicted.rotation).normalized();
   velocity_ += dx.segment<3>(6);
@@ -124,7 +123,7 @@ double PoseKalman::update(double time_s, const Rigid3d& measured, const Matrix6d
   covariance_ = p - k * s * k.transpose();
   covariance_ = 0.5 * (covariance_ + covariance_.transpose());
   time_s_ = std::max(time_s_, time_s);
-  return d2;
+  return {d2, true};
 }
 
 double largest_sigma(const Eigen::Matrix3d& covariance) {

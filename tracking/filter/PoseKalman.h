@@ -56,9 +56,13 @@ class PoseKalman {
   // with 6 degrees of freedom when it is the body).
   double mahalanobis2(double time_s, const Rigid3d& measured, const Matrix6d& covariance) const;
   // Folds in a measurement at time_s (>= the last) unless its squared Mahalanobis distance exceeds
-  // gate_chi2, and returns that distance (the gate and the update share one propagation and one
-  // factorisation; 0 where the filter starts here). Non-finite input is ignored (infinity).
-  double update(double time_s, const Rigid3d& measured, const Matrix6d& covariance,
+  // gate_chi2 (the gate and the update share one propagation and one factorisation). Non-finite
+  // input is ignored.
+  struct Update {
+    double mahalanobis2 = std::numeric_limits<double>::infinity();  // 0 where the filter starts here
+    bool applied = false;
+  };
+  Update update(double time_s, const Rigid3d& measured, const Matrix6d& covariance,
                 double gate_chi2 = std::numeric_limits<double>::infinity());
 
   // The state at the last measurement.

@@ -103,7 +103,9 @@ bool StarTracker::filter(TrackedStar& s, const IdentifiedStar& fit, double time_
   if (followed && start) {
     refuse = f.mahalanobis2(time_s, fit.world_from_star, measured) > settings_.filter_gate_chi2;
   } else if (followed) {
-    refuse = !(f.update(time_s, fit.world_from_star, measured, settings_.filter_gate_chi2) <= settings_.filter_gate_chi2);
+    // Refused as mahalanobis2 would (a failed factorisation: infinity); a fit within the gate that
+    // the filter could not fold in (non-finite) leaves it as it was.
+    refuse = f.update(time_s, fit.world_from_star, measured, settings_.filter_gate_chi2).mahalanobis2 > settings_.filter_gate_chi2;
     updated = !refuse;
   }
   if (refuse && ++refused < settings_.refuse_frames) return false;

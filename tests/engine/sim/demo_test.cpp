@@ -13,7 +13,6 @@
 #include "engine/scene/Components.h"
 #include "engine/sim/Demo.h"
 #include "engine/sim/DemoPickups.h"
-#include "engine/sim/ScriptedHands.h"
 #include "engine/tracked/Recording.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/sim/Realism.h"
@@ -165,29 +164,6 @@ TEST(Demo, InTheRealisticWorldTheTableAndTheObjectsHideMarkers) {
   ASSERT_TRUE(plain.has_value()) << plain.error();
   (*plain)->runtime().run_frame(0.0);
   EXPECT_TRUE((*plain)->simulated()->body_occluders().empty());
-}
-
-// A held object in the realistic world hides markers where a real one would be: in the true hand
-// while the true hand holds it, where the true hand let go of it once it has (the runtime's physics
-// would carry it on in the tracked hand, hiding the fingers that opened, until the tracked fingers
-// are seen opening: the peg of the workbench held for seconds past its socket). The rule: a true
-// hand holds a box while its thumb tip and a finger's are within 25 mm of it.
-TEST(Demo, ATrueHandHoldsABoxWhileItsThumbAndAFingerAreOnIt) {
-  const Eigen::Vector3d half(0.0225, 0.03, 0.0225);  // the workbench's peg
-  Rigid3d peg;
-  peg.translation = Eigen::Vector3d(0.28, 0.84, -0.35);
-  const GraspPose grasp = make_grasp(HandSide::kRight, 2.0 * half.x());
-  HandTruth hand{grasp.place(peg.translation, Eigen::Vector3d::UnitX()), grasp.pose(1.0)};
-  EXPECT_TRUE(hand_holds(hand, peg, half)) << "closed on it";
-  hand.pose = grasp.pose(0.0);
-  EXPECT_FALSE(hand_holds(hand, peg, half)) << "opened where it closed";
-  hand.pose = grasp.pose(1.0);
-  hand.world_from_hand.translation.y() += 0.1;
-  EXPECT_FALSE(hand_holds(hand, peg, half)) << "closed, 10 cm above it";
-  // Turned about the peg's axis, the grip still holds it.
-  const Rigid3d turned{Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitY())), peg.translation};
-  HandTruth turned_hand{grasp.place(peg.translation, turned.rotation * Eigen::Vector3d::UnitX()), grasp.pose(1.0)};
-  EXPECT_TRUE(hand_holds(turned_hand, turned, half));
 }
 
 TEST(Demo, WithPerfectHandsTooTheBlockIsLifted) {

@@ -123,13 +123,17 @@ TEST(PoseKalman, AMeasurementTwoCentimetresOffIsFarOutsideThePredictionAndTheTru
   // A gated update returns the same distance, and leaves the filter as it was where it is over.
   const double d2 = filter.mahalanobis2(t, off, r);
   const Rigid3d before = filter.pose();
-  EXPECT_DOUBLE_EQ(filter.update(t, off, r, 36.0), d2);
+  const PoseKalman::Update refused = filter.update(t, off, r, 36.0);
+  EXPECT_DOUBLE_EQ(refused.mahalanobis2, d2);
+  EXPECT_FALSE(refused.applied);
   EXPECT_EQ(filter.pose().translation, before.translation);
   EXPECT_LT(filter.time_s(), t);
   const Rigid3d on = measure(truth, 0.001, 0.001, rng);
   const double d2_on = filter.mahalanobis2(t, on, r);
   EXPECT_LT(d2_on, 36.0);
-  EXPECT_DOUBLE_EQ(filter.update(t, on, r, 36.0), d2_on);
+  const PoseKalman::Update folded = filter.update(t, on, r, 36.0);
+  EXPECT_DOUBLE_EQ(folded.mahalanobis2, d2_on);
+  EXPECT_TRUE(folded.applied);
   EXPECT_DOUBLE_EQ(filter.time_s(), t);
 }
 
@@ -141,11 +145,13 @@ TEST(PoseKalman, NonFiniteInputIsIgnored) {
   filter.update(0.0, p, r);
   Rigid3d bad = p;
   bad.translation.x() = std::numeric_limits<double>::quiet_NaN();
-  filter.update(0.1, bad, r);
+  EXPECT_FALSE(filter.update(0.1, bad, r).applied);
   Matrix6d bad_r = r;
   bad_r(0, 0) = std::numeric_limits<double>::infinity();
-  filter.update(0.2, p, bad_r);
-  filter.update(std::numeric_limits<double>::quiet_NaN(), p, r);
+  EXPECT_FALSE(filter.update(0.2, p, bad_r).applied);
+  const PoseKalman::Update nan_time = filter.update(std::numeric_limits<double>::quiet_NaN(), p, r);
+  EXPECT_FALSE(nan_time.applied);
+  EXPECT_EQ(nan_time.mahalanobis2, std::numeric_limits<double>::infinity());
   EXPECT_TRUE(filter.pose().is_finite());
   EXPECT_TRUE(filter.pose_covariance().allFinite());
   EXPECT_DOUBLE_EQ(filter.time_s(), 0.0);
