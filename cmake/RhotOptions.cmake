@@ -34,6 +34,20 @@ if(RHOT_SANITIZE)
     -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
     $<BUILD_INTERFACE:$<$<CXX_COMPILER_ID:GNU>:-Wno-maybe-uninitialized>>)
   target_link_options(rhot_options INTERFACE -fsanitize=address,undefined)
+  # Eigen's expression functions (EIGEN_STRONG_INLINE: plain `inline` on GCC and Clang) always
+  # inlined in the -O1 libraries: with UBSan's checks in each of them they grow past the inliner's
+  # threshold, and a 3-vector difference became a chain of calls (Eigen's out-of-line expression
+  # code was 25 % of the whole test suite's CPU time, perf over `ctest`; with them inlined the
+  # suite took 552 s of test time instead of 749 s, for 10 % more build). The thin programs keep
+  # plain inline: their -O0 code is not where the time goes. So do libraries whose Eigen code is
+  # compiled for its own sake and little run (RHOT_EIGEN_PLAIN_INLINE: tracking/core's
+  # decompositions, tracking/filter's Kalman filter), where inlining only lengthens the build.
+  option(RHOT_EIGEN_ALWAYS_INLINE "Sanitized builds: always inline Eigen's expression functions in the libraries" ON)
+  if(RHOT_EIGEN_ALWAYS_INLINE)
+    set(plain_inline $<OR:$<BOOL:$<TARGET_PROPERTY:RHOT_THIN_PROGRAM>>,$<BOOL:$<TARGET_PROPERTY:RHOT_EIGEN_PLAIN_INLINE>>>)
+    target_compile_definitions(rhot_options INTERFACE
+      $<BUILD_INTERFACE:$<$<NOT:${plain_inline}>:EIGEN_STRONG_INLINE=inline\ __attribute__\(\(always_inline\)\)>>)
+  endif()
 endif()
 
 # Linking: LLVM's lld where there is one (tools/setup-deps.sh installs it), else binutils' gold.

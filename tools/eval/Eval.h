@@ -17,10 +17,6 @@
 #include "tracking/hand/HandJoints.h"
 #include "tracking/sim/Realism.h"
 
-namespace CLI {
-class App;
-}
-
 namespace rhot {
 struct InteractionEvent;
 }
@@ -50,7 +46,6 @@ struct WorldFlags {
   std::optional<std::string> truth_hand;
   std::optional<std::string> bodies_hide;  // yes or no
 };
-void add_world_flags(CLI::App& command, WorldFlags& flags, bool hands);
 std::expected<rhot::WorldSettings, std::string> world_settings(const WorldFlags& flags);
 // The world's settings, for a report.
 nlohmann::json world_json(const rhot::WorldSettings& world, const std::string& name);

@@ -14,7 +14,6 @@
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <Eigen/Dense>
@@ -52,31 +51,6 @@ double percentile(std::vector<double> v, double q) {
 }  // namespace rhot::eval
 
 namespace rhot::eval {
-
-void add_world_flags(CLI::App& command, WorldFlags& flags, bool hands) {
-  command.add_option("--world", flags.world, "the simulated world: ideal or realistic (docs/tracking.md); the flags below override it")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"ideal", "realistic"}));
-  command.add_option("--sigma", flags.sigma, "pixel noise, standard deviation per axis (ideal 0.3, realistic 0.5)")
-      ->check(CLI::Range(1e-6, 50.0));
-  command.add_option("--dropout", flags.dropout, "probability a camera misses a visible marker")->check(CLI::Range(0.0, 1.0));
-  command.add_option("--strays", flags.strays, "false blobs per camera per frame, half fixed like lamps, half flickering")
-      ->check(CLI::Range(0, 1000));
-  command.add_option("--calib-error-px", flags.calib_error_px, "the tracker's rig is off the true one by about this reprojection error")
-      ->check(CLI::Range(0.0, 20.0));
-  command.add_option("--skew-ms", flags.skew_ms, "camera i exposes i times this later (unsynchronised cameras)")
-      ->check(CLI::Range(-100.0, 100.0));
-  command.add_option("--marker-mm", flags.marker_mm, "marker diameter: blobs merge when their discs overlap (0: never)")
-      ->check(CLI::Range(0.0, 100.0));
-  command
-      .add_option("--bodies-hide", flags.bodies_hide,
-                  "yes: the table and the objects hide markers too, not only the hands (realistic: yes)")
-      ->check(CLI::IsMember({"yes", "no"}));
-  if (hands) {
-    command.add_option("--truth-hand", flags.truth_hand, "model (the solver's own hand) or independent (a user's own bones and angles)")
-        ->check(CLI::IsMember({"model", "independent"}));
-  }
-}
 
 std::expected<rhot::WorldSettings, std::string> world_settings(const WorldFlags& flags) {
   auto world = rhot::world_named(flags.world);

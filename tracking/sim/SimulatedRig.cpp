@@ -12,25 +12,36 @@ namespace rhot {
 
 namespace {
 
+// In scalars, not Eigen's expression templates: at the sanitized build's -O1 those are not
+// inlined, and a simulated frame tests every marker's line of sight to every camera against every
+// occluder (the render soak spent 15 % of its time here with Eigen expressions). Each expression
+// is evaluated in the order Eigen's would, so the results are the same.
+struct V3 {
+  double x, y, z;
+};
+V3 v3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+V3 sub(const V3& a, const V3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+double dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
 // Smallest distance between segments [p0, p1] and [q0, q1].
-double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0, const Eigen::Vector3d& q1) {
-  const Eigen::Vector3d d1 = p1 - p0;
-  const Eigen::Vector3d d2 = q1 - q0;
-  const Eigen::Vector3d r = p0 - q0;
-  const double a = d1.squaredNorm();
-  const double e = d2.squaredNorm();
-  const double f = d2.dot(r);
+double segment_distance(const V3& p0, const V3& p1, const V3& q0, const V3& q1) {
+  const V3 d1 = sub(p1, p0);
+  const V3 d2 = sub(q1, q0);
+  const V3 r = sub(p0, q0);
+  const double a = dot(d1, d1);
+  const double e = dot(d2, d2);
+  const double f = dot(d2, r);
   double s = 0.0;
   double t = 0.0;
-  if (a <= 1e-18 && e <= 1e-18) return r.norm();
+  if (a <= 1e-18 && e <= 1e-18) return std::sqrt(dot(r, r));
   if (a <= 1e-18) {
     t = std::clamp(f / e, 0.0, 1.0);
   } else {
-    const double c = d1.dot(r);
+    const double c = dot(d1, r);
     if (e <= 1e-18) {
       s = std::clamp(-c / a, 0.0, 1.0);
     } else {
-      const double b = d1.dot(d2);
+      const double b = dot(d1, d2);
       const double denom = a * e - b * b;
       s = denom > 1e-18 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
       t = (b * s + f) / e;
@@ -43,25 +54,38 @@ double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, co
       }
     }
   }
-  return ((p0 + d1 * s) - (q0 + d2 * t)).norm();
+  const V3 gap{(p0.x + d1.x * s) - (q0.x + d2.x * t), (p0.y + d1.y * s) - (q0.y + d2.y * t), (p0.z + d1.z * s) - (q0.z + d2.z * t)};
+  return std::sqrt(dot(gap, gap));
+}
+
+// v turned by the conjugate of the unit quaternion (w, x, y, z): v + w t + u x t with
+// t = 2 (u x v), u = -(x, y, z), as Eigen's quaternion-vector product.
+V3 turn_back(const Eigen::Quaterniond& q, const V3& v) {
+  const V3 u{-q.x(), -q.y(), -q.z()};
+  const V3 t{2.0 * (u.y * v.z - u.z * v.y), 2.0 * (u.z * v.x - u.x * v.z), 2.0 * (u.x * v.y - u.y * v.x)};
+  const double w = q.w();
+  return {v.x + w * t.x + (u.y * t.z - u.z * t.y), v.y + w * t.y + (u.z * t.x - u.x * t.z), v.z + w * t.z + (u.x * t.y - u.y * t.x)};
 }
 
 }  // namespace
 
 bool Occluder::blocks(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {
-  if (!is_box()) return segment_distance(p, q, a_m, b_m) < radius_m;
+  const V3 p3 = v3(p), q3 = v3(q), centre = v3(a_m);
+  if (!is_box()) return segment_distance(p3, q3, centre, v3(b_m)) < radius_m;
   // Slabs: the segment in the box's frame, clipped by each pair of faces.
-  const Eigen::Quaterniond to_box = box_rotation.conjugate();
-  const Eigen::Vector3d a = to_box * (p - a_m);
-  const Eigen::Vector3d d = to_box * (q - a_m) - a;
+  const V3 a = turn_back(box_rotation, sub(p3, centre));
+  const V3 d = sub(turn_back(box_rotation, sub(q3, centre)), a);
+  const double half[3] = {box_half_m.x(), box_half_m.y(), box_half_m.z()};
+  const double start[3] = {a.x, a.y, a.z};
+  const double along[3] = {d.x, d.y, d.z};
   double t0 = 0.0, t1 = 1.0;
   for (int i = 0; i < 3; ++i) {
-    if (std::abs(d(i)) < 1e-15) {
-      if (std::abs(a(i)) > box_half_m(i)) return false;
+    if (std::abs(along[i]) < 1e-15) {
+      if (std::abs(start[i]) > half[i]) return false;
       continue;
     }
-    double u = (-box_half_m(i) - a(i)) / d(i);
-    double v = (box_half_m(i) - a(i)) / d(i);
+    double u = (-half[i] - start[i]) / along[i];
+    double v = (half[i] - start[i]) / along[i];
     if (u > v) std::swap(u, v);
     t0 = std::max(t0, u);
     t1 = std::min(t1, v);
