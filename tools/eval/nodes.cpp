@@ -101,6 +101,10 @@ struct HandComparison {
   long joints = 0;
   long hand_frames = 0;
   long seen = 0;
+  // Each seen hand's mean joint error in each frame, and when: a mean over the run hides a
+  // stretch of frames where a hand went wrong.
+  std::vector<double> frame_mm;
+  double worst_mm = 0.0, worst_t_s = 0.0;
   void step(double t, const SceneTruth& truth) {
     live->read_source(t);
     live->match();
@@ -111,11 +115,23 @@ struct HandComparison {
       const TrackedHand& hand = live->tracked_hand(h == 0 ? HandSide::kLeft : HandSide::kRight);
       if (!hand.hand_seen) continue;
       ++seen;
-      for (std::size_t j = 0; j < kHandJointCount; ++j) {
-        error_sum_m += (hand.joints_world[j] - truth.hands[h].world_from_hand * truth.hands[h].pose.position_m[j]).norm();
-        ++joints;
+      double sum_m = 0.0;
+      for (std::size_t j = 0; j < kHandJointCount; ++j)
+        sum_m += (hand.joints_world[j] - truth.hands[h].world_from_hand * truth.hands[h].pose.position_m[j]).norm();
+      error_sum_m += sum_m;
+      joints += static_cast<long>(kHandJointCount);
+      frame_mm.push_back(1000.0 * sum_m / static_cast<double>(kHandJointCount));
+      if (frame_mm.back() > worst_mm) {
+        worst_mm = frame_mm.back();
+        worst_t_s = t;
       }
     }
+  }
+  // The worst hand-frame and the 95th percentile of the hand-frames' mean errors.
+  void report(nlohmann::json& j, const std::string& prefix) const {
+    j[prefix + "hand_frame_p95_mm"] = percentile(frame_mm, 0.95);
+    j[prefix + "hand_frame_max_mm"] = worst_mm;
+    j[prefix + "hand_frame_max_at_s"] = worst_t_s;
   }
   double mean_mm() const { return joints > 0 ? 1000.0 * error_sum_m / static_cast<double>(joints) : 0.0; }
   double seen_fraction() const { return hand_frames > 0 ? static_cast<double>(seen) / static_cast<double>(hand_frames) : 0.0; }
@@ -462,6 +478,8 @@ nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSo
     j["hands_seen_fraction"] = run.hands.nodes_hands.seen_fraction();
     j["in_process_hand_joint_mean_mm"] = run.hands.local_hands.mean_mm();
     j["in_process_hands_seen_fraction"] = run.hands.local_hands.seen_fraction();
+    run.hands.nodes_hands.report(j, "");
+    run.hands.local_hands.report(j, "in_process_");
   }
   j["late"] = stats.assembly.late;
   j["duplicates"] = stats.assembly.duplicates;
