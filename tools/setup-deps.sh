@@ -22,6 +22,8 @@ packages=(
   # GLSL compiler, window system, assets, UI
   libvulkan-dev vulkan-tools mesa-vulkan-drivers vulkan-validationlayers glslc
   libglfw3-dev libtinygltf-dev libstb-dev libimgui-dev
+  # headsets: the OpenXR loader and headers, and the core validation layer its tests turn on
+  libopenxr-dev libopenxr-loader1 openxr-layer-corevalidation
   # a virtual display for window tests on machines without one
   xvfb xauth
   # camera nodes

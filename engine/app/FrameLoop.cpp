@@ -42,6 +42,7 @@ FrameLoop::FrameLoop(World& world, Systems& systems, FrameLoopSettings settings)
 }
 
 void FrameLoop::step() {
+  if (settings_.pace) settings_.pace();
   const FrameContext frame{frame_index_, dt_s_, time_s()};
   const auto start = Clock::now();
   systems_.run(world_, frame, stage_ms_);

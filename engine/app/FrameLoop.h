@@ -23,6 +23,9 @@ struct FrameLoopSettings {
   // same fixed dt, as headless runs and tests do, so results do not depend on machine speed.
   bool real_time = false;
   std::size_t stats_window_frames = 65536;
+  // Called before each frame, outside its timing: what paces the loop from outside, such as a
+  // headset runtime's wait for its next frame (Runtime::wait_for_headset).
+  std::function<void()> pace;
 
   [[nodiscard]] std::expected<void, std::string> check() const;
 };
@@ -33,7 +36,7 @@ class FrameLoop {
   // outlive the loop.
   FrameLoop(World& world, Systems& systems, FrameLoopSettings settings);
 
-  // Runs one frame.
+  // Runs one frame (after settings.pace, if given).
   void step();
 
   // Runs frames until `frames` have run in this call (0: no limit) or keep_running (checked

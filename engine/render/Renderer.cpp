@@ -11,10 +11,12 @@
 #include <spdlog/spdlog.h>
 
 #include "engine/render/Window.h"
+#include "engine/render/XrHeadset.h"
 #include "engine/render/vk/StereoPass.h"
 #include "engine/render/vk/Overlay.h"
 #include "engine/render/vk/Swapchain.h"
 #include "engine/render/vk/VulkanContext.h"
+#include "engine/render/vk/XrBinding.h"
 
 namespace rhot {
 
@@ -69,6 +71,7 @@ struct Renderer::Impl {
   std::unique_ptr<vk::Swapchain> swapchain;
   std::unique_ptr<vk::Overlay> overlay;
   Window* window = nullptr;
+  XrHeadset* headset = nullptr;
   bool capture_window = false;
   vk::Buffer window_buffer;
   Image window_image;
@@ -81,6 +84,8 @@ struct Renderer::Impl {
     overlay.reset();
     swapchain.reset();
     pass.reset();
+    if (context) vkDeviceWaitIdle(context->device());
+    if (headset) headset->impl().stop();  // the session and its swapchains go before the device
     if (context) {
       vkDeviceWaitIdle(context->device());
       context->destroy(window_buffer);
@@ -125,8 +130,20 @@ bool multiview_self_test(const vk::Context& context) {
 
 }  // namespace
 
-std::expected<std::unique_ptr<Renderer>, std::string> Renderer::create(const RendererSettings& settings, Window* window) {
-  if (auto ok = settings.check(); !ok) return std::unexpected(ok.error());
+std::expected<std::unique_ptr<Renderer>, std::string> Renderer::create(const RendererSettings& requested, Window* window,
+                                                                       XrHeadset* headset) {
+  if (auto ok = requested.check(); !ok) return std::unexpected(ok.error());
+  RendererSettings settings = requested;
+  if (headset != nullptr) {
+    const XrHeadsetInfo& xr = headset->info();
+    if (xr.recommended_width_px < 16 || xr.recommended_width_px > 8192 || xr.recommended_height_px < 16 ||
+        xr.recommended_height_px > 8192) {
+      return std::unexpected("the headset's recommended eye size " + std::to_string(xr.recommended_width_px) + "x" +
+                             std::to_string(xr.recommended_height_px) + " is outside 16 to 8192 pixels");
+    }
+    settings.eye_width_px = xr.recommended_width_px;
+    settings.eye_height_px = xr.recommended_height_px;
+  }
   // Mesa's CPU driver rasterises on worker threads and the frame waits for them. On two cores
   // those threads fight tracking and physics for the CPU, and the hand-off costs more than the
   // parallelism gains (measured: 540 x 600 per eye, the whole frame 11.9 ms p50 with workers,
@@ -152,6 +169,12 @@ std::expected<std::unique_ptr<Renderer>, std::string> Renderer::create(const Ren
       if (r != VK_SUCCESS) return std::unexpected(std::string("cannot create a Vulkan surface for the window: ") + vk::result_string(r));
       return surface;
     };
+  }
+  if (headset != nullptr) {
+    XrHeadset::Impl* xr = &headset->impl();
+    options.make_instance = [xr](const VkInstanceCreateInfo& info) { return xr->make_instance(info); };
+    options.physical_device = [xr](VkInstance instance) { return xr->physical_device(instance); };
+    options.make_device = [xr](VkPhysicalDevice physical, const VkDeviceCreateInfo& info) { return xr->make_device(physical, info); };
   }
   auto context = vk::Context::create(options);
   if (!context) return std::unexpected(context.error());
@@ -193,6 +216,12 @@ std::expected<std::unique_ptr<Renderer>, std::string> Renderer::create(const Ren
     impl->window = window;
     impl->swapchain = std::make_unique<vk::Swapchain>(*impl->context);
   }
+  if (headset != nullptr) {
+    // One two-layer swapchain where both eyes are drawn in one multiview pass, else one per eye.
+    impl->headset = headset;  // from here on, a failure ends what start() made before the device goes
+    if (auto started = headset->impl().start(*impl->context, multiview); !started) return std::unexpected(started.error());
+    info.headset = true;
+  }
   spdlog::info("renderer: {} x {} per eye, {}, lit per {}", settings.eye_width_px, settings.eye_height_px, to_string(info.mode),
                to_string(info.shading));
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
@@ -202,6 +231,7 @@ Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Renderer::~Renderer() = default;
 
 const RendererInfo& Renderer::info() const { return impl_->info; }
+XrHeadset* Renderer::headset() const { return impl_->headset; }
 int Renderer::eye_width_px() const { return impl_->pass->width(); }
 int Renderer::eye_height_px() const { return impl_->pass->height(); }
 std::uint64_t Renderer::validation_messages() const { return impl_->context->validation_messages(); }
@@ -227,6 +257,11 @@ void Renderer::render(const FrameInput& frame) {
   // (after a resize) swapchain images are touched again.
   m.pass->finish();
   if (m.overlay) m.overlay->end_frame();
+  XrHeadset::Impl* xr = m.headset ? &m.headset->impl() : nullptr;
+  const bool to_headset = xr != nullptr && xr->acquire();
+  const auto copy_to_headset = [&](VkCommandBuffer cmd, VkImage eyes) {
+    if (to_headset) xr->record_copy(cmd, eyes, m.pass->width(), m.pass->height());
+  };
   if (m.swapchain && m.swapchain->prepare(m.window->framebuffer_size())) {
     if (m.swapchain->acquire()) {
       // The blit (and the overlay) wait for the acquired image at the transfer stage; the
@@ -246,6 +281,7 @@ void Renderer::render(const FrameInput& frame) {
       skipped = m.pass->render(
           frame, m.meshes,
           [&](VkCommandBuffer cmd, VkImage eyes) {
+            copy_to_headset(cmd, eyes);
             m.swapchain->record_blit(cmd, eyes, w, h, m.overlay != nullptr);
             if (m.overlay) m.overlay->record(cmd, *m.swapchain);
             if (capture) m.swapchain->record_copy(cmd, m.window_buffer);
@@ -261,7 +297,10 @@ void Renderer::render(const FrameInput& frame) {
       presented = true;
     }
   }
-  if (!presented) skipped = m.pass->render(frame, m.meshes);
+  if (!presented) {
+    skipped = to_headset ? m.pass->render(frame, m.meshes, copy_to_headset) : m.pass->render(frame, m.meshes);
+  }
+  if (xr != nullptr) xr->end_frame();  // with the copies submitted; with no layer where nothing was acquired
   if (skipped > 0 && !m.warned_non_finite) {
     spdlog::warn("renderer: skipped {} instance(s) or line(s) with non-finite values (warned once)", skipped);
     m.warned_non_finite = true;

@@ -28,6 +28,7 @@
 namespace rhot {
 
 class Window;
+class XrHeadset;
 
 enum class StereoMode {
   kAuto,       // multiview where the start-up self-test shows the driver gets it right, else two passes
@@ -107,6 +108,7 @@ struct RendererInfo {
   StereoMode mode = StereoMode::kTwoPass;   // what is actually used: kMultiview or kTwoPass
   Shading shading = Shading::kPerPixel;     // what is actually used: kPerPixel or kPerVertex
   bool gpu_timings = false;                 // asked for, and the device has timestamps
+  bool headset = false;                     // drawing into an OpenXR runtime's swapchains
 };
 
 // A frame the GPU has finished drawing: when it was submitted and when it was done, on the steady
@@ -123,10 +125,13 @@ struct FrameCompletion {
 class Renderer {
  public:
   // Creates the renderer for offscreen rendering, or (with a window) also for presenting into
-  // it. Fails with a message where there is no Vulkan, no suitable device, or the window cannot
-  // get a swapchain.
+  // it, or (with a headset) for drawing into its OpenXR runtime's swapchains, the window (if any)
+  // then a desktop mirror. With a headset, its runtime makes the Vulkan instance and device
+  // (XR_KHR_vulkan_enable2), the eyes take the runtime's recommended size, and the session starts;
+  // the headset must outlive the renderer. Fails with a message where there is no Vulkan, no
+  // suitable device, the window cannot get a swapchain or the runtime refuses the session.
   [[nodiscard]] static std::expected<std::unique_ptr<Renderer>, std::string> create(const RendererSettings& settings,
-                                                                                    Window* window = nullptr);
+                                                                                    Window* window = nullptr, XrHeadset* headset = nullptr);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
@@ -138,11 +143,17 @@ class Renderer {
   // Uploads a mesh. Precondition: a valid MeshData (indices in range, three per triangle).
   MeshHandle upload_mesh(const MeshData& mesh);
 
+  // The headset it draws for (null without).
+  XrHeadset* headset() const;
+
   // Draws both eyes: waits for the previous frame to be drawn, then records and submits this one
   // and returns without waiting for it, so the caller's next frame (tracking, physics) runs while
   // the driver draws this one. One frame is in flight at most: the next render(), read_eyes(),
   // read_eye() or finish() waits for it. With a window, also shows both eyes side by side in it
-  // (unless it is minimised).
+  // (unless it is minimised). With a headset whose frame has begun (XrHeadset::begin_frame), also
+  // copies both eyes into its swapchains and ends the frame with them (frame.views must be those
+  // XrHeadset::locate_views gave for it), or ends it with nothing where the runtime said not to
+  // render.
   void render(const FrameInput& frame);
 
   // Waits until the last rendered frame has been drawn (and presented, with a window).

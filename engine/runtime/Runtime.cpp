@@ -1,13 +1,16 @@
 #include "engine/runtime/Runtime.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <thread>
 
 #include "base/Check.h"
 #include "base/SteadyClock.h"
 #include "engine/core/Transform.h"
 #include "engine/math/EigenGlm.h"
 #include "engine/render/StereoCamera.h"
+#include "engine/render/XrHeadset.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/rigid/StarSet.h"
 
@@ -117,7 +120,23 @@ void Runtime::run_frame(double t_s) {
   for (const Stage& s : stages_) s.stage.run(t_s);
 }
 
+void Runtime::wait_for_headset() {
+  XrHeadset* xr = renderer_ != nullptr ? renderer_->headset() : nullptr;
+  if (xr == nullptr) return;
+  headset_waited_ = true;
+  xr->poll_events();
+  if (xr->session_running()) {
+    (void)xr->begin_frame();
+  } else if (!xr->should_exit()) {
+    // No frame to wait for: idle rather than spin until the session runs.
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
 void Runtime::advance(const FrameContext& f) {
+  XrHeadset* xr = renderer_ != nullptr ? renderer_->headset() : nullptr;
+  if (xr != nullptr && !headset_waited_) wait_for_headset();
+  headset_waited_ = false;
   frame_start_s_ = steady_now_s();
   pose_s_ = frame_start_s_;
   // The headset's refresh, anchored at the first frame's start.
@@ -127,7 +146,9 @@ void Runtime::advance(const FrameContext& f) {
     next_time_s_ = f.time_s;
     started_ = true;
   }
-  advancing_ = !paused_ || step_requested_;
+  // Without the headset's focus (another application has it, or the session is not running) the
+  // simulation pauses; the frames are still drawn.
+  advancing_ = (!paused_ || step_requested_) && (xr == nullptr || xr->focused());
   step_requested_ = false;
   if (!advancing_) return;
   time_s_ = next_time_s_;
@@ -165,6 +186,13 @@ void Runtime::record() {
 
 void Runtime::render() {
   collect_displayed();
+  XrHeadset* xr = renderer_->headset();
+  if (xr != nullptr) {
+    // Drawn for the headset's frame, if one has begun, from where its eyes will be when it is shown.
+    if (!xr->current_frame()) return;
+    const HeadsetSettings& hs = scene_.settings.headset;
+    if (auto located = xr->locate_views(hs.near_m, hs.far_m)) views_ = *located;
+  }
   // When this frame will be shown: the refresh at or after the GPU's recent time per frame from now.
   const double now = steady_now_s();
   std::vector<double> gpu(recent_gpu_s_.begin(), recent_gpu_s_.end());
@@ -176,7 +204,8 @@ void Runtime::render() {
   shown.t_s = results.t_s;
   shown.moments.capture_s = std::isfinite(results.capture_steady_s) ? std::min(results.capture_steady_s, pose_s_) : frame_start_s_;
   shown.moments.pose_s = pose_s_;
-  shown.predicted_display_s = vsync_ ? vsync_->next_at_or_after(now + gpu_s) : now;
+  // The headset's runtime says when the frame will be shown; else the refresh after the GPU's work.
+  shown.predicted_display_s = xr != nullptr ? xr->current_frame()->display_s : vsync_ ? vsync_->next_at_or_after(now + gpu_s) : now;
   // Paused, the poses are old and stay put: nothing to predict.
   shown.horizon_s =
       settings_.predict && advancing_ ? std::clamp(shown.predicted_display_s - shown.moments.capture_s, 0.0, kMaxPredictionHorizon_s) : 0.0;
@@ -250,7 +279,12 @@ void Runtime::collect_displayed() {
       }
     }
     FrameMoments& m = p.shown.moments;
-    m.display_s = std::max(vsync_ ? vsync_->next_at_or_after(done->done_s) : done->done_s, m.submit_s);
+    // Shown at its predicted display time with a headset (or when it was done, if later), else at
+    // the refresh after it was done.
+    const double shown_s = renderer_->headset() != nullptr ? std::max(p.shown.predicted_display_s, done->done_s)
+                           : vsync_                        ? vsync_->next_at_or_after(done->done_s)
+                                                           : done->done_s;
+    m.display_s = std::max(shown_s, m.submit_s);
     latency_.record(m);
     for (const auto& observer : displayed_observers_) observer(p.shown);
   }

@@ -101,12 +101,19 @@ class Runtime {
   void add_stage(const std::string& after, TrackingStage stage);
   // Adds the runtime's systems; `after` names a system they run after ("" for none).
   void add_systems(Systems& systems, const std::string& after);
+  // With a headset (the renderer's): handles its runtime's events and waits for its next frame
+  // (xrWaitFrame), which paces the loop; while its session is not running, idles a few
+  // milliseconds instead. Give it to FrameLoopSettings::pace so that the wait is not counted as
+  // the frame's work; where a frame starts without it, the clock stage calls it. Nothing without a
+  // headset. engine/runtime/HeadsetLoop.h sets the loop up and runs it so.
+  void wait_for_headset();
   // Runs every stage once at t_s, as a frame the clock advances to t_s would, without a frame loop
   // (for tools and tests that drive the runtime themselves). The clock is not touched.
   void run_frame(double t_s);
 
   World& world() { return world_; }
   const SceneDesc& scene() const { return scene_; }
+  Renderer* renderer() const { return renderer_; }
   ResultSource& tracking() { return *tracking_; }
   const TrackedObjects& objects() const { return objects_; }
   HandPhysics& physics() { return *physics_; }
@@ -178,7 +185,8 @@ class Runtime {
   std::function<void()> overlay_;
   bool paused_ = false;
   bool step_requested_ = false;
-  bool advancing_ = true;  // this frame runs tracking and physics
+  bool advancing_ = true;        // this frame runs tracking and physics
+  bool headset_waited_ = false;  // wait_for_headset() ran for the coming frame
   bool started_ = false;
   double time_s_ = 0.0;  // of the frame that ran last
   double next_time_s_ = 0.0;

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -27,11 +28,13 @@
 #include "engine/app/FrameLoop.h"
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"
+#include "engine/runtime/HeadsetLoop.h"
 #include "engine/runtime/Overlay.h"
 #include "engine/render/PngWriter.h"
 #include "engine/render/Renderer.h"
 #include "engine/render/SceneRenderer.h"
 #include "engine/render/Window.h"
+#include "engine/render/XrHeadset.h"
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/Demo.h"
 #include "tracking/sim/Realism.h"
@@ -107,6 +110,8 @@ struct Options {
   std::string window_capture;
   std::string prediction = "on";
   bool no_overlay = false;
+  bool xr = false;      // on a headset through OpenXR
+  bool mirror = false;  // with xr: the eyes in a desktop window too
 };
 
 void add_options(CLI::App& cli, Options& o) {
@@ -194,6 +199,10 @@ void add_options(CLI::App& cli, Options& o) {
   cli.add_option("--window-capture", o.window_capture,
                  "With a window and --frames: write what it shows on the last frame (both eyes and the overlay) as PNG");
   cli.add_flag("--no-overlay", o.no_overlay, "No Dear ImGui overlay in the window");
+  cli.add_flag("--xr", o.xr,
+               "Show on a headset through the active OpenXR runtime (or the one XR_RUNTIME_JSON names; docs/openxr.md). "
+               "--frames N: end the session after N frames shown");
+  cli.add_flag("--mirror", o.mirror, "With --xr: also show both eyes in a desktop window");
 }
 
 // --stats FILE is written after the run, so whether it can be written is checked before: a long run
@@ -278,11 +287,21 @@ bool resolve_options(Options& o) {
     spdlog::error("--eye: expected WIDTHxHEIGHT in pixels, such as 1080x1200, got \"{}\"", o.eye_size);
     return false;
   }
+  if (o.mirror && !o.xr) {
+    spdlog::error("--mirror: needs --xr (without a headset the window shows the eyes anyway)");
+    return false;
+  }
+  if (o.xr) {
+    // The headset is the display; a window only as its mirror. The runtime's recommended eye size
+    // is used, and the session runs until the runtime ends it, --frames are shown or it is stopped.
+    if (!o.eye_size.empty()) spdlog::warn("--eye ignored with --xr: the eyes take the headset runtime's recommended size");
+    o.headless = !o.mirror;
+  }
   if (!o.headless && !rhot::Window::display_available()) {
     spdlog::info("no display found (DISPLAY and WAYLAND_DISPLAY are unset); running headless");
     o.headless = true;
   }
-  if (o.headless && o.frames == 0) o.frames = 900;
+  if (o.headless && o.frames == 0 && !o.xr) o.frames = 900;
   o.render.stereo = o.stereo == "multiview"  ? rhot::StereoMode::kMultiview
                     : o.stereo == "two-pass" ? rhot::StereoMode::kTwoPass
                                              : rhot::StereoMode::kAuto;
@@ -350,6 +369,19 @@ bool write_outputs(const Options& o, const rhot::Window* window, rhot::Renderer&
     j["scene"] = o.scene_path;
     j["rate_hz"] = o.loop.rate_hz;
     j["latency"] = latency.to_json();
+    if (const rhot::XrHeadset* xr = renderer.headset()) {
+      j["xr"] = {{"runtime", xr->info().runtime},
+                 {"system", xr->info().system},
+                 {"refresh_hz", xr->info().refresh_hz},
+                 {"frames_shown", xr->frames_submitted()},
+                 {"frames_late", xr->frames_late()},
+                 {"frames_late_own", xr->frames_late_own()},
+                 {"validation_enabled", xr->info().validation_enabled},
+                 {"validation_messages", xr->validation_messages()},
+                 {"vulkan_validation_enabled", renderer.info().validation_enabled},
+                 {"vulkan_validation_messages", renderer.validation_messages()},
+                 {"session_end", xr->exit_reason()}};
+    }
     std::ofstream out(o.stats_path);
     out << j.dump(2) << '\n';
     out.close();
@@ -399,6 +431,21 @@ void log_run(const Options& o, std::uint64_t ran, const rhot::FrameLoop& frame_l
   }
 }
 
+// The headset's figures after the run; false where the session failed (it never showed a frame,
+// or the runtime lost it).
+bool report_headset(const rhot::XrHeadset& headset) {
+  spdlog::info(
+      "OpenXR: {} frames shown, {} submitted after their display time ({} through rhot's own work); {} OpenXR validation "
+      "message(s); {}",
+      headset.frames_submitted(), headset.frames_late(), headset.frames_late_own(), headset.validation_messages(),
+      headset.exit_reason().empty() ? "the session did not end" : headset.exit_reason());
+  if (headset.frames_submitted() == 0) {
+    spdlog::error("--xr: no frame reached the headset");
+    return false;
+  }
+  return !headset.lost();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -425,8 +472,17 @@ int main(int argc, char** argv) {
     o.render.eye_width_px = scene->settings.headset.eye_width_px;
     o.render.eye_height_px = scene->settings.headset.eye_height_px;
   }
+  std::unique_ptr<rhot::XrHeadset> headset;  // outlives the renderer
+  if (o.xr) {
+    auto opened = rhot::XrHeadset::create({"rhot-demo", o.render.validation});
+    if (!opened) {
+      spdlog::error("--xr: {}", opened.error());
+      return EXIT_FAILURE;
+    }
+    headset = std::move(*opened);
+  }
   std::unique_ptr<rhot::Window> window = open_window(o);
-  auto renderer = rhot::Renderer::create(o.render, window.get());
+  auto renderer = rhot::Renderer::create(o.render, window.get(), headset.get());
   if (!renderer) {
     spdlog::error("cannot start the renderer: {}", renderer.error());
     return EXIT_FAILURE;
@@ -467,11 +523,12 @@ int main(int argc, char** argv) {
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+  // A headset's runtime paces the frames (xrWaitFrame; HeadsetLoop.h); the simulation keeps its fixed step.
   o.loop.real_time = !o.headless;
-  rhot::FrameLoop frame_loop(runtime.world(), systems, o.loop);
+  rhot::FrameLoop frame_loop(runtime.world(), systems, rhot::headset_loop_settings(runtime, o.loop));
   const std::unique_ptr<rhot::Overlay> overlay = make_overlay(o, window.get(), **renderer, runtime, frame_loop);
-  const std::uint64_t ran =
-      frame_loop.run(o.frames, [&] { return !g_interrupted.load() && !(window && window->should_close()) && !runtime.tracking().ended(); });
+  const auto stop_asked = [&] { return g_interrupted.load() || (window && window->should_close()) || runtime.tracking().ended(); };
+  const std::uint64_t ran = rhot::run_on_headset(runtime, frame_loop, o.frames, stop_asked);
   for (const std::string& line : runtime.tracking().summary()) spdlog::info("{}", line);
   if (png_writer) {
     if (const auto failed = png_writer->finish(); failed && !capture_failed) {
@@ -485,5 +542,6 @@ int main(int argc, char** argv) {
   if (!write_outputs(o, window.get(), **renderer, frame_loop, runtime.latency())) return EXIT_FAILURE;
   const std::uint64_t validation = (*renderer)->validation_messages();
   if (validation > 0) spdlog::warn("{} Vulkan validation message(s)", validation);
-  return capture_failed ? EXIT_FAILURE : EXIT_SUCCESS;
+  const bool headset_failed = headset && !report_headset(*headset);
+  return capture_failed || headset_failed ? EXIT_FAILURE : EXIT_SUCCESS;
 }

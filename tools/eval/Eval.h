@@ -181,6 +181,7 @@ struct FrameOptions {
   std::string prediction = "on";
   bool gpu_timings = false;
   bool real_time = false;
+  bool xr = false;  // on the OpenXR runtime's headset: paced by it, predicted to its display time
 };
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading,
           const WorldFlags& world, const FrameOptions& options);

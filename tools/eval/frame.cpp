@@ -28,6 +28,8 @@
 #include "tracking/sim/SimulatedRig.h"
 
 #include "engine/app/FrameLoop.h"
+#include "engine/render/XrHeadset.h"
+#include "engine/runtime/HeadsetLoop.h"
 #include "engine/sim/Demo.h"
 #include "tools/eval/Eval.h"
 
@@ -58,7 +60,16 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
       return 1;
     }
   }
-  auto renderer = rhot::Renderer::create(render);
+  std::unique_ptr<rhot::XrHeadset> headset;  // outlives the renderer
+  if (options.xr) {
+    auto opened = rhot::XrHeadset::create({"rhot-eval", false});
+    if (!opened) {
+      std::cerr << "rhot-eval: --xr: " << opened.error() << "\n";
+      return 1;
+    }
+    headset = std::move(*opened);
+  }
+  auto renderer = rhot::Renderer::create(render, nullptr, headset.get());
   if (!renderer) {
     std::cerr << "rhot-eval: cannot start the renderer: " << renderer.error() << "\n";
     return 1;
@@ -88,12 +99,12 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   loop.rate_hz = scene->settings.headset.refresh_hz;
   loop.budget_ms = 1000.0 / loop.rate_hz;
   loop.real_time = options.real_time;
-  rhot::FrameLoop frame_loop((*demo)->world(), systems, loop);
-  // One run, so that a paced loop keeps one vsync grid.
-  frame_loop.run(static_cast<std::uint64_t>(frames), [&] {
+  rhot::FrameLoop frame_loop((*demo)->world(), systems, rhot::headset_loop_settings((*demo)->runtime(), loop));
+  // One run, so that a paced loop keeps one vsync grid (or, with --xr, one session).
+  rhot::run_on_headset((*demo)->runtime(), frame_loop, static_cast<std::uint64_t>(frames), [&] {
     const std::uint64_t done = frame_loop.frame_index();
     if (done > 0 && done % 90 == 0) std::cerr << "rhot-eval: frame " << done << " of " << frames << "\n";
-    return true;
+    return false;
   });
   nlohmann::json j = frame_loop.stats().to_json();
   // Latency (engine/runtime/Latency.h) and the drawn hands against the truth (engine/sim/Demo.h).
@@ -125,6 +136,16 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
     }
   }
   j["real_time"] = options.real_time;
+  if (headset) {
+    if (headset->frames_submitted() == 0) {
+      std::cerr << "rhot-eval: --xr: no frame reached the headset\n";
+      return 1;
+    }
+    j["xr"] = {{"runtime", headset->info().runtime},       {"system", headset->info().system},
+               {"refresh_hz", headset->info().refresh_hz}, {"frames_shown", headset->frames_submitted()},
+               {"frames_late", headset->frames_late()},    {"frames_late_own", headset->frames_late_own()},
+               {"session_end", headset->exit_reason()}};
+  }
   j["scene"] = scene_file;
   j["world"] = world_json(*world, world_flags.world);
   j["eye_px"] = {(*renderer)->eye_width_px(), (*renderer)->eye_height_px()};

@@ -371,6 +371,9 @@ CLI::App* add_frame_command(CLI::App& app, FrameArgs& a, bool& json) {
       ->check(CLI::IsMember({"on", "off"}));
   cmd->add_flag("--gpu-timings", a.options.gpu_timings, "GPU timestamps around each eye's pass: the GPU's time per eye");
   cmd->add_flag("--real-time", a.options.real_time, "pace frames to the headset's refresh as a headset would (default: back to back)");
+  cmd->add_flag("--xr", a.options.xr,
+                "on the headset of the OpenXR runtime (XR_RUNTIME_JSON): paced by it, at its eye size, the hands predicted to its display "
+                "time; --frames counts frames shown");
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }

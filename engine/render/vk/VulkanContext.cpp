@@ -111,7 +111,7 @@ std::expected<std::unique_ptr<Context>, std::string> Context::create(const Optio
   std::unique_ptr<Context> c(new Context());
   if (auto made = c->create_instance(options); !made) return std::unexpected(made.error());
   if (auto chosen = c->choose_device(options); !chosen) return std::unexpected(chosen.error());
-  if (auto made = c->create_device(); !made) return std::unexpected(made.error());
+  if (auto made = c->create_device(options); !made) return std::unexpected(made.error());
   spdlog::info("Vulkan device: {} ({}){}", c->device_name_, type_name(c->device_type_), c->validation_enabled_ ? ", validation on" : "");
   return c;
 }
@@ -152,7 +152,11 @@ std::expected<void, std::string> Context::create_instance(const Options& options
   dci.pfnUserCallback = &Context::on_debug_message;
   dci.pUserData = this;
   if (validation_enabled_) ici.pNext = &dci;  // also catches messages from instance creation itself
-  if (const VkResult r = vkCreateInstance(&ici, nullptr, &instance_); r != VK_SUCCESS) {
+  if (options.make_instance) {
+    auto made = options.make_instance(ici);
+    if (!made) return std::unexpected(made.error());
+    instance_ = *made;
+  } else if (const VkResult r = vkCreateInstance(&ici, nullptr, &instance_); r != VK_SUCCESS) {
     return std::unexpected(std::string("cannot create a Vulkan 1.1 instance: ") + result_string(r));
   }
   if (validation_enabled_) {
@@ -185,6 +189,14 @@ std::expected<void, std::string> Context::choose_device(const Options& options) 
   if (selector == "auto") {
     if (const char* env = std::getenv("RHOT_VK_DEVICE"); env != nullptr && *env != '\0') selector = env;
   }
+  VkPhysicalDevice required = VK_NULL_HANDLE;  // the headset's, where its runtime names one
+  if (options.physical_device) {
+    auto named = options.physical_device(instance_);
+    if (!named) return std::unexpected(named.error());
+    required = *named;
+    if (options.device != "auto") spdlog::warn("--device {} ignored: the headset's runtime chooses the Vulkan device", options.device);
+    selector = "auto";
+  }
   struct Candidate {
     VkPhysicalDevice device;
     VkPhysicalDeviceProperties props;
@@ -196,7 +208,7 @@ std::expected<void, std::string> Context::choose_device(const Options& options) 
     VkPhysicalDeviceProperties props;
     vkGetPhysicalDeviceProperties(devices[i], &props);
     listing += "\n  [" + std::to_string(i) + "] " + props.deviceName + " (" + type_name(props.deviceType) + ")";
-    if (props.apiVersion < VK_API_VERSION_1_1) continue;
+    if (props.apiVersion < VK_API_VERSION_1_1 || (required != VK_NULL_HANDLE && devices[i] != required)) continue;
     std::uint32_t nfam = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(devices[i], &nfam, nullptr);
     std::vector<VkQueueFamilyProperties> families(nfam);
@@ -230,6 +242,10 @@ std::expected<void, std::string> Context::choose_device(const Options& options) 
     }
     if (match) chosen = &cand;
   }
+  if (chosen == nullptr && required != VK_NULL_HANDLE) {
+    return std::unexpected(std::string("the Vulkan device the headset's runtime names offers no Vulkan 1.1 graphics; devices found:") +
+                           listing);
+  }
   if (chosen == nullptr) {
     return std::unexpected("no Vulkan device matches \"" + selector +
                            "\" (choose auto, gpu, cpu, an index or part of a "
@@ -258,7 +274,7 @@ std::expected<void, std::string> Context::choose_device(const Options& options) 
 
 // The logical device with one graphics queue (multiview enabled where supported) and the
 // command pool.
-std::expected<void, std::string> Context::create_device() {
+std::expected<void, std::string> Context::create_device(const Options& options) {
   const float priority = 1.0f;
   VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
   qci.queueFamilyIndex = queue_family_;
@@ -277,7 +293,11 @@ std::expected<void, std::string> Context::create_device() {
   dci2.pQueueCreateInfos = &qci;
   dci2.enabledExtensionCount = static_cast<std::uint32_t>(device_extensions.size());
   dci2.ppEnabledExtensionNames = device_extensions.data();
-  if (const VkResult r = vkCreateDevice(physical_, &dci2, nullptr, &device_); r != VK_SUCCESS) {
+  if (options.make_device) {
+    auto made = options.make_device(physical_, dci2);
+    if (!made) return std::unexpected(made.error());
+    device_ = *made;
+  } else if (const VkResult r = vkCreateDevice(physical_, &dci2, nullptr, &device_); r != VK_SUCCESS) {
     return std::unexpected("cannot create a Vulkan device on " + device_name_ + ": " + result_string(r));
   }
   vkGetDeviceQueue(device_, queue_family_, 0, &queue_);

@@ -50,6 +50,12 @@ class Context {
     std::vector<std::string> instance_extensions;  // e.g. what GLFW needs for a surface
     // Creates the window surface once the instance exists; absent for offscreen rendering.
     std::function<std::expected<VkSurfaceKHR, std::string>(VkInstance)> make_surface;
+    // A headset's OpenXR runtime (XR_KHR_vulkan_enable2): it creates the instance and the device
+    // from rhot's create-infos, adding what it needs, and names the physical device. All three or
+    // none.
+    std::function<std::expected<VkInstance, std::string>(const VkInstanceCreateInfo&)> make_instance;
+    std::function<std::expected<VkPhysicalDevice, std::string>(VkInstance)> physical_device;
+    std::function<std::expected<VkDevice, std::string>(VkPhysicalDevice, const VkDeviceCreateInfo&)> make_device;
   };
 
   [[nodiscard]] static std::expected<std::unique_ptr<Context>, std::string> create(const Options& options);
@@ -88,7 +94,7 @@ class Context {
   // create()'s steps, in order.
   [[nodiscard]] std::expected<void, std::string> create_instance(const Options& options);
   [[nodiscard]] std::expected<void, std::string> choose_device(const Options& options);
-  [[nodiscard]] std::expected<void, std::string> create_device();
+  [[nodiscard]] std::expected<void, std::string> create_device(const Options& options);
   std::uint32_t memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags properties) const;
   static VKAPI_ATTR VkBool32 VKAPI_CALL on_debug_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                          VkDebugUtilsMessageTypeFlagsEXT types,
