@@ -105,12 +105,37 @@ bool xr_layer_available(const char* name) {
   return std::any_of(layers.begin(), layers.end(), [&](const XrApiLayerProperties& l) { return std::strcmp(l.layerName, name) == 0; });
 }
 
-bool xr_view_finite(const XrView& v) {
-  const XrPosef& p = v.pose;
-  const float values[] = {p.orientation.x, p.orientation.y, p.orientation.z,  p.orientation.w, p.position.x,   p.position.y,
-                          p.position.z,    v.fov.angleLeft, v.fov.angleRight, v.fov.angleUp,   v.fov.angleDown};
-  return std::all_of(std::begin(values), std::end(values), [](float x) { return std::isfinite(x); });
+bool xr_pose_usable(const XrPosef& p) {
+  const float values[] = {p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w, p.position.x, p.position.y, p.position.z};
+  const float q = p.orientation.x * p.orientation.x + p.orientation.y * p.orientation.y + p.orientation.z * p.orientation.z +
+                  p.orientation.w * p.orientation.w;
+  // Finite, a rotation (not a zero quaternion), and within a kilometre of the space's origin.
+  return std::all_of(std::begin(values), std::end(values), [](float x) { return std::isfinite(x) && std::abs(x) < 1000.0f; }) && q > 0.5f &&
+         q < 2.0f;
 }
+
+// A view the renderer can draw: a usable pose and a field of view with its left edge left of its
+// right and its lower edge below its upper, every edge less than 89 degrees from the view axis.
+bool xr_view_usable(const XrView& v) {
+  const float limit = 89.0f * static_cast<float>(M_PI) / 180.0f;
+  const XrFovf& f = v.fov;
+  const float angles[] = {f.angleLeft, f.angleRight, f.angleUp, f.angleDown};
+  return xr_pose_usable(v.pose) &&
+         std::all_of(std::begin(angles), std::end(angles), [&](float a) { return std::isfinite(a) && std::abs(a) < limit; }) &&
+         f.angleLeft < f.angleRight && f.angleDown < f.angleUp;
+}
+
+bool finite(const glm::mat4& m) {
+  for (int c = 0; c < 4; ++c) {
+    for (int r = 0; r < 4; ++r) {
+      if (!std::isfinite(m[c][r])) return false;
+    }
+  }
+  return true;
+}
+
+// The session or the instance is gone: nothing more can be done with it.
+bool xr_lost(XrResult r) { return r == XR_ERROR_SESSION_LOST || r == XR_ERROR_INSTANCE_LOST || r == XR_ERROR_RUNTIME_FAILURE; }
 
 glm::mat4 xr_pose_matrix(const XrPosef& pose) {
   const glm::quat q(pose.orientation.w, pose.orientation.x, pose.orientation.y, pose.orientation.z);
@@ -176,6 +201,10 @@ std::expected<std::unique_ptr<XrHeadset>, std::string> XrHeadset::create(const X
   if (const XrResult r = xrCreateInstance(&ici, &impl->instance); XR_FAILED(r)) return std::unexpected(xr_no_runtime(r));
   XrInstance instance = impl->instance;
 
+  if (impl->info.validation_enabled && !debug_utils) {
+    spdlog::warn("OpenXR validation: the runtime lacks XR_EXT_debug_utils; the layer's messages go to its own output, uncounted");
+    impl->info.validation_enabled = false;
+  }
   if (debug_utils && impl->info.validation_enabled) {
     auto create_messenger = xr_proc<PFN_xrCreateDebugUtilsMessengerEXT>(instance, "xrCreateDebugUtilsMessengerEXT");
     XrDebugUtilsMessengerCreateInfoEXT mci{XR_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
@@ -185,7 +214,8 @@ std::expected<std::unique_ptr<XrHeadset>, std::string> XrHeadset::create(const X
     mci.userCallback = &on_xr_message;
     mci.userData = impl.get();
     if (create_messenger == nullptr || XR_FAILED(create_messenger(instance, &mci, &impl->messenger))) {
-      spdlog::warn("OpenXR validation: cannot create a debug messenger; the layer's messages go to its own output uncounted");
+      spdlog::warn("OpenXR validation: cannot create a debug messenger; the layer's messages go to its own output, uncounted");
+      impl->info.validation_enabled = false;
     }
   }
 
@@ -257,15 +287,14 @@ std::expected<VkInstance, std::string> XrHeadset::Impl::make_instance(const VkIn
   }
   const std::uint32_t wanted = create_info.pApplicationInfo != nullptr ? create_info.pApplicationInfo->apiVersion : VK_API_VERSION_1_0;
   const XrVersion as_xr = XR_MAKE_VERSION(VK_API_VERSION_MAJOR(wanted), VK_API_VERSION_MINOR(wanted), 0);
-  if (as_xr < XR_MAKE_VERSION(XR_VERSION_MAJOR(req.minApiVersionSupported), XR_VERSION_MINOR(req.minApiVersionSupported), 0) ||
-      XR_MAKE_VERSION(XR_VERSION_MAJOR(as_xr), XR_VERSION_MINOR(as_xr), 0) >
-          XR_MAKE_VERSION(XR_VERSION_MAJOR(req.maxApiVersionSupported), XR_VERSION_MINOR(req.maxApiVersionSupported), 0)) {
-    return std::unexpected("the OpenXR runtime takes Vulkan " + std::to_string(XR_VERSION_MAJOR(req.minApiVersionSupported)) + "." +
-                           std::to_string(XR_VERSION_MINOR(req.minApiVersionSupported)) + " to " +
-                           std::to_string(XR_VERSION_MAJOR(req.maxApiVersionSupported)) + "." +
-                           std::to_string(XR_VERSION_MINOR(req.maxApiVersionSupported)) + ", rhot's renderer uses " +
-                           std::to_string(VK_API_VERSION_MAJOR(wanted)) + "." + std::to_string(VK_API_VERSION_MINOR(wanted)));
-  }
+  const XrVersion min = XR_MAKE_VERSION(XR_VERSION_MAJOR(req.minApiVersionSupported), XR_VERSION_MINOR(req.minApiVersionSupported), 0);
+  const XrVersion max = XR_MAKE_VERSION(XR_VERSION_MAJOR(req.maxApiVersionSupported), XR_VERSION_MINOR(req.maxApiVersionSupported), 0);
+  const std::string range = std::to_string(XR_VERSION_MAJOR(min)) + "." + std::to_string(XR_VERSION_MINOR(min)) + " to " +
+                            std::to_string(XR_VERSION_MAJOR(max)) + "." + std::to_string(XR_VERSION_MINOR(max));
+  const std::string ours = std::to_string(VK_API_VERSION_MAJOR(wanted)) + "." + std::to_string(VK_API_VERSION_MINOR(wanted));
+  if (as_xr < min) return std::unexpected("the OpenXR runtime needs Vulkan " + range + ", rhot's renderer uses " + ours);
+  // Newer than the runtime has tested "might work" (the extension's words): said, not refused.
+  if (as_xr > max) spdlog::warn("OpenXR: the runtime has tested Vulkan {}; rhot's renderer uses {}", range, ours);
   XrVulkanInstanceCreateInfoKHR ci{XR_TYPE_VULKAN_INSTANCE_CREATE_INFO_KHR};
   ci.systemId = system;
   ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
@@ -334,6 +363,10 @@ std::expected<void, std::string> XrHeadset::Impl::start(const vk::Context& conte
   if (const XrResult r = xrCreateReferenceSpace(session, &rci, &stage); XR_FAILED(r)) {
     return std::unexpected("cannot create the OpenXR reference space: " + xr_result(instance, r));
   }
+  rci.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_VIEW;
+  if (const XrResult r = xrCreateReferenceSpace(session, &rci, &view); XR_FAILED(r)) {
+    return std::unexpected("cannot create the OpenXR view space: " + xr_result(instance, r));
+  }
   // The swapchain format: the renderer's own (a copy), else BGRA (a blit converts).
   xrEnumerateSwapchainFormats(session, 0, &count, nullptr);
   std::vector<std::int64_t> formats(count);
@@ -379,10 +412,13 @@ void XrHeadset::Impl::stop() {
     if (c.handle != XR_NULL_HANDLE) xrDestroySwapchain(c.handle);
   }
   chains.clear();
+  if (view != XR_NULL_HANDLE) xrDestroySpace(view);
+  view = XR_NULL_HANDLE;
   if (stage != XR_NULL_HANDLE) xrDestroySpace(stage);
   stage = XR_NULL_HANDLE;
   if (session != XR_NULL_HANDLE) {
-    if (running) xrEndSession(session);
+    // Ended only where the runtime is stopping it; destroying a running session is allowed.
+    if (running && state == XR_SESSION_STATE_STOPPING) xrEndSession(session);
     running = false;
     xrDestroySession(session);
   }
@@ -428,6 +464,7 @@ void XrHeadset::poll_events() {
   for (;;) {
     XrEventDataBuffer event{XR_TYPE_EVENT_DATA_BUFFER};
     const XrResult r = xrPollEvent(m.instance, &event);
+    if (XR_FAILED(r)) m.fail("xrPollEvent", r);
     if (r != XR_SUCCESS) break;  // XR_EVENT_UNAVAILABLE, or a failure
     switch (event.type) {
       case XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED: {
@@ -477,20 +514,21 @@ std::optional<XrFrameTiming> XrHeadset::begin_frame() {
   if (m.frame) m.end_frame();  // the renderer did not draw it: nothing new to show
   XrFrameState fs{XR_TYPE_FRAME_STATE};
   if (const XrResult r = xrWaitFrame(m.session, nullptr, &fs); XR_FAILED(r)) {
-    spdlog::error("OpenXR: xrWaitFrame failed: {}", xr_result(m.instance, r));
+    m.fail("xrWaitFrame", r);
     return std::nullopt;
   }
   const double begun = steady_now_s();
   if (const XrResult r = xrBeginFrame(m.session, nullptr); XR_FAILED(r)) {
-    spdlog::error("OpenXR: xrBeginFrame failed: {}", xr_result(m.instance, r));
+    m.fail("xrBeginFrame", r);
     return std::nullopt;
   }
   XrFrameTiming t;
   t.index = m.frames_begun++;
   t.should_render = fs.shouldRender == XR_TRUE;
   t.display_time = fs.predictedDisplayTime;
-  t.display_s = steady_s_from_xr_time(fs.predictedDisplayTime);
   t.period_s = static_cast<double>(fs.predictedDisplayPeriod) * 1e-9;
+  t.display_s = steady_s_from_xr_time(fs.predictedDisplayTime);
+  if (!std::isfinite(t.display_s)) t.display_s = begun + t.period_s;  // the conversion failed: a period after the wait
   // The refresh from the period (XR_FB_display_refresh_rate would say it too, but Monado's null
   // compositor advertises it and then calls a function it lacks).
   if (t.period_s > 1e-3 && t.period_s < 1.0) m.info.refresh_hz = 1.0 / t.period_s;
@@ -514,7 +552,7 @@ std::optional<StereoViews> XrHeadset::locate_views(double near_m, double far_m) 
   std::array<XrView, 2> views{XrView{XR_TYPE_VIEW}, XrView{XR_TYPE_VIEW}};
   if (const XrResult r = xrLocateViews(m.session, &li, &vs, 2, &count, views.data()); XR_FAILED(r) || count != 2) return std::nullopt;
   const XrViewStateFlags needed = XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT;
-  if ((vs.viewStateFlags & needed) != needed || !xr_view_finite(views[0]) || !xr_view_finite(views[1])) return std::nullopt;
+  if ((vs.viewStateFlags & needed) != needed || !xr_view_usable(views[0]) || !xr_view_usable(views[1])) return std::nullopt;
   StereoViews out;
   for (int eye = 0; eye < 2; ++eye) {
     const XrView& v = views[static_cast<std::size_t>(eye)];
@@ -524,18 +562,42 @@ std::optional<StereoViews> XrHeadset::locate_views(double near_m, double far_m) 
     const EyeFovDeg fov{-static_cast<double>(v.fov.angleLeft) * kDeg, static_cast<double>(v.fov.angleRight) * kDeg,
                         static_cast<double>(v.fov.angleUp) * kDeg, -static_cast<double>(v.fov.angleDown) * kDeg};
     out.clip_from_eye[eye] = projection_from_fov(fov, near_m, far_m);
+    if (!finite(out.eye_from_world[eye]) || !finite(out.clip_from_eye[eye])) return std::nullopt;
   }
   m.views = views;
   m.views_located = true;
   return out;
 }
 
-void XrHeadset::set_world_from_stage(const glm::mat4& world_from_stage) { impl_->world_from_stage = world_from_stage; }
+std::optional<glm::mat4> XrHeadset::stage_from_head(double steady_s) {
+  Impl& m = *impl_;
+  if (m.view == XR_NULL_HANDLE || m.stage == XR_NULL_HANDLE) return std::nullopt;
+  XrSpaceLocation location{XR_TYPE_SPACE_LOCATION};
+  if (XR_FAILED(xrLocateSpace(m.view, m.stage, xr_time_from_steady_s(steady_s), &location))) return std::nullopt;
+  const XrSpaceLocationFlags needed = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT;
+  if ((location.locationFlags & needed) != needed) return std::nullopt;
+  if (!xr_pose_usable(location.pose)) return std::nullopt;
+  return xr_pose_matrix(location.pose);
+}
+
+std::expected<void, std::string> XrHeadset::set_world_from_stage(const glm::mat4& world_from_stage) {
+  const glm::mat3 r(world_from_stage);
+  const glm::mat3 off = glm::transpose(r) * r - glm::mat3(1.0f);
+  float error = std::abs(glm::determinant(r) - 1.0f) + std::abs(world_from_stage[0][3]) + std::abs(world_from_stage[1][3]) +
+                std::abs(world_from_stage[2][3]) + std::abs(world_from_stage[3][3] - 1.0f);
+  for (int c = 0; c < 3; ++c) error += std::abs(off[c][0]) + std::abs(off[c][1]) + std::abs(off[c][2]);
+  if (!finite(world_from_stage) || !(error < 1e-4f)) {
+    return std::unexpected(std::string("world_from_stage is not a rigid transform (finite, a rotation and a translation)"));
+  }
+  impl_->world_from_stage = world_from_stage;
+  return {};
+}
+
 const glm::mat4& XrHeadset::world_from_stage() const { return impl_->world_from_stage; }
 
 double XrHeadset::steady_s_from_xr_time(std::int64_t time) const {
   timespec ts{};
-  if (XR_FAILED(impl_->to_timespec(impl_->instance, time, &ts))) return 0.0;
+  if (XR_FAILED(impl_->to_timespec(impl_->instance, time, &ts))) return std::nan("");
   return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
 }
 
@@ -557,26 +619,45 @@ bool XrHeadset::Impl::acquire() {
   if (!frame || !frame->should_render || !views_located || chains.empty()) return false;
   for (Chain& c : chains) {
     XrSwapchainImageAcquireInfo ai{XR_TYPE_SWAPCHAIN_IMAGE_ACQUIRE_INFO};
-    XrResult r = xrAcquireSwapchainImage(c.handle, &ai, &c.acquired);
-    if (XR_SUCCEEDED(r)) {
-      XrSwapchainImageWaitInfo wi{XR_TYPE_SWAPCHAIN_IMAGE_WAIT_INFO};
-      wi.timeout = 100'000'000;  // 100 ms: far longer than a frame
-      r = xrWaitSwapchainImage(c.handle, &wi);
-      c.held = true;  // acquired: it must be released whether the wait succeeded or not
-      if (r == XR_TIMEOUT_EXPIRED) r = XR_ERROR_RUNTIME_FAILURE;
-    }
-    if (XR_FAILED(r) || c.acquired >= c.images.size()) {
-      spdlog::warn("OpenXR: cannot acquire a swapchain image ({}); the frame shows nothing new", xr_result(instance, r));
-      for (Chain& held : chains) {
-        if (!held.held) continue;
-        XrSwapchainImageReleaseInfo ri{XR_TYPE_SWAPCHAIN_IMAGE_RELEASE_INFO};
-        xrReleaseSwapchainImage(held.handle, &ri);
-        held.held = false;
-      }
+    if (const XrResult r = xrAcquireSwapchainImage(c.handle, &ai, &c.acquired); XR_FAILED(r) || c.acquired >= c.images.size()) {
+      // Nothing acquired from this one; those before it are waited for and released unwritten.
+      fail("xrAcquireSwapchainImage", XR_FAILED(r) ? r : XR_ERROR_RUNTIME_FAILURE);
+      release();
       return false;
     }
+    // An acquired image may be released only once waited for: a timeout is waited out again (the
+    // runtime still has the image in use), up to a second.
+    XrSwapchainImageWaitInfo wi{XR_TYPE_SWAPCHAIN_IMAGE_WAIT_INFO};
+    wi.timeout = 100'000'000;  // 100 ms
+    XrResult r = XR_TIMEOUT_EXPIRED;
+    for (int tries = 0; tries < 10 && r == XR_TIMEOUT_EXPIRED; ++tries) r = xrWaitSwapchainImage(c.handle, &wi);
+    if (r != XR_SUCCESS) {
+      // Stuck: this image can be neither written nor released, and the session cannot go on.
+      fail("xrWaitSwapchainImage", r == XR_TIMEOUT_EXPIRED ? XR_ERROR_RUNTIME_FAILURE : r);
+      release();
+      return false;
+    }
+    c.held = true;
   }
   return true;
+}
+
+void XrHeadset::Impl::release() {
+  for (Chain& c : chains) {
+    if (!c.held) continue;
+    XrSwapchainImageReleaseInfo ri{XR_TYPE_SWAPCHAIN_IMAGE_RELEASE_INFO};
+    xrReleaseSwapchainImage(c.handle, &ri);
+    c.held = false;
+  }
+}
+
+void XrHeadset::Impl::fail(const char* call, XrResult r) {
+  spdlog::error("OpenXR: {} failed: {}", call, xr_result(instance, r));
+  if (xr_lost(r) || ++failures >= 10) {
+    exit = true;
+    lost = true;
+    if (exit_reason.empty()) exit_reason = std::string("the OpenXR session failed (") + call + ": " + xr_result(instance, r) + ")";
+  }
 }
 
 void XrHeadset::Impl::record_copy(VkCommandBuffer cmd, VkImage eyes, int eye_width, int eye_height) const {
@@ -627,14 +708,8 @@ void XrHeadset::Impl::record_copy(VkCommandBuffer cmd, VkImage eyes, int eye_wid
 
 void XrHeadset::Impl::end_frame() {
   if (!frame) return;
-  bool drawn = false;
-  for (Chain& c : chains) {
-    if (!c.held) continue;
-    XrSwapchainImageReleaseInfo ri{XR_TYPE_SWAPCHAIN_IMAGE_RELEASE_INFO};
-    xrReleaseSwapchainImage(c.handle, &ri);
-    c.held = false;
-    drawn = true;
-  }
+  const bool drawn = std::any_of(chains.begin(), chains.end(), [](const Chain& c) { return c.held; });
+  release();
   std::array<XrCompositionLayerProjectionView, 2> pv{};
   XrCompositionLayerProjection layer{XR_TYPE_COMPOSITION_LAYER_PROJECTION};
   const XrCompositionLayerBaseHeader* layers[] = {reinterpret_cast<const XrCompositionLayerBaseHeader*>(&layer)};
@@ -656,8 +731,9 @@ void XrHeadset::Impl::end_frame() {
   ei.layers = drawn ? layers : nullptr;
   const double ended_s = steady_now_s();
   if (const XrResult r = xrEndFrame(session, &ei); XR_FAILED(r)) {
-    spdlog::error("OpenXR: xrEndFrame failed: {}", xr_result(instance, r));
+    fail("xrEndFrame", r);
   } else if (drawn) {
+    failures = 0;
     ++submitted;
     if (ended_s > frame->display_s) {
       ++late;

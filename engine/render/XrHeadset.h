@@ -45,8 +45,8 @@ struct XrHeadsetInfo {
   std::string system;   // the headset's name
   int recommended_width_px = 0;
   int recommended_height_px = 0;
-  double refresh_hz = 0.0;  // 1 / the predicted display period of the last frame begun (0 before the first)
-  bool validation_enabled = false;
+  double refresh_hz = 0.0;          // 1 / the predicted display period of the last frame begun (0 before the first)
+  bool validation_enabled = false;  // the core validation layer is on and its messages are counted
 };
 
 // A frame the runtime asked for (xrWaitFrame) and that has begun (xrBeginFrame).
@@ -101,13 +101,21 @@ class XrHeadset {
   // know where the eyes are (their poses are not valid).
   std::optional<StereoViews> locate_views(double near_m, double far_m);
 
+  // The head (the runtime's VIEW space: between the eyes, +Y up, looking down -Z) in its STAGE
+  // space at a moment on the steady clock, such as when a camera exposed (the runtime keeps a
+  // short history and predicts a little ahead). nullopt with no session, or where the runtime does
+  // not know where the head is (its pose is not valid or not finite).
+  std::optional<glm::mat4> stage_from_head(double steady_s);
+
   // rhot's world from the runtime's STAGE space (the rig's registration to the headset; identity
   // until one is set: both have +Y up and the floor at y = 0).
-  void set_world_from_stage(const glm::mat4& world_from_stage);
+  // Refused (and nothing changed) where it is not a rigid transform.
+  [[nodiscard]] std::expected<void, std::string> set_world_from_stage(const glm::mat4& world_from_stage);
   const glm::mat4& world_from_stage() const;
 
   // Converts between the steady clock (seconds) and the runtime's XrTime
-  // (XR_KHR_convert_timespec_time: both are CLOCK_MONOTONIC on Linux).
+  // (XR_KHR_convert_timespec_time: both are CLOCK_MONOTONIC on Linux). NaN, or 0, where the
+  // runtime cannot convert.
   double steady_s_from_xr_time(std::int64_t time) const;
   std::int64_t xr_time_from_steady_s(double steady_s) const;
 

@@ -125,12 +125,9 @@ void Runtime::wait_for_headset() {
   if (xr == nullptr) return;
   headset_waited_ = true;
   xr->poll_events();
-  if (xr->session_running()) {
-    (void)xr->begin_frame();
-  } else if (!xr->should_exit()) {
-    // No frame to wait for: idle rather than spin until the session runs.
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
+  // No frame to wait for (the session not running, or the runtime failing): idle rather than spin.
+  const bool waited = xr->session_running() && xr->begin_frame().has_value();
+  if (!waited && !xr->should_exit()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
 }
 
 void Runtime::advance(const FrameContext& f) {

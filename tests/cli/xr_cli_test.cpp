@@ -61,4 +61,34 @@ TEST(DemoXr, MirrorNeedsAHeadset) {
       << r.output;
 }
 
+TEST(CalibHeadset, RegistersTheSimulatedRigToTheRuntimesStageFromThirtySecondsOfItsMovingHead) {
+  RHOT_REQUIRE_XR_RUNTIME(runtime);
+  const fs::path dir = fs::path(::testing::TempDir()) / "rhot_xr_calib";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path out = dir / "headset.yaml";
+  const auto r = rhot::test::run_program("rhot-calib", "headset --simulate --sigma 0.5 --seconds 30 --json --out " + out.string(),
+                                         "2>" + (dir / "log.txt").string(), "env " + rhot::test::xr_test_environment(runtime));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  // 30 s at the runtime's 20 Hz, the star seen in nearly every frame.
+  EXPECT_GE(j.at("samples").get<int>(), 500);
+  const nlohmann::json& err = j.at("truth_error").at("world_from_stage");
+  EXPECT_LT(err.at("rotation_deg").get<double>(), 0.2) << r.output;
+  EXPECT_LT(err.at("translation_mm").get<double>(), 2.0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "headset_residuals.png"));
+  // The demo takes the registration; a file that is not one is refused naming it.
+  const auto demo = rhot::test::run_program("rhot-demo", "--xr --frames 10 --registration " + out.string(), "2>&1",
+                                            "env " + rhot::test::xr_test_environment(runtime));
+  EXPECT_EQ(demo.exit_code, 0) << demo.output;
+  EXPECT_NE(demo.output.find("the rig registered to the headset by " + out.string()), std::string::npos) << demo.output;
+  const fs::path bad = dir / "bad.yaml";
+  std::ofstream(bad) << "%YAML:1.0\n---\nrms_mm: 1.0\n";
+  const auto refused = rhot::test::run_program("rhot-demo", "--xr --frames 10 --registration " + bad.string(), "2>&1",
+                                               "env " + rhot::test::xr_test_environment(runtime));
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.output.find("[error] --registration: " + bad.string() + ": world_from_stage: missing\n"), std::string::npos)
+      << refused.output;
+}
+
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include <expected>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@
 #include <spdlog/spdlog.h>
 
 #include "tracking/camera/Camera.h"
+#include "tracking/source/FrameSource.h"
 
 namespace rhot::calib_tool {
 
@@ -33,6 +35,7 @@ void add_world(CLI::App& app, int& exit_code);
 void add_merge(CLI::App& app, int& exit_code);
 void add_colours(CLI::App& app, int& exit_code);
 void add_hand_model(CLI::App& app, int& exit_code);
+void add_headset(CLI::App& app, int& exit_code);
 // `simulate` has subcommands of its own: wand, lframe, floor (simulate.cpp) and board.
 void add_simulate(CLI::App& app, int& exit_code);
 void add_simulate_board(CLI::App& simulate, int& exit_code);
@@ -52,6 +55,12 @@ void make_parent_folder(const std::string& file);
 // a file gathering every camera's intrinsics at the world origin is taken as it is. Fails on a
 // file that does not load, or two cameras of one name.
 [[nodiscard]] std::expected<rhot::CameraRig, std::string> load_cameras(const std::vector<std::string>& files);
+
+// The frame source --source names (record.cpp): video:DEV[,DEV...] (capture devices, video files
+// or image sequences, bright blobs found with `blob_threshold`, -1 automatic) or
+// nodes:ENDPOINT[,ENDPOINT...] (camera nodes). Fails naming what is wrong.
+[[nodiscard]] std::expected<std::unique_ptr<FrameSource>, std::string> open_frame_source(const CameraRig& rig, const std::string& source,
+                                                                                         int blob_threshold);
 
 // Prints a report as indented JSON on stdout.
 void print_json(const nlohmann::json& report);

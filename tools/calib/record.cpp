@@ -38,37 +38,12 @@ int run(const RecordOptions& o) {
     spdlog::error("{}", rig.error());
     return 1;
   }
-  std::unique_ptr<FrameSource> source;
-  if (o.source.rfind("nodes:", 0) == 0) {
-    const auto endpoints = parse_node_endpoints(o.source.substr(6));
-    if (!endpoints) {
-      spdlog::error("--source: {}", endpoints.error());
-      return 1;
-    }
-    auto nodes = NodeSource::open(*rig, *endpoints);
-    if (!nodes) {
-      spdlog::error("{}", nodes.error());
-      return 1;
-    }
-    source = std::move(*nodes);
-  } else if (o.source.rfind("video:", 0) == 0) {
-    const auto devices = parse_video_devices(o.source.substr(6));
-    if (!devices) {
-      spdlog::error("--source: {}", devices.error());
-      return 1;
-    }
-    VideoSourceSettings settings;
-    settings.detector.threshold = o.blob_threshold;
-    auto video = VideoSource::open(*rig, *devices, settings);
-    if (!video) {
-      spdlog::error("{}", video.error());
-      return 1;
-    }
-    source = std::make_unique<VideoSource>(std::move(*video));
-  } else {
-    spdlog::error("--source: expected video:DEV[,DEV...] or nodes:ENDPOINT[,ENDPOINT...], got \"{}\"", o.source);
+  auto opened = open_frame_source(*rig, o.source, o.blob_threshold);
+  if (!opened) {
+    spdlog::error("{}", opened.error());
     return 1;
   }
+  std::unique_ptr<FrameSource> source = std::move(*opened);
   Detections d;
   d.camera_count = static_cast<int>(rig->cameras.size());
   long frame = 0;
@@ -103,6 +78,27 @@ int run(const RecordOptions& o) {
 }
 
 }  // namespace
+
+std::expected<std::unique_ptr<FrameSource>, std::string> open_frame_source(const CameraRig& rig, const std::string& source,
+                                                                           int blob_threshold) {
+  if (source.rfind("nodes:", 0) == 0) {
+    const auto endpoints = parse_node_endpoints(source.substr(6));
+    if (!endpoints) return std::unexpected("--source: " + endpoints.error());
+    auto nodes = NodeSource::open(rig, *endpoints);
+    if (!nodes) return std::unexpected(nodes.error());
+    return std::unique_ptr<FrameSource>(std::move(*nodes));
+  }
+  if (source.rfind("video:", 0) == 0) {
+    const auto devices = parse_video_devices(source.substr(6));
+    if (!devices) return std::unexpected("--source: " + devices.error());
+    VideoSourceSettings settings;
+    settings.detector.threshold = blob_threshold;
+    auto video = VideoSource::open(rig, *devices, settings);
+    if (!video) return std::unexpected(video.error());
+    return std::unique_ptr<FrameSource>(std::make_unique<VideoSource>(std::move(*video)));
+  }
+  return std::unexpected("--source: expected video:DEV[,DEV...] or nodes:ENDPOINT[,ENDPOINT...], got \"" + source + "\"");
+}
 
 void add_record(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<RecordOptions>();

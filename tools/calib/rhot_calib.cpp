@@ -7,6 +7,7 @@
 //   rhot-calib merge RIG_A.yaml RIG_B.yaml --out RIG.yaml [--json]
 //   rhot-calib colours IMAGES... | --source video:DEV --out colours.json [--expect red,...] [--mask FILE...] [--json]
 //   rhot-calib hand-model --take TAKE.c3d|TAKE.tsv --out MODEL.json [--fit-seconds S] [--json]
+//   rhot-calib headset --simulate | --rig RIG.yaml --source SRC --star ID --out headset.yaml [--seconds 30] [--json]
 //   rhot-calib simulate wand|lframe|floor|board ...
 //
 // docs/calibration.md walks through them in order.
@@ -84,6 +85,7 @@ int main(int argc, char** argv) {
   rhot::calib_tool::add_merge(app, exit_code);
   rhot::calib_tool::add_colours(app, exit_code);
   rhot::calib_tool::add_hand_model(app, exit_code);
+  rhot::calib_tool::add_headset(app, exit_code);
   rhot::calib_tool::add_simulate(app, exit_code);
   try {
     app.parse(argc, argv);

@@ -35,6 +35,8 @@
 #include "engine/render/SceneRenderer.h"
 #include "engine/render/Window.h"
 #include "engine/render/XrHeadset.h"
+#include "engine/math/EigenGlm.h"
+#include "tracking/calib/HeadsetRegistration.h"
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/Demo.h"
 #include "tracking/sim/Realism.h"
@@ -110,8 +112,9 @@ struct Options {
   std::string window_capture;
   std::string prediction = "on";
   bool no_overlay = false;
-  bool xr = false;      // on a headset through OpenXR
-  bool mirror = false;  // with xr: the eyes in a desktop window too
+  bool xr = false;           // on a headset through OpenXR
+  bool mirror = false;       // with xr: the eyes in a desktop window too
+  std::string registration;  // with xr: the rig registered to the headset (rhot-calib headset)
 };
 
 void add_options(CLI::App& cli, Options& o) {
@@ -203,6 +206,8 @@ void add_options(CLI::App& cli, Options& o) {
                "Show on a headset through the active OpenXR runtime (or the one XR_RUNTIME_JSON names; docs/openxr.md). "
                "--frames N: end the session after N frames shown");
   cli.add_flag("--mirror", o.mirror, "With --xr: also show both eyes in a desktop window");
+  cli.add_option("--registration", o.registration,
+                 "With --xr: the rig registered to the headset's space (rhot-calib headset --out FILE); default: the two taken as one");
 }
 
 // --stats FILE is written after the run, so whether it can be written is checked before: a long run
@@ -289,6 +294,10 @@ bool resolve_options(Options& o) {
   }
   if (o.mirror && !o.xr) {
     spdlog::error("--mirror: needs --xr (without a headset the window shows the eyes anyway)");
+    return false;
+  }
+  if (!o.registration.empty() && !o.xr) {
+    spdlog::error("--registration: needs --xr (it places the rig in a headset's space)");
     return false;
   }
   if (o.xr) {
@@ -480,6 +489,19 @@ int main(int argc, char** argv) {
       return EXIT_FAILURE;
     }
     headset = std::move(*opened);
+    if (!o.registration.empty()) {
+      const auto registration = rhot::read_headset_registration(o.registration);
+      if (!registration) {
+        spdlog::error("--registration: {}", registration.error());
+        return EXIT_FAILURE;
+      }
+      if (const auto set = headset->set_world_from_stage(rhot::to_glm(registration->world_from_stage)); !set) {
+        spdlog::error("--registration: {}: {}", o.registration, set.error());
+        return EXIT_FAILURE;
+      }
+      spdlog::info("the rig registered to the headset by {} ({} samples, {:.2f} mm RMS)", o.registration, registration->samples,
+                   registration->rms_mm);
+    }
   }
   std::unique_ptr<rhot::Window> window = open_window(o);
   auto renderer = rhot::Renderer::create(o.render, window.get(), headset.get());

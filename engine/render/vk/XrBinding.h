@@ -51,6 +51,7 @@ struct XrHeadset::Impl {
 
   XrSession session = XR_NULL_HANDLE;
   XrSpace stage = XR_NULL_HANDLE;
+  XrSpace view = XR_NULL_HANDLE;  // the head
   XrSessionState state = XR_SESSION_STATE_UNKNOWN;
   bool running = false;
   bool exit = false;
@@ -70,6 +71,7 @@ struct XrHeadset::Impl {
   std::uint64_t submitted = 0;
   std::uint64_t late = 0;
   std::uint64_t late_own = 0;
+  int failures = 0;  // calls failed since the last frame shown
 
   ~Impl();
 
@@ -92,6 +94,11 @@ struct XrHeadset::Impl {
   // Releases the images and ends the frame: with the projection layer where images were
   // acquired, else with none.
   void end_frame();
+  // Releases the images held (acquired and waited for).
+  void release();
+  // Logs a failed call; a lost session or instance, or ten failures without a frame shown between
+  // them, ends the run as lost.
+  void fail(const char* call, XrResult r);
 
   void handle_state(XrSessionState next);
 };
