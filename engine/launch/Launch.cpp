@@ -118,6 +118,8 @@ std::expected<std::unique_ptr<Launch>, std::string> Launch::create(const SceneDe
   rs.debug = settings.debug;
   rs.predict = settings.predict;
   rs.latency_window_frames = settings.latency_window_frames;
+  rs.publish_hands = settings.publish_hands;
+  rs.world_from_stage = settings.world_from_stage;
   auto runtime = Runtime::create(scene, renderer, rs, make_tracking);
   if (!runtime) return std::unexpected(runtime.error());
   launched->runtime_ = std::move(*runtime);

@@ -42,6 +42,8 @@ struct LaunchSettings {
   double speed = 1.0;               // replay speed (2: twice as fast)
   bool predict = true;              // RuntimeSettings::predict: draw the hands at the display time
   std::size_t latency_window_frames = 65536;  // RuntimeSettings::latency_window_frames
+  bool publish_hands = true;                  // RuntimeSettings::publish_hands: for rhot's OpenXR layer
+  Rigid3d world_from_stage;                   // RuntimeSettings::world_from_stage (rhot-calib headset)
   std::filesystem::path record;               // write every frame's hands and tracked objects here
   std::string stream;                         // send every frame's hands and objects to osc://HOST:PORT[,vmc] (engine/stream)
   // Real cameras: one OpenCV device per rig camera, in rig order (an index such as "0", a video

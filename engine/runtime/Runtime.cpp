@@ -5,6 +5,8 @@
 #include <cmath>
 #include <thread>
 
+#include <spdlog/spdlog.h>
+
 #include "base/Check.h"
 #include "base/SteadyClock.h"
 #include "engine/core/Transform.h"
@@ -12,6 +14,7 @@
 #include "engine/render/StereoCamera.h"
 #include "engine/render/XrHeadset.h"
 #include "engine/scene/SceneLoader.h"
+#include "tracking/hand/JointFrames.h"
 #include "tracking/rigid/StarSet.h"
 
 namespace rhot {
@@ -76,6 +79,15 @@ std::expected<std::unique_ptr<Runtime>, std::string> Runtime::create(const Scene
                            }
                          }}});
   r->hand_motion_.assign(2, MotionPredictor(kHandJointCount));
+  if (settings.publish_hands) {
+    auto writer = HandShareWriter::open(hand_share_name());
+    if (writer) {
+      r->hand_share_ = std::move(*writer);
+      r->stages_.push_back({{"publish", [self](double) { self->publish(); }}});
+    } else {
+      spdlog::warn("the hands are not published for other processes: {}", writer.error());
+    }
+  }
   if (r->stream_) {
     r->stages_.push_back({{"stream", [self](double) { self->stream_->send(self->tracking_->results(), self->stream_names_); }}});
   }
@@ -179,6 +191,48 @@ void Runtime::record() {
     events.push_back({event_name(e.type), *e.hand == HandSide::kLeft ? "left" : "right", name_of(e.object), e.reason});
   }
   recorder_->record(tracking_->results(), holding, events);
+}
+
+void Runtime::publish() {
+  const TrackingResults& results = tracking_->results();
+  HandShareSnapshot snap{};
+  snap.capture_s = std::isfinite(results.capture_steady_s) ? results.capture_steady_s : frame_start_s_;
+  snap.published_s = steady_now_s();
+  snap.frame = frames_;
+  const Eigen::Matrix4f w = settings_.world_from_stage.matrix().cast<float>();
+  std::copy(w.data(), w.data() + 16, snap.world_from_stage);  // Eigen is column-major, as the format
+  for (std::size_t h = 0; h < 2; ++h) {
+    const HandInput& in = results.hands[h];
+    HandShareHand& out = snap.hands[h];
+    if (!in.seen || !in.world_from_hand.is_finite()) continue;
+    const auto orientations = joint_orientations(in.world_from_hand.rotation, in.joints_world);
+    bool finite = true;
+    for (std::size_t j = 0; j < kHandJointCount; ++j) {
+      HandShareJoint& joint = out.joints[j];
+      const Eigen::Vector3d v = hand_motion_[h].velocity(j);
+      const Eigen::Quaterniond& q = orientations[j];
+      const double values[] = {in.joints_world[j].x(),
+                               in.joints_world[j].y(),
+                               in.joints_world[j].z(),
+                               q.x(),
+                               q.y(),
+                               q.z(),
+                               q.w(),
+                               in.radius_m[j],
+                               v.x(),
+                               v.y(),
+                               v.z()};
+      float* fields[] = {&joint.position[0],    &joint.position[1],    &joint.position[2],    &joint.orientation[0],
+                         &joint.orientation[1], &joint.orientation[2], &joint.orientation[3], &joint.radius,
+                         &joint.velocity[0],    &joint.velocity[1],    &joint.velocity[2]};
+      for (std::size_t k = 0; k < std::size(values); ++k) {
+        finite = finite && std::isfinite(values[k]);
+        *fields[k] = static_cast<float>(values[k]);
+      }
+    }
+    out.tracked = finite ? 1u : 0u;  // a hand with anything not finite is not published
+  }
+  hand_share_->publish(snap);
 }
 
 void Runtime::render() {

@@ -11,6 +11,8 @@
 //   record      with RuntimeSettings::record: the frame's results appended to a recording
 //   stream      with RuntimeSettings::stream: the frame's results handed to the OSC stream
 //               (engine/stream/OscStream.h: sent off the frame thread)
+//   publish     with RuntimeSettings::publish_hands: the hands into shared memory for other
+//               processes, such as rhot's OpenXR layer (engine/stream/HandShare.h)
 //   transforms  world transforms of the hierarchy
 //   physics     hand colliders, grasping, Bullet, interactions (reads Hand, writes HandBody)
 //   render      both eyes, drawn from the components (with a renderer)
@@ -43,6 +45,7 @@
 #include "engine/tracked/ResultSource.h"
 #include "engine/tracked/SessionRecorder.h"
 #include "engine/tracked/TrackedObjects.h"
+#include "engine/stream/HandShare.h"
 #include "engine/stream/OscStream.h"
 
 namespace rhot {
@@ -66,6 +69,12 @@ struct RuntimeSettings {
   // Latency percentiles (and GPU times) are over this many of the last frames; memory grows with
   // it, about 40 bytes a frame.
   std::size_t latency_window_frames = 65536;
+  // Publish every frame's hands for other processes on this machine (engine/stream/HandShare.h:
+  // rhot's OpenXR layer reads them), in the shared memory hand_share_name() names. A failure to
+  // publish is logged once and the runtime goes on without.
+  bool publish_hands = true;
+  // The rig registered to a headset's STAGE space (rhot-calib headset), published with the hands.
+  Rigid3d world_from_stage;
 };
 
 // A frame the headset has shown, once the GPU has finished it: its moments (Latency.h), and the
@@ -163,7 +172,8 @@ class Runtime {
   };
   void advance(const FrameContext& f);
   void render();
-  void record();  // the "record" stage: this frame's tracking and grasps into the recording
+  void record();   // the "record" stage: this frame's tracking and grasps into the recording
+  void publish();  // the "publish" stage: this frame's hands into the shared memory
   // Frames the renderer has finished since the last call: displayed, measured, observed.
   void collect_displayed();
   Entity hand_entity(HandSide side);
@@ -176,6 +186,7 @@ class Runtime {
   std::unique_ptr<HandPhysics> physics_;
   std::optional<SessionRecorder> recorder_;
   std::unique_ptr<OscStream> stream_;
+  std::unique_ptr<HandShareWriter> hand_share_;
   std::map<int, std::string> stream_names_;  // tracked objects' names by star id
   std::vector<Stage> stages_;
   Renderer* renderer_ = nullptr;

@@ -114,7 +114,8 @@ struct Options {
   bool no_overlay = false;
   bool xr = false;           // on a headset through OpenXR
   bool mirror = false;       // with xr: the eyes in a desktop window too
-  std::string registration;  // with xr: the rig registered to the headset (rhot-calib headset)
+  std::string registration;  // the rig registered to the headset (rhot-calib headset)
+  bool no_publish = false;
 };
 
 void add_options(CLI::App& cli, Options& o) {
@@ -207,7 +208,10 @@ void add_options(CLI::App& cli, Options& o) {
                "--frames N: end the session after N frames shown");
   cli.add_flag("--mirror", o.mirror, "With --xr: also show both eyes in a desktop window");
   cli.add_option("--registration", o.registration,
-                 "With --xr: the rig registered to the headset's space (rhot-calib headset --out FILE); default: the two taken as one");
+                 "The rig registered to the headset's space (rhot-calib headset --out FILE), for --xr and the published hands; default: "
+                 "the two taken as one");
+  cli.add_flag("--no-publish", o.no_publish,
+               "Do not publish the hands for other processes (rhot's OpenXR layer gives them to OpenXR applications; docs/openxr.md)");
 }
 
 // --stats FILE is written after the run, so whether it can be written is checked before: a long run
@@ -296,10 +300,7 @@ bool resolve_options(Options& o) {
     spdlog::error("--mirror: needs --xr (without a headset the window shows the eyes anyway)");
     return false;
   }
-  if (!o.registration.empty() && !o.xr) {
-    spdlog::error("--registration: needs --xr (it places the rig in a headset's space)");
-    return false;
-  }
+  o.demo.publish_hands = !o.no_publish;
   if (o.xr) {
     // The headset is the display; a window only as its mirror. The runtime's recommended eye size
     // is used, and the session runs until the runtime ends it, --frames are shown or it is stopped.
@@ -489,19 +490,22 @@ int main(int argc, char** argv) {
       return EXIT_FAILURE;
     }
     headset = std::move(*opened);
-    if (!o.registration.empty()) {
-      const auto registration = rhot::read_headset_registration(o.registration);
-      if (!registration) {
-        spdlog::error("--registration: {}", registration.error());
-        return EXIT_FAILURE;
-      }
+  }
+  if (!o.registration.empty()) {
+    const auto registration = rhot::read_headset_registration(o.registration);
+    if (!registration) {
+      spdlog::error("--registration: {}", registration.error());
+      return EXIT_FAILURE;
+    }
+    if (headset) {
       if (const auto set = headset->set_world_from_stage(rhot::to_glm(registration->world_from_stage)); !set) {
         spdlog::error("--registration: {}: {}", o.registration, set.error());
         return EXIT_FAILURE;
       }
-      spdlog::info("the rig registered to the headset by {} ({} samples, {:.2f} mm RMS)", o.registration, registration->samples,
-                   registration->rms_mm);
     }
+    o.demo.world_from_stage = registration->world_from_stage;
+    spdlog::info("the rig registered to the headset by {} ({} samples, {:.2f} mm RMS)", o.registration, registration->samples,
+                 registration->rms_mm);
   }
   std::unique_ptr<rhot::Window> window = open_window(o);
   auto renderer = rhot::Renderer::create(o.render, window.get(), headset.get());

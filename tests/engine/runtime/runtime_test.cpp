@@ -67,7 +67,8 @@ TEST(Runtime, AnySourcesResultsBecomeComponentsAndDrivePhysics) {
   r.add_stage("physics", {"after-physics", [&](double) { EXPECT_EQ(run.source->frames, static_cast<int>(r.frames())); }});
   r.add_systems(systems, "");
   ASSERT_TRUE(systems.build().has_value());
-  EXPECT_EQ(systems.names(), (std::vector<std::string>{"clock", "scripted", "tracked", "transforms", "physics", "after-physics"}));
+  EXPECT_EQ(systems.names(),
+            (std::vector<std::string>{"clock", "scripted", "tracked", "publish", "transforms", "physics", "after-physics"}));
   FrameLoop loop(r.world(), systems, FrameLoopSettings{});
   for (int i = 0; i < 90; ++i) loop.step();
 

@@ -44,8 +44,8 @@ std::vector<HeadsetPoseSample> look_around(double seconds, double yaw_deg, doubl
                                tilt_deg * kDeg * 0.5 * std::sin(0.97 * t));
     s.stage_from_head = pose(turn, Eigen::Vector3d(0.04 * std::sin(0.3 * t), 1.6 + 0.02 * std::sin(0.5 * t), 0.03 * std::cos(0.37 * t)));
     Rigid3d star = kWorldFromStage * s.stage_from_head * kHeadFromStar;
-    const Eigen::Vector3d dt = 1e-3 * noise_mm * Eigen::Vector3d(n(rng), n(rng), n(rng));
-    const Eigen::Vector3d dr = 0.1 * kDeg * noise_mm * Eigen::Vector3d(n(rng), n(rng), n(rng));
+    const Eigen::Vector3d dt = 1e-3 * noise_mm * Eigen::Vector3d{n(rng), n(rng), n(rng)};
+    const Eigen::Vector3d dr = 0.1 * kDeg * noise_mm * Eigen::Vector3d{n(rng), n(rng), n(rng)};
     star = star * pose(dr, Eigen::Vector3d::Zero());  // turned about its own origin
     star.translation += dt;
     if (outlier_every > 0 && i % outlier_every == outlier_every - 1) star.translation += Eigen::Vector3d(0.1, 0.0, 0.0);

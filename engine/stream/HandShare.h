@@ -1,0 +1,105 @@
+#pragma once
+// rhot's hands for other processes on the same machine, through shared memory: a running rhot
+// publishes every frame's hands (HandShareWriter), and readers such as rhot's OpenXR API layer
+// (engine/xrlayer) take the newest whenever they like (HandShareReader). Neither ever waits for
+// the other: the block is one snapshot guarded by a sequence counter (a seqlock), the writer
+// makes it odd while it writes and even again after, and a reader that sees the count change
+// under it reads again.
+//
+// The block (POSIX shared memory, name "/rhot-hands" unless RHOT_HANDS_SHM says otherwise) is
+// HandShareBlock below, format version kHandShareVersion; docs/openxr.md describes it field by
+// field. It outlives the writer: a rhot that stops cleanly marks it stopped, one that crashes
+// just stops updating it, and a rhot started again writes into the same block, so a reader
+// keeps its mapping throughout and only has to watch the times.
+//
+// Dependency-free (the C++ standard library and POSIX): the layer links it into applications.
+
+#include <atomic>
+#include <cstdint>
+#include <expected>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace rhot {
+
+inline constexpr std::uint32_t kHandShareMagic = 0x524E4448;  // "HDNR"
+inline constexpr std::uint32_t kHandShareVersion = 1;
+inline constexpr int kHandShareJoints = 26;  // XR_HAND_JOINT_COUNT_EXT, in OpenXR's order
+
+struct HandShareJoint {
+  float position[3];     // metres, rhot's world
+  float orientation[4];  // x, y, z, w: OpenXR's joint frame (-Z along the bone, +Y out of the back of the hand)
+  float radius;          // metres
+  float velocity[3];     // metres per second, rhot's world
+};
+
+struct HandShareHand {
+  std::uint32_t tracked;  // 1: seen in this frame; 0: the joints are not to be used
+  std::uint32_t reserved;
+  HandShareJoint joints[kHandShareJoints];
+};
+
+struct HandShareSnapshot {
+  double capture_s;    // when the cameras saw these hands, on CLOCK_MONOTONIC (the steady clock), seconds
+  double published_s;  // when rhot wrote them, same clock
+  std::uint64_t frame;
+  float world_from_stage[16];  // column-major 4 x 4: the rig registered to the headset's STAGE space; identity without one
+  HandShareHand hands[2];      // 0 left, 1 right
+};
+
+struct HandShareBlock {
+  std::uint32_t magic;
+  std::uint32_t version;
+  std::uint32_t size;                  // sizeof(HandShareBlock)
+  std::int32_t pid;                    // the writer's
+  std::atomic<std::uint32_t> running;  // 1 while a writer is publishing, 0 once it stopped cleanly
+  std::uint32_t reserved;
+  std::atomic<std::uint64_t> sequence;  // odd while the snapshot is being written
+  HandShareSnapshot snapshot;
+};
+
+// The block's name: RHOT_HANDS_SHM if set (it must start with '/'), else "/rhot-hands".
+std::string hand_share_name();
+
+// The publishing side. Creates the block if it is not there, or takes over the one there (of a
+// previous rhot, or one another rhot is writing: the last writer wins).
+class HandShareWriter {
+ public:
+  // Fails, naming the block, where shared memory cannot be created or mapped.
+  [[nodiscard]] static std::expected<std::unique_ptr<HandShareWriter>, std::string> open(const std::string& name);
+  HandShareWriter(const HandShareWriter&) = delete;
+  HandShareWriter& operator=(const HandShareWriter&) = delete;
+  ~HandShareWriter();  // marks the block stopped (its readers see the hands go untracked at once)
+
+  void publish(const HandShareSnapshot& snapshot);
+  const std::string& name() const { return name_; }
+
+ private:
+  HandShareWriter(std::string name, HandShareBlock* block) : name_(std::move(name)), block_(block) {}
+  std::string name_;
+  HandShareBlock* block_ = nullptr;
+};
+
+// The reading side. Never blocks; opens the block lazily and keeps trying (at most every
+// retry_s) while there is none.
+class HandShareReader {
+ public:
+  explicit HandShareReader(std::string name, double retry_s = 0.1) : name_(std::move(name)), retry_s_(retry_s) {}
+  HandShareReader(const HandShareReader&) = delete;
+  HandShareReader& operator=(const HandShareReader&) = delete;
+  ~HandShareReader();
+
+  // The newest snapshot, if a writer is publishing: nullopt where there is no block (yet), its
+  // writer stopped, or a consistent copy could not be taken in a few tries (a writer stuck midway,
+  // or crashed there). now_s: the steady clock, for the retries.
+  std::optional<HandShareSnapshot> read(double now_s);
+
+ private:
+  std::string name_;
+  double retry_s_;
+  double last_try_s_ = -1e300;
+  const HandShareBlock* block_ = nullptr;
+};
+
+}  // namespace rhot
