@@ -8,10 +8,12 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <benchmark/benchmark.h>
 #include <zmq.hpp>
@@ -21,6 +23,14 @@
 
 namespace rhot {
 namespace {
+
+// p50 and p99 of the per-iteration times (microseconds) as counters.
+void percentiles(benchmark::State& state, std::vector<double>& us) {
+  std::sort(us.begin(), us.end());
+  if (us.empty()) return;
+  state.counters["p50_us"] = us[us.size() / 2];
+  state.counters["p99_us"] = us[std::min(us.size() - 1, us.size() * 99 / 100)];
+}
 
 std::string block_name(const char* what) { return std::string("/rhot-bench-") + what + "-" + std::to_string(getpid()); }
 
@@ -70,6 +80,7 @@ void BM_HandShareDelivery(benchmark::State& state) {
   });
   HandShareReader reply((*back)->name());
   std::uint64_t frame = 0;
+  std::vector<double> us;
   for (auto _ : state) {
     const auto start = std::chrono::steady_clock::now();
     (*there)->publish(hands(++frame));
@@ -77,10 +88,13 @@ void BM_HandShareDelivery(benchmark::State& state) {
       const auto s = reply.read(steady_now_s());
       if (s && s->frame == frame) break;
     }
-    state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 2.0);
+    const double one_way = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 2.0;
+    state.SetIterationTime(one_way);
+    us.push_back(1e6 * one_way);
   }
   stop = true;
   echo.join();
+  percentiles(state, us);
   shm_unlink((*there)->name().c_str());
   shm_unlink((*back)->name().c_str());
 }
@@ -103,6 +117,7 @@ void BM_ZmqIpcDelivery(benchmark::State& state) {
     }
   });
   std::uint64_t frame = 0;
+  std::vector<double> us;
   for (auto _ : state) {
     const auto start = std::chrono::steady_clock::now();
     const HandShareSnapshot s = hands(++frame);
@@ -112,10 +127,13 @@ void BM_ZmqIpcDelivery(benchmark::State& state) {
       state.SkipWithError("no reply");
       break;
     }
-    state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 2.0);
+    const double one_way = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 2.0;
+    state.SetIterationTime(one_way);
+    us.push_back(1e6 * one_way);
   }
   stop = true;
   echo.join();
+  percentiles(state, us);
 }
 BENCHMARK(BM_ZmqIpcDelivery)->UseManualTime()->Unit(benchmark::kMicrosecond);
 

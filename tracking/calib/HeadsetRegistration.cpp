@@ -136,7 +136,7 @@ std::expected<ClosedForm, std::string> closed_form(std::span<const HeadsetPoseSa
   // Y = B^-1 X^-1 A per sample: quaternions summed on one hemisphere, translations averaged.
   Eigen::Vector4d q_sum = Eigen::Vector4d::Zero();
   Eigen::Vector3d t_sum = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond first;
+  Eigen::Quaterniond first = Eigen::Quaterniond::Identity();  // the first sample's, set below
   for (std::size_t i = 0; i < s.size(); ++i) {
     const Rigid3d y = s[i].stage_from_head.inverse() * out.x.inverse() * s[i].world_from_star;
     if (i == 0) first = y.rotation;
