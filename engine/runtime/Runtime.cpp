@@ -79,15 +79,9 @@ std::expected<std::unique_ptr<Runtime>, std::string> Runtime::create(const Scene
                            }
                          }}});
   r->hand_motion_.assign(2, MotionPredictor(kHandJointCount));
-  if (settings.publish_hands) {
-    auto writer = HandShareWriter::open(hand_share_name());
-    if (writer) {
-      r->hand_share_ = std::move(*writer);
-      r->stages_.push_back({{"publish", [self](double) { self->publish(); }}});
-    } else {
-      spdlog::warn("the hands are not published for other processes: {}", writer.error());
-    }
-  }
+  // The stage is there whether or not the block can be had now (another rhot may be publishing):
+  // publish() takes it over once it can.
+  if (settings.publish_hands) r->stages_.push_back({{"publish", [self](double) { self->publish(); }}});
   if (r->stream_) {
     r->stages_.push_back({{"stream", [self](double) { self->stream_->send(self->tracking_->results(), self->stream_names_); }}});
   }
@@ -194,6 +188,20 @@ void Runtime::record() {
 }
 
 void Runtime::publish() {
+  if (!hand_share_) {
+    // At the first frame, then once a second while another process holds the block.
+    const double now = steady_now_s();
+    if (now - hand_share_tried_s_ < 1.0) return;
+    hand_share_tried_s_ = now;
+    auto writer = HandShareWriter::open(hand_share_name());
+    if (!writer) {
+      if (!hand_share_warned_) spdlog::warn("the hands are not published for other processes: {}", writer.error());
+      hand_share_warned_ = true;
+      return;
+    }
+    hand_share_ = std::move(*writer);
+    if (hand_share_warned_) spdlog::info("the hands are published in {} from now on", hand_share_->name());
+  }
   const TrackingResults& results = tracking_->results();
   HandShareSnapshot snap{};
   snap.capture_s = std::isfinite(results.capture_steady_s) ? results.capture_steady_s : frame_start_s_;

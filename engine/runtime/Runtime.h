@@ -70,8 +70,9 @@ struct RuntimeSettings {
   // it, about 40 bytes a frame.
   std::size_t latency_window_frames = 65536;
   // Publish every frame's hands for other processes on this machine (engine/stream/HandShare.h:
-  // rhot's OpenXR layer reads them), in the shared memory hand_share_name() names. A failure to
-  // publish is logged once and the runtime goes on without.
+  // rhot's OpenXR layer reads them), in the shared memory hand_share_name() names. Where another
+  // process is publishing there (or the block cannot be had), that is logged once, and the
+  // runtime tries again once a second and takes over when it can.
   bool publish_hands = true;
   // The rig registered to a headset's STAGE space (rhot-calib headset), published with the hands.
   Rigid3d world_from_stage;
@@ -186,7 +187,9 @@ class Runtime {
   std::unique_ptr<HandPhysics> physics_;
   std::optional<SessionRecorder> recorder_;
   std::unique_ptr<OscStream> stream_;
-  std::unique_ptr<HandShareWriter> hand_share_;
+  std::unique_ptr<HandShareWriter> hand_share_;  // while this runtime owns the block
+  double hand_share_tried_s_ = -1e300;
+  bool hand_share_warned_ = false;
   std::map<int, std::string> stream_names_;  // tracked objects' names by star id
   std::vector<Stage> stages_;
   Renderer* renderer_ = nullptr;

@@ -1,6 +1,7 @@
 #include "engine/stream/HandShare.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -24,41 +25,58 @@ std::string hand_share_name() {
 std::expected<std::unique_ptr<HandShareWriter>, std::string> HandShareWriter::open(const std::string& name) {
   const int fd = shm_open(name.c_str(), O_RDWR | O_CREAT, 0644);
   if (fd < 0) return std::unexpected("cannot open the shared memory " + name + " for the hands: " + std::strerror(errno));
-  if (ftruncate(fd, sizeof(HandShareBlock)) != 0) {
-    const int err = errno;
-    close(fd);
-    return std::unexpected("cannot size the shared memory " + name + ": " + std::strerror(err));
+  const auto fail = [&](const std::string& why) {
+    ::close(fd);
+    return std::unexpected(why);
+  };
+  struct stat st {};
+  if (fstat(fd, &st) != 0) return fail("cannot read the shared memory " + name + ": " + std::strerror(errno));
+  if (st.st_uid != geteuid()) return fail("the shared memory " + name + " belongs to another user (uid " + std::to_string(st.st_uid) + ")");
+  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const void* peek = mmap(nullptr, sizeof(HandShareBlock), PROT_READ, MAP_SHARED, fd, 0);
+    std::string who = "another process";
+    if (peek != MAP_FAILED && static_cast<std::size_t>(st.st_size) >= sizeof(HandShareBlock)) {
+      who = "process " + std::to_string(static_cast<const HandShareBlock*>(peek)->pid);
+    }
+    if (peek != MAP_FAILED) munmap(const_cast<void*>(peek), sizeof(HandShareBlock));
+    return fail(who + " is publishing its hands in " + name + " (start this one with --no-publish, or another RHOT_HANDS_SHM)");
+  }
+  // Never smaller: a reader holding a larger mapping of it would fault.
+  if (static_cast<std::size_t>(st.st_size) < sizeof(HandShareBlock) && ftruncate(fd, sizeof(HandShareBlock)) != 0) {
+    return fail("cannot size the shared memory " + name + ": " + std::strerror(errno));
   }
   void* mapped = mmap(nullptr, sizeof(HandShareBlock), PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-  close(fd);
-  if (mapped == MAP_FAILED) return std::unexpected("cannot map the shared memory " + name + ": " + std::strerror(errno));
+  if (mapped == MAP_FAILED) return fail("cannot map the shared memory " + name + ": " + std::strerror(errno));
   auto* block = static_cast<HandShareBlock*>(mapped);
-  // A block of an older format (or a fresh, zeroed one) is laid out anew; readers check the
-  // header before they trust the snapshot.
   if (block->magic != kHandShareMagic || block->version != kHandShareVersion || block->size != sizeof(HandShareBlock)) {
-    block->magic = 0;  // not valid while it is being laid out
+    // A fresh (zeroed) block, or one of another format: laid out anew. Readers check the header
+    // before they trust the snapshot.
+    block->magic = 0;
     std::atomic_thread_fence(std::memory_order_release);
     new (&block->running) std::atomic<std::uint32_t>(0);
     new (&block->sequence) std::atomic<std::uint64_t>(0);
-    std::memset(&block->snapshot, 0, sizeof(block->snapshot));
     block->version = kHandShareVersion;
     block->size = sizeof(HandShareBlock);
     std::atomic_thread_fence(std::memory_order_release);
     block->magic = kHandShareMagic;
   }
+  // Whatever a previous writer left (a crash may have stopped it midway) is cleared under the
+  // seqlock: no hand tracked, published at time 0. Nobody else writes: this process holds the lock.
+  block->running.store(0, std::memory_order_release);
+  const std::uint64_t seq = block->sequence.load(std::memory_order_relaxed) | 1u;  // odd: being written
+  block->sequence.store(seq, std::memory_order_relaxed);
+  std::atomic_thread_fence(std::memory_order_release);
+  std::memset(&block->snapshot, 0, sizeof(block->snapshot));
+  block->sequence.store(seq + 1, std::memory_order_release);
   block->pid = static_cast<std::int32_t>(getpid());
-  // A sequence left odd by a writer that crashed midway is made even (its snapshot is whatever it
-  // got to; the next publish replaces it).
-  std::uint64_t seq = block->sequence.load(std::memory_order_relaxed);
-  if ((seq & 1u) != 0) block->sequence.store(seq + 1, std::memory_order_release);
-  block->running.store(1, std::memory_order_release);
-  return std::unique_ptr<HandShareWriter>(new HandShareWriter(name, block));
+  return std::unique_ptr<HandShareWriter>(new HandShareWriter(name, block, fd));
 }
 
 HandShareWriter::~HandShareWriter() {
   if (block_ == nullptr) return;
   block_->running.store(0, std::memory_order_release);
   munmap(block_, sizeof(HandShareBlock));
+  ::close(fd_);  // drops the lock
 }
 
 void HandShareWriter::publish(const HandShareSnapshot& snapshot) {
@@ -70,22 +88,43 @@ void HandShareWriter::publish(const HandShareSnapshot& snapshot) {
   block_->running.store(1, std::memory_order_release);
 }
 
-HandShareReader::~HandShareReader() {
+HandShareReader::~HandShareReader() { close(); }
+
+void HandShareReader::close() {
   if (block_ != nullptr) munmap(const_cast<HandShareBlock*>(block_), sizeof(HandShareBlock));
+  block_ = nullptr;
+  inode_ = 0;
+}
+
+// Maps the block the name now names, if it is another than the one mapped (or none is). At most
+// once every retry_s. True where a block is mapped afterwards.
+bool HandShareReader::open(double now_s) {
+  if (now_s - last_try_s_ < retry_s_) return block_ != nullptr;
+  last_try_s_ = now_s;
+  const int fd = shm_open(name_.c_str(), O_RDONLY, 0);
+  if (fd < 0) return block_ != nullptr;
+  struct stat st {};
+  const bool usable = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_uid == geteuid() &&
+                      static_cast<std::size_t>(st.st_size) >= sizeof(HandShareBlock);
+  if (!usable || (block_ != nullptr && static_cast<unsigned long>(st.st_ino) == inode_)) {
+    ::close(fd);
+    return block_ != nullptr;
+  }
+  void* mapped = mmap(nullptr, sizeof(HandShareBlock), PROT_READ, MAP_SHARED, fd, 0);
+  ::close(fd);
+  if (mapped == MAP_FAILED) return block_ != nullptr;
+  close();
+  block_ = static_cast<const HandShareBlock*>(mapped);
+  inode_ = static_cast<unsigned long>(st.st_ino);
+  last_sequence_ = 0;
+  last_change_s_ = now_s;
+  return true;
 }
 
 std::optional<HandShareSnapshot> HandShareReader::read(double now_s) {
-  if (block_ == nullptr) {
-    if (now_s - last_try_s_ < retry_s_) return std::nullopt;
-    last_try_s_ = now_s;
-    const int fd = shm_open(name_.c_str(), O_RDONLY, 0);
-    if (fd < 0) return std::nullopt;
-    struct stat st {};
-    const bool big_enough = fstat(fd, &st) == 0 && static_cast<std::size_t>(st.st_size) >= sizeof(HandShareBlock);
-    void* mapped = big_enough ? mmap(nullptr, sizeof(HandShareBlock), PROT_READ, MAP_SHARED, fd, 0) : MAP_FAILED;
-    close(fd);
-    if (mapped == MAP_FAILED) return std::nullopt;
-    block_ = static_cast<const HandShareBlock*>(mapped);
+  // No block yet; or nothing new for a while (the block may have been removed and made anew).
+  if (block_ == nullptr || now_s - last_change_s_ > retry_s_) {
+    if (!open(now_s)) return std::nullopt;
   }
   if (block_->magic != kHandShareMagic || block_->version != kHandShareVersion || block_->size != sizeof(HandShareBlock)) {
     return std::nullopt;
@@ -97,7 +136,12 @@ std::optional<HandShareSnapshot> HandShareReader::read(double now_s) {
     if ((before & 1u) != 0) continue;
     std::memcpy(&copy, &block_->snapshot, sizeof(copy));
     std::atomic_thread_fence(std::memory_order_acquire);
-    if (block_->sequence.load(std::memory_order_relaxed) == before) return before == 0 ? std::nullopt : std::optional(copy);
+    if (block_->sequence.load(std::memory_order_relaxed) != before) continue;
+    if (before != last_sequence_) {
+      last_sequence_ = before;
+      last_change_s_ = now_s;
+    }
+    return copy;
   }
   return std::nullopt;
 }

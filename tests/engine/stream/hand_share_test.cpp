@@ -50,16 +50,22 @@ TEST(HandShare, AReaderNeverSeesHalfOfOneFrameAndHalfOfAnother) {
   auto writer = HandShareWriter::open(name);
   ASSERT_TRUE(writer.has_value()) << writer.error();
   (*writer)->publish(frame_snapshot(1));
-  std::atomic<bool> done{false};
+  std::atomic<bool> stop{false};
+  std::atomic<std::uint64_t> published{1};
   std::thread publisher([&] {
-    for (std::uint64_t f = 2; f < 20000; ++f) (*writer)->publish(frame_snapshot(f));
-    done = true;
+    for (std::uint64_t f = 2; !stop.load(); ++f) {
+      (*writer)->publish(frame_snapshot(f));
+      published = f;
+    }
   });
+  // Reads while the frames come, until 2,000 of them were taken during at least 1,000 frames
+  // written (or 20 s: a machine that slow fails the counts below).
   HandShareReader reader(name, 0.0);
   int reads = 0, inconsistent = 0;
   std::uint64_t last = 0;
   bool backwards = false;
-  while (!done.load()) {
+  const double start = steady_now_s();
+  while ((reads < 2000 || published.load() < 1000) && steady_now_s() - start < 20.0) {
     if (const auto s = reader.read(steady_now_s())) {
       ++reads;
       inconsistent += consistent(*s) ? 0 : 1;
@@ -67,13 +73,15 @@ TEST(HandShare, AReaderNeverSeesHalfOfOneFrameAndHalfOfAnother) {
       last = s->frame;
     }
   }
+  stop = true;
   publisher.join();
-  EXPECT_GT(reads, 100);
+  EXPECT_GE(reads, 2000);
+  EXPECT_GE(published.load(), 1000u);
   EXPECT_EQ(inconsistent, 0);
   EXPECT_FALSE(backwards);
   const auto final_read = reader.read(steady_now_s());
   ASSERT_TRUE(final_read.has_value());
-  EXPECT_EQ(final_read->frame, 19999u);
+  EXPECT_EQ(final_read->frame, published.load());
   shm_unlink(name.c_str());
 }
 
@@ -98,6 +106,44 @@ TEST(HandShare, AReaderFindsAWriterStartedAfterItAndSeesItStopAndComeBack) {
   const auto s = reader.read(steady_now_s());
   ASSERT_TRUE(s.has_value());
   EXPECT_EQ(s->frame, 6u);
+  shm_unlink(name.c_str());
+}
+
+TEST(HandShare, OneWriterAtATimeAndWhatACrashedOneLeftHalfWrittenIsNeverRead) {
+  const std::string name = unique_name("owner");
+  shm_unlink(name.c_str());
+  {
+    auto first = HandShareWriter::open(name);
+    ASSERT_TRUE(first.has_value()) << first.error();
+    auto second = HandShareWriter::open(name);
+    ASSERT_FALSE(second.has_value());
+    EXPECT_EQ(second.error(), "process " + std::to_string(getpid()) + " is publishing its hands in " + name +
+                                  " (start this one with --no-publish, or another RHOT_HANDS_SHM)");
+    (*first)->publish(frame_snapshot(3));
+  }
+  // A writer that died while writing: its sequence left odd, its snapshot half of a new frame.
+  const int fd = shm_open(name.c_str(), O_RDWR, 0);
+  ASSERT_GE(fd, 0);
+  void* mapped = mmap(nullptr, sizeof(HandShareBlock), PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+  close(fd);
+  ASSERT_NE(mapped, MAP_FAILED);
+  auto* block = static_cast<HandShareBlock*>(mapped);
+  block->sequence.fetch_add(1);
+  block->snapshot.hands[0].joints[0].position[0] = 4.0f;
+  block->running.store(1);
+  HandShareReader reader(name, 0.0);
+  EXPECT_FALSE(reader.read(steady_now_s()).has_value());  // an odd sequence is never taken
+  // The next writer clears it: nothing tracked until it publishes.
+  auto next = HandShareWriter::open(name);
+  ASSERT_TRUE(next.has_value()) << next.error();
+  EXPECT_EQ(block->sequence.load() % 2, 0u);
+  EXPECT_EQ(block->snapshot.hands[0].tracked, 0u);
+  EXPECT_FALSE(reader.read(steady_now_s()).has_value());
+  (*next)->publish(frame_snapshot(4));
+  const auto s = reader.read(steady_now_s());
+  ASSERT_TRUE(s.has_value());
+  EXPECT_TRUE(consistent(*s));
+  munmap(mapped, sizeof(HandShareBlock));
   shm_unlink(name.c_str());
 }
 
