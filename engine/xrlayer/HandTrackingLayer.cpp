@@ -161,15 +161,17 @@ Session* session_of(State& s, const Tracker* tracker) {
   return nullptr;
 }
 
+// The layer's record of an instance (null for one it does not know), taken under the lock.
+std::shared_ptr<Instance> find_instance(XrInstance instance) {
+  State& s = state();
+  const std::lock_guard lock(s.mutex);
+  const auto it = s.instances.find(instance);
+  return it != s.instances.end() ? it->second : nullptr;
+}
+
 XRAPI_ATTR XrResult XRAPI_CALL get_system_properties(XrInstance instance, XrSystemId system, XrSystemProperties* properties) {
-  std::shared_ptr<Instance> in;
-  {
-    State& s = state();
-    const std::lock_guard lock(s.mutex);
-    const auto it = s.instances.find(instance);
-    if (it == s.instances.end()) return XR_ERROR_HANDLE_INVALID;
-    in = it->second;
-  }
+  const std::shared_ptr<Instance> in = find_instance(instance);
+  if (in == nullptr) return XR_ERROR_HANDLE_INVALID;
   if (properties == nullptr) return in->get_system_properties(instance, system, properties);
   // The runtime is not to see the extension's structure (it may not know the extension): taken
   // out of the chain for the call down, put back and filled after.
@@ -470,13 +472,7 @@ XRAPI_ATTR XrResult XRAPI_CALL create_api_layer_instance(const XrInstanceCreateI
 XRAPI_ATTR XrResult XRAPI_CALL get_instance_proc_addr(XrInstance instance, const char* name, PFN_xrVoidFunction* function) {
   if (name == nullptr || function == nullptr) return XR_ERROR_VALIDATION_FAILURE;
   *function = nullptr;
-  std::shared_ptr<Instance> in;
-  {
-    State& s = state();
-    const std::lock_guard lock(s.mutex);
-    const auto it = s.instances.find(instance);
-    if (it != s.instances.end()) in = it->second;
-  }
+  const std::shared_ptr<Instance> in = find_instance(instance);
   if (in == nullptr) return XR_ERROR_HANDLE_INVALID;  // the loader asks for functions of an instance only
   const std::string n(name);
   const auto give = [&](auto fn) {
