@@ -13,6 +13,9 @@
 #   tools/setup-deps.sh, which installs the Debian packages rhot needs (as root, or with sudo),
 #   then configures and builds the release preset's rhot-demo and rhot-node; with it,
 #   build/release/rhot-demo and build/release/rhot-node must be built already.
+# Keys: the script makes a key pair for the master and each node in LOGS/keys (rhot-node keygen),
+#   gives each side the other's public certificate, and runs everything with CURVE security
+#   (docs/camera-nodes.md, "Security").
 # RHOT_NODES_PORT: the first node's port (default 5601; node i publishes on 5601 + 2i, answers
 #   requests on the port after it).
 set -euo pipefail
@@ -57,14 +60,23 @@ start=$(( $(build/release/rhot-node --print-clock) + 1000000000 ))
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
 trap cleanup EXIT INT TERM
+keys=$logs/keys
+[[ -f "$keys/master/master.key_secret" ]] || build/release/rhot-node keygen --out "$keys/master" --name master >/dev/null
+mkdir -p "$keys/master/trusted"
+for i in 0 1 2 3; do
+  [[ -f "$keys/node$i/node$i.key_secret" ]] || build/release/rhot-node keygen --out "$keys/node$i" --name "node$i" >/dev/null
+  mkdir -p "$keys/node$i/trusted"
+  cp "$keys/master/master.key" "$keys/node$i/trusted/"
+  cp "$keys/node$i/node$i.key" "$keys/master/trusted/"
+done
 endpoints=()
 for i in 0 1 2 3; do
   p=$((port + 2 * i))
   build/release/rhot-node --publish "tcp://127.0.0.1:$p" --node-id "$i" --sim-rig "$rig" --sim-camera "$i" --sim-scene "$scene" \
-    --sim-start-ns "$start" >"$logs/rhot-node-$i.log" 2>&1 &
+    --sim-start-ns "$start" --keys "$keys/node$i" >"$logs/rhot-node-$i.log" 2>&1 &
   pids+=($!)
-  endpoints+=("tcp://127.0.0.1:$p")
+  endpoints+=("node$i@tcp://127.0.0.1:$p")
 done
 echo "nodes-demo: four nodes on ports $port-$((port + 7)), logs in $logs/rhot-node-*.log"
 sources=$(IFS=,; echo "${endpoints[*]}")
-build/release/rhot-demo --rig "$rig" --scene "$scene" --source "nodes:$sources" "${demo_args[@]}"
+build/release/rhot-demo --rig "$rig" --scene "$scene" --source "nodes:$sources" --keys "$keys/master" "${demo_args[@]}"

@@ -19,7 +19,7 @@ std::expected<void, std::string> LaunchSettings::check() const {
   if (!node_endpoints.empty() && (!video_devices.empty() || !replay.empty()))
     return std::unexpected(std::string("choose camera nodes, video devices or a replay, one of them"));
   for (const std::string& e : node_endpoints)
-    if (auto ok = check_endpoint(e); !ok) return std::unexpected("nodes: " + ok.error());
+    if (auto ok = parse_node_address(e); !ok) return std::unexpected("nodes: " + ok.error());
   return {};
 }
 
@@ -55,7 +55,9 @@ std::expected<CustomSource, std::string> open_frame_source(const LaunchSettings&
                                                            const SourceRequest& request, const SourceFactory& custom) {
   CustomSource out;
   if (!settings.node_endpoints.empty()) {
-    auto opened = NodeSource::open(request.rig, settings.node_endpoints);
+    NodeSourceSettings ns;
+    ns.security = settings.node_security;
+    auto opened = NodeSource::open(request.rig, settings.node_endpoints, ns);
     if (!opened) return std::unexpected(opened.error());
     out.source = std::move(*opened);
   } else if (!settings.video_devices.empty()) {

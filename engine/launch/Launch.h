@@ -28,6 +28,7 @@
 #include "tracking/detect/BlobDetector.h"
 #include "tracking/detect/ColourModel.h"
 #include "tracking/hand/HandLayout.h"
+#include "tracking/net/CurveKeys.h"
 #include "tracking/rigid/StarSet.h"
 #include "tracking/source/FrameSource.h"
 
@@ -55,9 +56,11 @@ struct LaunchSettings {
   // model.
   bool colour_markers = false;
   std::filesystem::path colours;  // the colour model (empty: default_colour_model())
-  // Camera nodes (rhot-node, docs/camera-nodes.md): their publish endpoints. Each node says which
-  // rig cameras its frames are from.
+  // Camera nodes (rhot-node, docs/camera-nodes.md): their publish endpoints, each NAME@ENDPOINT
+  // with keys. Each node says which rig cameras its frames are from.
   std::vector<std::string> node_endpoints;
+  // The master's key folder for the nodes (tracking/net/CurveKeys.h), or none: no security.
+  NetSecurity node_security;
   DebugViews debug;
 
   // Every value a user can set checked: "<name>: <what is wrong>" for the first bad one.

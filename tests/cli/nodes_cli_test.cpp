@@ -4,10 +4,14 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <regex>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -77,6 +81,11 @@ TEST(NodesCli, FourNodesDeliverEveryFrameAndTheMarkersAreFoundAsFromLocalCameras
   expect_few_lost(j, kSchedulingSlackFrames);
   EXPECT_GT(j["found_fraction"].get<double>(), kFoundFloor) << j.dump(2);
   EXPECT_EQ(j["bad_messages"], 0);
+  // Secure by default: keys made for the run, every handshake through at the first try.
+  EXPECT_EQ(j["security"], "curve");
+  EXPECT_EQ(j["handshakes_failed"], 0) << j.dump(2);
+  EXPECT_GE(j["handshake_median_ms"].get<double>(), 0.0) << j.dump(2);
+  EXPECT_LT(j["handshake_max_ms"].get<double>(), 1000.0) << j.dump(2);
   // A round trip's sample is at most half its round trip off, so neither the offset (checked
   // against the truth: the nodes share this host's clock) nor the fit's residual can honestly be
   // held below that: 100 us where round trips take 60-100 us (the release build), half the
@@ -146,26 +155,69 @@ TEST(NodesCli, FourNodesServingTheDemoTrackTheHandsAsWellAsTheInProcessSimulated
   }
 }
 
-TEST(NodesCli, TheDemoRunsOnFourNodeProcesses) {
-  // rhot-demo --source nodes:... on four rhot-node processes photographing its world: every frame
-  // is assembled from all four cameras, and the demo's own run is unchanged (exit 0, stats).
+// Key folders made as a user makes them (rhot-node keygen), in a temporary folder removed at the
+// end: master/ and node<i>/, each node trusting the master and the master every node; intruder/,
+// a master whose key no node lists.
+class KeyFolders {
+ public:
+  explicit KeyFolders(int nodes) : dir_(std::filesystem::temp_directory_path() / ("rhot-nodes-cli-keys-" + std::to_string(::getpid()))) {
+    std::filesystem::remove_all(dir_);
+    make("master");
+    make("intruder");
+    for (int i = 0; i < nodes; ++i) {
+      const std::string node = "node" + std::to_string(i);
+      make(node);
+      trust("master", node);
+      trust("intruder", node);
+      trust(node, "master");
+    }
+  }
+  ~KeyFolders() {
+    std::error_code ec;
+    std::filesystem::remove_all(dir_, ec);
+  }
+  std::string operator[](const std::string& name) const { return (dir_ / name).string(); }
+
+ private:
+  void make(const std::string& name) {
+    const auto r = rhot::test::run_program("rhot-node", "keygen --out " + (*this)[name] + " --name " + name, "2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::filesystem::create_directories(dir_ / name / "trusted");
+  }
+  void trust(const std::string& who, const std::string& whom) {
+    std::filesystem::copy_file(dir_ / whom / (whom + ".key"), dir_ / who / "trusted" / (whom + ".key"),
+                               std::filesystem::copy_options::overwrite_existing);
+  }
+  std::filesystem::path dir_;
+};
+
+TEST(NodesCli, TheDemoRunsOnFourNodeProcessesWithKeysAndAMasterTheyDoNotTrustHearsNothing) {
+  // rhot-demo --source nodes:... on four rhot-node processes photographing its world, with keys
+  // made by rhot-node keygen: every frame is assembled from all four cameras, and the demo's own
+  // run is unchanged (exit 0, stats). A master whose key the nodes do not list gets no frame, and
+  // the nodes say they refused it.
+  const KeyFolders keys(4);
   const auto ports = rhot::free_tcp_port_pairs(4);
   ASSERT_TRUE(ports.has_value()) << ports.error();
   const std::string bin = RHOT_BINARY_DIR;
   const std::string start = std::to_string(rhot::steady_now_ns() + 1'000'000'000);
+  const std::filesystem::path log = std::filesystem::temp_directory_path() / ("rhot-nodes-cli-" + std::to_string(::getpid()) + ".log");
   std::vector<rhot::ChildProcess> nodes;
   std::string endpoints;
   for (int i = 0; i < 4; ++i) {
+    const std::string node = "node" + std::to_string(i);
     const std::string endpoint = "tcp://127.0.0.1:" + std::to_string((*ports)[static_cast<std::size_t>(i)]);
-    auto child = rhot::ChildProcess::spawn({bin + "/rhot-node", "--publish", endpoint, "--node-id", std::to_string(i), "--sim-rig",
-                                            std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml", "--sim-camera", std::to_string(i),
-                                            "--sim-scene", std::string(RHOT_ASSET_DIR) + "/scenes/default.json", "--sim-start-ns", start},
-                                           "/dev/null");
+    auto child =
+        rhot::ChildProcess::spawn({bin + "/rhot-node", "--publish", endpoint, "--node-id", std::to_string(i), "--sim-rig",
+                                   std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml", "--sim-camera", std::to_string(i), "--sim-scene",
+                                   std::string(RHOT_ASSET_DIR) + "/scenes/default.json", "--sim-start-ns", start, "--keys", keys[node]},
+                                  i == 0 ? log.string() : "/dev/null");
     ASSERT_TRUE(child.has_value()) << child.error();
     nodes.push_back(std::move(*child));
-    endpoints += (i ? "," : "") + endpoint;
+    endpoints += (i ? "," : "") + node + "@" + endpoint;
   }
-  const auto r = rhot::test::run_program("rhot-demo", "--headless --frames 150 --eye 64x64 --source nodes:" + endpoints, "2>&1");
+  const auto r = rhot::test::run_program(
+      "rhot-demo", "--headless --frames 150 --eye 64x64 --source nodes:" + endpoints + " --keys " + keys["master"], "2>&1");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(assembly: (\d+) frames \((\d+) complete)"))) << r.output;
@@ -174,13 +226,66 @@ TEST(NodesCli, TheDemoRunsOnFourNodeProcesses) {
   // per hundred frames miss a camera to the deadline.
   const int slack = std::max(kSchedulingSlackFrames, kSchedulingSlackFrames * std::stoi(m[1]) / 100);
   EXPECT_GE(std::stoi(m[2]), std::stoi(m[1]) - slack) << "all four cameras in (nearly) every frame\n" << r.output;
-  for (auto& n : nodes) EXPECT_TRUE(n.running()) << "the nodes outlive the master";
+  EXPECT_EQ(r.output.find("INSECURE"), std::string::npos);
+
+  const auto intruder = rhot::test::run_program(
+      "rhot-demo", "--headless --frames 40 --eye 64x64 --source nodes:" + endpoints + " --keys " + keys["intruder"], "2>&1");
+  EXPECT_EQ(intruder.exit_code, 0) << intruder.output;
+  EXPECT_NE(intruder.output.find("assembly: 0 frames"), std::string::npos) << intruder.output;
+  EXPECT_NE(intruder.output.find("refused this master's key"), std::string::npos) << intruder.output;
+  for (auto& n : nodes) EXPECT_TRUE(n.running()) << "the nodes outlive both masters";
+  nodes[0].stop(2.0);
+  std::ifstream in(log);
+  const std::string node_log((std::istreambuf_iterator<char>(in)), {});
+  std::filesystem::remove(log);
+  EXPECT_NE(node_log.find("refused a peer at 127.0.0.1 with the key "), std::string::npos) << node_log;
+  EXPECT_NE(node_log.find("master connections admitted"), std::string::npos) << node_log;
   // A bad endpoint is one line and exit 1.
-  const auto bad = rhot::test::run_program("rhot-demo", "--headless --frames 1 --source nodes:tcp://127.0.0.1:99999", "2>&1");
+  const auto bad = rhot::test::run_program("rhot-demo", "--headless --frames 1 --insecure --source nodes:tcp://127.0.0.1:99999", "2>&1");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.output.find("--source: endpoint \"tcp://127.0.0.1:99999\": port \"99999\" is not a number from 1 to 65534"),
             std::string::npos)
       << bad.output;
+}
+
+// Security is on unless asked off: every program that talks to nodes refuses to start without a
+// key folder or --insecure, refuses a folder it cannot use naming the file, and says on every
+// start that it runs insecure.
+TEST(NodesCli, WithoutKeysOrInsecureNothingStartsAndInsecureIsSaidOnEveryStart) {
+  const std::string sim = " --sim-rig " + std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml --sim-camera 0";
+  const std::string need =
+      "camera nodes need --keys DIR (this program's NAME.key_secret, and the peers' NAME.key in DIR/trusted/; rhot-node keygen makes "
+      "them) or --insecure to run without security";
+  auto r = rhot::test::run_program("rhot-node", "--publish tcp://127.0.0.1:5601" + sim, "2>&1", "timeout 20");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find(need), std::string::npos) << r.output;
+  r = rhot::test::run_program("rhot-demo", "--headless --frames 1 --source nodes:tcp://127.0.0.1:5601", "2>&1", "timeout 20");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find(need), std::string::npos) << r.output;
+  r = rhot::test::run_program(
+      "rhot-calib",
+      "record --rig " + std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml --source nodes:tcp://127.0.0.1:5601 --out /dev/null", "2>&1",
+      "timeout 20");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find(need), std::string::npos) << r.output;
+  r = rhot::test::run_program("rhot-node", "--publish tcp://127.0.0.1:5601 --keys /nonexistent/keys" + sim, "2>&1", "timeout 20");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--keys: /nonexistent/keys: no such folder"), std::string::npos) << r.output;
+  r = rhot::test::run_program("rhot-node", "--publish tcp://127.0.0.1:5601 --keys /tmp --insecure" + sim, "2>&1", "timeout 20");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--keys and --insecure: choose one"), std::string::npos) << r.output;
+  r = rhot::test::run_program("rhot-demo", "--headless --frames 1 --keys /tmp", "2>&1", "timeout 20");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--keys: only for camera nodes"), std::string::npos) << r.output;
+  const auto ports = rhot::free_tcp_port_pairs(1);
+  ASSERT_TRUE(ports.has_value());
+  r = rhot::test::run_program("rhot-node", "--publish tcp://127.0.0.1:" + std::to_string((*ports)[0]) + " --insecure --seconds 0.2" + sim,
+                              "2>&1", "timeout 20");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("INSECURE: camera nodes without authentication or encryption (--insecure)"), std::string::npos) << r.output;
+  r = rhot::test::run_program("rhot-node", "keygen --out /tmp --name 'a b'", "2>&1", "timeout 20");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("keygen: key name \"a b\": only letters, digits, _ . and - (not ' ')"), std::string::npos) << r.output;
 }
 
 TEST(NodesCli, BadFlagsGetOneClearLine) {
@@ -195,8 +300,8 @@ TEST(NodesCli, BadFlagsGetOneClearLine) {
       "2>&1");
   EXPECT_NE(r.output.find("expected tcp://HOST:PORT, ipc://PATH or inproc://NAME"), std::string::npos) << r.output;
   r = rhot::test::run_program(
-      "rhot-node", "--publish tcp://127.0.0.1:5601 --sim-rig " + std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml --sim-camera 9",
-      "2>&1");
+      "rhot-node",
+      "--publish tcp://127.0.0.1:5601 --insecure --sim-rig " + std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml --sim-camera 9", "2>&1");
   EXPECT_NE(r.output.find("--sim-camera: camera 9 is not in"), std::string::npos) << r.output;
   r = rhot::test::run_program("rhot-node", "--help", "2>&1");
   EXPECT_EQ(r.exit_code, 0);

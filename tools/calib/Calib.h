@@ -25,6 +25,7 @@
 
 #include "tracking/camera/Camera.h"
 #include "tracking/source/FrameSource.h"
+#include "tools/common/NodeKeys.h"
 
 namespace rhot::calib_tool {
 
@@ -58,9 +59,10 @@ void make_parent_folder(const std::string& file);
 
 // The frame source --source names (record.cpp): video:DEV[,DEV...] (capture devices, video files
 // or image sequences, bright blobs found with `blob_threshold`, -1 automatic) or
-// nodes:ENDPOINT[,ENDPOINT...] (camera nodes). Fails naming what is wrong.
+// nodes:NAME@ENDPOINT[,...] (camera nodes, with the security `keys` ask for: --keys or
+// --insecure, tools/common/NodeKeys.h). Fails naming what is wrong.
 [[nodiscard]] std::expected<std::unique_ptr<FrameSource>, std::string> open_frame_source(const CameraRig& rig, const std::string& source,
-                                                                                         int blob_threshold);
+                                                                                         int blob_threshold, const NodeKeyFlags& keys);
 
 // Prints a report as indented JSON on stdout.
 void print_json(const nlohmann::json& report);

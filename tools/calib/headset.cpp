@@ -42,6 +42,7 @@ struct HeadsetOptions {
   int star = -1;  // -1: the set's first
   std::string source;
   int blob_threshold = -1;
+  NodeKeyFlags keys;
   double seconds = 30.0;
   double sigma_px = 0.5;
   unsigned seed = 1;
@@ -181,7 +182,7 @@ std::expected<Rig, std::string> open_rig(const HeadsetOptions& o) {
     rig.simulated = std::make_unique<SimulatedRig>(rig.cameras, std::vector<Trajectory>{}, settings);
     return rig;
   }
-  auto source = open_frame_source(rig.cameras, o.source, o.blob_threshold);
+  auto source = open_frame_source(rig.cameras, o.source, o.blob_threshold, o.keys);
   if (!source) return std::unexpected(source.error());
   rig.source = std::move(*source);
   return rig;
@@ -263,7 +264,8 @@ void add_headset(CLI::App& app, int& exit_code) {
       "headset", "register the rig to a headset's space from a marker star on the headset, through its OpenXR runtime (docs/openxr.md)");
   cmd->add_flag("--simulate", o->simulate, "the simulated rig, seeing a star on the runtime's own moving head (the truth is known)");
   cmd->add_option("--rig", o->rig, "the calibrated rig (OpenCV YAML)")->capture_default_str();
-  cmd->add_option("--source", o->source, "the cameras: video:DEV[,DEV...] or nodes:ENDPOINT[,ENDPOINT...] (as rhot-demo)");
+  cmd->add_option("--source", o->source, "the cameras: video:DEV[,DEV...] or nodes:NAME@ENDPOINT[,...] (as rhot-demo)");
+  add_node_key_flags(*cmd, o->keys);
   cmd->add_option("--stars", o->stars, "the marker star set (JSON)")->capture_default_str();
   cmd->add_option("--star", o->star, "the id of the star on the headset (default: the set's first)")->check(CLI::Range(0, 1000000));
   cmd->add_option("--seconds", o->seconds, "how long to sample once the star is seen")

@@ -30,6 +30,7 @@ struct RecordOptions {
   std::string out;
   int frames = 0;
   int blob_threshold = -1;
+  NodeKeyFlags keys;
 };
 
 int run(const RecordOptions& o) {
@@ -38,7 +39,7 @@ int run(const RecordOptions& o) {
     spdlog::error("{}", rig.error());
     return 1;
   }
-  auto opened = open_frame_source(*rig, o.source, o.blob_threshold);
+  auto opened = open_frame_source(*rig, o.source, o.blob_threshold, o.keys);
   if (!opened) {
     spdlog::error("{}", opened.error());
     return 1;
@@ -80,11 +81,16 @@ int run(const RecordOptions& o) {
 }  // namespace
 
 std::expected<std::unique_ptr<FrameSource>, std::string> open_frame_source(const CameraRig& rig, const std::string& source,
-                                                                           int blob_threshold) {
-  if (source.rfind("nodes:", 0) == 0) {
+                                                                           int blob_threshold, const NodeKeyFlags& keys) {
+  const bool nodes_named = source.rfind("nodes:", 0) == 0;
+  auto security = node_security_from(keys, nodes_named);
+  if (!security) return std::unexpected(security.error());
+  if (nodes_named) {
     const auto endpoints = parse_node_endpoints(source.substr(6));
     if (!endpoints) return std::unexpected("--source: " + endpoints.error());
-    auto nodes = NodeSource::open(rig, *endpoints);
+    NodeSourceSettings settings;
+    settings.security = std::move(*security);
+    auto nodes = NodeSource::open(rig, *endpoints, settings);
     if (!nodes) return std::unexpected(nodes.error());
     return std::unique_ptr<FrameSource>(std::move(*nodes));
   }
@@ -97,7 +103,7 @@ std::expected<std::unique_ptr<FrameSource>, std::string> open_frame_source(const
     if (!video) return std::unexpected(video.error());
     return std::unique_ptr<FrameSource>(std::make_unique<VideoSource>(std::move(*video)));
   }
-  return std::unexpected("--source: expected video:DEV[,DEV...] or nodes:ENDPOINT[,ENDPOINT...], got \"" + source + "\"");
+  return std::unexpected("--source: expected video:DEV[,DEV...] or nodes:NAME@ENDPOINT[,...], got \"" + source + "\"");
 }
 
 void add_record(CLI::App& app, int& exit_code) {
@@ -107,9 +113,11 @@ void add_record(CLI::App& app, int& exit_code) {
       ->required();
   cmd->add_option("--source", o->source,
                   "video:DEV[,DEV...]: a capture device index, video file or image sequence (cam0_%04d.png) per camera; or "
-                  "nodes:ENDPOINT[,ENDPOINT...]: camera nodes (rhot-node, docs/camera-nodes.md) serving the rig's cameras")
+                  "nodes:NAME@ENDPOINT[,...]: camera nodes (rhot-node, docs/camera-nodes.md) serving the rig's cameras, NAME.key each "
+                  "one's certificate in --keys DIR/trusted/ (nodes:ENDPOINT[,...] with --insecure)")
       ->required();
   cmd->add_option("--out", o->out, "detections CSV to write")->required();
+  add_node_key_flags(*cmd, o->keys);
   cmd->add_option("--frames", o->frames, "frames to record (default: until the files end or Ctrl-C)")->check(CLI::Range(0, 10000000));
   cmd->add_option("--blob-threshold", o->blob_threshold, "grey level of a marker pixel (default -1: automatic)")
       ->capture_default_str()

@@ -43,6 +43,7 @@
 #include "tracking/net/NodeSource.h"
 #include "tracking/source/VideoSource.h"
 #include "tools/common/CliExit.h"
+#include "tools/common/NodeKeys.h"
 #include "tools/common/NumberChecks.h"
 
 #ifndef RHOT_ASSET_DIR
@@ -116,6 +117,7 @@ struct Options {
   bool mirror = false;       // with xr: the eyes in a desktop window too
   std::string registration;  // the rig registered to the headset (rhot-calib headset)
   bool no_publish = false;
+  rhot::NodeKeyFlags node_keys;
 };
 
 void add_options(CLI::App& cli, Options& o) {
@@ -155,9 +157,11 @@ void add_options(CLI::App& cli, Options& o) {
   cli.add_option("--source", o.source,
                  "sim (the built-in simulated camera rig), replay:FILE (a recording made with --record), or video:DEV[,DEV...] "
                  "(real cameras, one per camera of --rig in rig order: a capture device index such as 0, a video file, or an image "
-                 "sequence such as cams/cam0_%04d.png; docs/demo.md), or nodes:ENDPOINT[,ENDPOINT...] (camera nodes, rhot-node, "
-                 "publishing at each ENDPOINT such as tcp://127.0.0.1:5601; docs/camera-nodes.md)")
+                 "sequence such as cams/cam0_%04d.png; docs/demo.md), or nodes:NAME@ENDPOINT[,NAME@ENDPOINT...] (camera nodes, "
+                 "rhot-node, each publishing at ENDPOINT such as tcp://127.0.0.1:5601, NAME.key its certificate in --keys DIR/trusted/; "
+                 "with --insecure, nodes:ENDPOINT[,...]; docs/camera-nodes.md)")
       ->capture_default_str();
+  rhot::add_node_key_flags(cli, o.node_keys);
   cli.add_option("--markers", o.markers,
                  "infrared (bright blobs, the low-cost hand layouts) or colour (seed 002's coloured markers: the colour hand layouts; "
                  "with --source sim, colour cameras drawn by the renderer on assets/rigs/stereo-640.yaml unless --rig; "
@@ -273,6 +277,12 @@ bool resolve_options(Options& o) {
     spdlog::error("--source: expected sim, replay:FILE, video:DEV[,DEV...] or nodes:ENDPOINT[,ENDPOINT...], got \"{}\"", o.source);
     return false;
   }
+  auto security = rhot::node_security_from(o.node_keys, !o.demo.node_endpoints.empty());
+  if (!security) {
+    spdlog::error("{}", security.error());
+    return false;
+  }
+  o.demo.node_security = std::move(*security);
   auto world = rhot::world_named(o.world);
   if (!world) {
     spdlog::error("{}", world.error());

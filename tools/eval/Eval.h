@@ -140,6 +140,10 @@ struct NodesArgs {
   // and objects, and the master tracks the hands from the nodes and, side by side, from an
   // in-process simulated rig of the same world at the same moments.
   std::string scene_file;
+  // Security: keys made for the run (CURVE between master and nodes) in keys_dir (kept; empty: a
+  // temporary folder, removed), or none with insecure.
+  std::string keys_dir;
+  bool insecure = false;
 };
 int nodes(const NodesArgs& args);
 // `rhot-eval colour`'s flags.

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
@@ -27,6 +28,7 @@
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
 #include "tracking/net/ChildProcess.h"
+#include "tracking/net/CurveKeys.h"
 #include "tracking/net/NodeSource.h"
 #include "tracking/sim/SimulatedRig.h"
 
@@ -35,7 +37,8 @@ namespace rhot::eval {
 namespace {
 
 struct NodePlan {
-  std::string endpoint;
+  std::string name;      // its key's (node<i>)
+  std::string endpoint;  // as the master names it: NAME@ENDPOINT with keys
   std::vector<std::string> argv;
   std::vector<int> cameras;
 };
@@ -171,7 +174,7 @@ bool load_demo(const NodesArgs& a, std::optional<DemoSimulation>& demo) {
 // The command line of node n, which publishes on `endpoint` and simulates `cameras`; the world's
 // time 0 is start_ns of the shared steady clock.
 std::vector<std::string> node_argv(const NodesArgs& a, int n, const std::filesystem::path& node_program, const std::string& endpoint,
-                                   const std::vector<int>& cameras, std::int64_t start_ns) {
+                                   const std::vector<int>& cameras, std::int64_t start_ns, const std::string& keys_dir) {
   std::string list;
   for (int c : cameras) list += (list.empty() ? "" : ",") + std::to_string(c);
   std::vector<std::string> argv = {node_program.string(),
@@ -194,6 +197,10 @@ std::vector<std::string> node_argv(const NodesArgs& a, int n, const std::filesys
                                    "--sim-start-ns",
                                    std::to_string(start_ns)};
   if (!a.scene_file.empty()) argv.insert(argv.end(), {"--sim-scene", a.scene_file});
+  if (keys_dir.empty())
+    argv.emplace_back("--insecure");
+  else
+    argv.insert(argv.end(), {"--keys", keys_dir + "/node" + std::to_string(n)});
   // Node 0 is the odd one: its clock and its link, as the flags say.
   if (n == 0) {
     argv.insert(argv.end(), {"--clock-offset-ms", std::to_string(a.clock_offset_ms), "--clock-drift-ppm", std::to_string(a.clock_drift_ppm),
@@ -204,14 +211,16 @@ std::vector<std::string> node_argv(const NodesArgs& a, int n, const std::filesys
 
 // Node n serves the cameras c with c % N == n and publishes on the n-th of `ports`.
 std::vector<NodePlan> plan_nodes(const NodesArgs& a, std::size_t camera_count, const std::filesystem::path& node_program,
-                                 const std::vector<int>& ports, std::int64_t start_ns) {
+                                 const std::vector<int>& ports, std::int64_t start_ns, const std::string& keys_dir) {
   std::vector<NodePlan> plans(static_cast<std::size_t>(a.nodes));
   for (int n = 0; n < a.nodes; ++n) {
     NodePlan& p = plans[static_cast<std::size_t>(n)];
     for (int c = n; c < static_cast<int>(camera_count); c += a.nodes) p.cameras.push_back(c);
     const int port = ports[static_cast<std::size_t>(n)];
-    p.endpoint = "tcp://127.0.0.1:" + std::to_string(port);
-    p.argv = node_argv(a, n, node_program, p.endpoint, p.cameras, start_ns);
+    p.name = "node" + std::to_string(n);
+    const std::string endpoint = "tcp://127.0.0.1:" + std::to_string(port);
+    p.endpoint = keys_dir.empty() ? endpoint : p.name + "@" + endpoint;
+    p.argv = node_argv(a, n, node_program, endpoint, p.cameras, start_ns, keys_dir);
   }
   return plans;
 }
@@ -228,6 +237,47 @@ bool spawn_nodes(const std::vector<NodePlan>& plans, const std::filesystem::path
     children.push_back(std::move(*child));
   }
   return true;
+}
+
+// The run's key folders in `dir`: master/ (trusting every node) and node<i>/ (trusting the master),
+// each key made unless it is there already. False after saying what failed.
+bool make_run_keys(const std::string& dir, int nodes) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names{"master"};
+  for (int n = 0; n < nodes; ++n) names.push_back("node" + std::to_string(n));
+  for (const std::string& name : names) {
+    if (fs::exists(fs::path(dir) / name / (name + ".key_secret"))) continue;
+    auto pair = make_key_pair(name);
+    if (pair) {
+      if (auto ok = write_certificates((fs::path(dir) / name).string(), *pair); !ok) pair = std::unexpected(ok.error());
+    }
+    if (!pair) {
+      std::cerr << "rhot-eval: " << pair.error() << "\n";
+      return false;
+    }
+  }
+  std::error_code ec;
+  for (const std::string& name : names) {
+    // The master trusts every node; each node trusts the master.
+    const std::vector<std::string> peers =
+        name == "master" ? std::vector<std::string>(names.begin() + 1, names.end()) : std::vector<std::string>{"master"};
+    fs::create_directories(fs::path(dir) / name / "trusted", ec);
+    for (const std::string& peer : peers)
+      fs::copy_file(fs::path(dir) / peer / (peer + ".key"), fs::path(dir) / name / "trusted" / (peer + ".key"),
+                    fs::copy_options::overwrite_existing, ec);
+    if (ec) {
+      std::cerr << "rhot-eval: " << dir << "/" << name << "/trusted: " << ec.message() << "\n";
+      return false;
+    }
+  }
+  return true;
+}
+
+// This process's CPU time so far (every thread: the receiving thread and ZeroMQ's I/O thread too).
+double process_cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) / 1e6;
 }
 
 NodeSourceSettings source_settings(const NodesArgs& a, std::int64_t start_ns) {
@@ -425,9 +475,27 @@ nlohmann::json per_node_report(const NodesArgs& a, const NodeSourceStats& stats)
                         {"lost", n.lost},
                         {"rejoined", n.rejoined},
                         {"node_detect_ms", n.node_detect_ms},
-                        {"node_dropped", n.node_dropped}});
+                        {"node_dropped", n.node_dropped},
+                        {"handshake_ms", n.handshake_ms},
+                        {"handshakes_failed", n.handshakes_failed},
+                        {"refused_by_node", n.refused_by_node}});
   }
   return per_node;
+}
+
+// Security's keys: which, the handshakes' times (first connection, over the nodes) and failures.
+void security_report(const NodesArgs& a, const NodeSourceStats& stats, nlohmann::json& j) {
+  j["security"] = a.insecure ? "none" : "curve";
+  std::vector<double> handshakes;
+  std::uint64_t failed = 0;
+  for (const NodeStats& n : stats.nodes) {
+    if (n.handshake_ms >= 0.0) handshakes.push_back(n.handshake_ms);
+    failed += n.handshakes_failed;
+  }
+  std::sort(handshakes.begin(), handshakes.end());
+  j["handshake_median_ms"] = handshakes.empty() ? -1.0 : handshakes[handshakes.size() / 2];
+  j["handshake_max_ms"] = handshakes.empty() ? -1.0 : handshakes.back();
+  j["handshakes_failed"] = failed;
 }
 
 // The JSON rhot-eval nodes prints.
@@ -486,6 +554,7 @@ nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSo
   j["out_of_order"] = stats.assembly.out_of_order;
   j["deadline_frames"] = stats.assembly.deadline_frames;
   j["bad_messages"] = stats.bad_messages;
+  security_report(a, stats, j);
   j["per_node"] = per_node_report(a, stats);
   return j;
 }
@@ -516,13 +585,32 @@ int nodes(const NodesArgs& a) {
   // ahead for the nodes to start and subscribe (a sanitizer build on a busy 2-core machine takes
   // over a second to start four processes).
   const std::int64_t start_ns = steady_now_ns() + 3'000'000'000;
-  const std::vector<NodePlan> plans = plan_nodes(a, rig->cameras.size(), node_program, *ports, start_ns);
+  const std::filesystem::path temporary_keys =
+      std::filesystem::temp_directory_path() / ("rhot-eval-nodes-keys-" + std::to_string(::getpid()));
+  const std::string keys_dir = a.insecure ? std::string() : a.keys_dir.empty() ? temporary_keys.string() : a.keys_dir;
+  struct RemoveKeys {
+    std::filesystem::path dir;
+    ~RemoveKeys() {
+      std::error_code ec;
+      if (!dir.empty()) std::filesystem::remove_all(dir, ec);
+    }
+  } remove_keys{!a.insecure && a.keys_dir.empty() ? temporary_keys : std::filesystem::path()};
+  if (!keys_dir.empty() && !make_run_keys(keys_dir, a.nodes)) return 1;
+  const std::vector<NodePlan> plans = plan_nodes(a, rig->cameras.size(), node_program, *ports, start_ns, keys_dir);
   const std::filesystem::path log = std::filesystem::temp_directory_path() / ("rhot-eval-nodes-" + std::to_string(::getpid()) + ".log");
   std::vector<ChildProcess> children;
   if (!spawn_nodes(plans, log, children)) return 1;
   std::vector<std::string> endpoints;
   for (const NodePlan& p : plans) endpoints.push_back(p.endpoint);
-  const NodeSourceSettings settings = source_settings(a, start_ns);
+  NodeSourceSettings settings = source_settings(a, start_ns);
+  if (!keys_dir.empty()) {
+    auto ring = load_key_ring(keys_dir + "/master");
+    if (!ring) {
+      std::cerr << "rhot-eval: " << ring.error() << "\n";
+      return 1;
+    }
+    settings.security = std::move(*ring);
+  }
   auto source = NodeSource::open(*rig, endpoints, settings);
   if (!source) {
     std::cerr << "rhot-eval: " << source.error() << "\n";
@@ -547,10 +635,15 @@ int nodes(const NodesArgs& a) {
                      .frames_expected = static_cast<std::int64_t>(std::floor(a.seconds * a.rate_hz)),
                      .victim = a.nodes - 1};
   NodesTally tally;
+  const double cpu0 = process_cpu_s();
   run_master(run, tally);
+  const double master_cpu_s = process_cpu_s() - cpu0;
   const NodeSourceStats stats = (*source)->stats();
   for (ChildProcess& c : children) c.stop(2.0);
-  std::cout << report(run, tally, stats).dump(2) << std::endl;
+  nlohmann::json j = report(run, tally, stats);
+  // The master's CPU per assembled frame (decryption is ZeroMQ's I/O thread's), beside the run's.
+  j["master_cpu_ms_per_frame"] = tally.assembled.empty() ? 0.0 : master_cpu_s * 1e3 / static_cast<double>(tally.assembled.size());
+  std::cout << j.dump(2) << std::endl;
   std::error_code ec;
   std::filesystem::remove(log, ec);
   return 0;

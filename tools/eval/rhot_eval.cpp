@@ -229,6 +229,10 @@ CLI::App* add_nodes_command(CLI::App& app, NodesArgs& a, bool& json) {
   cmd->add_option("--delay-ms", a.delay_ms, "node 0 holds each frame this long (a slow link)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 10000.0));
+  cmd->add_option("--keys", a.keys_dir,
+                  "make the run's keys (master/ and node<i>/ key folders, as rhot-node keygen writes them) in this folder and keep "
+                  "them (default: a temporary folder); keys already there are used")
+      ->excludes(cmd->add_flag("--insecure", a.insecure, "master and nodes without CURVE (to measure what security costs)"));
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }

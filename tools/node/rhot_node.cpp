@@ -25,6 +25,7 @@
 #include "tracking/sim/SimulatedRig.h"
 #include "tracking/source/VideoSource.h"
 #include "tools/common/CliExit.h"
+#include "tools/common/NodeKeys.h"
 #include "tools/common/NumberChecks.h"
 
 namespace {
@@ -55,6 +56,7 @@ struct Options {
   double clock_drift_ppm = 0.0;
   double delay_ms = 0.0;
   double seconds = 0.0;
+  rhot::NodeKeyFlags keys;
 };
 
 // Per-second rate and detection time for status replies.
@@ -151,6 +153,7 @@ int run_simulated(const Options& o, rhot::NodeServer& server) {
       const std::int64_t next = outbox.queue.empty() ? exposure : std::min(exposure, outbox.queue.front().first);
       if (now >= exposure) break;
       server.serve_until(next);
+      for (const std::string& w : server.take_warnings()) spdlog::warn("{}", w);
     }
     const std::int64_t began = rhot::steady_now_ns();
     if (began - exposure > period) {
@@ -217,6 +220,7 @@ int run_device(const Options& o, rhot::NodeServer& server) {
   while (!g_stop && rhot::steady_now_ns() < end) {
     // Files and image sequences are paced at --rate-hz; a device delivers at its own rate.
     server.serve_until(next_frame);
+    for (const std::string& w : server.take_warnings()) spdlog::warn("{}", w);
     outbox.send_due(server, rhot::steady_now_ns());
     const std::int64_t grabbed = rhot::steady_now_ns();
     auto frame = source->next();
@@ -295,10 +299,31 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(rhot::number_check(rhot::NumberBound::kNonNegative))  // CLI::Range lets nan through: a node that never stops
       ->check(CLI::Range(0.0, 1e7));
+  rhot::add_node_key_flags(cli, o.keys);
+  std::string keygen_out, keygen_name;
+  CLI::App* keygen = cli.add_subcommand(
+      "keygen",
+      "Make a key pair for the camera network: DIR/NAME.key (public: give it to the peers that are to trust it, into their "
+      "trusted/) and DIR/NAME.key_secret (this machine's only), in ZeroMQ's certificate format");
+  keygen->add_option("--out", keygen_out, "The folder to write them to (made if needed)")->required();
+  keygen->add_option("--name", keygen_name, "The key's name: letters, digits, _ . - (e.g. node0, master)")->required();
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return rhot::cli_exit_status(cli, e);
+  }
+  if (keygen->parsed()) {
+    auto pair = rhot::make_key_pair(keygen_name);
+    if (pair) {
+      if (auto ok = rhot::write_certificates(keygen_out, *pair); !ok) pair = std::unexpected(ok.error());
+    }
+    if (!pair) {
+      spdlog::error("keygen: {}", pair.error());
+      return 1;
+    }
+    std::printf("%s/%s.key (public: give it to the peers that are to trust it)\n%s/%s.key_secret (keep it here)\n", keygen_out.c_str(),
+                keygen_name.c_str(), keygen_out.c_str(), keygen_name.c_str());
+    return 0;
   }
   if (print_clock) {
     std::printf("%lld\n", static_cast<long long>(rhot::steady_now_ns()));
@@ -331,8 +356,13 @@ int main(int argc, char** argv) {
   clock.drift_ppm = o.clock_drift_ppm;
   // A simulated node's clock error starts with the simulated world, so a test knows its true offset.
   clock.start_ns = o.sim_start_ns.value_or(rhot::steady_now_ns());
+  const auto security = rhot::node_security_from(o.keys, true);
+  if (!security) {
+    spdlog::error("{}", security.error());
+    return 1;
+  }
   const auto cameras = static_cast<std::uint16_t>(o.sim_rig.empty() ? 1 : o.sim_cameras.size());
-  auto server = rhot::NodeServer::open(o.publish, o.control, static_cast<std::uint16_t>(o.node_id), cameras, clock);
+  auto server = rhot::NodeServer::open(o.publish, o.control, static_cast<std::uint16_t>(o.node_id), cameras, clock, *security);
   if (!server) {
     spdlog::error("{}", server.error());
     return 1;
@@ -341,7 +371,11 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   const int rc = o.sim_rig.empty() ? run_device(o, **server) : run_simulated(o, **server);
   const auto& s = (*server)->stats();
+  for (const std::string& w : (*server)->take_warnings()) spdlog::warn("{}", w);
   spdlog::info("node {}: {} frames published, {} dropped, {} requests answered ({} not understood)", o.node_id, s.frames_published,
                s.frames_dropped, s.requests, s.bad_requests);
+  if (*security)
+    spdlog::info("node {}: {} master connections admitted, {} peers refused (key not trusted), {} failed handshakes", o.node_id,
+                 s.masters_admitted, s.peers_refused, s.handshakes_failed);
   return rc;
 }

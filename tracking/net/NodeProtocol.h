@@ -22,6 +22,13 @@
 namespace rhot {
 
 inline constexpr std::uint8_t kNodeProtocolVersion = 1;
+
+// Whether the n-th occurrence of something on the network is told: the 1st, 10th, 100th ... (a
+// flood of bad messages or refused peers is counted, not logged line by line).
+inline bool worth_telling(std::uint64_t n) {
+  while (n >= 10 && n % 10 == 0) n /= 10;
+  return n == 1;
+}
 inline constexpr std::size_t kNodeHeaderBytes = 4;
 // A frame's fixed part after the header, and each detection's bytes.
 inline constexpr std::size_t kFrameFixedBytes = 30;

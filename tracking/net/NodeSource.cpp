@@ -19,6 +19,7 @@
 
 #include "tracking/net/ClockSync.h"
 #include "tracking/net/NodeProtocol.h"
+#include "tracking/net/SocketSecurity.h"
 
 namespace rhot {
 
@@ -54,6 +55,19 @@ std::string control_endpoint_for(const std::string& publish) {
   return publish + ".control";
 }
 
+std::expected<NodeAddress, std::string> parse_node_address(const std::string& item) {
+  NodeAddress out;
+  out.endpoint = item;
+  const auto at = item.find('@');
+  if (at != std::string::npos && item.find("://") > at) {
+    out.name = item.substr(0, at);
+    out.endpoint = item.substr(at + 1);
+    if (auto ok = check_key_name(out.name); !ok) return std::unexpected("node \"" + item + "\": " + ok.error());
+  }
+  if (auto ok = check_endpoint(out.endpoint); !ok) return std::unexpected(ok.error());
+  return out;
+}
+
 std::expected<std::vector<std::string>, std::string> parse_node_endpoints(const std::string& list) {
   std::vector<std::string> out;
   std::size_t start = 0;
@@ -61,8 +75,11 @@ std::expected<std::vector<std::string>, std::string> parse_node_endpoints(const 
     const auto comma = list.find(',', start);
     const std::string item = list.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     if (item.empty()) return std::unexpected("node endpoints \"" + list + "\": an empty entry");
-    if (auto ok = check_endpoint(item); !ok) return std::unexpected(ok.error());
-    if (std::find(out.begin(), out.end(), item) != out.end()) return std::unexpected("node endpoints \"" + list + "\": " + item + " twice");
+    const auto address = parse_node_address(item);
+    if (!address) return std::unexpected(address.error());
+    for (const std::string& earlier : out)
+      if (parse_node_address(earlier)->endpoint == address->endpoint)
+        return std::unexpected("node endpoints \"" + list + "\": " + address->endpoint + " twice");
     out.push_back(item);
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -105,16 +122,6 @@ std::expected<std::vector<int>, std::string> free_tcp_port_pairs(int count) {
   return out;
 }
 
-namespace {
-
-// Warnings at the 1st, 10th, 100th ... occurrence of each kind.
-bool worth_telling(std::uint64_t n) {
-  while (n >= 10 && n % 10 == 0) n /= 10;
-  return n == 1;
-}
-
-}  // namespace
-
 struct NodeSource::Impl {
   struct Node {
     std::string endpoint;
@@ -127,7 +134,20 @@ struct NodeSource::Impl {
     std::int64_t next_status_ns = 0;
     std::int64_t first_sync_ns = 0;
     std::uint32_t sequence = 0;
+    std::string node_name{};  // its certificate's, with security
+    std::string address{};    // the endpoint without the name
+    std::optional<CurveKey> node_key{};
+    // With security, each socket's handshakes; a socket whose session ZeroMQ ended for a protocol
+    // error (a bad key, injected or replayed bytes: ZeroMQ does not reconnect those) is opened
+    // anew at its reopen time (0: not due).
+    std::unique_ptr<HandshakeMonitor> frames_monitor{}, control_monitor{};
+    std::int64_t reopen_frames_ns = 0, reopen_control_ns = 0;
+    std::int64_t connected_ns = 0;  // the latest TCP connection, for the handshake's time
   };
+
+  // How long after a protocol error a node's socket is opened anew: a peer that keeps failing the
+  // handshake is retried twice a second, not in a busy loop.
+  static constexpr std::int64_t kReopenAfter_ns = 500'000'000;
 
   CameraRig rig;
   NodeSourceSettings settings;
@@ -256,6 +276,87 @@ struct NodeSource::Impl {
     }
   }
 
+  // (Re)opens a node's frame (SUB) or control (DEALER) socket: its options, its security and
+  // handshake monitor, its connection.
+  std::expected<void, std::string> open_socket(Node& node, bool frames) {
+    zmq::socket_t& socket = frames ? node.frames : node.control;
+    std::unique_ptr<HandshakeMonitor>& monitor = frames ? node.frames_monitor : node.control_monitor;
+    monitor.reset();
+    try {
+      socket = zmq::socket_t(context, frames ? zmq::socket_type::sub : zmq::socket_type::dealer);
+      socket.set(zmq::sockopt::linger, 0);
+      // A peer sending more than any message can be is disconnected by ZeroMQ before it is read.
+      socket.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxNodeMessageBytes));
+      socket.set(zmq::sockopt::reconnect_ivl, 100);
+      socket.set(zmq::sockopt::reconnect_ivl_max, 500);
+      if (frames) {
+        socket.set(zmq::sockopt::rcvhwm, 1000);
+        socket.set(zmq::sockopt::subscribe, "");
+      } else {
+        socket.set(zmq::sockopt::immediate, 1);
+        socket.set(zmq::sockopt::sndhwm, 16);
+      }
+      if (node.node_key) {
+        if (auto ok = make_curve_client(socket.handle(), *settings.security, *node.node_key); !ok) return ok;
+        auto attached = HandshakeMonitor::attach(context.handle(), socket.handle());
+        if (!attached) return std::unexpected(attached.error());
+        monitor = std::move(*attached);
+      }
+      socket.connect(frames ? node.address : control_endpoint_for(node.address));
+    } catch (const zmq::error_t& e) {
+      return std::unexpected(std::string(e.what()));
+    }
+    return {};
+  }
+
+  // Sockets due to be opened anew; true when any was (the poll's items change).
+  bool reopen_due(std::int64_t now) {
+    bool changed = false;
+    for (Node& node : nodes)
+      for (const bool frames : {true, false}) {
+        std::int64_t& due = frames ? node.reopen_frames_ns : node.reopen_control_ns;
+        if (due == 0 || now < due) continue;
+        due = 0;
+        changed = true;
+        if (auto ok = open_socket(node, frames); !ok) {
+          std::lock_guard lock(mutex);
+          warn("node " + node.endpoint + ": cannot open its socket again: " + ok.error());
+        }
+      }
+    return changed;
+  }
+
+  void handshakes(Node& node) {
+    using Kind = HandshakeMonitor::Event::Kind;
+    for (const bool frames : {true, false}) {
+      const std::unique_ptr<HandshakeMonitor>& monitor = frames ? node.frames_monitor : node.control_monitor;
+      if (!monitor) continue;
+      for (const HandshakeMonitor::Event& e : monitor->drain()) {
+        const std::int64_t now = steady_now_ns();
+        if (e.kind == Kind::kFailedProtocol || e.kind == Kind::kFailedAuth)
+          (frames ? node.reopen_frames_ns : node.reopen_control_ns) = now + kReopenAfter_ns;
+        std::lock_guard lock(mutex);
+        if (e.kind == Kind::kConnected) {
+          node.connected_ns = now;
+        } else if (e.kind == Kind::kSucceeded) {
+          if (node.stats.handshake_ms < 0.0 && node.connected_ns > 0)
+            node.stats.handshake_ms = static_cast<double>(now - node.connected_ns) / 1e6;
+        } else if (e.kind == Kind::kFailedAuth) {
+          ++node.stats.handshakes_failed;
+          if (worth_telling(++node.stats.refused_by_node))
+            warn("node " + node.endpoint + " refused this master's key (status " + std::to_string(e.value) +
+                 "): its key folder's trusted/ lacks this master's public certificate (" + std::to_string(node.stats.refused_by_node) +
+                 " refusals so far)");
+        } else if (e.kind == Kind::kFailedNoDetail || e.kind == Kind::kFailedProtocol) {
+          if (worth_telling(++node.stats.handshakes_failed - node.stats.refused_by_node))
+            warn("node " + node.endpoint + ": the handshake failed: whoever answers there cannot prove it holds " + node.node_name +
+                 "'s secret key, or runs without security, or the bytes on the way were not the node's; nothing from it is read (" +
+                 std::to_string(node.stats.handshakes_failed - node.stats.refused_by_node) + " so far)");
+        }
+      }
+    }
+  }
+
   void liveness(std::int64_t now) {
     std::lock_guard lock(mutex);
     const auto lost_after = static_cast<std::int64_t>(settings.lost_after_s * 1e9);
@@ -271,12 +372,19 @@ struct NodeSource::Impl {
     }
   }
 
-  void run() {
+  std::vector<zmq::pollitem_t> poll_items() {
     std::vector<zmq::pollitem_t> items;
     for (Node& node : nodes) {
       items.push_back({node.frames.handle(), 0, ZMQ_POLLIN, 0});
       items.push_back({node.control.handle(), 0, ZMQ_POLLIN, 0});
+      for (const auto* monitor : {node.frames_monitor.get(), node.control_monitor.get()})
+        if (monitor) items.push_back({monitor->socket(), 0, ZMQ_POLLIN, 0});
     }
+    return items;
+  }
+
+  void run() {
+    std::vector<zmq::pollitem_t> items = poll_items();
     while (!stop.load()) {
       try {
         zmq::poll(items.data(), items.size(), std::chrono::milliseconds(2));
@@ -285,6 +393,7 @@ struct NodeSource::Impl {
       }
       for (std::size_t i = 0; i < nodes.size(); ++i) {
         Node& node = nodes[i];
+        handshakes(node);
         zmq::message_t message;
         // Everything waiting, so a burst never queues behind the poll.
         while (node.frames.recv(message, zmq::recv_flags::dontwait)) on_frame(node, message, steady_now_ns());
@@ -297,6 +406,7 @@ struct NodeSource::Impl {
       const std::int64_t now = steady_now_ns();
       requests(now);
       liveness(now);
+      if (reopen_due(now)) items = poll_items();
     }
   }
 
@@ -340,27 +450,31 @@ std::expected<std::unique_ptr<NodeSource>, std::string> NodeSource::open(const C
       settings.assembly.deadline_ns < settings.assembly.tolerance_ns)
     return std::unexpected(std::string("node source: settings out of range (times must be positive; the deadline at least the tolerance)"));
   auto impl = std::make_unique<Impl>(rig, settings);
+  const NetSecurity& security = impl->settings.security;
   try {
-    for (const std::string& endpoint : endpoints) {
-      if (auto ok = check_endpoint(endpoint); !ok) return std::unexpected(ok.error());
-      Impl::Node node{endpoint, zmq::socket_t(impl->context, zmq::socket_type::sub), zmq::socket_t(impl->context, zmq::socket_type::dealer),
-                      ClockSync{}, NodeStats{}};
-      node.stats.endpoint = endpoint;
-      node.frames.set(zmq::sockopt::linger, 0);
-      node.frames.set(zmq::sockopt::rcvhwm, 1000);
-      node.frames.set(zmq::sockopt::subscribe, "");
-      // A peer sending more than any message can be is disconnected by ZeroMQ before it is read.
-      node.frames.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxNodeMessageBytes));
-      node.frames.set(zmq::sockopt::reconnect_ivl, 100);
-      node.frames.set(zmq::sockopt::reconnect_ivl_max, 500);
-      node.frames.connect(endpoint);
-      node.control.set(zmq::sockopt::linger, 0);
-      node.control.set(zmq::sockopt::immediate, 1);
-      node.control.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxNodeMessageBytes));
-      node.control.set(zmq::sockopt::sndhwm, 16);
-      node.control.set(zmq::sockopt::reconnect_ivl, 100);
-      node.control.set(zmq::sockopt::reconnect_ivl_max, 500);
-      node.control.connect(control_endpoint_for(endpoint));
+    for (const std::string& item : endpoints) {
+      const auto address = parse_node_address(item);
+      if (!address) return std::unexpected(address.error());
+      const std::string& endpoint = address->endpoint;
+      const Certificate* node_key = nullptr;
+      if (security) {
+        if (address->name.empty())
+          return std::unexpected("node " + endpoint + ": with keys, name each node as NAME@" + endpoint +
+                                 ", NAME.key being its certificate in " + security->dir + "/trusted/");
+        node_key = security->trusted_named(address->name);
+        if (!node_key) {
+          std::string have;
+          for (const Certificate& c : security->trusted) have += (have.empty() ? "" : ", ") + c.name;
+          return std::unexpected("node " + item + ": no " + security->dir + "/trusted/" + address->name + ".key (it holds " + have + ")");
+        }
+      }
+      Impl::Node node{item, zmq::socket_t(), zmq::socket_t(), ClockSync{}, NodeStats{}};
+      node.stats.endpoint = item;
+      node.node_name = address->name;
+      node.address = endpoint;
+      if (node_key) node.node_key = node_key->public_key;
+      for (const bool frames : {true, false})
+        if (auto ok = impl->open_socket(node, frames); !ok) return std::unexpected("node " + item + ": " + ok.error());
       node.first_sync_ns = steady_now_ns();
       impl->nodes.push_back(std::move(node));
     }

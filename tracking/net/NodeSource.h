@@ -12,6 +12,12 @@
 // from which nothing came for lost_after_s is lost: no longer waited for, shown in the warnings,
 // stats() and summary(); it rejoins with its next frame (ZeroMQ reconnects by itself). The clock:
 // the steady clock of the master's machine, in nanoseconds; RigFrame::time_s counts from open().
+//
+// With a key folder (NodeSourceSettings::security, CurveKeys.h) each node is named in the list as
+// NAME@ENDPOINT, NAME being its public certificate in the folder's trusted/ (NAME.key): the
+// master is the CURVE client of that key (SocketSecurity.h), so whatever answers at the endpoint
+// without the matching secret key is never heard, and everything on the wire is encrypted. Failed
+// handshakes are counted per node and told at the 1st, 10th, 100th ...
 
 #include <cstdint>
 #include <expected>
@@ -21,6 +27,7 @@
 #include <vector>
 
 #include "tracking/camera/Camera.h"
+#include "tracking/net/CurveKeys.h"
 #include "tracking/net/FrameAssembler.h"
 #include "tracking/source/FrameSource.h"
 
@@ -35,7 +42,14 @@ std::int64_t steady_now_ns();
 [[nodiscard]] std::expected<void, std::string> check_endpoint(const std::string& endpoint, bool allow_wildcard = false);
 // A node's control endpoint beside its publish endpoint: tcp port + 1, or PATH.control.
 std::string control_endpoint_for(const std::string& publish);
-// "tcp://127.0.0.1:5601,tcp://127.0.0.1:5603" -> the endpoints, each checked.
+// One node of a master's list: NAME@ENDPOINT, or ENDPOINT without a name (a master without keys).
+struct NodeAddress {
+  std::string name;  // its certificate's name (NAME.key in the master's trusted keys); empty: none given
+  std::string endpoint;
+};
+[[nodiscard]] std::expected<NodeAddress, std::string> parse_node_address(const std::string& item);
+// "node0@tcp://127.0.0.1:5601,node1@tcp://127.0.0.1:5603" -> the items as given, each checked
+// (parse_node_address), no endpoint twice.
 [[nodiscard]] std::expected<std::vector<std::string>, std::string> parse_node_endpoints(const std::string& list);
 
 // `count` loopback TCP ports P, each with P + 1 free too (a node's publish and control ports),
@@ -51,6 +65,9 @@ struct NodeSourceSettings {
   // RigFrame::time_s counts from this moment of the master's clock (empty: open()). A simulation
   // shared by nodes and master sets it to the simulated world's time 0.
   std::optional<std::int64_t> time_origin_ns;
+  // The master's key folder (its own secret key; in trusted/ each node's public certificate), or
+  // none: --insecure, every node heard, nothing encrypted.
+  NetSecurity security;
 };
 
 struct NodeStats {
@@ -66,6 +83,12 @@ struct NodeStats {
   double clock_drift_ppm = 0.0;
   double clock_residual_us = 0.0;
   double min_rtt_us = 0.0;
+  // Security: handshakes that failed (whoever answers cannot prove the node's key, or runs without
+  // security), those of them the node refused (it does not trust this master's key), and the
+  // first connection's handshake time (from the TCP connection to its success; -1: none yet).
+  std::uint64_t handshakes_failed = 0;
+  std::uint64_t refused_by_node = 0;
+  double handshake_ms = -1.0;
   // From its latest status reply.
   double node_rate_hz = 0.0;
   double node_detect_ms = 0.0;

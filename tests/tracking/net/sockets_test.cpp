@@ -38,7 +38,7 @@ TEST(NodeServer, JunkRequestsAreAnsweredAsNotUnderstoodAndTheNodeGoesOn) {
   ASSERT_TRUE(ports.has_value()) << ports.error();
   NodeClock clock;
   clock.offset_ns = 5'000'000;  // the node's clock 5 ms ahead
-  auto server = NodeServer::open(tcp((*ports)[0]), tcp((*ports)[0] + 1), 7, 1, clock);
+  auto server = NodeServer::open(tcp((*ports)[0]), tcp((*ports)[0] + 1), 7, 1, clock, NetSecurity{});
   ASSERT_TRUE(server.has_value()) << server.error();
   std::atomic<bool> stop{false};
   std::thread serving([&] {
