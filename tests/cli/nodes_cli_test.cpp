@@ -16,12 +16,15 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/NodesRun.h"
 #include "tests/support/Sanitizers.h"
 #include "tests/support/RunCommand.h"
 #include "tracking/net/ChildProcess.h"
 #include "tracking/net/NodeSource.h"
 
 namespace {
+
+using rhot::test::run_nodes;
 
 // Frames a loaded 2-core machine may lose or see incomplete to scheduling. Under AddressSanitizer
 // (CI's build) every process runs two to three times slower, so a few frames more miss the
@@ -35,32 +38,6 @@ constexpr int kSchedulingSlackFrames = 2;
 constexpr double kFoundFloor = 0.98;
 constexpr double kHandsSeenFloor = 0.99;
 #endif
-
-nlohmann::json run_nodes_once(const std::string& args) {
-  const auto r = rhot::test::run_program("rhot-eval", "nodes " + args + " --json", "2>/dev/null");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  try {
-    return nlohmann::json::parse(r.output);
-  } catch (const nlohmann::json::exception& e) {
-    ADD_FAILURE() << e.what() << "\n" << r.output;
-    return {};
-  }
-}
-
-// These tests measure the transport, and need a machine that keeps real time. Whether it did is
-// measured too: exposures no node made (each skipped them, behind real time: a shared machine
-// stalled). A run where more than 1 % were not made is run again, up to three runs; the last is
-// returned whatever it measured, so a machine that never keeps time still fails.
-nlohmann::json run_nodes(const std::string& args) {
-  nlohmann::json j;
-  for (int attempt = 0; attempt < 3; ++attempt) {
-    j = run_nodes_once(args);
-    if (!j.contains("frames_not_made") || j["frames_not_made"].get<int>() * 100 <= j["frames_expected"].get<int>()) return j;
-    std::fprintf(stderr, "run %d: the machine stalled (%d of %d exposures not made by any node); again\n", attempt + 1,
-                 j["frames_not_made"].get<int>(), j["frames_expected"].get<int>());
-  }
-  return j;
-}
 
 // Frames lost on the way: at most `transport` (the machine's scheduling), however many exposures
 // the nodes themselves skipped (a node behind real time skips to the present; a whole-machine

@@ -144,6 +144,9 @@ struct NodesArgs {
   // temporary folder, removed), or none with insecure.
   std::string keys_dir;
   bool insecure = false;
+  // --chaos SECONDS: faults thrown at the nodes and the master for this long (Chaos.h), the run's
+  // length.
+  std::optional<double> chaos_s;
 };
 int nodes(const NodesArgs& args);
 // `rhot-eval colour`'s flags.

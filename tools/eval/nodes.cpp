@@ -24,6 +24,7 @@
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/Demo.h"
 #include "engine/tracked/LiveTracking.h"
+#include "tools/eval/Chaos.h"
 #include "tools/eval/Eval.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/geometry/Matching.h"
@@ -144,6 +145,10 @@ struct HandComparison {
 bool check_args(const NodesArgs& a, const CameraRig& rig) {
   if (a.nodes > static_cast<int>(rig.cameras.size())) {
     std::cerr << "rhot-eval: --nodes " << a.nodes << ": " << a.rig_file << " has only " << rig.cameras.size() << " cameras\n";
+    return false;
+  }
+  if (a.chaos_s && (a.kill_at || a.restart_at)) {
+    std::cerr << "rhot-eval: --chaos kills and restarts nodes itself: not with --kill-node-at or --restart-node-at\n";
     return false;
   }
   if (a.restart_at && (!a.kill_at || *a.restart_at <= *a.kill_at)) {
@@ -329,12 +334,39 @@ struct NodesRun {
   std::int64_t start_ns;
   std::int64_t period_ns;
   std::int64_t frames_expected;
-  int victim;  // the node killed and restarted
+  int victim;              // the node killed and restarted
+  Chaos* chaos = nullptr;  // with --chaos
 };
 
-// What the master's loop counts.
+// The exposures assembled, a flag each, allocated once: a set would grow through a long run, which
+// --chaos's memory figure would count as the master's.
+class ExposureSet {
+ public:
+  explicit ExposureSet(std::int64_t exposures) : flags_(static_cast<std::size_t>(std::max<std::int64_t>(exposures, 0)), 0) {}
+  void insert(std::int64_t k) {
+    if (k < 0 || k >= static_cast<std::int64_t>(flags_.size()) || flags_[static_cast<std::size_t>(k)]) return;
+    flags_[static_cast<std::size_t>(k)] = 1;
+    ++count_;
+  }
+  bool contains(std::int64_t k) const {
+    return k >= 0 && k < static_cast<std::int64_t>(flags_.size()) && flags_[static_cast<std::size_t>(k)];
+  }
+  std::size_t size() const { return count_; }
+  bool empty() const { return count_ == 0; }
+
+ private:
+  std::vector<char> flags_;
+  std::size_t count_ = 0;
+};
+
+// What the master's loop counts. Its per-frame records are allocated for the whole run at the
+// start, so the run's memory is the master's.
 struct NodesTally {
-  std::set<std::int64_t> assembled;
+  NodesTally(std::int64_t exposures, std::size_t cameras) : assembled(exposures) {
+    assembly_ms.reserve(static_cast<std::size_t>(exposures));
+    latency_ms.reserve(static_cast<std::size_t>(exposures) * cameras);
+  }
+  ExposureSet assembled;
   // Per camera: the counter and exposure of its last message in a frame, and the exposures its
   // node never made (behind real time it skips to the present, or it was not running): the
   // counter counts the messages made, so a gap in exposures wider than the gap in counters is
@@ -349,7 +381,33 @@ struct NodesTally {
   long found = 0, truth_total = 0, found_down = 0, truth_down = 0;
   bool killed = false, restarted = false, rejoined = false;
   std::int64_t complete = 0;
+  long wrong_markers = 0;                       // detections far from every true marker's image
+  long memory_start_kb = 0, memory_end_kb = 0;  // the master's resident memory, after its start and at the end
+  long heap_start_kb = 0, heap_end_kb = 0;      // and its heap in use
 };
+
+// A detection further than this from every true marker's image is not a marker (the nodes'
+// noise is a fraction of a pixel).
+constexpr double kWrongMarker_px = 5.0;
+
+// Detections of f not within kWrongMarker_px of any true marker's image at exposure time t.
+long wrong_markers_in(const NodesRun& run, const AssembledFrame& f, double t) {
+  long wrong = 0;
+  std::vector<Eigen::Vector3d> truth;
+  for (const Trajectory& m : run.markers) truth.push_back(m.at(t));
+  for (std::size_t c = 0; c < f.cameras.size() && c < run.rig.cameras.size(); ++c) {
+    if (!f.cameras[c]) continue;
+    std::vector<Eigen::Vector2d> images;
+    for (const Eigen::Vector3d& p : truth)
+      if (const auto px = run.rig.cameras[c].project(p)) images.push_back(*px);
+    for (const Detection& d : f.cameras[c]->detections) {
+      const bool near =
+          std::any_of(images.begin(), images.end(), [&](const Eigen::Vector2d& i) { return (i - d.pixel).norm() < kWrongMarker_px; });
+      wrong += near ? 0 : 1;
+    }
+  }
+  return wrong;
+}
 
 // Kills the victim node at --kill-node-at and starts it again at --restart-node-at, t_now seconds
 // into the run.
@@ -429,6 +487,7 @@ void tally_frame(const NodesRun& run, const AssembledFrame& f, NodesTally& tally
     run.hands.local_hands.step(t, truth);
     return;
   }
+  tally.wrong_markers += wrong_markers_in(run, f, t);
   const std::vector<MatchedPoint> points = match_and_triangulate(run.rig, frame, run.match);
   std::vector<Eigen::Vector3d> truth;
   for (const Trajectory& m : run.markers) truth.push_back(m.at(t));
@@ -448,9 +507,19 @@ void run_master(const NodesRun& run, NodesTally& tally) {
   const std::int64_t end_ns = run.start_ns + static_cast<std::int64_t>(a.seconds * 1e9) + run.settings.assembly.deadline_ns + 50'000'000;
   double next_progress_s = 1.0;
   bool more = true;
+  // Memory is first read once the run is past its start: the clock fits' 10 s windows filled, the
+  // nodes each restarted once or so.
+  const double memory_at_s = std::min(15.0, 0.25 * a.seconds);
   while (steady_now_ns() < end_ns || more) {
     const double t_now = static_cast<double>(steady_now_ns() - run.start_ns) / 1e9;
-    kill_or_restart_victim(run, t_now, tally);
+    if (run.chaos)
+      run.chaos->step(t_now);
+    else
+      kill_or_restart_victim(run, t_now, tally);
+    if (tally.memory_start_kb == 0 && t_now >= memory_at_s) {
+      tally.memory_start_kb = resident_kb();
+      tally.heap_start_kb = heap_in_use_kb();
+    }
     if (t_now >= next_progress_s) {
       spdlog::info("{:.0f} of {:.0f} s", next_progress_s, a.seconds);
       next_progress_s += 1.0;
@@ -458,8 +527,13 @@ void run_master(const NodesRun& run, NodesTally& tally) {
     for (const std::string& w : run.source.take_warnings()) spdlog::warn("{}", w);
     const std::vector<AssembledFrame> closed = run.source.take_frames(0.01);
     more = !closed.empty();
-    for (const AssembledFrame& f : closed) tally_frame(run, f, tally);
+    for (const AssembledFrame& f : closed) {
+      tally_frame(run, f, tally);
+      if (run.chaos) run.chaos->on_frame(f, static_cast<double>(steady_now_ns() - run.start_ns) / 1e9);
+    }
   }
+  tally.memory_end_kb = resident_kb();
+  tally.heap_end_kb = heap_in_use_kb();
 }
 
 nlohmann::json per_node_report(const NodesArgs& a, const NodeSourceStats& stats) {
@@ -498,6 +572,42 @@ void security_report(const NodesArgs& a, const NodeSourceStats& stats, nlohmann:
   j["handshakes_failed"] = failed;
 }
 
+// With --chaos: frames lost while every node served (none may be: an exposure a node did not make,
+// being behind real time on a stalled machine, is not one), frames a camera missed, memory, and
+// the faults.
+void chaos_report(const NodesRun& run, const NodesTally& tally, nlohmann::json& j) {
+  std::int64_t lost_all_up = 0;
+  nlohmann::json lost_at = nlohmann::json::array();  // when (the first ten), to look into
+  for (std::int64_t k = 0; k < run.frames_expected; ++k) {
+    const double t = static_cast<double>(k) / run.a.rate_hz;
+    if (tally.assembled.contains(k) || !run.chaos->all_up(t) || !run.chaos->all_up(t + 0.05)) continue;
+    // Every camera made this exposure (and its neighbours: a counter gap says how many were
+    // skipped, not which): one behind real time, skipping exposures on a stalled machine, was not
+    // up for it.
+    bool made = true;
+    for (std::size_t c = 0; c < tally.not_made.size(); ++c)
+      for (std::int64_t i = std::max<std::int64_t>(0, k - 1); i <= std::min(run.frames_expected - 1, k + 1); ++i)
+        made = made && !(tally.tracks[c].counter && tally.not_made[c][static_cast<std::size_t>(i)]);
+    lost_all_up += made ? 1 : 0;
+    if (made && lost_at.size() < 10) lost_at.push_back(t);
+  }
+  j["frames_lost_while_all_up_at_s"] = lost_at;
+  j["chaos_seconds"] = run.a.seconds;
+  j["seed"] = run.a.seed;
+  j["frames_lost_while_all_up"] = lost_all_up;
+  j["frames_with_camera_missing"] = static_cast<std::int64_t>(tally.assembled.size()) - tally.complete;
+  // The growth is the heap's: resident memory also holds what the allocator keeps after a free (a
+  // sanitizer's quarantine of a few hundred MB, glibc's arenas), which is not the program's.
+  j["memory_start_kb"] = tally.memory_start_kb;
+  j["memory_end_kb"] = tally.memory_end_kb;
+  j["heap_start_kb"] = tally.heap_start_kb;
+  j["heap_end_kb"] = tally.heap_end_kb;
+  j["memory_growth_fraction"] =
+      tally.heap_start_kb > 0 ? static_cast<double>(tally.heap_end_kb - tally.heap_start_kb) / static_cast<double>(tally.heap_start_kb)
+                              : 0.0;
+  run.chaos->report(j);
+}
+
 // The JSON rhot-eval nodes prints.
 nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSourceStats& stats) {
   const NodesArgs& a = run.a;
@@ -524,6 +634,8 @@ nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSo
   }
   j["frames_not_made"] = not_made;
   j["frames_lost_in_transport"] = run.frames_expected - static_cast<std::int64_t>(tally.assembled.size()) - not_made;
+  j["wrong_markers_accepted"] = tally.wrong_markers;
+  if (run.chaos) chaos_report(run, tally, j);
   j["frames_complete"] = tally.complete;
   j["assembly_p50_ms"] = percentile(tally.assembly_ms, 0.5);
   j["assembly_p99_ms"] = percentile(tally.assembly_ms, 0.99);
@@ -534,7 +646,8 @@ nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSo
   j["clock_residual_us"] = residual;
   // Node 0's clock is start-relative: true offset = offset + drift * (t - start).
   const double true_offset_ms = a.clock_offset_ms + a.clock_drift_ppm * 1e-6 * (a.seconds * 1e3);
-  j["clock_offset_error_us"] = stats.nodes.empty() ? 0.0 : std::abs(stats.nodes[0].clock_offset_ms - true_offset_ms) * 1e3;
+  if (!run.chaos)  // chaos gives restarted nodes clocks of its own
+    j["clock_offset_error_us"] = stats.nodes.empty() ? 0.0 : std::abs(stats.nodes[0].clock_offset_ms - true_offset_ms) * 1e3;
   j["found_fraction"] = tally.truth_total > 0 ? static_cast<double>(tally.found) / static_cast<double>(tally.truth_total) : 0.0;
   if (a.kill_at)
     j["found_fraction_while_node_down"] =
@@ -559,10 +672,58 @@ nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSo
   return j;
 }
 
+// Where the run's keys are made (empty with --insecure), removed at the end unless --keys named it.
+struct RunKeys {
+  std::string dir;
+  std::filesystem::path remove;
+  explicit RunKeys(const NodesArgs& a) {
+    const std::filesystem::path temporary = std::filesystem::temp_directory_path() / ("rhot-eval-nodes-keys-" + std::to_string(::getpid()));
+    dir = a.insecure ? std::string() : a.keys_dir.empty() ? temporary.string() : a.keys_dir;
+    if (!a.insecure && a.keys_dir.empty()) remove = temporary;
+  }
+  ~RunKeys() {
+    std::error_code ec;
+    if (!remove.empty()) std::filesystem::remove_all(remove, ec);
+  }
+  RunKeys(const RunKeys&) = delete;
+  RunKeys& operator=(const RunKeys&) = delete;
+};
+
+// The master's node source on the planned nodes, with the run's keys: nullptr after saying why not.
+std::unique_ptr<NodeSource> open_master(const CameraRig& rig, const std::vector<NodePlan>& plans, NodeSourceSettings settings,
+                                        const RunKeys& keys) {
+  std::vector<std::string> endpoints;
+  for (const NodePlan& p : plans) endpoints.push_back(p.endpoint);
+  if (!keys.dir.empty()) {
+    auto ring = load_key_ring(keys.dir + "/master");
+    if (!ring) {
+      std::cerr << "rhot-eval: " << ring.error() << "\n";
+      return nullptr;
+    }
+    settings.security = std::move(*ring);
+  }
+  auto source = NodeSource::open(rig, endpoints, settings);
+  if (!source) {
+    std::cerr << "rhot-eval: " << source.error() << "\n";
+    return nullptr;
+  }
+  return std::move(*source);
+}
+
+std::unique_ptr<Chaos> make_chaos(const NodesArgs& a, const std::vector<NodePlan>& plans, std::vector<ChildProcess>& children,
+                                  const std::filesystem::path& log, NodeSource& source, bool secure) {
+  if (!a.chaos_s) return nullptr;
+  std::vector<ChaosNode> nodes;
+  for (const NodePlan& p : plans) nodes.push_back({p.argv, parse_node_address(p.endpoint)->endpoint, p.cameras});
+  return std::make_unique<Chaos>(a.seed, a.seconds, std::move(nodes), children, log, source, secure);
+}
+
 }  // namespace
 
-int nodes(const NodesArgs& a) {
+int nodes(const NodesArgs& given) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));  // stdout is the JSON's
+  NodesArgs a = given;
+  if (a.chaos_s) a.seconds = *a.chaos_s;
   auto rig = rhot::load_rig(a.rig_file);
   if (!rig) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
@@ -585,47 +746,26 @@ int nodes(const NodesArgs& a) {
   // ahead for the nodes to start and subscribe (a sanitizer build on a busy 2-core machine takes
   // over a second to start four processes).
   const std::int64_t start_ns = steady_now_ns() + 3'000'000'000;
-  const std::filesystem::path temporary_keys =
-      std::filesystem::temp_directory_path() / ("rhot-eval-nodes-keys-" + std::to_string(::getpid()));
-  const std::string keys_dir = a.insecure ? std::string() : a.keys_dir.empty() ? temporary_keys.string() : a.keys_dir;
-  struct RemoveKeys {
-    std::filesystem::path dir;
-    ~RemoveKeys() {
-      std::error_code ec;
-      if (!dir.empty()) std::filesystem::remove_all(dir, ec);
-    }
-  } remove_keys{!a.insecure && a.keys_dir.empty() ? temporary_keys : std::filesystem::path()};
-  if (!keys_dir.empty() && !make_run_keys(keys_dir, a.nodes)) return 1;
-  const std::vector<NodePlan> plans = plan_nodes(a, rig->cameras.size(), node_program, *ports, start_ns, keys_dir);
+  const RunKeys keys(a);
+  if (!keys.dir.empty() && !make_run_keys(keys.dir, a.nodes)) return 1;
+  const std::vector<NodePlan> plans = plan_nodes(a, rig->cameras.size(), node_program, *ports, start_ns, keys.dir);
   const std::filesystem::path log = std::filesystem::temp_directory_path() / ("rhot-eval-nodes-" + std::to_string(::getpid()) + ".log");
   std::vector<ChildProcess> children;
   if (!spawn_nodes(plans, log, children)) return 1;
-  std::vector<std::string> endpoints;
-  for (const NodePlan& p : plans) endpoints.push_back(p.endpoint);
-  NodeSourceSettings settings = source_settings(a, start_ns);
-  if (!keys_dir.empty()) {
-    auto ring = load_key_ring(keys_dir + "/master");
-    if (!ring) {
-      std::cerr << "rhot-eval: " << ring.error() << "\n";
-      return 1;
-    }
-    settings.security = std::move(*ring);
-  }
-  auto source = NodeSource::open(*rig, endpoints, settings);
-  if (!source) {
-    std::cerr << "rhot-eval: " << source.error() << "\n";
-    return 1;
-  }
+  const NodeSourceSettings settings = source_settings(a, start_ns);
+  const std::unique_ptr<NodeSource> source = open_master(*rig, plans, settings, keys);
+  if (!source) return 1;
   const std::vector<Trajectory> markers = demo ? std::vector<Trajectory>{} : wandering_markers(*rig, a.markers, a.seed);
   DemoHands hands;
   if (demo) set_up_demo_hands(a, *rig, *demo, hands);
+  const std::unique_ptr<Chaos> chaos = make_chaos(a, plans, children, log, *source, !keys.dir.empty());
   const NodesRun run{.a = a,
                      .rig = *rig,
                      .demo = demo,
                      .plans = plans,
                      .log = log,
                      .children = children,
-                     .source = **source,
+                     .source = *source,
                      .settings = settings,
                      .markers = markers,
                      .hands = hands,
@@ -633,12 +773,13 @@ int nodes(const NodesArgs& a) {
                      .start_ns = start_ns,
                      .period_ns = static_cast<std::int64_t>(std::llround(1e9 / a.rate_hz)),
                      .frames_expected = static_cast<std::int64_t>(std::floor(a.seconds * a.rate_hz)),
-                     .victim = a.nodes - 1};
-  NodesTally tally;
+                     .victim = a.nodes - 1,
+                     .chaos = chaos.get()};
+  NodesTally tally(run.frames_expected, rig->cameras.size());
   const double cpu0 = process_cpu_s();
   run_master(run, tally);
   const double master_cpu_s = process_cpu_s() - cpu0;
-  const NodeSourceStats stats = (*source)->stats();
+  const NodeSourceStats stats = source->stats();
   for (ChildProcess& c : children) c.stop(2.0);
   nlohmann::json j = report(run, tally, stats);
   // The master's CPU per assembled frame (decryption is ZeroMQ's I/O thread's), beside the run's.

@@ -233,6 +233,13 @@ CLI::App* add_nodes_command(CLI::App& app, NodesArgs& a, bool& json) {
                   "make the run's keys (master/ and node<i>/ key folders, as rhot-node keygen writes them) in this folder and keep "
                   "them (default: a temporary folder); keys already there are used")
       ->excludes(cmd->add_flag("--insecure", a.insecure, "master and nodes without CURVE (to measure what security costs)"));
+  cmd->add_option("--chaos", a.chaos_s,
+                  "for this many seconds (the run's length), kill and restart nodes at random with new clocks and slow links, put an "
+                  "impostor at a dead node's endpoint, send junk and oversized messages to the nodes, stall the master's receiving "
+                  "thread (random from --seed); reports frames_lost_while_all_up, rejoin_p99_s, memory_growth_fraction, "
+                  "wrong_markers_accepted")
+      ->check(CLI::Range(5.0, 86400.0))
+      ->check(rhot::number_check(rhot::NumberBound::kPositive));
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }

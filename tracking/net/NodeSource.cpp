@@ -134,12 +134,13 @@ struct NodeSource::Impl {
     std::int64_t next_status_ns = 0;
     std::int64_t first_sync_ns = 0;
     std::uint32_t sequence = 0;
-    std::string node_name{};  // its certificate's, with security
-    std::string address{};    // the endpoint without the name
+    std::optional<std::uint64_t> last_counter{};  // of its last frame
+    std::string node_name{};                      // its certificate's, with security
+    std::string address{};                        // the endpoint without the name
     std::optional<CurveKey> node_key{};
-    // With security, each socket's handshakes; a socket whose session ZeroMQ ended for a protocol
-    // error (a bad key, injected or replayed bytes: ZeroMQ does not reconnect those) is opened
-    // anew at its reopen time (0: not due).
+    // Each socket's connections and handshakes; a socket whose session ZeroMQ ended (a bad key,
+    // injected or replayed bytes, a message over the size limit: ZeroMQ does not reconnect those)
+    // is opened anew at its reopen time (0: not due).
     std::unique_ptr<HandshakeMonitor> frames_monitor{}, control_monitor{};
     std::int64_t reopen_frames_ns = 0, reopen_control_ns = 0;
     std::int64_t connected_ns = 0;  // the latest TCP connection, for the handshake's time
@@ -148,6 +149,7 @@ struct NodeSource::Impl {
   // How long after a protocol error a node's socket is opened anew: a peer that keeps failing the
   // handshake is retried twice a second, not in a busy loop.
   static constexpr std::int64_t kReopenAfter_ns = 500'000'000;
+  static constexpr std::int64_t kReconnectWait_ns = 1'000'000'000;
 
   CameraRig rig;
   NodeSourceSettings settings;
@@ -167,6 +169,7 @@ struct NodeSource::Impl {
   std::uint64_t frame_index = 0;
 
   std::atomic<bool> stop{false};
+  std::atomic<std::int64_t> stall_ns{0};  // stall_receiver's, taken by the thread's next turn
   std::thread receiver;
 
   Impl(const CameraRig& r, NodeSourceSettings s)
@@ -202,6 +205,17 @@ struct NodeSource::Impl {
              std::to_string(rig.cameras.size()) + " cameras)");
       return;
     }
+    // A counter lower than the last one heard: the node started again, with a clock that may be
+    // another (a restarted machine, or one that ran with another offset): measured anew before
+    // its frames are placed in time. Within lost_after_s of its last frame it was never lost, so
+    // this is the only sign of it.
+    if (node.last_counter && m.counter < *node.last_counter) {
+      node.clock.reset();
+      node.first_sync_ns = arrival_ns;
+      node.next_sync_ns = 0;
+      warn("node " + node.endpoint + " started again (its frame counter began anew): its clock is measured anew");
+    }
+    node.last_counter = m.counter;
     if (!node.clock.synchronised()) {
       ++node.stats.unsynchronised;
       return;
@@ -296,12 +310,11 @@ struct NodeSource::Impl {
         socket.set(zmq::sockopt::immediate, 1);
         socket.set(zmq::sockopt::sndhwm, 16);
       }
-      if (node.node_key) {
+      if (node.node_key)
         if (auto ok = make_curve_client(socket.handle(), *settings.security, *node.node_key); !ok) return ok;
-        auto attached = HandshakeMonitor::attach(context.handle(), socket.handle());
-        if (!attached) return std::unexpected(attached.error());
-        monitor = std::move(*attached);
-      }
+      auto attached = HandshakeMonitor::attach(context.handle(), socket.handle());
+      if (!attached) return std::unexpected(attached.error());
+      monitor = std::move(*attached);
       socket.connect(frames ? node.address : control_endpoint_for(node.address));
     } catch (const zmq::error_t& e) {
       return std::unexpected(std::string(e.what()));
@@ -333,8 +346,13 @@ struct NodeSource::Impl {
       if (!monitor) continue;
       for (const HandshakeMonitor::Event& e : monitor->drain()) {
         const std::int64_t now = steady_now_ns();
-        if (e.kind == Kind::kFailedProtocol || e.kind == Kind::kFailedAuth)
-          (frames ? node.reopen_frames_ns : node.reopen_control_ns) = now + kReopenAfter_ns;
+        std::int64_t& reopen = frames ? node.reopen_frames_ns : node.reopen_control_ns;
+        if (e.kind == Kind::kFailedProtocol || e.kind == Kind::kFailedAuth) reopen = now + kReopenAfter_ns;
+        // ZeroMQ reconnects a connection that broke, but not one it ended itself (a message over
+        // the size limit, a protocol error): a connection that is not back within
+        // kReconnectWait_ns is opened anew.
+        if (e.kind == Kind::kDisconnected && reopen == 0) reopen = now + kReconnectWait_ns;
+        if (e.kind == Kind::kSucceeded) reopen = 0;
         std::lock_guard lock(mutex);
         if (e.kind == Kind::kConnected) {
           node.connected_ns = now;
@@ -386,6 +404,7 @@ struct NodeSource::Impl {
   void run() {
     std::vector<zmq::pollitem_t> items = poll_items();
     while (!stop.load()) {
+      if (const std::int64_t stall = stall_ns.exchange(0); stall > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(stall));
       try {
         zmq::poll(items.data(), items.size(), std::chrono::milliseconds(2));
       } catch (const zmq::error_t&) {
@@ -531,6 +550,8 @@ std::vector<std::string> NodeSource::take_warnings() {
   std::lock_guard lock(impl_->mutex);
   return std::exchange(impl_->warnings, {});
 }
+
+void NodeSource::stall_receiver(double seconds) { impl_->stall_ns = static_cast<std::int64_t>(std::max(0.0, seconds) * 1e9); }
 
 NodeSourceStats NodeSource::stats() const {
   std::lock_guard lock(impl_->mutex);

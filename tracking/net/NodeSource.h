@@ -128,6 +128,9 @@ class NodeSource final : public FrameSource {
   // The master's clock at the time origin (open(), unless the settings name one).
   std::int64_t origin_ns() const;
   NodeSourceStats stats() const;
+  // For evaluations and tests: the receiving thread does nothing for `seconds` from its next turn,
+  // as on a machine that stalled (its sockets queue what comes meanwhile).
+  void stall_receiver(double seconds);
 
  private:
   struct Impl;

@@ -10,25 +10,13 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/TempDir.h"
 #include "tracking/net/CurveKeys.h"
 
 namespace rhot {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A fresh folder under the system's temporary one, removed at the end.
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name) : path(fs::temp_directory_path() / (name + "-" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p);
@@ -64,11 +52,11 @@ std::string czmq_secret_certificate() {
 }
 
 TEST(CurveKeys, AKeyPairIsWrittenInZeroMqsCertificateFormatAndReadBack) {
-  TempDir dir("rhot-keys-roundtrip");
+  const fs::path dir = test::fresh_test_dir("CurveKeys");
   auto pair = make_key_pair("node0");
   ASSERT_TRUE(pair.has_value()) << pair.error();
-  ASSERT_TRUE(write_certificates(dir.path.string(), *pair).has_value());
-  const fs::path pub = dir.path / "node0.key", sec = dir.path / "node0.key_secret";
+  ASSERT_TRUE(write_certificates(dir.string(), *pair).has_value());
+  const fs::path pub = dir / "node0.key", sec = dir / "node0.key_secret";
   EXPECT_EQ(mode_of(sec), 0600u) << "the secret key is its owner's alone";
   EXPECT_EQ(mode_of(pub), 0644u);
   const std::string pub_text = read_text(pub), sec_text = read_text(sec);
@@ -89,31 +77,31 @@ TEST(CurveKeys, AKeyPairIsWrittenInZeroMqsCertificateFormatAndReadBack) {
   // Two pairs are never the same key.
   EXPECT_NE(make_key_pair("node1")->public_key, pair->public_key);
   // A key is never overwritten: replacing one is done on purpose, by removing it.
-  const auto again = write_certificates(dir.path.string(), *make_key_pair("node0"));
+  const auto again = write_certificates(dir.string(), *make_key_pair("node0"));
   ASSERT_FALSE(again.has_value());
   EXPECT_EQ(again.error(), pub.string() + ": already exists; remove it first to make a new key");
   EXPECT_EQ(read_certificate(sec.string(), true)->secret_key, pair->secret_key);
 }
 
 TEST(CurveKeys, ACertificateWrittenByAnotherToolIsRead) {
-  TempDir dir("rhot-keys-czmq");
-  write_text(dir.path / "client.key_secret", czmq_secret_certificate());
-  const auto c = read_certificate((dir.path / "client.key_secret").string(), true);
+  const fs::path dir = test::fresh_test_dir("CurveKeys");
+  write_text(dir / "client.key_secret", czmq_secret_certificate());
+  const auto c = read_certificate((dir / "client.key_secret").string(), true);
   ASSERT_TRUE(c.has_value()) << c.error();
   EXPECT_EQ(c->public_key.z85(), kDocPublic);
   EXPECT_EQ(c->secret_key->z85(), kDocSecret);
 }
 
 TEST(CurveKeys, AKeyFolderIsItsOwnSecretAndTheTrustedPeers) {
-  TempDir dir("rhot-keys-ring");
+  const fs::path dir = test::fresh_test_dir("CurveKeys");
   const auto master = make_key_pair("master"), node0 = make_key_pair("node0"), node1 = make_key_pair("node1");
-  ASSERT_TRUE(write_certificates((dir.path / "master").string(), *master).has_value());
-  ASSERT_TRUE(write_certificates((dir.path / "nodes").string(), *node0).has_value());
-  ASSERT_TRUE(write_certificates((dir.path / "nodes").string(), *node1).has_value());
-  fs::create_directories(dir.path / "master" / "trusted");
-  fs::copy_file(dir.path / "nodes" / "node1.key", dir.path / "master" / "trusted" / "node1.key");
-  fs::copy_file(dir.path / "nodes" / "node0.key", dir.path / "master" / "trusted" / "node0.key");
-  const auto ring = load_key_ring((dir.path / "master").string());
+  ASSERT_TRUE(write_certificates((dir / "master").string(), *master).has_value());
+  ASSERT_TRUE(write_certificates((dir / "nodes").string(), *node0).has_value());
+  ASSERT_TRUE(write_certificates((dir / "nodes").string(), *node1).has_value());
+  fs::create_directories(dir / "master" / "trusted");
+  fs::copy_file(dir / "nodes" / "node1.key", dir / "master" / "trusted" / "node1.key");
+  fs::copy_file(dir / "nodes" / "node0.key", dir / "master" / "trusted" / "node0.key");
+  const auto ring = load_key_ring((dir / "master").string());
   ASSERT_TRUE(ring.has_value()) << ring.error();
   EXPECT_EQ(ring->own.name, "master");
   ASSERT_EQ(ring->trusted.size(), 2u);
@@ -126,8 +114,8 @@ TEST(CurveKeys, AKeyFolderIsItsOwnSecretAndTheTrustedPeers) {
 }
 
 TEST(CurveKeys, BadKeyFilesAndFoldersAreRefusedNamingTheFile) {
-  TempDir dir("rhot-keys-bad");
-  const fs::path d = dir.path;
+  const fs::path dir = test::fresh_test_dir("CurveKeys");
+  const fs::path& d = dir;
   const std::string good_pub = "metadata\n    name = \"x\"\ncurve\n    public-key = \"" + kDocPublic + "\"\n";
   const auto refused = [](const std::expected<Certificate, std::string>& r) { return r.has_value() ? std::string("(read)") : r.error(); };
 
