@@ -168,7 +168,7 @@ class KeyFolders {
   std::filesystem::path dir_;
 };
 
-TEST(NodesCli, TheDemoRunsOnFourNodeProcessesWithKeysAndAMasterTheyDoNotTrustHearsNothing) {
+TEST(NodesCli, TheDemoRunsOnFourNodeProcessesWithKeysAndNeitherAnUntrustedMasterNorAnImpostorNodeGetsThrough) {
   // rhot-demo --source nodes:... on four rhot-node processes photographing its world, with keys
   // made by rhot-node keygen: every frame is assembled from all four cameras, and the demo's own
   // run is unchanged (exit 0, stats). A master whose key the nodes do not list gets no frame, and
@@ -211,6 +211,24 @@ TEST(NodesCli, TheDemoRunsOnFourNodeProcessesWithKeysAndAMasterTheyDoNotTrustHea
   EXPECT_NE(intruder.output.find("assembly: 0 frames"), std::string::npos) << intruder.output;
   EXPECT_NE(intruder.output.find("refused this master's key"), std::string::npos) << intruder.output;
   for (auto& n : nodes) EXPECT_TRUE(n.running()) << "the nodes outlive both masters";
+  // An impostor at node 3's endpoint: a real node process, trusted by nobody as node 3 (it holds
+  // node 2's key). The master never hears it, says why, and tracks on with the other three.
+  nodes[3].kill();
+  const std::string endpoint3 = "tcp://127.0.0.1:" + std::to_string((*ports)[3]);
+  auto impostor =
+      rhot::ChildProcess::spawn({bin + "/rhot-node", "--publish", endpoint3, "--node-id", "3", "--sim-rig",
+                                 std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml", "--sim-camera", "3", "--sim-scene",
+                                 std::string(RHOT_ASSET_DIR) + "/scenes/default.json", "--sim-start-ns", start, "--keys", keys["node2"]},
+                                "/dev/null");
+  ASSERT_TRUE(impostor.has_value()) << impostor.error();
+  const auto fooled = rhot::test::run_program(
+      "rhot-demo", "--headless --frames 60 --eye 64x64 --source nodes:" + endpoints + " --keys " + keys["master"], "2>&1");
+  EXPECT_EQ(fooled.exit_code, 0) << fooled.output;
+  EXPECT_NE(fooled.output.find("node node3@" + endpoint3 + " (id -1): not connected, 0 frames"), std::string::npos) << fooled.output;
+  EXPECT_NE(fooled.output.find("cannot prove it holds node3's secret key"), std::string::npos) << fooled.output;
+  EXPECT_NE(fooled.output.find("node node2@"), std::string::npos) << fooled.output;
+  ASSERT_TRUE(std::regex_search(fooled.output, m, std::regex(R"(assembly: (\d+) frames)"))) << fooled.output;
+  EXPECT_GT(std::stoi(m[1]), 40) << "the other three nodes' frames\n" << fooled.output;
   nodes[0].stop(2.0);
   std::ifstream in(log);
   const std::string node_log((std::istreambuf_iterator<char>(in)), {});
