@@ -10,14 +10,16 @@
 
 namespace {
 
-using rhot::test::run_nodes;
+using rhot::test::run_nodes_once;
 
 // A minute of faults together (tools/eval/Chaos.h): nodes killed and restarted with new clocks and
 // slow links, an impostor at a dead node's endpoint, junk and oversized messages at the nodes, the
 // master's receiving thread stalled. No frame is lost while every node serves, no marker but a
 // node's is ever taken, every node comes back, and the master's heap does not grow.
 TEST(NodesCli, AMinuteOfChaosLosesNoFrameWhileEveryNodeServesAndTakesNoFalseMarker) {
-  const nlohmann::json j = run_nodes("--chaos 60 --seed 5");
+  // One run: a machine that stalls skips exposures, which the count of frames lost while every
+  // node served leaves out, so the run is not repeated.
+  const nlohmann::json j = run_nodes_once("--chaos 60 --seed 5");
   ASSERT_TRUE(j.contains("frames_lost_while_all_up")) << j.dump();
   EXPECT_EQ(j["security"], "curve");
   EXPECT_EQ(j["frames_lost_while_all_up"], 0) << j.dump(2);

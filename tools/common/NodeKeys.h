@@ -4,13 +4,12 @@
 // (rhot-node, rhot-demo, rhot-calib record and headset, rhot-eval nodes; docs/camera-nodes.md,
 // "Security"): --keys DIR (its own NAME.key_secret, and in DIR/trusted/ the public certificates
 // of the peers it trusts) or --insecure, one of them, whenever nodes are used. Running insecure is
-// said on every start.
+// said on every start, by the node's and the master's sockets themselves (SocketSecurity.h).
 
 #include <expected>
 #include <string>
 
 #include <CLI/CLI.hpp>
-#include <spdlog/spdlog.h>
 
 #include "tracking/net/CurveKeys.h"
 
@@ -31,7 +30,7 @@ inline void add_node_key_flags(CLI::App& app, NodeKeyFlags& flags) {
 }
 
 // The security the flags ask for, its keys loaded and checked (`using_nodes`: whether this run
-// talks to nodes at all; the flags are refused otherwise). Says so when it is none.
+// talks to nodes at all; the flags are refused otherwise).
 [[nodiscard]] inline std::expected<NetSecurity, std::string> node_security_from(const NodeKeyFlags& flags, bool using_nodes) {
   if (!using_nodes) {
     if (!flags.keys.empty()) return std::unexpected(std::string("--keys: only for camera nodes"));
@@ -39,12 +38,7 @@ inline void add_node_key_flags(CLI::App& app, NodeKeyFlags& flags) {
     return NetSecurity{};
   }
   if (!flags.keys.empty() && flags.insecure) return std::unexpected(std::string("--keys and --insecure: choose one"));
-  if (flags.insecure) {
-    spdlog::warn(
-        "INSECURE: camera nodes without authentication or encryption (--insecure): anyone on the camera network can read the markers "
-        "and send false ones (docs/camera-nodes.md, \"Security\")");
-    return NetSecurity{};
-  }
+  if (flags.insecure) return NetSecurity{};
   if (flags.keys.empty())
     return std::unexpected(std::string(
         "camera nodes need --keys DIR (this program's NAME.key_secret, and the peers' NAME.key in DIR/trusted/; rhot-node keygen makes "

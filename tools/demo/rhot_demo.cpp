@@ -274,7 +274,7 @@ bool resolve_options(Options& o) {
     }
     o.demo.node_endpoints = std::move(*endpoints);
   } else if (o.source != "sim") {
-    spdlog::error("--source: expected sim, replay:FILE, video:DEV[,DEV...] or nodes:ENDPOINT[,ENDPOINT...], got \"{}\"", o.source);
+    spdlog::error("--source: expected sim, replay:FILE, video:DEV[,DEV...] or nodes:NAME@ENDPOINT[,...], got \"{}\"", o.source);
     return false;
   }
   auto security = rhot::node_security_from(o.node_keys, !o.demo.node_endpoints.empty());

@@ -33,7 +33,6 @@
 #include "tools/eval/Eval.h"
 #include "tracking/net/CurveKeys.h"
 #include "tracking/net/NodeProtocol.h"
-#include "tracking/net/SocketSecurity.h"
 
 namespace rhot::eval {
 
@@ -53,6 +52,21 @@ void send_raw(int port, const std::vector<std::uint8_t>& bytes) {
   ::close(fd);
 }
 
+// Whether a loopback TCP port can be bound now.
+bool port_free(int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return false;
+  const int on = 1;
+  ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on);  // as ZeroMQ binds
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  const bool ok = ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  ::close(fd);
+  return ok;
+}
+
 }  // namespace
 
 // The attacker's thread: junk at every node's ports all along and, while a node is down, an
@@ -62,8 +76,9 @@ struct Chaos::Attacker {
   bool secure = true;
   std::mt19937_64 rng;
   zmq::context_t context{1};
-  std::atomic<int> target{-1};  // the node to impersonate (-1: none)
-  std::atomic<int> bound{-1};   // the node whose endpoint the impostor holds now
+  std::atomic<int> target{-1};    // the node to impersonate (-1: none)
+  std::atomic<int> bound{-1};     // the node whose endpoint the impostor holds now
+  std::atomic<bool> busy{false};  // closing or binding: `bound` is about to change
   std::atomic<bool> stop{false};
   std::atomic<std::uint64_t> false_frames{0}, junk{0}, oversized{0};
   std::thread thread;
@@ -98,8 +113,7 @@ struct Chaos::Attacker {
 
   void run() {
     std::optional<zmq::socket_t> pub, rep;
-    std::unique_ptr<ZapHandler> zap;  // the impostor admits every master
-    std::optional<KeyRing> own;       // the impostor's key (not the node's)
+    std::optional<KeyRing> own;  // the impostor's key (not the node's; no ZAP handler: it would admit any master)
     if (secure) {
       auto pair = make_key_pair("impostor");
       if (pair) own = KeyRing{"", *pair, {}};
@@ -109,6 +123,7 @@ struct Chaos::Attacker {
     while (!stop) {
       const std::int64_t now = steady_now_ns();
       if (target != bound) {
+        busy = true;
         pub.reset();
         rep.reset();
         bound = -1;
@@ -135,6 +150,7 @@ struct Chaos::Attacker {
             bound = -1;
           }
         }
+        busy = false;
       }
       if (pub && bound >= 0) {
         // Frames of false markers, junk and, twice a second, one message over any limit.
@@ -172,13 +188,11 @@ struct Chaos::Attacker {
   }
 };
 
-long heap_in_use_kb() {
 #ifdef RHOT_CHAOS_ASAN
-  return static_cast<long>(__sanitizer_get_current_allocated_bytes() / 1024);
+long heap_in_use_kb() { return static_cast<long>(__sanitizer_get_current_allocated_bytes() / 1024); }
 #else
-  return static_cast<long>(mallinfo2().uordblks / 1024);
+long heap_in_use_kb() { return static_cast<long>(mallinfo2().uordblks / 1024); }
 #endif
-}
 
 long resident_kb() {
   std::ifstream in("/proc/self/status");
@@ -229,9 +243,12 @@ void Chaos::kill_one(double t_s) {
 }
 
 void Chaos::restart(Down& d, double t_s) {
-  // The impostor gives the endpoint back first (within a second).
+  // The impostor gives the endpoint back first, and the ports are free (ZeroMQ closes its sockets
+  // in the background) before the node binds them: within a second.
   attacker_->target = -1;
-  for (int i = 0; i < 100 && attacker_->bound != -1; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const int port = port_of(nodes_[static_cast<std::size_t>(d.node)].endpoint);
+  for (int i = 0; i < 100 && (attacker_->busy || attacker_->bound != -1 || !port_free(port) || !port_free(port + 1)); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   auto child = ChildProcess::spawn(new_clock_argv(nodes_[static_cast<std::size_t>(d.node)]), log_);
   if (child) children_[static_cast<std::size_t>(d.node)] = std::move(*child);
   d.restarted_s = t_s;
@@ -239,8 +256,14 @@ void Chaos::restart(Down& d, double t_s) {
 }
 
 void Chaos::step(double t_s) {
-  for (Down& d : downs_)
+  for (Down& d : downs_) {
     if (!d.restarted_s && t_s >= d.restart_s) restart(d, t_s);
+    // A node that could not start (its port still held) is started again, as an operator would.
+    if (d.restarted_s && !d.rejoined_s && !children_[static_cast<std::size_t>(d.node)].running()) {
+      spdlog::warn("chaos: node {} exited after its restart; starting it again", d.node);
+      restart(d, *d.restarted_s);
+    }
+  }
   if (t_s < next_event_s_ || t_s > seconds_ - 2.5) return;
   next_event_s_ = t_s + std::uniform_real_distribution<double>(1.0, 3.0)(rng_);
   const bool one_down = std::any_of(downs_.begin(), downs_.end(), [](const Down& d) { return !d.rejoined_s; });

@@ -266,6 +266,8 @@ bool make_run_keys(const std::string& dir, int nodes) {
     // The master trusts every node; each node trusts the master.
     const std::vector<std::string> peers =
         name == "master" ? std::vector<std::string>(names.begin() + 1, names.end()) : std::vector<std::string>{"master"};
+    // trusted/ holds exactly the run's peers, whatever was there before.
+    fs::remove_all(fs::path(dir) / name / "trusted", ec);
     fs::create_directories(fs::path(dir) / name / "trusted", ec);
     for (const std::string& peer : peers)
       fs::copy_file(fs::path(dir) / peer / (peer + ".key"), fs::path(dir) / name / "trusted" / (peer + ".key"),
@@ -672,14 +674,21 @@ nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSo
   return j;
 }
 
-// Where the run's keys are made (empty with --insecure), removed at the end unless --keys named it.
+// Where the run's keys are made (empty with --insecure): --keys DIR, or a new private temporary
+// folder (mkdtemp: no other user can have put keys there first), removed at the end.
 struct RunKeys {
   std::string dir;
   std::filesystem::path remove;
   explicit RunKeys(const NodesArgs& a) {
-    const std::filesystem::path temporary = std::filesystem::temp_directory_path() / ("rhot-eval-nodes-keys-" + std::to_string(::getpid()));
-    dir = a.insecure ? std::string() : a.keys_dir.empty() ? temporary.string() : a.keys_dir;
-    if (!a.insecure && a.keys_dir.empty()) remove = temporary;
+    if (a.insecure) return;
+    if (!a.keys_dir.empty()) {
+      dir = a.keys_dir;
+      return;
+    }
+    std::string pattern = (std::filesystem::temp_directory_path() / "rhot-eval-nodes-keys-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) return;  // dir stays empty: refused below
+    dir = pattern;
+    remove = pattern;
   }
   ~RunKeys() {
     std::error_code ec;
@@ -747,6 +756,10 @@ int nodes(const NodesArgs& given) {
   // over a second to start four processes).
   const std::int64_t start_ns = steady_now_ns() + 3'000'000'000;
   const RunKeys keys(a);
+  if (!a.insecure && keys.dir.empty()) {
+    std::cerr << "rhot-eval: cannot make a temporary folder for the run's keys\n";
+    return 1;
+  }
   if (!keys.dir.empty() && !make_run_keys(keys.dir, a.nodes)) return 1;
   const std::vector<NodePlan> plans = plan_nodes(a, rig->cameras.size(), node_program, *ports, start_ns, keys.dir);
   const std::filesystem::path log = std::filesystem::temp_directory_path() / ("rhot-eval-nodes-" + std::to_string(::getpid()) + ".log");

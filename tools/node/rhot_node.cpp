@@ -57,6 +57,7 @@ struct Options {
   double delay_ms = 0.0;
   double seconds = 0.0;
   rhot::NodeKeyFlags keys;
+  bool print_clock = false;
 };
 
 // Per-second rate and detection time for status replies.
@@ -248,16 +249,9 @@ int run_device(const Options& o, rhot::NodeServer& server) {
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App cli{
-      "rhot-node: a camera node. Finds the markers of its cameras and publishes their detections to the master over "
-      "ZeroMQ (docs/camera-nodes.md); answers time and status requests on the control endpoint beside it."};
-  Options o;
+void add_options(CLI::App& cli, Options& o) {
   cli.add_option("--publish", o.publish, "Where to publish frames, e.g. tcp://127.0.0.1:5601 (bound here, and nowhere else)");
-  bool print_clock = false;
-  cli.add_flag("--print-clock", print_clock, "Print this machine's steady clock (ns, as --sim-start-ns takes it) and exit");
+  cli.add_flag("--print-clock", o.print_clock, "Print this machine's steady clock (ns, as --sim-start-ns takes it) and exit");
   cli.add_option("--control", o.control, "Where to answer time and status requests (default: the publish port + 1)");
   cli.add_option("--node-id", o.node_id, "This node's number, in its messages")->capture_default_str()->check(CLI::Range(0, 65535));
   auto* sim_rig =
@@ -300,6 +294,31 @@ int main(int argc, char** argv) {
       ->check(rhot::number_check(rhot::NumberBound::kNonNegative))  // CLI::Range lets nan through: a node that never stops
       ->check(CLI::Range(0.0, 1e7));
   rhot::add_node_key_flags(cli, o.keys);
+}
+
+// rhot-node keygen: a key pair written as DIR/NAME.key and DIR/NAME.key_secret.
+int make_keys(const std::string& out, const std::string& name) {
+  auto pair = rhot::make_key_pair(name);
+  if (pair) {
+    if (auto ok = rhot::write_certificates(out, *pair); !ok) pair = std::unexpected(ok.error());
+  }
+  if (!pair) {
+    spdlog::error("keygen: {}", pair.error());
+    return 1;
+  }
+  std::printf("%s/%s.key (public: give it to the peers that are to trust it)\n%s/%s.key_secret (keep it here)\n", out.c_str(), name.c_str(),
+              out.c_str(), name.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{
+      "rhot-node: a camera node. Finds the markers of its cameras and publishes their detections to the master over "
+      "ZeroMQ (docs/camera-nodes.md); answers time and status requests on the control endpoint beside it."};
+  Options o;
+  add_options(cli, o);
   std::string keygen_out, keygen_name;
   CLI::App* keygen = cli.add_subcommand(
       "keygen",
@@ -312,20 +331,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return rhot::cli_exit_status(cli, e);
   }
-  if (keygen->parsed()) {
-    auto pair = rhot::make_key_pair(keygen_name);
-    if (pair) {
-      if (auto ok = rhot::write_certificates(keygen_out, *pair); !ok) pair = std::unexpected(ok.error());
-    }
-    if (!pair) {
-      spdlog::error("keygen: {}", pair.error());
-      return 1;
-    }
-    std::printf("%s/%s.key (public: give it to the peers that are to trust it)\n%s/%s.key_secret (keep it here)\n", keygen_out.c_str(),
-                keygen_name.c_str(), keygen_out.c_str(), keygen_name.c_str());
-    return 0;
-  }
-  if (print_clock) {
+  if (keygen->parsed()) return make_keys(keygen_out, keygen_name);
+  if (o.print_clock) {
     std::printf("%lld\n", static_cast<long long>(rhot::steady_now_ns()));
     return 0;
   }

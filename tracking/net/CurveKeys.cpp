@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <system_error>
 
@@ -50,27 +49,74 @@ std::string certificate_text(const Certificate& c, bool secret) {
   return out.str();
 }
 
-// Writes a new file with exactly `mode`, never replacing one.
+std::string errno_text(int e) { return std::generic_category().message(e); }
+
+// Writes a new file with exactly `mode`, never replacing one, and flushes it to the disk: a crash
+// leaves the whole key or none (a half-written file is removed).
 std::expected<void, std::string> write_new_file(const fs::path& path, const std::string& text, mode_t mode) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
   if (fd < 0) {
     const int e = errno;
     if (e == EEXIST) return std::unexpected(path.string() + ": already exists; remove it first to make a new key");
-    return std::unexpected(path.string() + ": cannot create: " + std::generic_category().message(e));
+    return std::unexpected(path.string() + ": cannot create: " + errno_text(e));
   }
-  ::fchmod(fd, mode);  // whatever the umask
+  const auto fail = [&](int e) {
+    ::close(fd);
+    ::unlink(path.c_str());
+    return std::unexpected(path.string() + ": cannot write: " + errno_text(e));
+  };
+  if (::fchmod(fd, mode) != 0) return fail(errno);  // whatever the umask
   std::size_t done = 0;
   while (done < text.size()) {
     const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n <= 0) {
-      ::close(fd);
-      ::unlink(path.c_str());
-      return std::unexpected(path.string() + ": cannot write");
-    }
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return fail(n < 0 ? errno : EIO);
     done += static_cast<std::size_t>(n);
   }
-  if (::close(fd) != 0) return std::unexpected(path.string() + ": cannot write");
+  if (::fsync(fd) != 0) return fail(errno);
+  if (::close(fd) != 0) {
+    const int e = errno;
+    ::unlink(path.c_str());
+    return std::unexpected(path.string() + ": cannot write: " + errno_text(e));
+  }
   return {};
+}
+
+// A certificate file's text, read through one descriptor (its checks and its reading are of the
+// same file): a regular file of at most kMaxCertificateBytes; a secret one owned by this user and
+// neither readable nor writable by anyone else.
+std::expected<std::string, std::string> read_certificate_text(const std::string& path, bool secret) {
+  // A secret key is never followed through a link; O_NONBLOCK: a FIFO put in its place does not hang.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | (secret ? O_NOFOLLOW : 0));
+  if (fd < 0) return std::unexpected(path + ": " + errno_text(errno));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) return std::unexpected(path + ": " + errno_text(errno));
+  if (!S_ISREG(st.st_mode)) return std::unexpected(path + ": not a file");
+  if (static_cast<std::uintmax_t>(st.st_size) > kMaxCertificateBytes)
+    return std::unexpected(path + ": " + std::to_string(st.st_size) + " bytes, too large for a certificate");
+  if (secret && (st.st_mode & 077) != 0) {
+    char mode[8];
+    std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
+    return std::unexpected(path + ": a secret key other users can read or write (mode " + mode + "); chmod 600 " + path);
+  }
+  if (secret && st.st_uid != ::geteuid())
+    return std::unexpected(path + ": a secret key owned by another user (uid " + std::to_string(st.st_uid) + ")");
+  std::string text(kMaxCertificateBytes + 1, '\0');
+  std::size_t got = 0;
+  while (got < text.size()) {
+    const ssize_t n = ::read(fd, text.data() + got, text.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return std::unexpected(path + ": cannot read: " + errno_text(errno));
+    if (n == 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  if (got > kMaxCertificateBytes) return std::unexpected(path + ": too large for a certificate");
+  text.resize(got);
+  return text;
 }
 
 // The ZPL of a certificate: sections at column 0, `name = value` four spaces in, comments from #.
@@ -161,22 +207,9 @@ std::expected<void, std::string> write_certificates(const std::string& dir, cons
 }
 
 std::expected<Certificate, std::string> read_certificate(const std::string& path, bool secret) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) return std::unexpected(path + ": " + std::generic_category().message(errno));
-  if (!S_ISREG(st.st_mode)) return std::unexpected(path + ": not a file");
-  if (static_cast<std::uintmax_t>(st.st_size) > kMaxCertificateBytes)
-    return std::unexpected(path + ": " + std::to_string(st.st_size) + " bytes, too large for a certificate");
-  if (secret && (st.st_mode & 077) != 0) {
-    char mode[8];
-    std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
-    return std::unexpected(path + ": a secret key readable by other users (mode " + mode + "); chmod 600 " + path);
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return std::unexpected(path + ": cannot read");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return std::unexpected(path + ": cannot read");
-  auto parsed = parse_zpl(path, text.str());
+  const auto text = read_certificate_text(path, secret);
+  if (!text) return std::unexpected(text.error());
+  auto parsed = parse_zpl(path, *text);
   if (!parsed) return std::unexpected(parsed.error());
   Certificate c;
   c.path = path;
@@ -220,8 +253,8 @@ std::expected<KeyRing, std::string> load_key_ring(const std::string& dir) {
   KeyRing ring;
   ring.dir = dir;
   std::vector<fs::path> secrets, publics;
-  for (const auto& entry : fs::directory_iterator(dir, ec))
-    if (entry.path().extension() == ".key_secret") secrets.push_back(entry.path());
+  for (auto it = fs::directory_iterator(dir, ec); !ec && it != fs::directory_iterator(); it.increment(ec))
+    if (it->path().extension() == ".key_secret") secrets.push_back(it->path());
   if (ec) return std::unexpected(dir + ": cannot list: " + ec.message());
   std::sort(secrets.begin(), secrets.end());
   if (secrets.empty())
@@ -235,10 +268,10 @@ std::expected<KeyRing, std::string> load_key_ring(const std::string& dir) {
   const fs::path trusted = fs::path(dir) / "trusted";
   if (!fs::is_directory(trusted, ec))
     return std::unexpected(trusted.string() + ": no such folder (it holds the public certificates, NAME.key, of the peers to trust)");
-  for (const auto& entry : fs::directory_iterator(trusted, ec)) {
-    if (entry.path().extension() == ".key_secret")
-      return std::unexpected(entry.path().string() + ": a secret key among the trusted; give peers only public certificates");
-    if (entry.path().extension() == ".key") publics.push_back(entry.path());
+  for (auto it = fs::directory_iterator(trusted, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    if (it->path().extension() == ".key_secret")
+      return std::unexpected(it->path().string() + ": a secret key among the trusted; give peers only public certificates");
+    if (it->path().extension() == ".key") publics.push_back(it->path());
   }
   if (ec) return std::unexpected(trusted.string() + ": cannot list: " + ec.message());
   std::sort(publics.begin(), publics.end());

@@ -97,6 +97,7 @@ std::expected<std::unique_ptr<NodeServer>, std::string> NodeServer::open(const s
   impl->node_id = node_id;
   impl->cameras = cameras;
   impl->clock = clock;
+  if (!security) impl->warn(kInsecureWarning);
   if (security) {
     impl->keys_dir = security->dir;
     auto zap = ZapHandler::bind(impl->context.handle(), *security);
@@ -104,7 +105,7 @@ std::expected<std::unique_ptr<NodeServer>, std::string> NodeServer::open(const s
     impl->zap = std::move(*zap);
     for (zmq::socket_t* socket : {&impl->frames, &impl->control}) {
       if (auto ok = make_curve_server(socket->handle(), *security); !ok) return std::unexpected("node security: " + ok.error());
-      auto monitor = HandshakeMonitor::attach(impl->context.handle(), socket->handle());
+      auto monitor = HandshakeMonitor::attach(impl->context.handle(), socket->handle(), true);
       if (!monitor) return std::unexpected(monitor.error());
       impl->monitors.push_back(std::move(*monitor));
     }

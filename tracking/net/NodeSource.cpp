@@ -367,9 +367,11 @@ struct NodeSource::Impl {
                  " refusals so far)");
         } else if (e.kind == Kind::kFailedNoDetail || e.kind == Kind::kFailedProtocol) {
           if (worth_telling(++node.stats.handshakes_failed - node.stats.refused_by_node))
-            warn("node " + node.endpoint + ": the handshake failed: whoever answers there cannot prove it holds " + node.node_name +
-                 "'s secret key, or runs without security, or the bytes on the way were not the node's; nothing from it is read (" +
-                 std::to_string(node.stats.handshakes_failed - node.stats.refused_by_node) + " so far)");
+            warn("node " + node.endpoint + ": the handshake failed: " +
+                 (node.node_key ? "whoever answers there cannot prove it holds " + node.node_name +
+                                      "'s secret key, or runs without security, or the bytes on the way were not the node's"
+                                : std::string("whoever answers there runs with security, and this master without (--insecure)")) +
+                 "; nothing from it is read (" + std::to_string(node.stats.handshakes_failed - node.stats.refused_by_node) + " so far)");
         }
       }
     }
@@ -404,7 +406,10 @@ struct NodeSource::Impl {
   void run() {
     std::vector<zmq::pollitem_t> items = poll_items();
     while (!stop.load()) {
-      if (const std::int64_t stall = stall_ns.exchange(0); stall > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(stall));
+      if (const std::int64_t stall = stall_ns.exchange(0); stall > 0) {
+        const std::int64_t until = steady_now_ns() + stall;
+        while (!stop.load() && steady_now_ns() < until) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
       try {
         zmq::poll(items.data(), items.size(), std::chrono::milliseconds(2));
       } catch (const zmq::error_t&) {
@@ -500,6 +505,7 @@ std::expected<std::unique_ptr<NodeSource>, std::string> NodeSource::open(const C
   } catch (const zmq::error_t& e) {
     return std::unexpected(std::string("node source: ") + e.what());
   }
+  if (!security) impl->warn(kInsecureWarning);
   Impl* raw = impl.get();
   impl->receiver = std::thread([raw] { raw->run(); });
   return std::unique_ptr<NodeSource>(new NodeSource(std::move(impl)));

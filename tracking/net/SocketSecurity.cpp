@@ -100,19 +100,23 @@ std::vector<ZapHandler::Decision> ZapHandler::answer() {
       }
     }
     const std::string status = d.admitted ? "200" : "400";
-    const std::string text = d.admitted ? "OK" : "key not trusted";
+    const std::string text = d.admitted ? "OK" : d.key ? "key not trusted" : "CURVE only";
     const std::string reply[] = {"1.0", request_id, status, text, d.admitted ? d.key->z85() : std::string(), ""};
-    for (std::size_t i = 0; i < 6; ++i) zmq_send(socket_, reply[i].data(), reply[i].size(), i + 1 < 6 ? ZMQ_SNDMORE : 0);
+    // A reply that cannot be sent leaves the handshake to time out (kHandshakeMs): refused either way.
+    for (std::size_t i = 0; i < 6; ++i)
+      if (zmq_send(socket_, reply[i].data(), reply[i].size(), i + 1 < 6 ? ZMQ_SNDMORE : 0) < 0) break;
     out.push_back(std::move(d));
   }
   return out;
 }
 
-std::expected<std::unique_ptr<HandshakeMonitor>, std::string> HandshakeMonitor::attach(void* context, void* socket) {
+std::expected<std::unique_ptr<HandshakeMonitor>, std::string> HandshakeMonitor::attach(void* context, void* socket, bool failures_only) {
   static std::atomic<unsigned long long> next{0};
   const std::string endpoint = "inproc://rhot-handshake-monitor-" + std::to_string(next++);
-  const int events = ZMQ_EVENT_CONNECTED | ZMQ_EVENT_ACCEPTED | ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_HANDSHAKE_SUCCEEDED |
-                     ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_AUTH;
+  const int failures = ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_AUTH;
+  const int events = failures_only
+                         ? failures
+                         : failures | ZMQ_EVENT_CONNECTED | ZMQ_EVENT_ACCEPTED | ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_HANDSHAKE_SUCCEEDED;
   if (zmq_socket_monitor(socket, endpoint.c_str(), events) != 0)
     return std::unexpected(std::string("socket monitor: ") + zmq_strerror(zmq_errno()));
   void* pair = zmq_socket(context, ZMQ_PAIR);

@@ -21,6 +21,11 @@ namespace rhot {
 // CURVE client of the node whose public key is `node_key`. The handshake is given kHandshakeMs:
 // a peer that connects and says nothing is dropped, not kept.
 inline constexpr int kHandshakeMs = 2000;
+
+// What a node or a master opened without keys says (in its warnings) as it starts.
+inline constexpr const char* kInsecureWarning =
+    "INSECURE: camera nodes without authentication or encryption (--insecure): anyone on the camera network can read the markers and "
+    "send false ones (docs/camera-nodes.md, \"Security\")";
 [[nodiscard]] std::expected<void, std::string> make_curve_server(void* socket, const KeyRing& keys);
 [[nodiscard]] std::expected<void, std::string> make_curve_client(void* socket, const KeyRing& keys, const CurveKey& node_key);
 
@@ -53,7 +58,11 @@ class ZapHandler {
 // Handshake outcomes of one socket (ZeroMQ's socket monitor over an inproc pair).
 class HandshakeMonitor {
  public:
-  [[nodiscard]] static std::expected<std::unique_ptr<HandshakeMonitor>, std::string> attach(void* context, void* socket);
+  // Every event below, or (failures_only: a node's, where anyone may connect and hang up) only
+  // the failed handshakes. ZeroMQ's I/O thread waits while the monitor's pipe is full, so a socket
+  // that strangers reach is told only what it counts, and drained often.
+  [[nodiscard]] static std::expected<std::unique_ptr<HandshakeMonitor>, std::string> attach(void* context, void* socket,
+                                                                                            bool failures_only = false);
   ~HandshakeMonitor();
   HandshakeMonitor(const HandshakeMonitor&) = delete;
   HandshakeMonitor& operator=(const HandshakeMonitor&) = delete;

@@ -121,7 +121,7 @@ TEST(CurveKeys, BadKeyFilesAndFoldersAreRefusedNamingTheFile) {
 
   write_text(d / "open.key_secret", czmq_secret_certificate(), 0644);
   EXPECT_EQ(refused(read_certificate((d / "open.key_secret").string(), true)),
-            (d / "open.key_secret").string() + ": a secret key readable by other users (mode 0644); chmod 600 " +
+            (d / "open.key_secret").string() + ": a secret key other users can read or write (mode 0644); chmod 600 " +
                 (d / "open.key_secret").string());
   std::string mismatched = czmq_secret_certificate();
   mismatched.replace(mismatched.find(kDocPublic), kDocPublic.size(), "rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7");

@@ -24,6 +24,7 @@
 #include "tracking/net/CurveKeys.h"
 #include "tracking/net/NodeServer.h"
 #include "tracking/net/NodeSource.h"
+#include "tracking/net/SocketSecurity.h"
 
 namespace rhot {
 namespace {
@@ -93,9 +94,9 @@ class ServingNode {
     thread_ = std::thread([this] {
       std::uint64_t counter = 0;
       while (!stop_) {
+        std::lock_guard lock(mutex_);  // the server's stats are read from the test's thread
         server_->publish(frame_at(counter++, kNodeMarker));
         server_->serve_until(steady_now_ns() + 10'000'000);
-        std::lock_guard lock(mutex_);
         for (std::string& w : server_->take_warnings()) warnings_.push_back(std::move(w));
       }
     });
@@ -443,6 +444,52 @@ TEST(NodeSecurity, OnTheWireFramesAreEncryptedAndInjectedOrReplayedBytesChangeNo
   EXPECT_GT(master->stats().nodes[0].handshakes_failed, failed_before);
   for (const Eigen::Vector2d& p : heard.pixels) EXPECT_EQ(p, kNodeMarker) << "no marker but the node's was ever taken";
   EXPECT_EQ(master->stats().bad_messages, 0u) << "nothing the attacker sent reached the decoder";
+}
+
+// A trusted node that sends one message over the size limit: ZeroMQ ends that connection itself
+// and would never reconnect it; the master opens the socket anew and hears the node again.
+TEST(NodeSecurity, AfterAMessageOverTheSizeLimitTheNodeIsHeardAgain) {
+  KeyFolders keys;
+  const auto ports = free_tcp_port_pairs(1);
+  ASSERT_TRUE(ports.has_value()) << ports.error();
+  const NetSecurity node_keys = keys.ring("node0");
+  zmq::context_t context;
+  auto zap = ZapHandler::bind(context.handle(), *node_keys);
+  ASSERT_TRUE(zap.has_value()) << zap.error();
+  zmq::socket_t pub(context, zmq::socket_type::pub), rep(context, zmq::socket_type::rep);
+  for (zmq::socket_t* s : {&pub, &rep}) {
+    s->set(zmq::sockopt::linger, 0);
+    ASSERT_TRUE(make_curve_server(s->handle(), *node_keys).has_value());
+  }
+  pub.bind(on_loopback((*ports)[0]));
+  rep.bind(on_loopback((*ports)[0] + 1));
+  std::atomic<bool> stop{false}, oversize{false};
+  std::thread node([&] {
+    std::uint64_t counter = 0;
+    while (!stop) {
+      (*zap)->answer();
+      zmq::message_t request;
+      while (rep.recv(request, zmq::recv_flags::dontwait)) {
+        const auto d = decode(std::span(static_cast<const std::uint8_t*>(request.data()), request.size()));
+        const TimeRequest q = d && std::holds_alternative<TimeRequest>(*d) ? std::get<TimeRequest>(*d) : TimeRequest{};
+        (void)rep.send(zmq::buffer(encode(TimeReply{q.sequence, q.master_send_ns, steady_now_ns()})), zmq::send_flags::none);
+      }
+      if (oversize.exchange(false))
+        (void)pub.send(zmq::buffer(std::vector<std::uint8_t>(kMaxNodeMessageBytes + 1000, 0x55)), zmq::send_flags::none);
+      (void)pub.send(zmq::buffer(encode(frame_at(counter++, kNodeMarker))), zmq::send_flags::none);
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  });
+  auto master = open_master("node0@" + on_loopback((*ports)[0]), keys.ring("master"));
+  ASSERT_TRUE(master);
+  EXPECT_GT(hear(*master, 1.0).frames, 30);
+  oversize = true;
+  (void)hear(*master, 0.3);  // the frames before it, and the connection ends
+  const Heard after = hear(*master, 2.5);
+  stop = true;
+  node.join();
+  EXPECT_GT(after.frames, 50) << "heard again within about a second";
+  EXPECT_EQ(master->stats().bad_messages, 0u) << "the message over the limit never reached the decoder";
 }
 
 TEST(NodeSecurity, ANodeListWithKeysNamesEachNodesCertificate) {
