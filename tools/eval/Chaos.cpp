@@ -107,7 +107,11 @@ struct Chaos::Attacker {
     f.width = 1280;
     f.height = 720;
     std::uniform_real_distribution<double> x(10.0, 1270.0), y(10.0, 710.0);
-    for (int i = 0; i < 20; ++i) f.detections.push_back({Eigen::Vector2d(x(rng), y(rng)), -1});
+    for (int i = 0; i < 20; ++i) {
+      const double px = x(rng);
+      const double py = y(rng);
+      f.detections.push_back({Eigen::Vector2d(px, py), -1});
+    }
     return encode(f);
   }
 
