@@ -296,26 +296,69 @@ NodeSourceSettings source_settings(const NodesArgs& a, std::int64_t start_ns) {
 }
 
 // With the demo's world: the hands tracked from the nodes' frames and, at the same moments, from
-// an in-process simulated rig of the same world (its own noise: the same seed gives other
-// draws than the nodes', which each seed their own cameras) seeing the same cameras.
+// the nodes' own simulations run in process (AsOnTheNodes: the same detections, noise and all)
+// seeing the same cameras.
 struct DemoHands {
   std::unique_ptr<LiveTracking> from_nodes, in_process;
   HeldFrames* held = nullptr;
   HandComparison nodes_hands, local_hands;
 };
 
+// The nodes' own simulations, in process: node n's cameras (c % N == n) photographed by a
+// simulated rig of those cameras alone, seeded as rhot-node seeds its own (the world's seed x 1000
+// plus its first camera), so that each camera's noise is drawn as on its node and the two trackers
+// see the same detections: what differs is the transport alone (clock mapping, late cameras).
+class AsOnTheNodes final : public FrameSource {
+ public:
+  AsOnTheNodes(const NodesArgs& a, const CameraRig& rig, const std::shared_ptr<DemoWorld>& world) : rig_(rig) {
+    for (int n = 0; n < a.nodes; ++n) {
+      Part part;
+      CameraRig mine;
+      for (int c = n; c < static_cast<int>(rig.cameras.size()); c += a.nodes) {
+        part.cameras.push_back(c);
+        mine.cameras.push_back(rig.cameras[static_cast<std::size_t>(c)]);
+      }
+      SimulatedRigSettings settings;
+      settings.sigma_px = a.sigma;
+      settings.rate_hz = a.rate_hz;
+      settings.seed = a.seed * 1000u + static_cast<unsigned>(part.cameras.front());
+      part.sim = std::make_unique<SimulatedRig>(mine, std::vector<Trajectory>{}, settings);
+      part.sim->set_world(world);
+      parts_.push_back(std::move(part));
+    }
+  }
+  const CameraRig& rig() const override { return rig_; }
+  std::optional<RigFrame> next(double t_s) override {
+    RigFrame out;
+    out.time_s = t_s;
+    out.cameras.resize(rig_.cameras.size());
+    for (Part& part : parts_) {
+      std::optional<RigFrame> f = part.sim->next(t_s);
+      if (!f) return std::nullopt;
+      for (std::size_t j = 0; j < part.cameras.size() && j < f->cameras.size(); ++j) {
+        CameraFrame& c = out.cameras[static_cast<std::size_t>(part.cameras[j])];
+        c = std::move(f->cameras[j]);
+        c.camera = part.cameras[j];
+      }
+    }
+    return out;
+  }
+
+ private:
+  struct Part {
+    std::vector<int> cameras;
+    std::unique_ptr<SimulatedRig> sim;
+  };
+  CameraRig rig_;
+  std::vector<Part> parts_;
+};
+
 void set_up_demo_hands(const NodesArgs& a, const CameraRig& rig, const DemoSimulation& demo, DemoHands& hands) {
   auto frames = std::make_unique<HeldFrames>(rig);
   hands.held = frames.get();
   hands.from_nodes = std::make_unique<LiveTracking>(std::move(frames), demo.objects, demo.layouts);
-  SimulatedRigSettings local;
-  local.sigma_px = a.sigma;
-  local.rate_hz = a.rate_hz;
-  local.seed = a.seed;
-  auto local_rig = std::make_unique<SimulatedRig>(rig, std::vector<Trajectory>{}, local);
-  local_rig->set_world(demo.world);
-  hands.in_process =
-      std::make_unique<LiveTracking>(std::make_unique<SameCamerasAs>(std::move(local_rig), *hands.held), demo.objects, demo.layouts);
+  hands.in_process = std::make_unique<LiveTracking>(
+      std::make_unique<SameCamerasAs>(std::make_unique<AsOnTheNodes>(a, rig, demo.world), *hands.held), demo.objects, demo.layouts);
   hands.nodes_hands.live = hands.from_nodes.get();
   hands.local_hands.live = hands.in_process.get();
 }
