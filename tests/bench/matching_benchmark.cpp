@@ -7,10 +7,13 @@
 #include <filesystem>
 #include <map>
 
+#include <optional>
+
 #include <benchmark/benchmark.h>
 #include <opencv2/calib3d.hpp>
 
 #include "tracking/camera/RigFile.h"
+#include "base/Jobs.h"
 #include "tracking/geometry/Matching.h"
 #include "tracking/sim/SimulatedRig.h"
 
@@ -78,13 +81,18 @@ const ScaleData& scale_data(int rig, int markers) {
   return d;
 }
 
+// Matching per frame on room-8 (rig 0) and stage-32 (rig 1), one thread (no job pool) or a job
+// pool of `threads` (the same points: tests/tracking/geometry/matching_threads_test.cpp).
 void BM_MatchScaling(benchmark::State& state) {
   const ScaleData& d = scale_data(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const int threads = static_cast<int>(state.range(2));
+  std::optional<rhot::JobPool> jobs;
+  if (threads > 1) jobs.emplace(threads);
   std::size_t i = 0;
   double found = 0.0;
   std::int64_t runs = 0;
   for (auto _ : state) {
-    const auto points = rhot::match_and_triangulate(d.rig, d.frames[i++ % d.frames.size()]);
+    const auto points = rhot::match_and_triangulate(d.rig, d.frames[i++ % d.frames.size()], {}, jobs ? &*jobs : nullptr);
     found += static_cast<double>(points.size());
     ++runs;
     benchmark::DoNotOptimize(points.data());
@@ -94,13 +102,9 @@ void BM_MatchScaling(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.range(1)), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_MatchScaling)
-    ->ArgNames({"rig", "markers"})
-    ->Args({0, 100})
-    ->Args({0, 300})
-    ->Args({0, 1000})
-    ->Args({1, 100})
-    ->Args({1, 300})
-    ->Args({1, 1000})
+    ->ArgNames({"rig", "markers", "threads"})
+    ->ArgsProduct({{0, 1}, {100, 300, 1000}, {1, 2}})
+    ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 
 void BM_PairwiseCvTriangulatePoints(benchmark::State& state) {

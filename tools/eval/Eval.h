@@ -81,7 +81,7 @@ GraspComparison compare_grasps(const std::vector<GraspSpan>& tracked, const std:
 
 // uniform: markers standing still, spread uniformly through the box (else wandering through it).
 int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
-                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform = false);
+                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform = false, int threads = 0);
 int wand(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout,
          const std::vector<double>& volume, const std::vector<double>& volume_centre);
 int stars(const std::string& rig_file, const std::string& set_file, int bodies, const WorldFlags& world, int frames, unsigned seed,

@@ -1,7 +1,7 @@
 // rhot-eval: measurements a user sizing a rig wants, as one JSON object on stdout.
 //
 //   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M] [--spread wander|uniform]
-//                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] [--threads T] --json
 //   rhot-eval demo [--scene FILE] [--placements N] [--seed S] [--hands tracked|perfect] [world flags] --json
 //   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--calibrate-hand] [world flags] [--frames N] --json
 //   rhot-eval hands --take FILE --labelled [--model FILE | --fit-fraction F] [--hide-gap-s S] [--hide-together N] [--seed K] --json
@@ -263,6 +263,7 @@ constexpr const char* kCentreHelp =
 struct TriangulationArgs {
   int markers = 100;
   std::string spread = "wander";
+  int threads = 0;
 };
 
 // `rhot-eval stars`' own flags.
@@ -296,6 +297,9 @@ CLI::App* add_triangulation_command(CLI::App& app, SharedArgs& s, TriangulationA
   tri->add_option("--frames", s.frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
   tri->add_option("--seed", s.seed, "random seed")->capture_default_str();
   tri->add_option("--markers", a.markers, "markers in the volume")->capture_default_str()->check(CLI::Range(1, 10000));
+  tri->add_option("--threads", a.threads, "threads matching runs on (0: every core there is); the points do not depend on it")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 256));
   tri->add_option("--dropout", s.dropout, "probability a camera misses a visible marker")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
@@ -456,7 +460,7 @@ int main(int argc, char** argv) {
   }
   if (tri->parsed())
     return triangulation(s.rig_file, s.sigma, s.frames, s.seed, tri_args.markers, s.dropout, s.volume, s.volume_centre,
-                         tri_args.spread == "uniform");
+                         tri_args.spread == "uniform", tri_args.threads);
   if (hands_cmd->parsed()) return hands(hands_args);
   if (stars_cmd->parsed())
     return stars(s.rig_file, stars_args.set_file, stars_args.bodies, stars_args.world, s.frames, s.seed, s.volume, s.volume_centre);

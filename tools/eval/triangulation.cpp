@@ -18,6 +18,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "engine/sim/GraspScenarios.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
@@ -32,7 +33,7 @@
 namespace rhot::eval {
 
 int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
-                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform) {
+                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform, int threads) {
   const auto rig = rhot::load_rig(rig_file);
   if (!rig) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
@@ -58,6 +59,7 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
                                  : rhot::random_trajectories(markers, centre - half, centre + half, seed + 1),
                          settings);
 
+  rhot::JobPool jobs(rhot::threads_or_all(threads));
   double sum_error2 = 0.0;
   double sum_bound2 = 0.0;
   long points = 0;
@@ -70,7 +72,7 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
     const auto start = std::chrono::steady_clock::now();
-    const auto matched = rhot::match_and_triangulate(*rig, frame);
+    const auto matched = rhot::match_and_triangulate(*rig, frame, {}, &jobs);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     std::vector<int> seen_by(frame.truth_position_m.size(), 0);
     for (const rhot::CameraFrame& cf : frame.cameras) {
@@ -108,6 +110,7 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   j["frames"] = frames;
   j["markers"] = markers;
   j["seed"] = seed;
+  j["threads"] = jobs.threads();
   j["volume_centre_m"] = {centre.x(), centre.y(), centre.z()};
   j["volume_size_m"] = {box.size.x(), box.size.y(), box.size.z()};
   j["spread"] = uniform ? "uniform" : "wander";

@@ -9,6 +9,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "base/Check.h"
+#include "base/Jobs.h"
 #include "tracking/geometry/EpipolarIndex.h"
 
 namespace rhot {
@@ -213,12 +214,12 @@ namespace {
 // the best without sharing detections.
 class Matcher {
  public:
-  Matcher(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings)
-      : rig_(rig), settings_(settings), n_(rig.cameras.size()), cams_(n_), poses_(camera_projections(rig)) {
+  Matcher(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings, JobPool* jobs)
+      : rig_(rig), settings_(settings), jobs_(jobs), n_(rig.cameras.size()), cams_(n_), poses_(camera_projections(rig)) {
     for (std::size_t c = 0; c < n_; ++c) {
       RHOT_PRECONDITION(frame.cameras[c].camera == static_cast<int>(c), "match_and_triangulate: cameras in rig order");
-      cams_[c].build(rig.cameras[c], frame.cameras[c]);
     }
+    for_each(n_, [&](std::size_t c) { cams_[c].build(rig.cameras[c], frame.cameras[c]); });
     if (rig.volume && settings.seed_margin >= 0.0) {
       const Eigen::Vector3d half =
           0.5 * rig.volume->size_m + settings.seed_margin * rig.volume->size_m + Eigen::Vector3d::Constant(settings.seed_margin_m);
@@ -231,57 +232,125 @@ class Matcher {
     for (std::size_t i = 0; i < n_; ++i) {
       for (std::size_t j = i + 1; j < n_; ++j) seed_pair(i, j);
     }
-    for (Cluster& cl : clusters_) refine(cl);
+    for_each(clusters_.size(), [&](std::size_t k) { refine(clusters_[k]); });
     return accept();
   }
 
  private:
+  // fn(k) for k in [0, n): on the job pool where there is one, else in order. Every use writes
+  // only what belongs to k, so the result is the same whatever the thread count.
+  template <class F>
+  void for_each(std::size_t n, F&& fn) {
+    if (jobs_ != nullptr) {
+      jobs_->for_each(n, fn);
+    } else {
+      for (std::size_t k = 0; k < n; ++k) fn(k);
+    }
+  }
+
+  // One detection's seeds in a pair of cameras: the candidates on its epipolar line that may seed
+  // (of its colour, meeting it inside the seed volume), nearest the line first, and those grown
+  // ahead of time (see seed_pair).
+  struct Candidate {
+    double residual = 0.0;  // off the epipolar line (normalised units)
+    int b = -1;
+    Eigen::Vector3d x{0, 0, 0};  // where the two rays meet
+    bool operator<(const Candidate& o) const { return residual < o.residual || (residual == o.residual && b < o.b); }
+  };
+  struct Grown {
+    Cluster cluster;
+    bool confirmed = false;
+  };
+  struct SeedPlan {
+    std::vector<Candidate> candidates;
+    std::vector<std::optional<Grown>> grown;  // per candidate, where it was grown ahead
+  };
+
   // Seeds from every epipolar-consistent detection pair of cameras i < j, each grown into every
-  // other camera.
+  // other camera. In order of i's detections: for each, its candidates nearest the line first,
+  // skipping those already explained or already paired with it in a cluster, until one is
+  // confirmed. With a job pool, the detections' candidates are first grown in parallel as if
+  // nothing this pair confirms changed what is explained (growing reads only the detections);
+  // the plans are then committed in order, skipping what an earlier detection's cluster
+  // explained meanwhile and growing on the spot where a plan ran out: the clusters, and all that
+  // follows, are exactly the serial ones.
   void seed_pair(std::size_t i, std::size_t j) {
     if (cams_[i].pixel.empty() || cams_[j].pixel.empty()) return;
     // cam_j_from_cam_i = R t; essential matrix E = [t]x R maps x_i to the epipolar line in j.
     const Rigid3d j_from_i = rig_.cameras[j].cam_from_world * rig_.cameras[i].cam_from_world.inverse();
     const Eigen::Matrix3d e = skew(j_from_i.translation) * j_from_i.rotation.toRotationMatrix();
-    const double fj = 0.5 * (rig_.cameras[j].intrinsics.fx + rig_.cameras[j].intrinsics.fy);
     // Many lines against many detections: index camera j's detections by epipolar line
     // (EpipolarIndex); few: test every one.
-    const auto open = [](const std::vector<char>& explained) {
-      return static_cast<std::size_t>(std::count(explained.begin(), explained.end(), char{0}));
-    };
-    const bool indexed = open(cams_[i].explained) * open(cams_[j].explained) >= kIndexAbovePairs;
-    if (indexed) index_.build(j_from_i.translation, cams_[j].normalised, cams_[j].explained);
+    open_.clear();
     for (std::size_t a = 0; a < cams_[i].pixel.size(); ++a) {
-      if (cams_[i].explained[a] != 0) continue;
-      const Eigen::Vector3d line = e * cams_[i].normalised[a].homogeneous();
-      const double tolerance = settings_.epipolar_tolerance_px * line.head<2>().norm() / fj;
-      const Eigen::Vector3d ray_a = poses_[i].ray_direction_world(cams_[i].normalised[a]);
-      candidates_.clear();
-      if (indexed) {
-        index_.query(line, tolerance, candidates_);
-      } else {
-        for (std::size_t b = 0; b < cams_[j].pixel.size(); ++b) {
-          if (cams_[j].explained[b] == 0 && std::abs(line.dot(cams_[j].normalised[b].homogeneous())) <= tolerance) {
-            candidates_.push_back(static_cast<int>(b));
-          }
+      if (cams_[i].explained[a] == 0) open_.push_back(a);
+    }
+    const auto open_j = static_cast<std::size_t>(std::count(cams_[j].explained.begin(), cams_[j].explained.end(), char{0}));
+    if (open_.empty() || open_j == 0) return;
+    const bool indexed = open_.size() * open_j >= kIndexAbovePairs;
+    if (indexed) index_.build(j_from_i.translation, cams_[j].normalised, cams_[j].explained);
+    const bool ahead = jobs_ != nullptr && jobs_->threads() > 1 && open_.size() >= kGrowAheadFrom;
+    if (plans_.size() < open_.size()) plans_.resize(open_.size());
+    for_each(open_.size(), [&](std::size_t k) {
+      plan_seeds(i, open_[k], j, e, indexed, plans_[k]);
+      if (ahead) grow_ahead(i, open_[k], j, plans_[k]);
+    });
+    for (std::size_t k = 0; k < open_.size(); ++k) {
+      SeedPlan& plan = plans_[k];
+      const std::size_t a = open_[k];
+      for (std::size_t c = 0; c < plan.candidates.size(); ++c) {
+        const auto b = static_cast<std::size_t>(plan.candidates[c].b);
+        if (cams_[j].explained[b] != 0 || explained_by_a_cluster(i, a, j, b)) continue;
+        Grown g = plan.grown[c] ? std::move(*plan.grown[c]) : grow_seed(i, a, j, b, plan.candidates[c].x);
+        const bool confirmed = g.confirmed;
+        keep(std::move(g));
+        if (confirmed) break;  // a is explained: no more seeds from it
+      }
+    }
+  }
+
+  // Detection a of camera i: its candidates in camera j (written to plan, nothing grown yet).
+  void plan_seeds(std::size_t i, std::size_t a, std::size_t j, const Eigen::Matrix3d& e, bool indexed, SeedPlan& plan) const {
+    thread_local std::vector<int> near_line;
+    plan.candidates.clear();
+    plan.grown.clear();
+    const double fj = 0.5 * (rig_.cameras[j].intrinsics.fx + rig_.cameras[j].intrinsics.fy);
+    const Eigen::Vector3d line = e * cams_[i].normalised[a].homogeneous();
+    const double tolerance = settings_.epipolar_tolerance_px * line.head<2>().norm() / fj;
+    near_line.clear();
+    if (indexed) {
+      index_.query(line, tolerance, near_line);
+    } else {
+      for (std::size_t b = 0; b < cams_[j].pixel.size(); ++b) {
+        if (cams_[j].explained[b] == 0 && std::abs(line.dot(cams_[j].normalised[b].homogeneous())) <= tolerance) {
+          near_line.push_back(static_cast<int>(b));
         }
       }
-      // Nearest the line first: the true match is, more often than not, and once it is
-      // confirmed the ghosts behind it are never grown.
-      ranked_.clear();
-      for (const int b : candidates_)
-        ranked_.emplace_back(std::abs(line.dot(cams_[j].normalised[static_cast<std::size_t>(b)].homogeneous())), b);
-      std::sort(ranked_.begin(), ranked_.end());
-      for (const auto& [residual, candidate] : ranked_) {
-        const auto b = static_cast<std::size_t>(candidate);
-        if (cams_[j].explained[b] != 0 || cams_[j].colour[b] != cams_[i].colour[a]) continue;
-        if (explained_by_a_cluster(i, a, j, b)) continue;
-        const auto x =
-            ray_midpoint(poses_[i].centre_world(), ray_a, poses_[j].centre_world(), poses_[j].ray_direction_world(cams_[j].normalised[b]));
-        // Two rays that meet far outside the volume the rig is for: a ghost, almost always.
-        if (!x || (x->array() < seed_lo_.array()).any() || (x->array() > seed_hi_.array()).any()) continue;
-        if (grow_seed(i, a, j, b, *x)) break;  // a is explained: no more seeds from it
-      }
+    }
+    const Eigen::Vector3d ray_a = poses_[i].ray_direction_world(cams_[i].normalised[a]);
+    for (const int candidate : near_line) {
+      const auto b = static_cast<std::size_t>(candidate);
+      if (cams_[j].colour[b] != cams_[i].colour[a]) continue;
+      const auto x =
+          ray_midpoint(poses_[i].centre_world(), ray_a, poses_[j].centre_world(), poses_[j].ray_direction_world(cams_[j].normalised[b]));
+      // Two rays that meet far outside the volume the rig is for: a ghost, almost always.
+      if (!x || (x->array() < seed_lo_.array()).any() || (x->array() > seed_hi_.array()).any()) continue;
+      plan.candidates.push_back({std::abs(line.dot(cams_[j].normalised[b].homogeneous())), candidate, *x});
+    }
+    // Nearest the line first: the true match is, more often than not, and once it is confirmed
+    // the ghosts behind it are never grown.
+    std::sort(plan.candidates.begin(), plan.candidates.end());
+    plan.grown.resize(plan.candidates.size());
+  }
+
+  // The plan's seeds grown in order, as the serial pass would with what is explained now, up to
+  // the first confirmed one.
+  void grow_ahead(std::size_t i, std::size_t a, std::size_t j, SeedPlan& plan) const {
+    for (std::size_t c = 0; c < plan.candidates.size(); ++c) {
+      const auto b = static_cast<std::size_t>(plan.candidates[c].b);
+      if (cams_[j].explained[b] != 0 || explained_by_a_cluster(i, a, j, b)) continue;
+      plan.grown[c] = grow_seed(i, a, j, b, plan.candidates[c].x);
+      if (plan.grown[c]->confirmed) return;
     }
   }
 
@@ -293,11 +362,14 @@ class Matcher {
     return false;
   }
 
-  // The seed (a in camera i, b in camera j, meeting near x) grown into every other camera; kept as
-  // a cluster unless it is a ghost. True when three or more views confirm it: its detections are
-  // then explained and seed nothing more.
-  bool grow_seed(std::size_t i, std::size_t a, std::size_t j, std::size_t b, const Eigen::Vector3d& x) {
-    Cluster cl;
+  // The seed (a in camera i, b in camera j, meeting near x) grown into every other camera; a
+  // cluster unless it is a ghost (then with no detections). Confirmed when three or more views
+  // agree: its detections are then explained and seed nothing more (keep). Reads only the
+  // detections, so seeds can grow side by side.
+  Grown grow_seed(std::size_t i, std::size_t a, std::size_t j, std::size_t b, const Eigen::Vector3d& x) const {
+    thread_local std::vector<Observation> grown;
+    Grown out;
+    Cluster& cl = out.cluster;
     cl.seed_point = x;
     cl.colour = cams_[i].colour[a];
     cl.detection.assign(n_, -1);
@@ -311,30 +383,32 @@ class Matcher {
       cl.detection[k] = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
       if (cl.detection[k] < 0) ++unseen;
     }
-    grown_.clear();
+    grown.clear();
     for (std::size_t k = 0; k < n_; ++k) {
-      if (cl.detection[k] >= 0) grown_.push_back({static_cast<int>(k), cams_[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
+      if (cl.detection[k] >= 0) grown.push_back({static_cast<int>(k), cams_[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
     }
     // A pair no third camera confirms, where more than two cameras should have seen it, is a
     // ghost: the acceptance rule would refuse it anyway (more missing than support).
-    if (grown_.size() == 2 && unseen > 2) return false;
+    if (grown.size() == 2 && unseen > 2) {
+      cl.detection.clear();
+      return out;
+    }
     // Three or more views that agree after refinement (every residual small) explain their
     // detections; a coincidental third detection near a ghost rarely survives refinement.
-    bool confirmed = false;
-    if (grown_.size() >= 3) {
-      auto refined = refine_point(poses_, grown_, cl.seed_point, 5);
+    if (grown.size() >= 3) {
+      auto refined = refine_point(poses_, grown, cl.seed_point, 5);
       // A neighbouring marker's detection picked up in one or two cameras need not spoil the
       // others' agreement: the worst goes (never a, b), while three views or more remain.
-      for (int drop = 0; drop < 2 && refined && refined->max_residual_px > settings_.max_residual_px && grown_.size() > 3; ++drop) {
+      for (int drop = 0; drop < 2 && refined && refined->max_residual_px > settings_.max_residual_px && grown.size() > 3; ++drop) {
         const auto worst = static_cast<std::size_t>(refined->worst_observation);
-        const auto camera = static_cast<std::size_t>(grown_[worst].camera);
+        const auto camera = static_cast<std::size_t>(grown[worst].camera);
         if (camera == i || camera == j) break;
         cl.detection[camera] = -1;
-        grown_.erase(grown_.begin() + static_cast<std::ptrdiff_t>(worst));
-        refined = refine_point(poses_, grown_, refined->position_world, 5);
+        grown.erase(grown.begin() + static_cast<std::ptrdiff_t>(worst));
+        refined = refine_point(poses_, grown, refined->position_world, 5);
       }
       if (refined) {
-        confirmed = refined->max_residual_px <= settings_.max_residual_px;
+        out.confirmed = refined->max_residual_px <= settings_.max_residual_px;
         cl.seed_point = refined->position_world;
         // Where two markers project close together in one camera, the refined point picks the
         // right detection more often than the two-view seed did.
@@ -352,16 +426,22 @@ class Matcher {
         if (!changed) cl.seed_refined = std::move(refined);
       }
     }
+    return out;
+  }
+
+  // A grown seed kept as a cluster (a ghost, with no detections, is not); a confirmed one
+  // explains its detections.
+  void keep(Grown&& g) {
+    if (g.cluster.detection.empty()) return;
     const int index = static_cast<int>(clusters_.size());
     for (std::size_t k = 0; k < n_; ++k) {
-      if (cl.detection[k] < 0) continue;
-      const auto d = static_cast<std::size_t>(cl.detection[k]);
+      if (g.cluster.detection[k] < 0) continue;
+      const auto d = static_cast<std::size_t>(g.cluster.detection[k]);
       links_.emplace_back(index, cams_[k].first_link[d]);
       cams_[k].first_link[d] = static_cast<int>(links_.size()) - 1;
-      if (confirmed) cams_[k].explained[d] = 1;
+      if (g.confirmed) cams_[k].explained[d] = 1;
     }
-    clusters_.push_back(std::move(cl));
-    return confirmed;
+    clusters_.push_back(std::move(g.cluster));
   }
 
   // Refines a cluster, counts its support and the cameras that should have seen it.
@@ -490,6 +570,7 @@ class Matcher {
 
   const CameraRig& rig_;
   const MatchSettings& settings_;
+  JobPool* jobs_;  // nullptr: everything in order on the caller
   std::size_t n_;
   std::vector<CameraDetections> cams_;
   std::vector<CameraProjection> poses_;
@@ -500,12 +581,15 @@ class Matcher {
   // seeding near linear in the markers.
   std::vector<std::pair<int, int>> links_;
   std::vector<Cluster> clusters_;
-  std::vector<Observation> grown_;  // scratch for grow_seed
-  // seed_pair's: camera j's open detections by epipolar line, and those near one line.
+  // seed_pair's: camera j's open detections by epipolar line, camera i's open detections and
+  // their plans.
   static constexpr std::size_t kIndexAbovePairs = 512;
+  // Seeds are grown ahead in parallel for a pair with at least this many open detections in its
+  // first camera (fewer: the dispatch costs more than it saves).
+  static constexpr std::size_t kGrowAheadFrom = 16;
   EpipolarIndex index_;
-  std::vector<int> candidates_;
-  std::vector<std::pair<double, int>> ranked_;  // candidates by distance from the line
+  std::vector<std::size_t> open_;
+  std::vector<SeedPlan> plans_;
   // Where seeds may lie (MatchSettings::seed_margin): everywhere without a volume.
   Eigen::Vector3d seed_lo_ = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
   Eigen::Vector3d seed_hi_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
@@ -513,9 +597,10 @@ class Matcher {
 
 }  // namespace
 
-std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings) {
+std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings,
+                                                JobPool* jobs) {
   RHOT_PRECONDITION(frame.cameras.size() == rig.cameras.size(), "match_and_triangulate: one CameraFrame per camera of the rig");
-  return Matcher(rig, frame, settings).run();
+  return Matcher(rig, frame, settings, jobs).run();
 }
 
 }  // namespace rhot

@@ -39,6 +39,8 @@
 
 namespace rhot {
 
+class JobPool;
+
 struct MatchSettings {
   double epipolar_tolerance_px = 2.0;
   double reprojection_tolerance_px = 2.5;
@@ -96,7 +98,10 @@ class PixelSigmaEstimate {
 // Per point its standard deviation per axis (metres) under sigma_px of detection noise.
 std::vector<double> point_sigmas_m(std::span<const MatchedPoint> points, double sigma_px);
 
-// Precondition: frame.cameras[i].camera == i for every camera of the rig.
-std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings = {});
+// Precondition: frame.cameras[i].camera == i for every camera of the rig. With a job pool, the
+// cameras' detections, the seeds and the clusters' refinement are spread over its threads; the
+// points are the same, bit for bit, whatever the thread count (docs/tracking.md "Threads").
+std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings = {},
+                                                JobPool* jobs = nullptr);
 
 }  // namespace rhot

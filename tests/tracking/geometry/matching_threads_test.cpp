@@ -1,0 +1,64 @@
+// Matching on a job pool gives the serial points, bit for bit, whatever the thread count.
+
+#include <bit>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "base/Jobs.h"
+#include "tracking/camera/RigFile.h"
+#include "tracking/geometry/Matching.h"
+#include "tracking/sim/SimulatedRig.h"
+
+namespace rhot {
+namespace {
+
+// Every field of every point, doubles compared by their bits.
+void expect_identical(const std::vector<MatchedPoint>& serial, const std::vector<MatchedPoint>& pooled, int threads) {
+  ASSERT_EQ(serial.size(), pooled.size()) << threads << " threads";
+  const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+  for (std::size_t k = 0; k < serial.size(); ++k) {
+    const MatchedPoint& s = serial[k];
+    const MatchedPoint& p = pooled[k];
+    SCOPED_TRACE(testing::Message() << threads << " threads, point " << k);
+    for (int a = 0; a < 3; ++a) ASSERT_EQ(bits(s.point.position_world[a]), bits(p.point.position_world[a]));
+    ASSERT_EQ(bits(s.point.reprojection_rms_px), bits(p.point.reprojection_rms_px));
+    ASSERT_EQ(bits(s.point.sigma_m_per_px), bits(p.point.sigma_m_per_px));
+    ASSERT_EQ(s.point.cameras, p.point.cameras);
+    ASSERT_EQ(s.detection, p.detection);
+    ASSERT_EQ(s.colour, p.colour);
+    ASSERT_EQ(s.observations.size(), p.observations.size());
+    for (std::size_t o = 0; o < s.observations.size(); ++o) {
+      ASSERT_EQ(s.observations[o].camera, p.observations[o].camera);
+      ASSERT_EQ(bits(s.observations[o].pixel.x()), bits(p.observations[o].pixel.x()));
+      ASSERT_EQ(bits(s.observations[o].pixel.y()), bits(p.observations[o].pixel.y()));
+    }
+  }
+}
+
+// A crowded stage (32 cameras, 400 markers, noise and dropout): many seeds per camera pair, so the
+// seeds are grown ahead on the pool and what one detection's cluster explains changes what the
+// next may seed.
+TEST(MatchingThreads, TheSameSeedGivesTheSamePointsWhateverTheThreadCount) {
+  const auto rig = load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / "stage-32.yaml");
+  ASSERT_TRUE(rig.has_value()) << (rig ? "" : rig.error());
+  const TrackingVolume volume = rig->volume.value();
+  SimulatedRigSettings settings;
+  settings.dropout = 0.1;
+  settings.sigma_px = 0.3;
+  SimulatedRig sim(*rig, random_trajectories(400, volume.centre_m - 0.5 * volume.size_m, volume.centre_m + 0.5 * volume.size_m, 11), settings);
+  JobPool two(2);
+  JobPool three(3);
+  JobPool eight(8);
+  for (int f = 0; f < 2; ++f) {
+    const RigFrame frame = sim.next();
+    const std::vector<MatchedPoint> serial = match_and_triangulate(*rig, frame);
+    ASSERT_GT(serial.size(), 300U) << "a crowded frame";
+    expect_identical(serial, match_and_triangulate(*rig, frame, {}, &two), 2);
+    expect_identical(serial, match_and_triangulate(*rig, frame, {}, &three), 3);
+    expect_identical(serial, match_and_triangulate(*rig, frame, {}, &eight), 8);
+  }
+}
+
+}  // namespace
+}  // namespace rhot
