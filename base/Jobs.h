@@ -31,6 +31,9 @@ int hardware_threads();
 // A thread count from a flag: 0 means every core there is (hardware_threads()).
 int threads_or_all(int threads);
 
+// The most threads a flag may ask for.
+inline constexpr int kMaxThreads = 256;
+
 class JobPool {
  public:
   // threads: how many threads work on a loop, the caller's included (threads - 1 workers are

@@ -1,7 +1,9 @@
 #include "engine/launch/Launch.h"
 
 #include <cmath>
+#include <string>
 
+#include "base/Jobs.h"
 #include "engine/tracked/ReplaySource.h"
 #include "tracking/camera/RigFile.h"
 #include "tracking/net/NodeSource.h"
@@ -11,6 +13,9 @@ namespace rhot {
 
 std::expected<void, std::string> LaunchSettings::check() const {
   if (!std::isfinite(speed) || !(speed > 0.0)) return std::unexpected(std::string("speed: the replay speed must be a positive number"));
+  if (threads < 0 || threads > kMaxThreads)
+    return std::unexpected("threads: " + std::to_string(threads) + " is not a thread count (0: every core, at most " +
+                           std::to_string(kMaxThreads) + ")");
   if (auto detector_ok = rhot::check(detector); !detector_ok) return std::unexpected("detector: " + detector_ok.error());
   if (colour_markers && !node_endpoints.empty()) {
     return std::unexpected(std::string("colour markers through camera nodes: the node protocol (version 1) carries no colour"));
@@ -65,6 +70,7 @@ std::expected<CustomSource, std::string> open_frame_source(const LaunchSettings&
     vs.detector = settings.detector;
     if (settings.colour_markers) vs.colours = request.colours;
     vs.rate_hz = request.rate_hz;
+    vs.threads = settings.threads;
     auto opened = VideoSource::open(request.rig, settings.video_devices, vs);
     if (!opened) return std::unexpected(rig_file.string() + ": " + opened.error());
     out.source = std::make_unique<VideoSource>(std::move(*opened));
@@ -108,6 +114,7 @@ std::expected<std::unique_ptr<Launch>, std::string> Launch::create(const SceneDe
     if (!opened) return std::unexpected(opened.error());
     LiveTrackingSettings live_settings;
     live_settings.filter_hands = settings.filter_hands;
+    live_settings.threads = settings.threads;
     live_settings.tracker_rig = std::move(opened->tracker_rig);
     auto live = std::make_unique<LiveTracking>(std::move(opened->source), objects, *layouts, live_settings);
     self->live_ = live.get();

@@ -1,5 +1,7 @@
 #include "engine/tracked/LiveTracking.h"
 
+#include "base/Check.h"
+
 #include <algorithm>
 #include <limits>
 #include <optional>
@@ -22,6 +24,8 @@ HandInput hand_input(const TrackedHand& tracked) {
 LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObjects& objects, const std::array<HandLayout, 2>& layouts,
                            LiveTrackingSettings settings)
     : source_(std::move(source)), settings_(std::move(settings)), layouts_(layouts) {
+  RHOT_PRECONDITION(settings_.threads >= 0, "LiveTracking: threads >= 0 (0: every core)");
+  if (const int threads = threads_or_all(settings_.threads); threads > 1) jobs_ = std::make_unique<JobPool>(threads);
   for (const TrackedObject& o : objects.objects) object_from_star_.emplace_back(o.star_id, o.object_from_star);
   // One library for the objects' stars and both hand stars (ids -1 and -2, after the objects'), so
   // that one assignment a frame shares the points between them all.
@@ -138,7 +142,8 @@ void LiveTracking::match() {
   results_.point_colours.clear();
   double sum_rms = 0.0;
   // Gates as wide as the detection noise estimated so far; each point's uncertainty from it.
-  const std::vector<MatchedPoint> matched = match_and_triangulate(tracker_rig(), frame_, match_settings_for(pixel_sigma_.sigma_px()));
+  const std::vector<MatchedPoint> matched =
+      match_and_triangulate(tracker_rig(), frame_, match_settings_for(pixel_sigma_.sigma_px()), jobs_.get());
   point_sigma_m_ = point_sigmas_m(matched, pixel_sigma_.update(matched));
   for (const MatchedPoint& m : matched) {
     results_.points.push_back(m.point.position_world);

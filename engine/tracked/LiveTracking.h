@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "base/Jobs.h"
 #include "engine/tracked/ResultSource.h"
 #include "engine/tracked/TrackedObjects.h"
 #include "tracking/geometry/Matching.h"
@@ -40,6 +41,9 @@ struct LiveTrackingSettings {
   // The rig the tracker believes (empty: the source's own). A simulation with a calibration error
   // gives the tracker a rig a little off the one that made the detections.
   std::optional<CameraRig> tracker_rig;
+  // Threads the matching stage runs on (base/Jobs.h), 0: every core there is. The results do not
+  // depend on it (docs/tracking.md "Threads").
+  int threads = 0;
 };
 
 // A tracked hand as the engine takes it.
@@ -77,6 +81,7 @@ class LiveTracking final : public ResultSource {
  private:
   std::unique_ptr<FrameSource> source_;
   LiveTrackingSettings settings_;
+  std::unique_ptr<JobPool> jobs_;  // none with one thread
   PixelSigmaEstimate pixel_sigma_;
   std::vector<double> point_sigma_m_;                      // this frame's points' standard deviations
   std::vector<std::pair<int, Rigid3d>> object_from_star_;  // per tracked object: star id, where the star sits on it

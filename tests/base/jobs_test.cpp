@@ -18,8 +18,10 @@ TEST(JobPool, CallsEveryIndexExactlyOnceWhateverTheThreadsAndGrain) {
     for (const std::size_t grain : {std::size_t{1}, std::size_t{7}, std::size_t{1000}}) {
       for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{5}, std::size_t{999}, std::size_t{20000}}) {
         std::vector<std::atomic<int>> calls(n);
-        pool.for_each(n, [&](std::size_t i) { calls[i].fetch_add(1); }, grain);
-        for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(calls[i].load(), 1) << threads << " threads, grain " << grain << ", n " << n << ", i " << i;
+        pool.for_each(
+            n, [&](std::size_t i) { calls[i].fetch_add(1); }, grain);
+        for (std::size_t i = 0; i < n; ++i)
+          ASSERT_EQ(calls[i].load(), 1) << threads << " threads, grain " << grain << ", n " << n << ", i " << i;
       }
     }
   }
@@ -45,7 +47,8 @@ TEST(JobPool, ManyLoopsInARowGiveTheSerialResult) {
   JobPool pool(3);
   std::vector<double> out(4096);
   for (int round = 0; round < 2000; ++round) {
-    pool.for_each(out.size(), [&](std::size_t i) { out[i] = static_cast<double>(i * static_cast<std::size_t>(round)); }, 64);
+    pool.for_each(
+        out.size(), [&](std::size_t i) { out[i] = static_cast<double>(i * static_cast<std::size_t>(round)); }, 64);
     ASSERT_EQ(out[4095], 4095.0 * round);
     ASSERT_EQ(out[17], 17.0 * round);
   }

@@ -140,6 +140,10 @@ TEST(DemoCli, MissingSceneAndBadFlagsAreReported) {
   EXPECT_EQ(nan_rate.exit_code, 1) << nan_rate.output;
   EXPECT_NE(nan_rate.output.find("rate_hz must be from 1 to 10000, got nan"), std::string::npos) << nan_rate.output;
 
+  const DemoRun threads = run_demo("--headless --threads -1");
+  EXPECT_EQ(threads.exit_code, 1) << threads.output;
+  EXPECT_NE(threads.output.find("--threads: Value -1 not in range 0 to 256"), std::string::npos) << threads.output;
+
   const DemoRun unknown = run_demo("--fly");
   EXPECT_NE(unknown.exit_code, 0);
   EXPECT_NE(unknown.output.find("--fly"), std::string::npos) << unknown.output;

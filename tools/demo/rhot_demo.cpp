@@ -20,6 +20,8 @@
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wnull-dereference"
 #include <CLI/CLI.hpp>
+
+#include "base/Jobs.h"
 #pragma GCC diagnostic pop
 #include <nlohmann/json.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -200,6 +202,9 @@ void add_options(CLI::App& cli, Options& o) {
       ->check(CLI::Range(0.0, 20.0));
   cli.add_option("--seed", o.demo.seed, "Simulation seed")->capture_default_str();
   cli.add_flag("--filter", o.demo.filter_hands, "1-euro filter the tracked hands (steadier at rest, some lag)");
+  cli.add_option("--threads", o.demo.threads, "Threads the tracker matches on (0: every core there is); the results do not depend on it")
+      ->capture_default_str()
+      ->check(CLI::Range(0, rhot::kMaxThreads));
   cli.add_option("--debug-views", o.debug_views, "Debug views on from the start: markers, rays, frusta, colliders (comma-separated)")
       ->delimiter(',')
       ->check(CLI::IsMember({"markers", "rays", "frusta", "colliders"}));

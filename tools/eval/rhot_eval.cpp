@@ -40,6 +40,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "engine/sim/GraspScenarios.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
@@ -49,6 +50,7 @@
 #include "tracking/rigid/StarTracker.h"
 #include "tracking/sim/SimulatedRig.h"
 
+#include "base/Jobs.h"
 #include "tools/eval/Eval.h"
 #include "tools/common/CliExit.h"
 #include "tools/common/NumberChecks.h"
@@ -299,7 +301,7 @@ CLI::App* add_triangulation_command(CLI::App& app, SharedArgs& s, TriangulationA
   tri->add_option("--markers", a.markers, "markers in the volume")->capture_default_str()->check(CLI::Range(1, 10000));
   tri->add_option("--threads", a.threads, "threads matching runs on (0: every core there is); the points do not depend on it")
       ->capture_default_str()
-      ->check(CLI::Range(0, 256));
+      ->check(CLI::Range(0, rhot::kMaxThreads));
   tri->add_option("--dropout", s.dropout, "probability a camera misses a visible marker")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));

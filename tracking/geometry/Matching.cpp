@@ -597,8 +597,7 @@ class Matcher {
 
 }  // namespace
 
-std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings,
-                                                JobPool* jobs) {
+std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings, JobPool* jobs) {
   RHOT_PRECONDITION(frame.cameras.size() == rig.cameras.size(), "match_and_triangulate: one CameraFrame per camera of the rig");
   return Matcher(rig, frame, settings, jobs).run();
 }

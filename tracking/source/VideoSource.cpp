@@ -1,5 +1,7 @@
 #include "tracking/source/VideoSource.h"
 
+#include "base/Jobs.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -40,6 +42,7 @@ struct VideoSource::Impl {
   Clock::time_point opened = Clock::now();
   std::uint64_t index = 0;
   bool ended = false;
+  std::unique_ptr<JobPool> jobs;  // the cameras' detection side by side; none with one thread or camera
 };
 
 std::expected<std::vector<std::string>, std::string> parse_video_devices(const std::string& list) {
@@ -77,7 +80,12 @@ std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, 
   }
   if (!(settings.rate_hz > 0.0) || !std::isfinite(settings.rate_hz))
     return std::unexpected(std::string("video source: rate_hz must be a positive number"));
+  if (settings.threads < 0 || settings.threads > kMaxThreads)
+    return std::unexpected("video source: threads: " + std::to_string(settings.threads) +
+                           " is not a thread count (0: every core, at most " + std::to_string(kMaxThreads) + ")");
   auto impl = std::make_unique<Impl>();
+  if (const int threads = std::min(threads_or_all(settings.threads), static_cast<int>(devices.size())); threads > 1)
+    impl->jobs = std::make_unique<JobPool>(threads);
   impl->rig = rig;
   impl->devices = devices;
   impl->settings = settings;
@@ -154,7 +162,9 @@ std::optional<RigFrame> VideoSource::next() {
     frame.capture_steady_s = std::chrono::duration<double>(s.opened.time_since_epoch()).count() + grabbed_sum_s / static_cast<double>(live);
   }
   frame.cameras.resize(n);
-  for (std::size_t c = 0; c < n; ++c) {
+  // Each camera's image detected on its own (its frame, its stats, its colour detector): on the
+  // job pool where there is one, the same detections whatever the thread count.
+  const auto detect = [&](std::size_t c) {
     CameraFrame& cf = frame.cameras[c];
     cf.camera = static_cast<int>(c);
     cf.timestamp_s = s.live[c] ? grab_time_s[c] : frame.time_s;
@@ -163,23 +173,28 @@ std::optional<RigFrame> VideoSource::next() {
     if (image.empty()) {
       ++st.failed_reads;
       st.last_problem = "frame " + std::to_string(frame.index) + ": no image from \"" + s.devices[c] + "\"";
-      continue;
+      return;
     }
     const CameraIntrinsics& k = s.rig.cameras[c].intrinsics;
     if (image.cols != k.width_px || image.rows != k.height_px) {
       ++st.bad_images;
       st.last_problem = "frame " + std::to_string(frame.index) + ": \"" + s.devices[c] + "\" gave a " + size_text(image.cols, image.rows) +
                         " image, the rig calibrates it at " + size_text(k.width_px, k.height_px);
-      continue;
+      return;
     }
     auto detections = s.colour_detectors.empty() ? detect_blobs(image, s.settings.detector) : s.colour_detectors[c].track(image);
     if (!detections) {
       ++st.bad_images;
       st.last_problem = "frame " + std::to_string(frame.index) + ": \"" + s.devices[c] + "\": " + detections.error();
-      continue;
+      return;
     }
     ++st.frames;
     cf.detections = std::move(*detections);
+  };
+  if (s.jobs) {
+    s.jobs->for_each(n, detect);
+  } else {
+    for (std::size_t c = 0; c < n; ++c) detect(c);
   }
   return frame;
 }

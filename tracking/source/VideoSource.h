@@ -37,6 +37,7 @@ struct VideoSourceSettings {
   std::optional<ColourModel> colours;  // coloured markers: detect these colours instead of bright blobs
   ColourDetectorSettings colour_detector;
   double rate_hz = 90.0;  // files' frame rate, for their timestamps
+  int threads = 0;        // the cameras' images detected on this many threads (base/Jobs.h), 0: every core
 };
 
 struct VideoCameraStats {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -14,6 +15,7 @@
 #include "engine/sim/Demo.h"
 #include "engine/sim/DemoPickups.h"
 #include "engine/tracked/Recording.h"
+#include "engine/tracked/TrackingResults.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/sim/Realism.h"
 
@@ -336,6 +338,54 @@ TEST(Demo, TheOneEuroFilterSteadiesAHandAtRest) {
   std::printf("index tip at rest, mean motion per frame: %.4f mm raw, %.4f mm filtered\n", 1e3 * raw, 1e3 * filtered);
   EXPECT_GT(raw, 0.0);
   EXPECT_LT(filtered, 0.6 * raw) << "raw " << raw << " m, filtered " << filtered << " m";
+}
+
+// The tracker's thread count (LaunchSettings::threads) changes nothing it delivers: the realistic
+// world's demo run on one thread and on three gives the same points, objects and hands, bit for bit.
+TEST(Demo, TheThreadCountChangesNoResult) {
+  const auto scene = load_scene_file(std::string(RHOT_ASSET_DIR) + "/scenes/default.json");
+  ASSERT_TRUE(scene.has_value());
+  const auto realistic = world_named("realistic");
+  ASSERT_TRUE(realistic.has_value());
+  const auto run = [&](int threads) {
+    DemoSettings settings;
+    settings.asset_dir = RHOT_ASSET_DIR;
+    settings.world = *realistic;
+    settings.sigma_px = realistic->sigma_px;
+    settings.threads = threads;
+    auto created = Demo::create(*scene, nullptr, settings);
+    EXPECT_TRUE(created.has_value()) << (created ? "" : created.error());
+    std::vector<TrackingResults> frames;
+    for (int f = 0; f < 240; ++f) {
+      (*created)->runtime().run_frame(f / 90.0);
+      frames.push_back((*created)->runtime().tracking().results());
+    }
+    return frames;
+  };
+  const std::vector<TrackingResults> one = run(1);
+  const std::vector<TrackingResults> three = run(3);
+  ASSERT_EQ(one.size(), three.size());
+  const auto same = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0;
+  };
+  std::size_t points = 0;
+  for (std::size_t f = 0; f < one.size(); ++f) {
+    SCOPED_TRACE(testing::Message() << "frame " << f);
+    ASSERT_EQ(one[f].points.size(), three[f].points.size());
+    for (std::size_t p = 0; p < one[f].points.size(); ++p) ASSERT_TRUE(same(one[f].points[p], three[f].points[p])) << "point " << p;
+    points += one[f].points.size();
+    ASSERT_EQ(one[f].world_from_object.size(), three[f].world_from_object.size());
+    for (const auto& [id, pose] : one[f].world_from_object) {
+      ASSERT_TRUE(three[f].world_from_object.contains(id)) << "object " << id;
+      EXPECT_TRUE(same(pose.translation, three[f].world_from_object.at(id).translation)) << "object " << id;
+    }
+    for (std::size_t h = 0; h < 2; ++h) {
+      ASSERT_EQ(one[f].hands[h].seen, three[f].hands[h].seen) << "hand " << h;
+      for (std::size_t j = 0; j < one[f].hands[h].joints_world.size(); ++j)
+        ASSERT_TRUE(same(one[f].hands[h].joints_world[j], three[f].hands[h].joints_world[j])) << "hand " << h << " joint " << j;
+    }
+  }
+  EXPECT_GT(points, 240U * 10U) << "the run tracked markers";
 }
 
 }  // namespace

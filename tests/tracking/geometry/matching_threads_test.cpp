@@ -46,7 +46,8 @@ TEST(MatchingThreads, TheSameSeedGivesTheSamePointsWhateverTheThreadCount) {
   SimulatedRigSettings settings;
   settings.dropout = 0.1;
   settings.sigma_px = 0.3;
-  SimulatedRig sim(*rig, random_trajectories(400, volume.centre_m - 0.5 * volume.size_m, volume.centre_m + 0.5 * volume.size_m, 11), settings);
+  SimulatedRig sim(*rig, random_trajectories(400, volume.centre_m - 0.5 * volume.size_m, volume.centre_m + 0.5 * volume.size_m, 11),
+                   settings);
   JobPool two(2);
   JobPool three(3);
   JobPool eight(8);
