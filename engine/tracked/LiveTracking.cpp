@@ -192,7 +192,7 @@ void LiveTracking::track_stars(double t_s) {
 void LiveTracking::track_hands(double t_s) {
   // The hand stars were followed with the objects' (track_stars); the points left go to the fingertips.
   const std::array<HandTracker*, 2> hands{hand_trackers_[0].get(), hand_trackers_[1].get()};
-  rhot::track_hands(hands, hand_star_, stars_, t_s, results_.points, point_sigma_m_, taken_, results_.point_colours);
+  rhot::track_hands(hands, hand_star_, stars_, t_s, results_.points, point_sigma_m_, taken_, results_.point_colours, jobs_.get());
   for (std::size_t h = 0; h < 2; ++h) {
     const TrackedHand& tracked = hand_trackers_[h]->last();
     results_.hands[h] = hand_input(tracked);

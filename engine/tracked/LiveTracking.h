@@ -41,7 +41,7 @@ struct LiveTrackingSettings {
   // The rig the tracker believes (empty: the source's own). A simulation with a calibration error
   // gives the tracker a rig a little off the one that made the detections.
   std::optional<CameraRig> tracker_rig;
-  // Threads the matching stage runs on (base/Jobs.h), 0: every core there is. The results do not
+  // Threads the matching and hands stages run on (base/Jobs.h), 0: every core there is. The results do not
   // depend on it (docs/tracking.md "Threads").
   int threads = 0;
 };

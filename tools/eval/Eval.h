@@ -80,6 +80,23 @@ inline constexpr double kSameMoment_s = 0.25;
 GraspComparison compare_grasps(const std::vector<GraspSpan>& tracked, const std::vector<GraspSpan>& perfect);
 
 // uniform: markers standing still, spread uniformly through the box (else wandering through it).
+// `rhot-eval scale`'s flags (scale.cpp): the defaults are the crowded stage (docs/tracking.md
+// "Threads": six people, twelve hands, twelve props, 1,000 markers on stage-32 at 120 Hz).
+struct ScaleArgs {
+  std::string rig_file = std::string(RHOT_ASSET_DIR) + "/rigs/stage-32.yaml";
+  std::string set_file = std::string(RHOT_ASSET_DIR) + "/stars/stage-props.json";       // the props' stars
+  std::string hand_set_file = std::string(RHOT_ASSET_DIR) + "/stars/stage-hands.json";  // the hands' backs'
+  int markers = 1000;
+  int bodies = 12;
+  int hands = 12;
+  int threads = 0;
+  double rate_hz = 120.0;
+  double seconds = 10.0;
+  unsigned seed = 1;
+  double sigma = 0.3;
+  double dropout = 0.0;
+};
+int scale(const ScaleArgs& args);
 int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
                   const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform = false, int threads = 0);
 int wand(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout,

@@ -2,6 +2,7 @@
 //
 //   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M] [--spread wander|uniform]
 //                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] [--threads T] --json
+//   rhot-eval scale [--rig FILE] [--markers N] [--bodies B] [--hands H] [--threads T] [--rate-hz R] [--seconds S] --json
 //   rhot-eval demo [--scene FILE] [--placements N] [--seed S] [--hands tracked|perfect] [world flags] --json
 //   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--calibrate-hand] [world flags] [--frames N] --json
 //   rhot-eval hands --take FILE --labelled [--model FILE | --fit-fraction F] [--hide-gap-s S] [--hide-together N] [--seed K] --json
@@ -409,6 +410,45 @@ CLI::App* add_calibration_command(CLI::App& app, SharedArgs& s, CalibrationArgs&
   return cmd;
 }
 
+CLI::App* add_scale_command(CLI::App& app, ScaleArgs& a, bool& json) {
+  auto* cmd = app.add_subcommand("scale",
+                                 "a crowded stage at the cameras' rate: people walking with tracked hands and props among loose markers; "
+                                 "each stage's time, frames over the camera period, bodies and hands against the truth, the speed-up over "
+                                 "one thread (defaults: the crowded stage)");
+  cmd->add_option("--rig", a.rig_file, "camera rig (OpenCV YAML)")->capture_default_str()->check(CLI::ExistingFile);
+  cmd->add_option("--set", a.set_file, "marker star set for the props (JSON, from rhot-stars)")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--hand-set", a.hand_set_file, "marker star set for the backs of the hands, one star a hand")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--markers", a.markers, "markers in all: the hands' nine each, the props' four each, the rest loose")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10000));
+  cmd->add_option("--bodies", a.bodies, "props (rigid marker stars), carried by the people")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 40));
+  cmd->add_option("--hands", a.hands, "tracked hands, two a person")->capture_default_str()->check(CLI::Range(0, 40));
+  cmd->add_option("--threads", a.threads, "threads (0: every core there is); the results do not depend on it")
+      ->capture_default_str()
+      ->check(CLI::Range(0, rhot::kMaxThreads));
+  cmd->add_option("--rate-hz", a.rate_hz, "the cameras' rate: frames a second, and the period a frame must fit")
+      ->capture_default_str()
+      ->check(rhot::number_check(rhot::NumberBound::kPositive))
+      ->check(CLI::Range(1.0, 1000.0));
+  cmd->add_option("--seconds", a.seconds, "how long the crowd walks (the first half second is not judged)")
+      ->capture_default_str()
+      ->check(rhot::number_check(rhot::NumberBound::kPositive))
+      ->check(CLI::Range(0.6, 3600.0));
+  cmd->add_option("--seed", a.seed, "random seed")->capture_default_str();
+  cmd->add_option("--sigma", a.sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--dropout", a.dropout, "probability a camera misses a visible marker")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--json", json, "print JSON (the only output format)");
+  return cmd;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -438,6 +478,8 @@ int main(int argc, char** argv) {
   CLI::App* demo_cmd = add_demo_command(app, demo_args, json);
   InteractionsArgs inter_args;
   CLI::App* inter_cmd = add_interactions_command(app, inter_args, json);
+  ScaleArgs scale_args;
+  CLI::App* scale_cmd = add_scale_command(app, scale_args, json);
   CalibrationArgs calib_args;
   CLI::App* calib_cmd = add_calibration_command(app, shared, calib_args, json);
   try {
@@ -464,6 +506,7 @@ int main(int argc, char** argv) {
     return triangulation(s.rig_file, s.sigma, s.frames, s.seed, tri_args.markers, s.dropout, s.volume, s.volume_centre,
                          tri_args.spread == "uniform", tri_args.threads);
   if (hands_cmd->parsed()) return hands(hands_args);
+  if (scale_cmd->parsed()) return scale(scale_args);
   if (stars_cmd->parsed())
     return stars(s.rig_file, stars_args.set_file, stars_args.bodies, stars_args.world, s.frames, s.seed, s.volume, s.volume_centre);
   if (wand_cmd->parsed()) return wand(s.rig_file, length_mm, s.sigma, s.frames, s.seed, s.dropout, s.volume, s.volume_centre);

@@ -1,5 +1,7 @@
 #include "tracking/hand/HandTracker.h"
 
+#include "base/Jobs.h"
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -354,7 +356,16 @@ std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::measure_se
 
 void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_star, const std::vector<TrackedStar>& stars, double time_s,
                  std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m, std::vector<bool>& taken,
-                 std::span<const int> colour) {
+                 std::span<const int> colour, JobPool* jobs) {
+  // Each hand's own work on the pool where there is one (it reads the points and `taken`, and
+  // writes only that hand's state); the sharing out between them in order, as on one thread.
+  const auto per_hand = [&](auto&& fn) {
+    if (jobs != nullptr) {
+      jobs->for_each(hands.size(), fn);
+    } else {
+      for (std::size_t h = 0; h < hands.size(); ++h) fn(h);
+    }
+  };
   taken.assign(points.size(), false);
   for (const TrackedStar& s : stars) {
     if (s.frames_since_seen != 0) continue;
@@ -367,14 +378,18 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
     std::size_t hand;
     int marker, point;
   };
-  std::vector<Pick> picks;
-  for (std::size_t h = 0; h < hands.size(); ++h) {
+  std::vector<std::vector<HandTracker::FingertipCandidate>> candidates(hands.size());
+  per_hand([&](std::size_t h) {
     if (hand_star[h] < 0 || static_cast<std::size_t>(hand_star[h]) >= stars.size()) {
       hands[h]->begin(time_s, false, {});  // no star to follow this hand by
     } else {
       hands[h]->begin(time_s, stars[static_cast<std::size_t>(hand_star[h])]);
     }
-    for (const auto& c : hands[h]->fingertip_candidates(points, taken, colour)) picks.push_back({c.distance_m, h, c.marker, c.point});
+    candidates[h] = hands[h]->fingertip_candidates(points, taken, colour);
+  });
+  std::vector<Pick> picks;
+  for (std::size_t h = 0; h < hands.size(); ++h) {
+    for (const auto& c : candidates[h]) picks.push_back({c.distance_m, h, c.marker, c.point});
   }
   // Nearest first over every hand: a point goes to the fingertip it fits best, whichever hand's.
   std::sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance_m < b.distance_m; });
@@ -386,10 +401,10 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
     slot = p.point;
     taken[static_cast<std::size_t>(p.point)] = true;
   }
-  for (std::size_t h = 0; h < hands.size(); ++h) {
+  per_hand([&](std::size_t h) {
     hands[h]->untangle_neighbours(points, tip[h]);
     hands[h]->finish(time_s, points, sigma_m, tip[h]);
-  }
+  });
 }
 
 }  // namespace rhot

@@ -28,6 +28,8 @@
 
 namespace rhot {
 
+class JobPool;
+
 struct TrackedHand {
   bool hand_seen = false;   // the hand star was seen this frame
   Rigid3d world_from_hand;  // last known
@@ -198,9 +200,11 @@ class HandTracker {
 // Every hand of a frame, their stars followed with every other star by one StarTracker (`stars`:
 // that tracker's output; hand_star[h]: the index of hand h's star in it, -1 for a hand without one). The points of every star
 // seen this frame are taken; the fingertips get the points left, nearest first over all hands.
-// `taken` comes back marking the points the stars and the fingertips use.
+// `taken` comes back marking the points the stars and the fingertips use. With a job pool, each
+// hand's own steps (its frame, its candidates, its fingers' solve) run side by side; the results are
+// the same whatever the thread count.
 void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_star, const std::vector<TrackedStar>& stars, double time_s,
                  std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m, std::vector<bool>& taken,
-                 std::span<const int> colour = {});
+                 std::span<const int> colour = {}, JobPool* jobs = nullptr);
 
 }  // namespace rhot
