@@ -41,11 +41,11 @@ namespace rhot::eval {
 
 namespace {
 
-constexpr std::size_t kHandMarkers = 9;     // four on the back, one on each fingertip
-constexpr double kBodyCorrect_m = 0.010;    // a body's reported origin within this of the truth
-constexpr double kWristCorrect_m = 0.010;   // a hand seen with its wrist within this of the truth
-constexpr double kTipCorrect_m = 0.020;     // a correct hand's fingertips, every one within this
-constexpr double kWarmUp_s = 0.5;           // the trackers' first frames are not judged nor timed
+constexpr std::size_t kHandMarkers = 9;    // four on the back, one on each fingertip
+constexpr double kBodyCorrect_m = 0.010;   // a body's reported origin within this of the truth
+constexpr double kWristCorrect_m = 0.010;  // a hand seen with its wrist within this of the truth
+constexpr double kTipCorrect_m = 0.020;    // a correct hand's fingertips, every one within this
+constexpr double kWarmUp_s = 0.5;          // the trackers' first frames are not judged nor timed
 
 // A person walking: a slow path over the floor, facing a heading that swings.
 struct Walker {
@@ -125,7 +125,7 @@ struct Crowd {
       // Worn clear of the hands: a person's first prop on the head (a headset), the second on the
       // back, more at the hips; each turning about its own axis as heads and bodies do.
       const std::size_t k = b / people.size();
-      const Eigen::Vector3d held = k == 0 ? Eigen::Vector3d(0.0, 1.7, 0.05)
+      const Eigen::Vector3d held = k == 0   ? Eigen::Vector3d(0.0, 1.7, 0.05)
                                    : k == 1 ? Eigen::Vector3d(0.0, 1.35, -0.18)
                                             : Eigen::Vector3d(k % 2 == 0 ? -0.2 : 0.2, 0.95, -0.1 * static_cast<double>(k / 2));
       const Eigen::Quaterniond spin(Eigen::AngleAxisd(turn, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()));
@@ -160,7 +160,8 @@ std::expected<Crowd, std::string> make_crowd(const ScaleArgs& a, const StarSet& 
   crowd.people = walkers(people, box.centre - box.size / 2, box.centre + box.size / 2, a.seed + 1);
   std::array<HandLayout, 2> base;
   for (std::size_t s = 0; s < 2; ++s) {
-    auto layout = load_hand_layout(std::filesystem::path(RHOT_ASSET_DIR) / "hands" / (s == 0 ? "low-cost-left.json" : "low-cost-right.json"));
+    auto layout =
+        load_hand_layout(std::filesystem::path(RHOT_ASSET_DIR) / "hands" / (s == 0 ? "low-cost-left.json" : "low-cost-right.json"));
     if (!layout) return std::unexpected(layout.error());
     base[s] = std::move(*layout);
   }
@@ -395,7 +396,8 @@ int scale(const ScaleArgs& a) {
   // Of the hands judged correct (seen, the wrist where it is), those whose five fingertips are within
   // 20 mm too: what the rig's resolution allows fingers (stage-32's cameras see a centimetre a pixel
   // from six metres).
-  j["fingertips_correct_fraction"] = run.hand_correct > 0 ? static_cast<double>(run.tips_correct) / static_cast<double>(run.hand_correct) : 0.0;
+  j["fingertips_correct_fraction"] =
+      run.hand_correct > 0 ? static_cast<double>(run.tips_correct) / static_cast<double>(run.hand_correct) : 0.0;
   j["hand_joint_error_mean_mm"] = run.joint_errors > 0 ? 1000.0 * run.joint_error_sum_m / static_cast<double>(run.joint_errors) : 0.0;
   j["speedup_vs_one_thread"] = one ? mean(one->frame_ms) / std::max(mean(run.frame_ms), 1e-9) : 1.0;
   if (one) {
