@@ -103,7 +103,7 @@ void BM_MatchScaling(benchmark::State& state) {
 }
 BENCHMARK(BM_MatchScaling)
     ->ArgNames({"rig", "markers", "threads"})
-    ->ArgsProduct({{0, 1}, {100, 300, 1000}, {1, 2}})
+    ->ArgsProduct({{0, 1}, {100, 300, 1000}, {1, 2, 4, 8, 16}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 

@@ -291,10 +291,15 @@ class Matcher {
     if (indexed) index_.build(j_from_i.translation, cams_[j].normalised, cams_[j].explained);
     const bool ahead = jobs_ != nullptr && jobs_->threads() > 1 && open_.size() >= kGrowAheadFrom;
     if (plans_.size() < open_.size()) plans_.resize(open_.size());
-    for_each(open_.size(), [&](std::size_t k) {
+    const auto plan_one = [&](std::size_t k) {
       plan_seeds(i, open_[k], j, e, indexed, plans_[k]);
       if (ahead) grow_ahead(i, open_[k], j, plans_[k]);
-    });
+    };
+    if (ahead) {
+      for_each(open_.size(), plan_one);
+    } else {
+      for (std::size_t k = 0; k < open_.size(); ++k) plan_one(k);  // too few to be worth a dispatch
+    }
     for (std::size_t k = 0; k < open_.size(); ++k) {
       SeedPlan& plan = plans_[k];
       const std::size_t a = open_[k];
