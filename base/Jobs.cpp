@@ -8,6 +8,9 @@
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #endif
+#if defined(__linux__)
+#include <sched.h>
+#endif
 
 namespace rhot {
 
@@ -31,17 +34,32 @@ void pause() {
 
 }  // namespace
 
-int hardware_threads() { return std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
+int hardware_threads() {
+#if defined(__linux__)
+  // The cores this process may run on (taskset, a container's cpuset), not every core of the host.
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  if (sched_getaffinity(0, sizeof(allowed), &allowed) == 0) return std::max(1, CPU_COUNT(&allowed));
+#endif
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
 
 int threads_or_all(int threads) { return threads > 0 ? threads : hardware_threads(); }
 
 JobPool::JobPool(int threads) {
   RHOT_PRECONDITION(threads >= 1, "JobPool: at least one thread");
   workers_.reserve(static_cast<std::size_t>(threads - 1));
-  for (int t = 1; t < threads; ++t) workers_.emplace_back([this] { worker_main(); });
+  try {
+    for (int t = 1; t < threads; ++t) workers_.emplace_back([this] { worker_main(); });
+  } catch (...) {
+    stop_workers();  // the ones started; then the caller hears why (std::system_error)
+    throw;
+  }
 }
 
-JobPool::~JobPool() {
+JobPool::~JobPool() { stop_workers(); }
+
+void JobPool::stop_workers() {
   {
     std::lock_guard lock(mutex_);
     stop_ = true;
@@ -49,6 +67,7 @@ JobPool::~JobPool() {
   }
   wake_.notify_all();
   for (std::thread& t : workers_) t.join();
+  workers_.clear();
 }
 
 void JobPool::take_runs() {
@@ -105,9 +124,9 @@ void JobPool::run(std::size_t n, std::size_t grain, RangeFn fn, void* context) {
     generation_.fetch_add(1, std::memory_order_release);
   }
   wake_.notify_all();
-  t_running_for = this;
+  const JobPool* const was_running_for = std::exchange(t_running_for, this);
   take_runs();
-  t_running_for = nullptr;
+  t_running_for = was_running_for;
   for (int s = 0; s < kSpins && inside_.load(std::memory_order_acquire) != 0; ++s) pause();
   std::exception_ptr error;
   {

@@ -11,7 +11,9 @@
 // Why not a library: Debian's oneTBB (libtbb-dev) would do the same, but a frame's loops are a few
 // dozen to a few thousand short items, dispatched some tens of times a frame; what they need is
 // a dispatch of a few microseconds (workers spin briefly before they sleep) and nothing else.
-// This is about 150 lines, with no dependency, and runs as is under the sanitizers.
+// This is about 150 lines, with no dependency, and runs as is under the sanitizers (its tests are
+// also clean under ThreadSanitizer: clang++-19 -std=c++23 -O1 -g -fsanitize=thread -I. base/Jobs.cpp
+// base/Check.cpp tests/base/jobs_test.cpp -lgtest -lgtest_main -lfmt -lspdlog).
 
 #include <atomic>
 #include <cstdint>
@@ -25,7 +27,8 @@
 
 namespace rhot {
 
-// The threads this machine runs at once (std::thread::hardware_concurrency, at least 1).
+// The threads this process can run at once: the cores it may run on (its CPU affinity, which
+// taskset and a container's cpuset limit; elsewhere std::thread::hardware_concurrency), at least 1.
 int hardware_threads();
 
 // A thread count from a flag: 0 means every core there is (hardware_threads()).
@@ -37,7 +40,8 @@ inline constexpr int kMaxThreads = 256;
 class JobPool {
  public:
   // threads: how many threads work on a loop, the caller's included (threads - 1 workers are
-  // started). Precondition: threads >= 1.
+  // started). Precondition: threads >= 1. Throws std::system_error when the system starts no
+  // more threads (the ones started are stopped first).
   explicit JobPool(int threads);
   ~JobPool();
   JobPool(const JobPool&) = delete;
@@ -46,9 +50,12 @@ class JobPool {
   int threads() const { return static_cast<int>(workers_.size()) + 1; }
 
   // Calls fn(i) once for every i in [0, n), spread over the pool's threads in runs of `grain`
-  // indices, and returns when every call has returned. The first exception a call throws is
-  // rethrown here once all have returned. Called from inside one of this pool's loops (a job
-  // that itself loops), it runs inline on the calling thread.
+  // indices, and returns when every call has returned. Called from inside one of this pool's
+  // loops (a job that itself loops), it runs inline on the calling thread.
+  // Exceptions are for failures, not results: when a call throws, the rest of its run of `grain`
+  // indices is skipped (on one thread, every index after it), the other runs go on, and one
+  // exception is rethrown here once all have returned (the first thrown in time: which one, when
+  // several calls throw, depends on the threads).
   template <class F>
   void for_each(std::size_t n, F&& fn, std::size_t grain = 1) {
     auto run_range = [](void* context, std::size_t begin, std::size_t end) {
@@ -63,6 +70,7 @@ class JobPool {
   void run(std::size_t n, std::size_t grain, RangeFn fn, void* context);
   void take_runs();  // runs of the current job until none are left
   void worker_main();
+  void stop_workers();
 
   std::vector<std::thread> workers_;
   std::mutex run_mutex_;  // one loop at a time, whoever asks

@@ -1,6 +1,7 @@
 #include "engine/launch/Launch.h"
 
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "base/Jobs.h"
@@ -57,7 +58,8 @@ namespace {
 
 // The frame source the settings name: camera nodes, video devices, or the application's own.
 std::expected<CustomSource, std::string> open_frame_source(const LaunchSettings& settings, const std::filesystem::path& rig_file,
-                                                           const SourceRequest& request, const SourceFactory& custom) {
+                                                           const SourceRequest& request, const SourceFactory& custom,
+                                                           const std::shared_ptr<JobPool>& jobs) {
   CustomSource out;
   if (!settings.node_endpoints.empty()) {
     NodeSourceSettings ns;
@@ -70,7 +72,8 @@ std::expected<CustomSource, std::string> open_frame_source(const LaunchSettings&
     vs.detector = settings.detector;
     if (settings.colour_markers) vs.colours = request.colours;
     vs.rate_hz = request.rate_hz;
-    vs.threads = settings.threads;
+    vs.jobs = jobs;  // the tracker's one pool (none: one thread)
+    vs.threads = 1;
     auto opened = VideoSource::open(request.rig, settings.video_devices, vs);
     if (!opened) return std::unexpected(rig_file.string() + ": " + opened.error());
     out.source = std::make_unique<VideoSource>(std::move(*opened));
@@ -110,11 +113,16 @@ std::expected<std::unique_ptr<Launch>, std::string> Launch::create(const SceneDe
       colour_model = std::move(*loaded);
     }
     const SourceRequest request{*rig, *layouts, objects, colour_model, scene.settings.headset.refresh_hz};
-    auto opened = open_frame_source(settings, rig_file, request, custom);
+    // One pool of the settings' threads for the whole tracker: the video cameras' detection and
+    // the tracking stages take turns on it.
+    std::shared_ptr<JobPool> jobs;
+    if (const int threads = threads_or_all(settings.threads); threads > 1) jobs = std::make_shared<JobPool>(threads);
+    auto opened = open_frame_source(settings, rig_file, request, custom, jobs);
     if (!opened) return std::unexpected(opened.error());
     LiveTrackingSettings live_settings;
     live_settings.filter_hands = settings.filter_hands;
-    live_settings.threads = settings.threads;
+    live_settings.threads = 1;
+    live_settings.jobs = jobs;
     live_settings.tracker_rig = std::move(opened->tracker_rig);
     auto live = std::make_unique<LiveTracking>(std::move(opened->source), objects, *layouts, live_settings);
     self->live_ = live.get();

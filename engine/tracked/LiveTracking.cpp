@@ -24,8 +24,12 @@ HandInput hand_input(const TrackedHand& tracked) {
 LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObjects& objects, const std::array<HandLayout, 2>& layouts,
                            LiveTrackingSettings settings)
     : source_(std::move(source)), settings_(std::move(settings)), layouts_(layouts) {
-  RHOT_PRECONDITION(settings_.threads >= 0, "LiveTracking: threads >= 0 (0: every core)");
-  if (const int threads = threads_or_all(settings_.threads); threads > 1) jobs_ = std::make_unique<JobPool>(threads);
+  RHOT_PRECONDITION(settings_.threads >= 0 && settings_.threads <= kMaxThreads, "LiveTracking: threads from 0 (every core) to kMaxThreads");
+  if (settings_.jobs) {
+    jobs_ = settings_.jobs;
+  } else if (const int threads = threads_or_all(settings_.threads); threads > 1) {
+    jobs_ = std::make_shared<JobPool>(threads);
+  }
   for (const TrackedObject& o : objects.objects) object_from_star_.emplace_back(o.star_id, o.object_from_star);
   // One library for the objects' stars and both hand stars (ids -1 and -2, after the objects'), so
   // that one assignment a frame shares the points between them all.

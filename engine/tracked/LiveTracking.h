@@ -44,6 +44,7 @@ struct LiveTrackingSettings {
   // Threads the matching and hands stages run on (base/Jobs.h), 0: every core there is. The results do not
   // depend on it (docs/tracking.md "Threads").
   int threads = 0;
+  std::shared_ptr<JobPool> jobs;  // or this pool, shared with the frame source (threads is then unused)
 };
 
 // A tracked hand as the engine takes it.
@@ -81,7 +82,7 @@ class LiveTracking final : public ResultSource {
  private:
   std::unique_ptr<FrameSource> source_;
   LiveTrackingSettings settings_;
-  std::unique_ptr<JobPool> jobs_;  // none with one thread
+  std::shared_ptr<JobPool> jobs_;  // none with one thread
   PixelSigmaEstimate pixel_sigma_;
   std::vector<double> point_sigma_m_;                      // this frame's points' standard deviations
   std::vector<std::pair<int, Rigid3d>> object_from_star_;  // per tracked object: star id, where the star sits on it

@@ -61,6 +61,20 @@ TEST(JobPool, AJobThatLoopsAgainRunsItsLoopInline) {
   for (const auto& c : calls) ASSERT_EQ(c.load(), 1);
 }
 
+// A worker of one pool that loops on another pool, then on its own again: the second loop on its
+// own pool runs inline, as any nested loop does (it once forgot which pool it was running for, and
+// waited for the pool it was part of).
+TEST(JobPool, ALoopOnAnotherPoolDoesNotMakeANestedLoopWait) {
+  JobPool outer(3);
+  JobPool other(2);
+  std::vector<std::atomic<int>> calls(8 * 8 * 2);
+  outer.for_each(8, [&](std::size_t i) {
+    other.for_each(8, [&](std::size_t j) { calls[(i * 8 + j) * 2].fetch_add(1); });
+    outer.for_each(8, [&](std::size_t j) { calls[(i * 8 + j) * 2 + 1].fetch_add(1); });
+  });
+  for (const auto& c : calls) ASSERT_EQ(c.load(), 1);
+}
+
 TEST(JobPool, TheFirstExceptionIsRethrownAfterEveryCallReturned) {
   JobPool pool(3);
   std::atomic<int> returned{0};

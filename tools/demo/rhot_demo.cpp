@@ -20,13 +20,12 @@
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wnull-dereference"
 #include <CLI/CLI.hpp>
-
-#include "base/Jobs.h"
 #pragma GCC diagnostic pop
 #include <nlohmann/json.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "base/Jobs.h"
 #include "engine/app/FrameLoop.h"
 #include "engine/core/Transform.h"
 #include "engine/core/World.h"

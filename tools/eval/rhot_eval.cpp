@@ -9,14 +9,14 @@
 //   rhot-eval hands --take FILE --layout FILE [--map TAKE=LAYOUT ...] [--labelled | --rig FILE [world flags]]
 //                   [--calibrate-seconds S [--calibrate-from labelled|cameras]] [--hide-gap-s S --hide-together N --seed K] [--hide
 //                   MARKER@T0-T1 ...] --json
-//   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] --json
+//   rhot-eval stars --rig FILE --set FILE [--bodies N] [--sigma PX] [--frames N] [--seed S] [--dropout P] [--threads T] --json
 //   rhot-eval calibration --rig FILE [--wand-mm 500] [--sigma PX] [--frames 2000] [--seed S] [--dropout P] --json
 //   rhot-eval nodes [--nodes N] [--markers M] [--rate-hz R] [--seconds S] [--kill-node-at T --restart-node-at T2]
 //                   [--clock-offset-ms X --clock-drift-ppm Y] [--delay-ms D] --json
 //   rhot-eval colour [--rig FILE] [--frames N] [--seed S] [--noise SIGMA] [--white-balance-k KELVIN]
 //                    [--clutter on|off] [--colours FILE] [--device D] --json
 //   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
-//                  [--volume-m X Y Z] [--volume-centre-m X Y Z] --json
+//                  [--volume-m X Y Z] [--volume-centre-m X Y Z] [--threads T] --json
 //
 // Markers wander through a box: the flags', else the rig file's tracking volume, else a 1 m cube
 // where the cameras' optical axes meet (least squares); the simulated rig sees them with Gaussian noise and dropouts; matching and
@@ -51,7 +51,6 @@
 #include "tracking/rigid/StarTracker.h"
 #include "tracking/sim/SimulatedRig.h"
 
-#include "base/Jobs.h"
 #include "tools/eval/Eval.h"
 #include "tools/common/CliExit.h"
 #include "tools/common/NumberChecks.h"
@@ -256,7 +255,15 @@ struct SharedArgs {
   double dropout = 0.0;
   std::vector<double> volume;
   std::vector<double> volume_centre;
+  int threads = 0;  // wand and stars: matching's threads
 };
+
+// --threads, for the modes whose matching runs on a job pool.
+void add_threads_flag(CLI::App& cmd, int& threads) {
+  cmd.add_option("--threads", threads, "threads matching runs on (0: every core there is); the results do not depend on it")
+      ->capture_default_str()
+      ->check(CLI::Range(0, rhot::kMaxThreads));
+}
 
 constexpr const char* kVolumeHelp = "size of the box the markers move in, X Y Z metres (default: the rig file's volume_size, else 1 1 1)";
 constexpr const char* kCentreHelp =
@@ -300,9 +307,7 @@ CLI::App* add_triangulation_command(CLI::App& app, SharedArgs& s, TriangulationA
   tri->add_option("--frames", s.frames, "frames to simulate")->capture_default_str()->check(CLI::Range(1, 1000000));
   tri->add_option("--seed", s.seed, "random seed")->capture_default_str();
   tri->add_option("--markers", a.markers, "markers in the volume")->capture_default_str()->check(CLI::Range(1, 10000));
-  tri->add_option("--threads", a.threads, "threads matching runs on (0: every core there is); the points do not depend on it")
-      ->capture_default_str()
-      ->check(CLI::Range(0, rhot::kMaxThreads));
+  add_threads_flag(*tri, a.threads);
   tri->add_option("--dropout", s.dropout, "probability a camera misses a visible marker")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
@@ -329,6 +334,7 @@ CLI::App* add_wand_command(CLI::App& app, SharedArgs& s, double& length_mm, bool
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--volume-m", s.volume, kVolumeHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
   cmd->add_option("--volume-centre-m", s.volume_centre, kCentreHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kAny));
+  add_threads_flag(*cmd, s.threads);
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }
@@ -343,6 +349,7 @@ CLI::App* add_stars_command(CLI::App& app, SharedArgs& s, StarsArgs& a, bool& js
   cmd->add_option("--seed", s.seed, "random seed")->capture_default_str();
   cmd->add_option("--volume-m", s.volume, kVolumeHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
   cmd->add_option("--volume-centre-m", s.volume_centre, kCentreHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kAny));
+  add_threads_flag(*cmd, s.threads);
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }
@@ -508,7 +515,8 @@ int main(int argc, char** argv) {
   if (hands_cmd->parsed()) return hands(hands_args);
   if (scale_cmd->parsed()) return scale(scale_args);
   if (stars_cmd->parsed())
-    return stars(s.rig_file, stars_args.set_file, stars_args.bodies, stars_args.world, s.frames, s.seed, s.volume, s.volume_centre);
-  if (wand_cmd->parsed()) return wand(s.rig_file, length_mm, s.sigma, s.frames, s.seed, s.dropout, s.volume, s.volume_centre);
+    return stars(s.rig_file, stars_args.set_file, stars_args.bodies, stars_args.world, s.frames, s.seed, s.volume, s.volume_centre,
+                 s.threads);
+  if (wand_cmd->parsed()) return wand(s.rig_file, length_mm, s.sigma, s.frames, s.seed, s.dropout, s.volume, s.volume_centre, s.threads);
   return 1;
 }

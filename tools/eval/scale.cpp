@@ -1,6 +1,6 @@
 // rhot-eval scale: a crowded stage run at the cameras' rate. People walk through the rig's volume,
 // each with two tracked hands (a distinct marker star on the back of each, a marker on every
-// fingertip) and props (rigid marker stars worn on the head, the back, the hips), among
+// fingertip) and props (rigid marker stars worn on the head and the back), among
 // loose markers (suits, scenery) up to --markers in all. Every frame is matched, its stars followed
 // and its hands solved on --threads threads; each stage is timed, and the bodies and hands are
 // judged against the truth. The same run on one thread gives the speed-up and must give the same
@@ -123,11 +123,8 @@ struct Crowd {
       const Rigid3d person = people[static_cast<std::size_t>(body_person[b])].world_from_person(t);
       const double turn = 0.8 * std::sin(2.0 * std::numbers::pi * body_turn_hz[b] * t);
       // Worn clear of the hands: a person's first prop on the head (a headset), the second on the
-      // back, more at the hips; each turning about its own axis as heads and bodies do.
-      const std::size_t k = b / people.size();
-      const Eigen::Vector3d held = k == 0   ? Eigen::Vector3d(0.0, 1.7, 0.05)
-                                   : k == 1 ? Eigen::Vector3d(0.0, 1.35, -0.18)
-                                            : Eigen::Vector3d(k % 2 == 0 ? -0.2 : 0.2, 0.95, -0.1 * static_cast<double>(k / 2));
+      // back (there are at most two a person: --bodies sets how many people there are too).
+      const Eigen::Vector3d held = b < people.size() ? Eigen::Vector3d(0.0, 1.7, 0.05) : Eigen::Vector3d(0.0, 1.35, -0.18);
       const Eigen::Quaterniond spin(Eigen::AngleAxisd(turn, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()));
       out.world_from_body.push_back(person * Rigid3d(spin, held));
     }
@@ -372,7 +369,9 @@ int scale(const ScaleArgs& a) {
   j["set"] = a.set_file;
   j["hand_set"] = a.hand_set_file;
   j["cameras"] = rig->cameras.size();
-  j["markers"] = a.markers;
+  // What was tracked: the hands' and props' markers, and loose ones up to --markers (none below it).
+  j["markers"] = static_cast<int>(kHandMarkers) * a.hands + 4 * a.bodies +
+                 std::max(0, a.markers - static_cast<int>(kHandMarkers) * a.hands - 4 * a.bodies);
   j["people"] = crowd->people.size();
   j["bodies"] = a.bodies;
   j["hands"] = a.hands;
@@ -390,15 +389,20 @@ int scale(const ScaleArgs& a) {
   j["frame_p99_ms"] = percentile(run.frame_ms, 0.99);
   const auto missed = std::count_if(run.frame_ms.begin(), run.frame_ms.end(), [&](double ms) { return ms > period_ms; });
   j["missed_period_fraction"] = run.frame_ms.empty() ? 0.0 : static_cast<double>(missed) / static_cast<double>(run.frame_ms.size());
-  j["found_fraction"] = run.findable > 0 ? static_cast<double>(run.found) / static_cast<double>(run.findable) : 0.0;
-  j["bodies_correct_fraction"] = run.body_frames > 0 ? static_cast<double>(run.body_correct) / static_cast<double>(run.body_frames) : 1.0;
-  j["hands_correct_fraction"] = run.hand_frames > 0 ? static_cast<double>(run.hand_correct) / static_cast<double>(run.hand_frames) : 1.0;
+  // A fraction of nothing (no markers, bodies or hands to judge) is null.
+  const auto fraction = [](long part, long whole) {
+    return whole > 0 ? nlohmann::json(static_cast<double>(part) / static_cast<double>(whole)) : nlohmann::json(nullptr);
+  };
+  j["found_fraction"] = fraction(run.found, run.findable);
+  j["bodies_correct_fraction"] = fraction(run.body_correct, run.body_frames);
+  j["hands_correct_fraction"] = fraction(run.hand_correct, run.hand_frames);
   // Of the hands judged correct (seen, the wrist where it is), those whose five fingertips are within
   // 20 mm too: what the rig's resolution allows fingers (stage-32's cameras see a centimetre a pixel
   // from six metres).
-  j["fingertips_correct_fraction"] =
-      run.hand_correct > 0 ? static_cast<double>(run.tips_correct) / static_cast<double>(run.hand_correct) : 0.0;
-  j["hand_joint_error_mean_mm"] = run.joint_errors > 0 ? 1000.0 * run.joint_error_sum_m / static_cast<double>(run.joint_errors) : 0.0;
+  j["fingertips_correct_fraction"] = fraction(run.tips_correct, run.hand_correct);
+  j["hand_joint_error_mean_mm"] = run.joint_errors > 0
+                                      ? nlohmann::json(1000.0 * run.joint_error_sum_m / static_cast<double>(run.joint_errors))
+                                      : nlohmann::json(nullptr);
   j["speedup_vs_one_thread"] = one ? mean(one->frame_ms) / std::max(mean(run.frame_ms), 1e-9) : 1.0;
   if (one) {
     j["one_thread_frame_p99_ms"] = percentile(one->frame_ms, 0.99);

@@ -17,6 +17,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "engine/sim/GraspScenarios.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
@@ -169,7 +170,7 @@ struct StarTally {
 // Marker stars moving through the volume (25 of a set by default), matched, triangulated and
 // tracked; identities against the truth, poses against the true poses.
 int stars(const std::string& rig_file, const std::string& set_file, int bodies, const WorldFlags& world_flags, int frames, unsigned seed,
-          const std::vector<double>& volume, const std::vector<double>& volume_centre) {
+          const std::vector<double>& volume, const std::vector<double>& volume_centre, int threads) {
   const auto world = world_settings(world_flags);
   if (!world) {
     std::cerr << "rhot-eval: " << world.error() << "\n";
@@ -209,6 +210,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   // The tracker's rig: the truth, or as an imperfect calibration has it.
   const rhot::CameraRig tracker_rig = rhot::perturbed_rig(*rig, world->calib_error_px, seed);
 
+  rhot::JobPool jobs(rhot::threads_or_all(threads));
   StarTally tally;
   std::vector<double> ms;
   for (int f = 0; f < frames; ++f) {
@@ -224,7 +226,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
     }
     const rhot::RigFrame frame = sim.next();
     const std::vector<rhot::MatchedPoint> matched =
-        rhot::match_and_triangulate(tracker_rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
+        rhot::match_and_triangulate(tracker_rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()), &jobs);
     const LabelledPoints labelled = label_points(frame, matched, bodies);
     const auto start = std::chrono::steady_clock::now();
     const std::vector<double> sigmas = rhot::point_sigmas_m(matched, pixel_sigma.update(matched));
@@ -241,6 +243,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   j["world"] = world_json(*world, world_flags.world);
   j["frames"] = frames;
   j["seed"] = seed;
+  j["threads"] = jobs.threads();
   j["volume_centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
   j["volume_size_m"] = {box.size.x(), box.size.y(), box.size.z()};
   tally.put(j);

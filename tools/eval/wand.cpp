@@ -17,6 +17,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "engine/sim/GraspScenarios.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
@@ -33,7 +34,7 @@ namespace rhot::eval {
 // A two-marker wand of known length waved through the volume; the measured length per frame
 // against the true one (the Wiimote thesis's accuracy test).
 int wand(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout,
-         const std::vector<double>& volume, const std::vector<double>& volume_centre) {
+         const std::vector<double>& volume, const std::vector<double>& volume_centre, int threads) {
   const auto rig = rhot::load_rig(rig_file);
   if (!rig) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
@@ -52,13 +53,14 @@ int wand(const std::string& rig_file, double length_mm, double sigma, int frames
     return 1;
   }
   rhot::SimulatedRig sim(*rig, {ends[0], ends[1]}, settings);
+  rhot::JobPool jobs(rhot::threads_or_all(threads));
   double sum_abs = 0.0;
   double sum_sq = 0.0;
   double max_abs = 0.0;
   long measured = 0;
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
-    const auto matched = rhot::match_and_triangulate(*rig, frame);
+    const auto matched = rhot::match_and_triangulate(*rig, frame, {}, &jobs);
     // The wand is measured when exactly one point belongs wholly to each end.
     std::array<const rhot::MatchedPoint*, 2> end_point{nullptr, nullptr};
     int points_per_end[2] = {0, 0};
@@ -81,6 +83,7 @@ int wand(const std::string& rig_file, double length_mm, double sigma, int frames
   j["length_mm"] = length_mm;
   j["sigma_px"] = sigma;
   j["dropout"] = dropout;
+  j["threads"] = jobs.threads();
   j["frames"] = frames;
   j["frames_measured"] = measured;
   j["volume_centre_m"] = {centre.x(), centre.y(), centre.z()};

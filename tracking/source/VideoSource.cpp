@@ -42,7 +42,7 @@ struct VideoSource::Impl {
   Clock::time_point opened = Clock::now();
   std::uint64_t index = 0;
   bool ended = false;
-  std::unique_ptr<JobPool> jobs;  // the cameras' detection side by side; none with one thread or camera
+  std::shared_ptr<JobPool> jobs;  // the cameras' detection side by side; none with one thread or camera
 };
 
 std::expected<std::vector<std::string>, std::string> parse_video_devices(const std::string& list) {
@@ -84,8 +84,11 @@ std::expected<VideoSource, std::string> VideoSource::open(const CameraRig& rig, 
     return std::unexpected("video source: threads: " + std::to_string(settings.threads) +
                            " is not a thread count (0: every core, at most " + std::to_string(kMaxThreads) + ")");
   auto impl = std::make_unique<Impl>();
-  if (const int threads = std::min(threads_or_all(settings.threads), static_cast<int>(devices.size())); threads > 1)
-    impl->jobs = std::make_unique<JobPool>(threads);
+  if (settings.jobs) {
+    impl->jobs = settings.jobs;
+  } else if (const int threads = std::min(threads_or_all(settings.threads), static_cast<int>(devices.size())); threads > 1) {
+    impl->jobs = std::make_shared<JobPool>(threads);
+  }
   impl->rig = rig;
   impl->devices = devices;
   impl->settings = settings;

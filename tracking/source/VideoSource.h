@@ -32,12 +32,15 @@
 
 namespace rhot {
 
+class JobPool;
+
 struct VideoSourceSettings {
   BlobDetectorSettings detector;
   std::optional<ColourModel> colours;  // coloured markers: detect these colours instead of bright blobs
   ColourDetectorSettings colour_detector;
-  double rate_hz = 90.0;  // files' frame rate, for their timestamps
-  int threads = 0;        // the cameras' images detected on this many threads (base/Jobs.h), 0: every core
+  double rate_hz = 90.0;          // files' frame rate, for their timestamps
+  int threads = 0;                // the cameras' images detected on this many threads (base/Jobs.h), 0: every core
+  std::shared_ptr<JobPool> jobs;  // or on this pool, shared with the rest of the tracker (threads is then unused)
 };
 
 struct VideoCameraStats {
