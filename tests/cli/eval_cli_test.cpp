@@ -505,6 +505,9 @@ TEST(EvalCli, ScaleRefusesARateOrThreadsItCannotUse) {
   const EvalRun nan_rate = rhot::test::run_program("rhot-eval", "scale --rate-hz nan --json", "2>&1");
   EXPECT_EQ(nan_rate.exit_code, 1) << nan_rate.output;
   EXPECT_NE(nan_rate.output.find("--rate-hz"), std::string::npos) << nan_rate.output;
+  const EvalRun nan_sigma = rhot::test::run_program("rhot-eval", "scale --sigma nan --json", "2>&1");
+  EXPECT_EQ(nan_sigma.exit_code, 1) << nan_sigma.output;
+  EXPECT_NE(nan_sigma.output.find("--sigma"), std::string::npos) << nan_sigma.output;
   const EvalRun threads = rhot::test::run_program("rhot-eval", "scale --threads -1 --json", "2>&1");
   EXPECT_EQ(threads.exit_code, 1) << threads.output;
   EXPECT_NE(threads.output.find("--threads: Value -1 not in range 0 to 256"), std::string::npos) << threads.output;

@@ -448,9 +448,13 @@ CLI::App* add_scale_command(CLI::App& app, ScaleArgs& a, bool& json) {
       ->check(rhot::number_check(rhot::NumberBound::kPositive))
       ->check(CLI::Range(0.6, 3600.0));
   cmd->add_option("--seed", a.seed, "random seed")->capture_default_str();
-  cmd->add_option("--sigma", a.sigma, "pixel noise, standard deviation per axis")->capture_default_str()->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--sigma", a.sigma, "pixel noise, standard deviation per axis")
+      ->capture_default_str()
+      ->check(rhot::number_check(rhot::NumberBound::kNonNegative))  // CLI::Range lets nan through
+      ->check(CLI::Range(0.0, 10.0));
   cmd->add_option("--dropout", a.dropout, "probability a camera misses a visible marker")
       ->capture_default_str()
+      ->check(rhot::number_check(rhot::NumberBound::kNonNegative))
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;

@@ -203,6 +203,9 @@ void fold(std::uint64_t& hash, const Eigen::Vector3d& v) {
   }
 }
 
+// Loose markers: those --markers leaves after the hands' and the props' (none when they alone exceed it).
+int loose_markers(const ScaleArgs& a) { return std::max(0, a.markers - static_cast<int>(kHandMarkers) * a.hands - 4 * a.bodies); }
+
 double resident_mb() {
   std::ifstream statm("/proc/self/statm");
   long pages = 0;
@@ -231,7 +234,7 @@ Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, cons
   settings.dropout = a.dropout;
   settings.seed = a.seed;
   settings.rate_hz = a.rate_hz;
-  const int loose = std::max(0, a.markers - static_cast<int>(kHandMarkers) * a.hands - 4 * a.bodies);
+  const int loose = loose_markers(a);
   SimulatedRig sim(rig, random_trajectories(loose, box.centre - box.size / 2, box.centre + box.size / 2, a.seed + 2), settings);
   sim.set_scripted_markers([&](double t) { return crowd.markers(crowd.truth_at(t)); });
   // One library: the props' stars (ids 0 .. bodies - 1), then the hands' (the set's next ones).
@@ -370,8 +373,7 @@ int scale(const ScaleArgs& a) {
   j["hand_set"] = a.hand_set_file;
   j["cameras"] = rig->cameras.size();
   // What was tracked: the hands' and props' markers, and loose ones up to --markers (none below it).
-  j["markers"] = static_cast<int>(kHandMarkers) * a.hands + 4 * a.bodies +
-                 std::max(0, a.markers - static_cast<int>(kHandMarkers) * a.hands - 4 * a.bodies);
+  j["markers"] = static_cast<int>(kHandMarkers) * a.hands + 4 * a.bodies + loose_markers(a);
   j["people"] = crowd->people.size();
   j["bodies"] = a.bodies;
   j["hands"] = a.hands;
