@@ -145,6 +145,53 @@ std::optional<btTransform> GraspSystem::grip_target(Entity object) const {
   return target_of(it->second);
 }
 
+std::vector<Entity> GraspSystem::held_objects() const {
+  std::vector<Entity> out;
+  out.reserve(held_.size());
+  for (const auto& [e, held] : held_) out.push_back(e);
+  std::ranges::sort(out, [](Entity a, Entity b) { return a.index < b.index; });  // (not the map's order)
+  return out;
+}
+
+double GraspSystem::out_of_surface_m(int hand, const GripPoint& g, const btTransform& target, btScalar grown) const {
+  const btVector3 on_bone = hands_[static_cast<std::size_t>(hand)]->tracked_bone(g.bone) * g.on_bone;
+  const btVector3 on_object = target * (g.on_object * grown);
+  return static_cast<double>((on_bone - on_object).dot(target.getBasis() * g.normal));
+}
+
+bool GraspSystem::grip_seen_closed(Entity object) const {
+  const auto it = held_.find(object);
+  if (it == held_.end()) return false;
+  const Held& held = it->second;
+  const btTransform target = target_of(held);
+  for (int hand = 0; hand < 2; ++hand) {
+    const auto& grip = held.by[static_cast<std::size_t>(hand)];
+    if (!grip || !hands_[static_cast<std::size_t>(hand)]->active()) continue;
+    const btScalar grown = static_cast<btScalar>(physics_.scale(object) / grip->scale);
+    bool anchor = false, finger = false;
+    for (const GripPoint& g : grip->grip) {
+      if (!g.measured || grip_confidence(hand, g) < settings_.confident) continue;
+      if (out_of_surface_m(hand, g, target, grown) > settings_.release_distance_m) continue;
+      (g.group == 0 || g.group == kPalmGroup ? anchor : finger) = true;
+    }
+    if (anchor && finger) return true;
+  }
+  return false;
+}
+
+std::vector<InteractionEvent> GraspSystem::let_go(Entity object, const std::string& reason) {
+  const auto it = held_.find(object);
+  if (it == held_.end()) return {};
+  const std::size_t before = events_.size();
+  const bool both = it->second.both();
+  for (int hand = 0; hand < 2; ++hand) {
+    const auto h = held_.find(object);
+    if (h != held_.end() && h->second.by[static_cast<std::size_t>(hand)])
+      release(object, hand, both ? LetGo::kBoth : LetGo::kOpened, reason);
+  }
+  return {events_.begin() + static_cast<std::ptrdiff_t>(before), events_.end()};
+}
+
 void GraspSystem::emit(InteractionEventType type, Entity object, std::optional<int> hand) {
   InteractionEvent e{type, physics_.time_s(), object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), Entity{}, 0.0, {}};
   if (hand) e.hand = side_of(*hand);
@@ -480,15 +527,12 @@ void GraspSystem::release_opened() {
       const btScalar grown = static_cast<btScalar>(physics_.scale(object) / grip->scale);  // the object's scale since the grip points
       for (GripPoint& g : grip->grip) {
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
-        const btVector3 on_bone = h->tracked_bone(g.bone) * g.on_bone;
         if (trusted && !g.measured) {
           // Measured for the first time since the grasp: held from where it is now.
-          g.on_object = target.inverse() * on_bone / grown;
+          g.on_object = target.inverse() * (h->tracked_bone(g.bone) * g.on_bone) / grown;
           g.measured = true;
         }
-        const btVector3 on_object = target * (g.on_object * grown);
-        const btVector3 normal = target.getBasis() * g.normal;
-        const double out_m = static_cast<double>((on_bone - on_object).dot(normal));
+        const double out_m = out_of_surface_m(hand, g, target, grown);
         const bool open = trusted && out_m > settings_.release_distance_m;
         if (g.group == 0 || g.group == kPalmGroup) {
           any_anchor = true;

@@ -100,6 +100,16 @@ class GraspSystem {
   const GraspSettings& settings() const { return settings_; }
   // Where the hand holds `object` now (world), if held.
   std::optional<btTransform> grip_target(Entity object) const;
+  // The objects held now, by one hand or two.
+  std::vector<Entity> held_objects() const;
+  // Whether some hand is seen to hold `object` now: a grip point of each side of the grasp (the
+  // anchor, and a finger) measured this frame and not open. False for an object not held, and
+  // for one held only by digits that are hidden or measured open.
+  bool grip_seen_closed(Entity object) const;
+  // Something other than the hand takes `object` out of its grip (a socket it is seated in):
+  // every hand holding it lets go with `reason`, as when it opens (the object keeps the hand's
+  // velocity). Returns the release events, which are also this step's; none if it was not held.
+  std::vector<InteractionEvent> let_go(Entity object, const std::string& reason);
 
   struct Contact {
     int bone;
@@ -168,6 +178,10 @@ class GraspSystem {
   void ignore_hand(btRigidBody* object, int hand, bool ignore);
   void emit(InteractionEventType type, Entity object, std::optional<int> hand);
   double curl_rad(int hand, int finger) const;
+  // How far a grip point's bone is out of the object's surface now, along its normal at the point
+  // (metres; negative: pressed in): `target` where the grip has the object, `grown` its scale
+  // since the grip point was taken.
+  double out_of_surface_m(int hand, const GripPoint& g, const btTransform& target, btScalar grown) const;
   // The confidence of the joint that tells whether a grip point's finger is measured.
   double grip_confidence(int hand, const GripPoint& g) const;
 

@@ -130,7 +130,8 @@ struct Mechanisms::Part {
   bool pressed = false;
   Socket socket;
   std::optional<Entity> held;
-  std::unique_ptr<btTypedConstraint> hold;  // a socket's grip on what it holds
+  std::unique_ptr<btTypedConstraint> hold;      // a socket's grip on what it holds
+  std::unordered_map<Entity, Seating> seating;  // held objects it accepts, near it
 };
 
 Mechanisms::~Mechanisms() {
@@ -261,8 +262,66 @@ bool Mechanisms::pressed(Entity button) const {
   return it != by_entity_.end() && parts_[it->second]->pressed;
 }
 
-void Mechanisms::update(World& world, const GraspSystem& grasp, std::vector<InteractionEvent>& events) {
+bool Mechanisms::accepts(World& world, const Part& socket, Entity object) const {
+  if (socket.socket.accepts.empty()) return true;
+  const Name* name = world.find<Name>(object);
+  const Tags* tags = world.find<Tags>(object);
+  for (const std::string& a : socket.socket.accepts) {
+    if ((name && name->value == a) || (tags && std::ranges::find(tags->values, a) != tags->values.end())) return true;
+  }
+  return false;
+}
+
+// Held objects seated in a free socket stay there when a hand not seen holding them leaves:
+// let go of here, the snap below takes them.
+void Mechanisms::seat_held_objects(World& world, GraspSystem& grasp, std::vector<InteractionEvent>& events, double dt) {
+  const std::vector<Entity> held = grasp.held_objects();
+  for (auto& part : parts_) {
+    Part& p = *part;
+    if (p.kind != Part::Kind::kSocket) continue;
+    std::erase_if(p.seating, [&](const auto& s) { return std::ranges::find(held, s.first) == held.end(); });
+    const WorldTransform* socket_pose = world.find<WorldTransform>(p.entity);
+    if (p.held || !socket_pose || world.has<Disabled>(p.entity)) {
+      p.seating.clear();
+      continue;
+    }
+    const btVector3 attach =
+        (pose_of(socket_pose->world_from_local) * btTransform(to_bt(p.socket.attach_rotation), to_bt(p.socket.attach_position)))
+            .getOrigin();
+    for (const Entity object : held) {
+      btRigidBody* body = physics_->body(object);
+      if (!body || !accepts(world, p, object)) continue;
+      bool in_another = false;
+      for (const auto& other : parts_) in_another = in_another || (other->held && *other->held == object);
+      if (in_another) continue;
+      const double d = static_cast<double>((body->getWorldTransform().getOrigin() - attach).length());
+      const bool inside = d <= p.socket.snap_distance_m;
+      auto [it, fresh] = p.seating.try_emplace(object);
+      Seating& s = it->second;
+      if (fresh) s.armed = !inside;  // grasped inside (taken out of the socket, say): not until it has left
+      if (!inside) {
+        s = Seating{};
+        s.armed = true;
+        continue;
+      }
+      if (!s.armed) continue;
+      s.nearest_m = std::min(s.nearest_m, d);
+      // Its velocity smoothed over kSeatSmoothing_s: a tracked hand held still jitters by millimetres a frame.
+      s.velocity += (body->getLinearVelocity() - s.velocity) * static_cast<btScalar>(std::min(1.0, dt / kSeatSmoothing_s));
+      if (static_cast<double>(s.velocity.length()) < kSeatSpeed_mps) s.rested_s += dt;
+      if (s.rested_s < kSeat_s) continue;
+      const double leaving_at = std::min(s.nearest_m + kUnseat_m, 0.9 * p.socket.snap_distance_m);
+      if (d <= leaving_at || grasp.grip_seen_closed(object)) continue;
+      for (InteractionEvent& e : grasp.let_go(object, "left in the socket (no finger seen holding it)")) events.push_back(std::move(e));
+      p.seating.erase(object);
+    }
+  }
+}
+
+void Mechanisms::update(World& world, GraspSystem& grasp, std::vector<InteractionEvent>& events) {
   const double now = physics_->time_s();
+  seat_held_objects(world, grasp, events, last_update_s_ < 0.0 ? 0.0 : now - last_update_s_);
+  last_update_s_ = now;
   const auto raise = [&](InteractionEventType type, Entity subject, Entity object) {
     InteractionEvent ev{type, now, object, std::nullopt, {}, false, Eigen::Vector3d::Zero(), subject, 0.0, {}};
     events.push_back(std::move(ev));
@@ -321,12 +380,7 @@ void Mechanisms::update(World& world, const GraspSystem& grasp, std::vector<Inte
         if (!object ||
             static_cast<double>((object->getWorldTransform().getOrigin() - attach.getOrigin()).length()) > p.socket.snap_distance_m)
           continue;
-        bool accepted = p.socket.accepts.empty();
-        const Name* name = world.find<Name>(ev.object);
-        const Tags* tags = world.find<Tags>(ev.object);
-        for (const std::string& a : p.socket.accepts) {
-          accepted = accepted || (name && name->value == a) || (tags && std::ranges::find(tags->values, a) != tags->values.end());
-        }
+        const bool accepted = accepts(world, p, ev.object);
         bool taken = false;  // by another socket
         for (const auto& other : parts_) taken = taken || (other->held && *other->held == ev.object);
         if (!accepted || taken) continue;

@@ -12,7 +12,10 @@
 //           knuckle pushing it never presses.
 //   socket  an object it accepts, released within snap_distance of its attach pose, is put there
 //           and held by a fixed constraint (snap); a hand that grasps it takes it out (unsnap).
-//           One object at a time.
+//           One object at a time. An object carried in and seated (kept within snap_distance,
+//           nearly still, for kSeat_s) stays in the socket when the hand leaves unless the hand
+//           is seen to hold it (GraspSystem::grip_seen_closed): the socket takes it out of a grip
+//           whose fingers are hidden, as a joint keeps a handle (docs/grasping.md, "Sockets are held").
 //
 // update() runs after the grasp system's post_step and appends its events.
 
@@ -47,7 +50,15 @@ class Mechanisms {
   // After the grasp system's post_step: buttons pressed and released, objects snapped and taken
   // out, pokeable entities touched by a fingertip; appends kPress, kUnpress, kSnap, kUnsnap,
   // kPoke events to `events` (which holds the grasp system's of this step).
-  void update(World& world, const GraspSystem& grasp, std::vector<InteractionEvent>& events);
+  void update(World& world, GraspSystem& grasp, std::vector<InteractionEvent>& events);
+
+  // A held object counts as seated in a socket after this long within its snap distance, moving
+  // slower than kSeatSpeed_mps (its velocity smoothed over kSeatSmoothing_s); a seated object leaves the socket with the hand only once it
+  // is kUnseat_m farther from the attach point than it came (or near the snap distance).
+  static constexpr double kSeat_s = 0.25;
+  static constexpr double kSeatSpeed_mps = 0.15;
+  static constexpr double kSeatSmoothing_s = 0.1;
+  static constexpr double kUnseat_m = 0.02;
 
   // A hinge's angle in degrees or a slider's position in metres (a button's depth in metres),
   // from where the scene put it; nothing for an entity without one.
@@ -62,6 +73,16 @@ class Mechanisms {
  private:
   Mechanisms() = default;
   struct Part;
+  // A held object near a socket: how long it has rested within the snap distance and how near it came.
+  struct Seating {
+    bool armed = false;  // carried in from outside the snap distance (not grasped inside it)
+    double rested_s = 0.0;
+    double nearest_m = 1e9;
+    btVector3 velocity{0, 0, 0};  // smoothed
+  };
+  void seat_held_objects(World& world, GraspSystem& grasp, std::vector<InteractionEvent>& events, double dt);
+  bool accepts(World& world, const Part& socket, Entity object) const;
+  double last_update_s_ = -1.0;
   PhysicsWorld* physics_ = nullptr;
   std::vector<std::unique_ptr<Part>> parts_;
   std::unordered_map<Entity, std::size_t> by_entity_;

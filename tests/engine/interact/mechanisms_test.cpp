@@ -318,10 +318,28 @@ std::string socket_scene(const std::string& accepts) {
 struct SocketStage : Stage {
   GraspPose grasp = make_grasp(HandSide::kRight, 0.05, 0.006, 2);
   explicit SocketStage(const std::string& accepts) : Stage(socket_scene(accepts)) {}
-  void hand(double closure, double lift_m) {
+  bool hidden = false;  // every fingertip hidden from the cameras (confidence 0.6, as the tracker estimates them)
+  void hand(double closure, double lift_m, double across_m = 0.0) {
     std::array<HandInput, 2> hands;
-    hands[1] = hand_input(grasp.place(Eigen::Vector3d(0.0, 0.825 + lift_m, 0.0), Eigen::Vector3d::UnitX()), grasp.pose(closure));
+    hands[1] = hand_input(grasp.place(Eigen::Vector3d(across_m, 0.825 + lift_m, 0.0), Eigen::Vector3d::UnitX()), grasp.pose(closure));
+    if (hidden) {
+      for (int digit = 0; digit < 5; ++digit)
+        hands[1].confidence[static_cast<std::size_t>(chain_joints(static_cast<Finger>(digit))[3])] = 0.6;
+    }
     step(hands);
+  }
+  // Reach and close on the cube with every finger seen, lift it 8 cm (its centre 5 mm from the
+  // attach point), and rest there `rest_s` with the fingertips hidden and the hand closed.
+  void carry_in_and_hide(double rest_s) {
+    for (int i = 0; i < 45; ++i) hand(0.0, 0.15 * (1.0 - i / 44.0));
+    for (int i = 0; i < 45; ++i) hand(i / 44.0, 0.0);
+    for (int i = 0; i < 45; ++i) hand(1.0, 0.08 * i / 44.0);
+    hidden = true;
+    for (int i = 0; i < static_cast<int>(rest_s * 90.0); ++i) hand(1.0, 0.08);
+  }
+  const InteractionEvent* first(InteractionEventType type) const {
+    const auto it = std::ranges::find_if(events, [&](const InteractionEvent& e) { return e.type == type; });
+    return it == events.end() ? nullptr : &*it;
   }
   // Reach, close, lift 8 cm (the cube's centre 5 mm from the attach point), open, take the hand up.
   void carry_and_let_go() {
@@ -351,6 +369,58 @@ TEST(Sockets, AnAcceptedObjectReleasedNearTheAttachPoseSnapsAndAHandTakesItOut) 
   for (int i = 0; i < 45; ++i) r.hand(1.0, 0.085 + 0.1 * i / 44.0);
   EXPECT_GT(r.body("cube")->getWorldTransform().getOrigin().y(), 0.97f);
   EXPECT_FALSE(r.physics->mechanisms().held_in(r.named("holder")).has_value());
+}
+
+// The peg of the workbench: a palm-down hand hides its own grip, so a hand that opened over the
+// socket was seen to open only seconds later, and the peg left with it (seeds 201, 218, 219).
+TEST(Sockets, ASeatedObjectStaysWhenAHandWhoseGripIsHiddenLeaves) {
+  SocketStage r(R"("peg")");
+  r.carry_in_and_hide(0.5);
+  ASSERT_EQ(r.count(InteractionEventType::kGrasp), 1);
+  ASSERT_EQ(r.count(InteractionEventType::kRelease), 0) << "resting in the socket, not yet let go";
+  // The hand goes up, still closed as far as anything measured says.
+  for (int i = 0; i < 45; ++i) r.hand(1.0, 0.08 + 0.2 * i / 44.0);
+  ASSERT_EQ(r.count(InteractionEventType::kRelease), 1);
+  EXPECT_EQ(r.first(InteractionEventType::kRelease)->reason, "left in the socket (no finger seen holding it)");
+  ASSERT_EQ(r.count(InteractionEventType::kSnap), 1);
+  EXPECT_EQ(r.physics->mechanisms().held_in(r.named("holder")), r.named("cube"));
+  r.seconds(1.0);
+  EXPECT_LT((r.body("cube")->getWorldTransform().getOrigin() - btVector3(0, 0.91f, 0)).length(), 0.002f);
+}
+
+TEST(Sockets, AnObjectSeenHeldCarriedPastOrTakenOutLeavesWithTheHand) {
+  {
+    // Every fingertip seen closed on it: the hand is seen holding it, whatever the socket.
+    SocketStage r(R"("peg")");
+    r.carry_in_and_hide(0.5);
+    r.hidden = false;
+    for (int i = 0; i < 45; ++i) r.hand(1.0, 0.08 + 0.2 * i / 44.0);
+    EXPECT_EQ(r.count(InteractionEventType::kRelease), 0);
+    EXPECT_EQ(r.count(InteractionEventType::kSnap), 0);
+    EXPECT_GT(r.body("cube")->getWorldTransform().getOrigin().y(), 1.05f);
+  }
+  {
+    // Hidden, but swept through the socket at 0.25 m/s without resting there.
+    SocketStage r(R"("peg")");
+    r.carry_in_and_hide(0.0);
+    for (int i = 0; i < 65; ++i) r.hand(1.0, 0.08, 0.18 * i / 64.0);
+    EXPECT_EQ(r.count(InteractionEventType::kRelease), 0);
+    EXPECT_GT(r.body("cube")->getWorldTransform().getOrigin().x(), 0.15f);
+  }
+  {
+    // Put in the socket, then grasped in it and taken out by a hand whose fingertips hide.
+    SocketStage r(R"("peg")");
+    r.carry_and_let_go();
+    ASSERT_EQ(r.count(InteractionEventType::kSnap), 1);
+    for (int i = 0; i < 45; ++i) r.hand(0.0, 0.085 + 0.1 * (1.0 - i / 44.0));
+    for (int i = 0; i < 45; ++i) r.hand(i / 44.0, 0.085);
+    ASSERT_EQ(r.count(InteractionEventType::kUnsnap), 1);
+    r.hidden = true;
+    for (int i = 0; i < 45; ++i) r.hand(1.0, 0.085);
+    for (int i = 0; i < 45; ++i) r.hand(1.0, 0.085 + 0.1 * i / 44.0);
+    EXPECT_EQ(r.count(InteractionEventType::kSnap), 1) << "not put back";
+    EXPECT_GT(r.body("cube")->getWorldTransform().getOrigin().y(), 0.97f);
+  }
 }
 
 TEST(Sockets, AnObjectTheSocketDoesNotAcceptFalls) {
