@@ -48,13 +48,15 @@ class Mechanisms {
   [[nodiscard]] static std::expected<std::unique_ptr<Mechanisms>, std::string> create(World& world, PhysicsWorld& physics);
 
   // After the grasp system's post_step: buttons pressed and released, objects snapped and taken
-  // out, pokeable entities touched by a fingertip; appends kPress, kUnpress, kSnap, kUnsnap,
-  // kPoke events to `events` (which holds the grasp system's of this step).
+  // out, pokeable entities touched by a fingertip, seated objects taken from a hidden grip;
+  // appends kPress, kUnpress, kSnap, kUnsnap, kPoke events, and the kRelease of an object a socket
+  // takes (GraspSystem::let_go), to `events` (which holds the grasp system's of this step).
   void update(World& world, GraspSystem& grasp, std::vector<InteractionEvent>& events);
 
-  // A held object counts as seated in a socket after this long within its snap distance, moving
-  // slower than kSeatSpeed_mps (its velocity smoothed over kSeatSmoothing_s); a seated object leaves the socket with the hand only once it
-  // is kUnseat_m farther from the attach point than it came (or near the snap distance).
+  // A held object counts as seated in a socket after kSeat_s within its snap distance, moving
+  // slower than kSeatSpeed_mps (its velocity smoothed over kSeatSmoothing_s). The hand leaves
+  // once the object is kUnseat_m farther from the attach point than it came (or at 90 % of the
+  // snap distance); then, unless a finger is seen holding it, the socket takes it.
   static constexpr double kSeat_s = 0.25;
   static constexpr double kSeatSpeed_mps = 0.15;
   static constexpr double kSeatSmoothing_s = 0.1;
