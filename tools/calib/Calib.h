@@ -8,6 +8,7 @@
 // one JSON report on stdout; pictures are PNG files beside the output (`--pictures DIR`, default:
 // the output file's folder).
 
+#include <atomic>
 #include <expected>
 #include <filesystem>
 #include <memory>
@@ -63,6 +64,11 @@ void make_parent_folder(const std::string& file);
 // --insecure, tools/common/NodeKeys.h). Fails naming what is wrong.
 [[nodiscard]] std::expected<std::unique_ptr<FrameSource>, std::string> open_frame_source(const CameraRig& rig, const std::string& source,
                                                                                          int blob_threshold, const NodeKeyFlags& keys);
+
+// Ctrl-C or SIGTERM, once stop_on_signals() has run: the commands that run until stopped
+// (record, headset) end their loops on it and still write what they have.
+void stop_on_signals();
+bool stop_asked();
 
 // Prints a report as indented JSON on stdout.
 void print_json(const nlohmann::json& report);

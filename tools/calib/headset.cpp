@@ -4,10 +4,8 @@
 // simulated one and the star rides on the runtime's own (moving) head through a known transform,
 // so the result is checked against the truth.
 
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -29,9 +27,6 @@
 namespace rhot::calib_tool {
 
 namespace {
-
-std::atomic<bool> g_stop{false};
-void on_signal(int) { g_stop.store(true); }
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
@@ -113,7 +108,7 @@ std::vector<HeadsetPoseSample> collect(const HeadsetOptions& o, XrHeadset& heads
   while (!headset.should_exit()) {
     headset.poll_events();
     const double now = steady_now_s();
-    if (!asked_to_end && (g_stop.load() || (std::isfinite(first_s) && now - first_s >= o.seconds) ||
+    if (!asked_to_end && (stop_asked() || (std::isfinite(first_s) && now - first_s >= o.seconds) ||
                           (!std::isfinite(first_s) && now - start_s > o.seconds + 15.0))) {
       headset.request_exit();
       asked_to_end = true;
@@ -220,8 +215,7 @@ int run(const HeadsetOptions& o) {
       return markers;
     });
   }
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  stop_on_signals();
   spdlog::info("look around for {:.0f} s with the headset on, turning and tilting the head (Ctrl-C ends early)", o.seconds);
   const std::vector<HeadsetPoseSample> samples = collect(o, **headset, **renderer, *rig, *star);
   const auto registration = register_headset(samples);

@@ -3,8 +3,6 @@
 // (--source nodes:..., as rhot-demo), written as rhot's CSV for
 // `wand`. The blob detector finds the marker in every image; nothing is labelled.
 
-#include <atomic>
-#include <csignal>
 #include <memory>
 #include <string>
 
@@ -19,10 +17,6 @@
 namespace rhot::calib_tool {
 
 namespace {
-
-// Ctrl-C (or SIGTERM) ends the recording; what was recorded is still written.
-std::atomic<bool> g_stop{false};
-void on_signal(int) { g_stop.store(true); }
 
 struct RecordOptions {
   std::vector<std::string> rig;
@@ -48,11 +42,10 @@ int run(const RecordOptions& o) {
   Detections d;
   d.camera_count = static_cast<int>(rig->cameras.size());
   long frame = 0;
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  stop_on_signals();
   spdlog::info("recording{}; Ctrl-C stops and writes what was recorded",
                o.frames > 0 ? fmt::format(" {} frames", o.frames) : std::string());
-  while ((o.frames <= 0 || frame < o.frames) && !g_stop.load()) {
+  while ((o.frames <= 0 || frame < o.frames) && !stop_asked()) {
     const auto f = source->next(0.0);
     if (!f) break;
     DetectionFrame df;

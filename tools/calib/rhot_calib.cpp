@@ -12,7 +12,9 @@
 //
 // docs/calibration.md walks through them in order.
 
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -28,6 +30,18 @@
 #include "tracking/camera/RigFile.h"
 
 namespace rhot::calib_tool {
+
+namespace {
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop.store(true); }
+}  // namespace
+
+void stop_on_signals() {
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+}
+
+bool stop_asked() { return g_stop.load(); }
 
 const CLI::Validator& finite_number() {
   static const CLI::Validator validator = number_check(NumberBound::kAny);

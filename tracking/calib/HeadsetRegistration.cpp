@@ -17,7 +17,7 @@ namespace rhot {
 
 namespace {
 
-constexpr double kDeg = 180.0 / std::numbers::pi;
+constexpr double kDegPerRadian = 180.0 / std::numbers::pi;
 // Rotation errors are weighed as the displacement they make at this distance: 1 mrad as 0.1 mm.
 constexpr double kRotationLever_m = 0.1;
 
@@ -102,7 +102,7 @@ std::expected<ClosedForm, std::string> closed_form(std::span<const HeadsetPoseSa
     const Rigid3d b = s[i].stage_from_head * s[j].stage_from_head.inverse();
     const Eigen::Vector3d alpha = rotation_vector(a.rotation);
     const Eigen::Vector3d beta = rotation_vector(b.rotation);
-    out.turn_deg = std::max(out.turn_deg, beta.norm() * kDeg);
+    out.turn_deg = std::max(out.turn_deg, beta.norm() * kDegPerRadian);
     h += alpha * beta.transpose();
     spread += beta * beta.transpose();
     relative.emplace_back(a, b);
@@ -188,7 +188,7 @@ std::expected<HeadsetRegistration, std::string> register_headset(std::span<const
   for (const HeadsetPoseSample& s : samples) {
     const Rigid3d predicted = r.world_from_stage * s.stage_from_head * r.head_from_star;
     const double mm = 1e3 * (predicted.translation - s.world_from_star.translation).norm();
-    const double deg = kDeg * s.world_from_star.rotation.angularDistance(predicted.rotation);
+    const double deg = kDegPerRadian * s.world_from_star.rotation.angularDistance(predicted.rotation);
     r.residual_mm.push_back(mm);
     r.residual_deg.push_back(deg);
     sum_mm += mm * mm;

@@ -65,7 +65,38 @@ Svd3 svd(const Eigen::Matrix3d& m) {
 }
 
 Eigen::Matrix4d umeyama_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, bool with_scale) {
-  return Eigen::umeyama(from, to, with_scale);
+  // Umeyama (1991), as Eigen::umeyama computes it, in fixed-size sums over the columns: Eigen's
+  // products of the two 3 x n matrices instantiate its general matrix-product kernels, most of this
+  // file's compile time under the sanitizers.
+  const Eigen::Index n = from.cols();
+  const double inv_n = 1.0 / static_cast<double>(n);
+  Eigen::Vector3d mean_from = Eigen::Vector3d::Zero(), mean_to = Eigen::Vector3d::Zero();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    mean_from += from.col(i);
+    mean_to += to.col(i);
+  }
+  mean_from *= inv_n;
+  mean_to *= inv_n;
+  Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();  // the cross-covariance, to x from^T
+  double from_variance = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector3d f = from.col(i) - mean_from;
+    sigma.noalias() += (to.col(i) - mean_to) * f.transpose();
+    from_variance += f.squaredNorm();
+  }
+  sigma *= inv_n;
+  from_variance *= inv_n;
+  const Svd3 s = svd(sigma);
+  // A reflection is the best orthogonal fit when det(U) det(V) < 0: the rotation nearest it flips
+  // the axis of the smallest singular value.
+  Eigen::Vector3d d = Eigen::Vector3d::Ones();
+  if (s.u.determinant() * s.v.determinant() < 0.0) d(2) = -1.0;
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  const Eigen::Matrix3d r = s.u * d.asDiagonal() * s.v.transpose();
+  const double c = with_scale ? s.singular_values.dot(d) / from_variance : 1.0;
+  m.topLeftCorner<3, 3>() = c * r;
+  m.topRightCorner<3, 1>() = mean_to - c * r * mean_from;
+  return m;
 }
 
 Eigen::Quaterniond rotation_between(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {

@@ -3,7 +3,7 @@
 // uses one: each instantiation of SelfAdjointEigenSolver or JacobiSVD costs tens of seconds of
 // compile time under the sanitizers (docs/PERFORMANCE.md, "Build time"). Each function is the
 // Eigen call its name says, with the same results bit for bit, except the closed-form eigenvalues
-// (symmetric_eigenvalues_direct and _packed), which are rhot's own scalar code.
+// (symmetric_eigenvalues_direct and _packed) and umeyama_transform, which are rhot's own code.
 
 #include <array>
 
@@ -46,9 +46,11 @@ Svd3 svd(const Eigen::Matrix3d& m);
 // sanitizers, measured in engine_physics_test's unit.
 Eigen::Quaterniond rotation_between(const Eigen::Vector3d& from, const Eigen::Vector3d& to);
 
-// Eigen::umeyama(from, to, with_scale): the similarity (4 x 4, homogeneous; a rigid motion
-// without the scale) taking the columns of `from` nearest the columns of `to` in least squares.
-// Its 3 x 3 SVD made it the costliest call to compile of tracking/hand's and tracking/calib's units.
+// The similarity (4 x 4, homogeneous; a rigid motion without the scale) taking the columns of
+// `from` nearest the columns of `to` in least squares: Umeyama's algorithm, as Eigen::umeyama
+// (from, to, with_scale) computes it, equal to it to rounding (not bit for bit: its sums are in
+// another order). Eigen's 3 x 3 SVD made it the costliest call to compile of tracking/hand's and
+// tracking/calib's units, and its products of 3 x n matrices the costliest of this one's.
 Eigen::Matrix4d umeyama_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, bool with_scale);
 
 }  // namespace rhot

@@ -35,7 +35,7 @@ std::vector<HandJoint> inferred_joints(int digit) {
   return {static_cast<HandJoint>(base), static_cast<HandJoint>(base + 1), static_cast<HandJoint>(base + 2)};
 }
 
-struct Bench {
+struct CurlBench {
   World world;
   std::unique_ptr<HandPhysics> physics;
   Entity cube;
@@ -44,7 +44,7 @@ struct Bench {
   double hidden_closure = 0.0;  // where the tracker's estimate keeps them (0: open)
   std::vector<InteractionEvent> events;
 
-  explicit Bench(double curl_rad = GraspSettings{}.hidden_finger_curl_rad) {
+  explicit CurlBench(double curl_rad = GraspSettings{}.hidden_finger_curl_rad) {
     physics = test::physics_for(world, test::parse(bench_scene(curl_rad)));
     cube = find_named(world, "cube");
   }
@@ -90,7 +90,7 @@ struct Bench {
 };
 
 TEST(FingerContact, TheDistanceFromACapsuleToABoxIsExact) {
-  Bench b;
+  CurlBench b;
   const btRigidBody& body = *b.physics->physics().body(b.cube);
   // The cube's +x face is at x = 0.025; a 5 mm capsule along z at x = 0.1.
   EXPECT_NEAR(capsule_distance_m(body, {0.1, 0.825, -0.01}, {0.1, 0.825, 0.01}, 0.005), 0.07, 1e-4);
@@ -109,12 +109,12 @@ TEST(FingerContact, AThumbAndIndexHiddenByTheCubeStillGraspIt) {
   // The demo's failure: the cube hides the closing thumb and index tips from every camera, the
   // tracker keeps their estimate open, and the grasp never began (thumb and index 2-3 cm off
   // the cube). Placed against it, they grasp, and the cube is lifted.
-  Bench without(0.0);
+  CurlBench without(0.0);
   without.hidden = {0, 1};
   without.reach_and_close();
   EXPECT_EQ(without.grasps(), 0) << "the failure this reproduces";
 
-  Bench b;
+  CurlBench b;
   b.hidden = {0, 1};
   b.reach_and_close();
   ASSERT_EQ(b.grasps(), 1);
@@ -130,7 +130,7 @@ TEST(FingerContact, AThumbAndIndexHiddenByTheCubeStillGraspIt) {
 
 TEST(FingerContact, AHiddenFingerRestsOnWhatItsHandHoldsNeitherInsideNorAway) {
   for (const double estimate : {0.0, 1.6}) {  // relaxed open by the tracker, or curled into the cube
-    Bench b;
+    CurlBench b;
     b.reach_and_close();
     ASSERT_EQ(b.grasps(), 1);
     b.hidden = {1};
@@ -148,7 +148,7 @@ TEST(FingerContact, AHiddenFingerRestsOnWhatItsHandHoldsNeitherInsideNorAway) {
 TEST(FingerContact, AnOpenHandOverTheCubeLeavesItsHiddenFingersAlone) {
   // Hovering open over the cube, nothing closing: the hidden index stays where the tracker put it
   // and nothing is grasped.
-  Bench b;
+  CurlBench b;
   b.hidden = {1};
   for (int i = 0; i < 90; ++i) b.step(0.0, 0.01);
   for (const bool placed : b.physics->placements()[1].placed) EXPECT_FALSE(placed);

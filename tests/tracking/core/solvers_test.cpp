@@ -5,6 +5,7 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -93,7 +94,7 @@ TEST(RotationBetween, TakesTheFirstDirectionOntoTheSecond) {
   EXPECT_LT((half * a + a).norm(), 1e-12);
 }
 
-// umeyama_transform is Eigen's umeyama: a rigid motion (and a scale, when asked) of points comes
+// umeyama_transform is Umeyama's fit: a rigid motion (and a scale, when asked) of points comes
 // back exactly.
 TEST(UmeyamaTransform, GivesBackTheMotionThatMovedThePoints) {
   std::mt19937 rng(11);
@@ -107,6 +108,29 @@ TEST(UmeyamaTransform, GivesBackTheMotionThatMovedThePoints) {
     const Eigen::Matrix4d m = umeyama_transform(from, to, scale != 1.0);
     EXPECT_LT((m.topLeftCorner<3, 3>() - scale * q.toRotationMatrix()).norm(), 1e-10) << scale;
     EXPECT_LT((m.topRightCorner<3, 1>() - t).norm(), 1e-10) << scale;
+  }
+}
+
+// Where no motion fits exactly (noisy points, and points mirrored, for which the best orthogonal
+// fit is a reflection), it is Eigen::umeyama's least-squares fit to rounding, and a rotation.
+TEST(UmeyamaTransform, IsEigensFitToRoundingForNoisyAndMirroredPoints) {
+  std::mt19937 rng(12);
+  std::normal_distribution<double> normal;
+  Eigen::Matrix3Xd from(3, 9);
+  for (Eigen::Index i = 0; i < from.cols(); ++i) from.col(i) = Eigen::Vector3d{normal(rng), normal(rng), normal(rng)};
+  const Eigen::Quaterniond q = Eigen::Quaterniond{normal(rng), normal(rng), normal(rng), normal(rng)}.normalized();
+  Eigen::Matrix3Xd noisy = ((1.7 * q.toRotationMatrix()) * from).colwise() + Eigen::Vector3d(1.0, 0.5, -3.0);
+  for (Eigen::Index i = 0; i < noisy.cols(); ++i) noisy.col(i) += 0.2 * Eigen::Vector3d{normal(rng), normal(rng), normal(rng)};
+  const Eigen::Matrix3Xd mirrored = Eigen::Vector3d(-1.0, 1.0, 1.0).asDiagonal() * from;
+  for (const Eigen::Matrix3Xd* to : {&std::as_const(noisy), &mirrored}) {
+    for (const bool with_scale : {false, true}) {
+      const Eigen::Matrix4d m = umeyama_transform(from, *to, with_scale);
+      const Eigen::Matrix4d eigen = Eigen::umeyama(from, *to, with_scale);
+      EXPECT_LT((m - eigen).norm(), 1e-12) << "mirrored " << (to == &mirrored) << ", scale " << with_scale << "\n" << m << "\n" << eigen;
+      const Eigen::Matrix3d r = m.topLeftCorner<3, 3>() / std::cbrt(m.topLeftCorner<3, 3>().determinant());
+      EXPECT_LT((r.transpose() * r - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+      EXPECT_GT((m.topLeftCorner<3, 3>().determinant()), 0.0);
+    }
   }
 }
 

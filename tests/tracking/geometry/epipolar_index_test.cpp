@@ -8,12 +8,17 @@
 namespace rhot {
 namespace {
 
-// The points within the tolerance of a line, by testing every one.
+// The points within the tolerance of a line, by testing every one. In scalars, in the order of
+// Eigen's line.dot(point.homogeneous()): this test program is compiled at -O0 under the
+// sanitizers, where each of Eigen's expression functions is a call and the 3.7 million products
+// took most of the test's 12 s.
 std::vector<int> brute_force(std::span<const Eigen::Vector2d> points, std::span<const char> skip, const Eigen::Vector3d& line,
                              double tolerance) {
   std::vector<int> out;
+  const double a = line.x(), b = line.y(), c = line.z();
   for (std::size_t k = 0; k < points.size(); ++k) {
-    if (skip[k] == 0 && std::abs(line.dot(points[k].homogeneous())) <= tolerance) out.push_back(static_cast<int>(k));
+    const double* p = points[k].data();
+    if (skip[k] == 0 && std::abs(a * p[0] + b * p[1] + c) <= tolerance) out.push_back(static_cast<int>(k));
   }
   return out;
 }
