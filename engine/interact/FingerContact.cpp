@@ -77,16 +77,42 @@ std::optional<double> rest_digit(HandInput& hand, const DigitChain& chain, int f
     }
     return p;
   };
+  // The collider's radius of bone k (HandColliders: the smaller of its joints', at least
+  // min_radius_m).
+  const auto radius = [&](int k) {
+    return std::max(HandColliderSettings{}.min_radius_m, std::min(hand.radius_m[at(k)], hand.radius_m[at(k + 1)]));
+  };
   // How far the curled digit's bones are out of the body, less the rest: <= 0 is resting on it.
   const auto gap = [&](double theta) {
     const auto p = curled(theta);
     double d = std::numeric_limits<double>::infinity();
-    for (int k = first; k < chain.count - 1; ++k) {
-      // The collider's radius (HandColliders: the smaller of its joints', at least min_radius_m).
-      const double r = std::max(HandColliderSettings{}.min_radius_m, std::min(hand.radius_m[at(k)], hand.radius_m[at(k + 1)]));
-      d = std::min(d, capsule_distance_m(body, p[static_cast<std::size_t>(k)], p[static_cast<std::size_t>(k + 1)], r));
-    }
+    for (int k = first; k < chain.count - 1; ++k)
+      d = std::min(d, capsule_distance_m(body, p[static_cast<std::size_t>(k)], p[static_cast<std::size_t>(k + 1)], radius(k)));
     return d - rest_m;
+  };
+  // gap(theta) <= 0, asking the exact distance only of bones that the body's bounding box does not
+  // already put beyond the rest (a bone is no nearer the body than its box, less its half length
+  // and radius, from its middle): the march below needs only the sign, and the distance queries
+  // were most of a step's placement.
+  btVector3 box_lo, box_hi;
+  body.getAabb(box_lo, box_hi);
+  const auto box_distance = [&](const Eigen::Vector3d& x) {
+    double d2 = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      const double out = std::max({static_cast<double>(box_lo[a]) - x[a], x[a] - static_cast<double>(box_hi[a]), 0.0});
+      d2 += out * out;
+    }
+    return std::sqrt(d2);
+  };
+  const auto touches = [&](double theta) {
+    const auto p = curled(theta);
+    for (int k = first; k < chain.count - 1; ++k) {
+      const Eigen::Vector3d& a = p[static_cast<std::size_t>(k)];
+      const Eigen::Vector3d& b = p[static_cast<std::size_t>(k + 1)];
+      if (box_distance(0.5 * (a + b)) - 0.5 * (b - a).norm() - radius(k) > rest_m + 1e-6) continue;
+      if (capsule_distance_m(body, a, b, radius(k)) - rest_m <= 0.0) return true;
+    }
+    return false;
   };
   // March toward the rest (curling when clear of it, uncurling when deeper), then halve the last
   // step five times.
@@ -95,10 +121,20 @@ std::optional<double> rest_digit(HandInput& hand, const DigitChain& chain, int f
   if (!std::isfinite(g0)) return std::nullopt;
   if (g0 <= 0.0 && g0 >= -kTolerance_m) return 0.0;  // resting already
   const bool inside = g0 < 0.0;
+  if (!inside) {
+    // Every point of the curled digit stays within its bones' summed length of the knuckle it
+    // turns about: a body's box farther than that (and the radius) is never reached.
+    double reach = 0.0, thickest = 0.0;
+    for (int k = first; k < chain.count - 1; ++k) {
+      reach += (hand.joints_world[at(k + 1)] - hand.joints_world[at(k)]).norm();
+      thickest = std::max(thickest, radius(k));
+    }
+    if (box_distance(hand.joints_world[at(first)]) - reach - thickest > rest_m + 1e-6) return std::nullopt;
+  }
   const double direction = inside ? -1.0 : 1.0, limit = inside ? max_uncurl_rad : max_curl_rad;
   double before = 0.0, after = -1.0;
   for (double theta = kStep_rad; theta <= limit + 1e-9; theta += kStep_rad) {
-    if ((gap(direction * theta) <= 0.0) != inside) {
+    if (touches(direction * theta) != inside) {
       after = theta;
       break;
     }
@@ -107,7 +143,7 @@ std::optional<double> rest_digit(HandInput& hand, const DigitChain& chain, int f
   if (after < 0.0) return std::nullopt;
   for (int i = 0; i < 5; ++i) {
     const double mid = 0.5 * (before + after);
-    ((gap(direction * mid) <= 0.0) != inside ? after : before) = mid;
+    (touches(direction * mid) != inside ? after : before) = mid;
   }
   // Curling: the first angle resting; uncurling: the last one still on it.
   const double theta = direction * (inside ? before : after);
