@@ -96,5 +96,27 @@ TEST(HandColliders, NonFiniteHandsAreIgnored) {
   EXPECT_TRUE(p->hand(HandSide::kRight).active());
 }
 
+// A contact's body is told to be a bone of this hand, which one, or neither: the other hand's bones
+// (which carry the same indices) and the scene's bodies are no bone of it.
+TEST(HandColliders, EachBoneIsFoundFromItsBodyAndNothingElseIs) {
+  World world;
+  auto p = physics_for(world, parse(kPlateScene));
+  Rigid3d left, right;
+  left.translation = Eigen::Vector3d(-0.3, 1.2, 0.0);
+  right.translation = Eigen::Vector3d(0.3, 1.2, 0.0);
+  p->step(world, {hand_input(left, pointing_hand(HandSide::kLeft)), hand_input(right, pointing_hand(HandSide::kRight))});
+  const HandColliders& l = p->hand(HandSide::kLeft);
+  const HandColliders& r = p->hand(HandSide::kRight);
+  for (int i = 0; i < kHandBoneCount; ++i) {
+    EXPECT_EQ(r.bone_of(r.bone(i)), i);
+    EXPECT_EQ(l.bone_of(l.bone(i)), i);
+    EXPECT_FALSE(r.bone_of(l.bone(i)).has_value()) << i;
+    EXPECT_FALSE(l.bone_of(r.bone(i)).has_value()) << i;
+  }
+  EXPECT_FALSE(r.bone_of(p->physics().body(named(world, "plate"))).has_value());
+  EXPECT_FALSE(r.bone_of(p->physics().body(named(world, "stand"))).has_value());
+  EXPECT_FALSE(r.bone_of(nullptr).has_value());
+}
+
 }  // namespace
 }  // namespace rhot
