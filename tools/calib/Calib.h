@@ -8,7 +8,6 @@
 // one JSON report on stdout; pictures are PNG files beside the output (`--pictures DIR`, default:
 // the output file's folder).
 
-#include <atomic>
 #include <expected>
 #include <filesystem>
 #include <memory>
