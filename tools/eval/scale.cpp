@@ -282,7 +282,8 @@ Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, cons
     const auto t3 = Clock::now();
     if (f == warm) run.resident_mb_warm = resident_mb();
     if (verbose && frames >= 20 && (f + 1) % (frames / 10) == 0)
-      std::cerr << "rhot-eval: frame " << f + 1 << " of " << frames << " (" << threads << " thread" << (threads == 1 ? "" : "s") << ")\n";
+      std::cerr << "rhot-eval: frame " << f + 1 << " of " << frames << " (" << threads << " thread" << (threads == 1 ? "" : "s")
+                << "), resident " << std::round(resident_mb() * 10.0) / 10.0 << " MB\n";
     for (const Eigen::Vector3d& p : points) fold(run.fingerprint, p);
     for (const HandTracker* h : hand_ptrs) {
       for (const Eigen::Vector3d& j : h->last().joints_world) fold(run.fingerprint, j);
