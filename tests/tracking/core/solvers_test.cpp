@@ -5,7 +5,6 @@
 #include <limits>
 #include <numbers>
 #include <random>
-#include <utility>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -94,14 +93,25 @@ TEST(RotationBetween, TakesTheFirstDirectionOntoTheSecond) {
   EXPECT_LT((half * a + a).norm(), 1e-12);
 }
 
+// Points and a rotation from standard normal draws (braced lists: drawn left to right).
+Eigen::Matrix3Xd normal_points(std::mt19937& rng, Eigen::Index count) {
+  std::normal_distribution<double> normal;
+  Eigen::Matrix3Xd points(3, count);
+  for (Eigen::Index i = 0; i < count; ++i) points.col(i) = Eigen::Vector3d{normal(rng), normal(rng), normal(rng)};
+  return points;
+}
+
+Eigen::Quaterniond normal_rotation(std::mt19937& rng) {
+  std::normal_distribution<double> normal;
+  return Eigen::Quaterniond{normal(rng), normal(rng), normal(rng), normal(rng)}.normalized();
+}
+
 // umeyama_transform is Umeyama's fit: a rigid motion (and a scale, when asked) of points comes
 // back exactly.
 TEST(UmeyamaTransform, GivesBackTheMotionThatMovedThePoints) {
   std::mt19937 rng(11);
-  std::normal_distribution<double> normal;
-  Eigen::Matrix3Xd from(3, 6);
-  for (Eigen::Index i = 0; i < from.cols(); ++i) from.col(i) = Eigen::Vector3d{normal(rng), normal(rng), normal(rng)};
-  const Eigen::Quaterniond q = Eigen::Quaterniond{normal(rng), normal(rng), normal(rng), normal(rng)}.normalized();
+  const Eigen::Matrix3Xd from = normal_points(rng, 6);
+  const Eigen::Quaterniond q = normal_rotation(rng);
   const Eigen::Vector3d t(0.4, -2.0, 1.5);
   for (const double scale : {1.0, 2.5}) {
     const Eigen::Matrix3Xd to = ((scale * q.toRotationMatrix()) * from).colwise() + t;
@@ -115,14 +125,12 @@ TEST(UmeyamaTransform, GivesBackTheMotionThatMovedThePoints) {
 // fit is a reflection), it is Eigen::umeyama's least-squares fit to rounding, and a rotation.
 TEST(UmeyamaTransform, IsEigensFitToRoundingForNoisyAndMirroredPoints) {
   std::mt19937 rng(12);
-  std::normal_distribution<double> normal;
-  Eigen::Matrix3Xd from(3, 9);
-  for (Eigen::Index i = 0; i < from.cols(); ++i) from.col(i) = Eigen::Vector3d{normal(rng), normal(rng), normal(rng)};
-  const Eigen::Quaterniond q = Eigen::Quaterniond{normal(rng), normal(rng), normal(rng), normal(rng)}.normalized();
-  Eigen::Matrix3Xd noisy = ((1.7 * q.toRotationMatrix()) * from).colwise() + Eigen::Vector3d(1.0, 0.5, -3.0);
-  for (Eigen::Index i = 0; i < noisy.cols(); ++i) noisy.col(i) += 0.2 * Eigen::Vector3d{normal(rng), normal(rng), normal(rng)};
+  const Eigen::Matrix3Xd from = normal_points(rng, 9);
+  const Eigen::Quaterniond q = normal_rotation(rng);
+  const Eigen::Matrix3Xd noisy =
+      ((1.7 * q.toRotationMatrix()) * from).colwise() + Eigen::Vector3d(1.0, 0.5, -3.0) + 0.2 * normal_points(rng, from.cols());
   const Eigen::Matrix3Xd mirrored = Eigen::Vector3d(-1.0, 1.0, 1.0).asDiagonal() * from;
-  for (const Eigen::Matrix3Xd* to : {&std::as_const(noisy), &mirrored}) {
+  for (const Eigen::Matrix3Xd* to : {&noisy, &mirrored}) {
     for (const bool with_scale : {false, true}) {
       const Eigen::Matrix4d m = umeyama_transform(from, *to, with_scale);
       const Eigen::Matrix4d eigen = Eigen::umeyama(from, *to, with_scale);
