@@ -147,6 +147,9 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
 namespace {
 
 // Evidence that is not finite is none.
+// A finger's flexion rate: its three hinges' together (rad/s).
+double closing_of(const FingerAngles& rate) { return rate.flexion_rad[0] + rate.flexion_rad[1] + rate.flexion_rad[2]; }
+
 FingerEvidence::Kind usable(const FingerEvidence& e) {
   switch (e.kind) {
     case FingerEvidence::Kind::kTip:
@@ -163,6 +166,12 @@ FingerEvidence::Kind usable(const FingerEvidence& e) {
 }
 
 }  // namespace
+
+double HandSolver::coupling(Finger finger) const {
+  const auto fi = static_cast<std::size_t>(finger);
+  // Scaled to seconds of evidence: the sums are in (rad/s)^2 x s, the prior in (rad/s)^2 x 1 s.
+  return (coupling_xy_[fi] + kCouplingPrior_rad2_s2) / (coupling_xx_[fi] + kCouplingPrior_rad2_s2);
+}
 
 const HandState& HandSolver::update(double time_s, const std::array<FingerEvidence, kFingerCount>& fingers) {
   using Kind = FingerEvidence::Kind;
@@ -199,6 +208,17 @@ const HandState& HandSolver::update(double time_s, const std::array<FingerEviden
     closing_sum += closing;
     ++closing_count;
   }
+  // Each seen finger's rate against the others' mean, for the coupling learnt.
+  if (dt > 0.0 && closing_count > 1) {
+    const double forget = std::exp(-dt / kCouplingMemory_s);
+    for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
+      if (!state_.tip_seen[fi]) continue;
+      const double own = closing_of(rate_[fi]);
+      const double others = (closing_sum - own) / (closing_count - 1);
+      coupling_xy_[fi] = forget * coupling_xy_[fi] + dt * own * others;
+      coupling_xx_[fi] = forget * coupling_xx_[fi] + dt * others * others;
+    }
+  }
   // Hidden fingers: with other fingers seen, each bends as they do (a hand closes and opens as a
   // whole: a grasp, a release); with none seen, it goes on as it last moved, slowing, holds, and
   // only after kHold_s eases toward relaxed.
@@ -219,8 +239,9 @@ const HandState& HandSolver::update(double time_s, const std::array<FingerEviden
         for (std::size_t k = 0; k < 3; ++k) r.flexion_rad[k] = (a.flexion_rad[k] - from.flexion_rad[k]) / dt;
       }
     } else if (closing_count > 0) {
-      // The others' mean flexion rate, shared over this finger's hinges by their ranges.
-      const double closing = closing_sum / closing_count;
+      // The others' mean flexion rate, times this finger's learnt coupling to them, shared over
+      // its hinges by their ranges.
+      const double closing = coupling(static_cast<Finger>(fi)) * closing_sum / closing_count;
       double range = 0.0;
       for (std::size_t k = 0; k < 3; ++k) range += chain.limits.flexion_max_rad[k] - chain.limits.flexion_min_rad[k];
       for (std::size_t k = 0; k < 3; ++k) {

@@ -5,8 +5,9 @@
 // FABRIK toward a tip, FingerIK.h; or bones measured); pinch and grip gestures with hysteresis.
 //
 // A finger whose tip is hidden (a curling finger hides its own marker) is estimated, not dropped:
-// while other fingers are seen, it bends as they do, at their mean flexion rate shared over its
-// hinges (a hand closes on an object and opens again as a whole), and holds still while they do;
+// while other fingers are seen, it bends with them, at their mean flexion rate times its own
+// coupling to them (learnt while they were seen together: coupling()) shared over its hinges (a
+// hand closes on an object and opens again as a whole), and holds still while they do;
 // with no finger seen it goes on as it last moved, slowing (kCoast_s), holds, and only after
 // kHold_s eases toward a relaxed pose.
 //
@@ -112,6 +113,16 @@ class HandSolver {
   static constexpr double kHold_s = 1.0;
   static constexpr double kCoast_s = 0.15;
   static constexpr double kEstimatedConfidence = 0.6;
+  // How a hidden finger bends with the seen ones is learnt while they are seen together: each
+  // finger's flexion rate against the others' mean (a least-squares slope over the last
+  // kCouplingMemory_s, exponentially weighted), starting from 1 (bend as fast as they do) and
+  // worth kCouplingPrior_rad2_s2 of (rad/s)^2 of evidence before any is seen. A thumb closes a fist
+  // at about a third of the fingers' rate; bent at their rate, as before, it passed through the
+  // fingers 60 mm from where it was.
+  static constexpr double kCouplingMemory_s = 4.0;
+  static constexpr double kCouplingPrior_rad2_s2 = 10.0;
+  // Each finger's learnt slope (1 until it has been seen bending with the others).
+  double coupling(Finger finger) const;
   static constexpr double kPredictedConfidence = 0.75;
 
  private:
@@ -120,7 +131,11 @@ class HandSolver {
   std::array<double, kFingerCount> last_seen_s_{};
   std::array<FingerAngles, kFingerCount> rate_{};  // each finger's angular rates, rad/s (seen: measured; hidden: estimated)
   std::array<bool, kFingerCount> estimated_{};     // hidden and estimated from the seen fingers
-  std::array<bool, kFingerCount> predicted_{};     // hidden and placed at a predicted tip
+  // Per finger, the exponentially weighted sums of (own rate x others' mean rate) and (others'
+  // mean rate)^2 over the frames it was seen with others (rad^2/s^2 x seconds): the coupling's slope.
+  std::array<double, kFingerCount> coupling_xy_{};
+  std::array<double, kFingerCount> coupling_xx_{};
+  std::array<bool, kFingerCount> predicted_{};  // hidden and placed at a predicted tip
   GestureSettings gestures_;
   HandState state_;
   double time_s_ = 0.0;

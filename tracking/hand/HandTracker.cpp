@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <tuple>
 
 #include <cmath>
 
@@ -30,6 +31,8 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   marker_found_s_.assign(n, std::nullopt);
   reappearing_.assign(n, {});
   reappearing_now_.assign(n, {});
+  reachable_.assign(n, {});
+  reachable_now_.assign(n, {});
   out_.marker_point.assign(n, -1);
   every_tip_marked_ = std::ranges::all_of(layout.fingertip_marker, [](int m) { return m >= 0; });
   // The model takes 63 markers at most (HiddenMarkerEstimator's sets of visible markers are bits).
@@ -156,6 +159,7 @@ std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(s
                                                                                std::span<const int> colour) {
   std::vector<FingertipCandidate> out;
   for (auto& r : reappearing_now_) r.clear();
+  for (auto& r : reachable_now_) r.clear();
   if (!out_.hand_seen) return out;
   const Rigid3d hand_from_world = out_.world_from_hand.inverse();
   for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
@@ -228,6 +232,70 @@ void HandTracker::untangle_neighbours(std::span<const Eigen::Vector3d> points, s
   }
 }
 
+void HandTracker::reacquire_by_reach(std::span<const Eigen::Vector3d> points, std::vector<bool>& taken, std::span<int> marker_point) {
+  if (!out_.hand_seen || marker_point.size() != layout_.markers.size()) return;
+  const Rigid3d hand_from_world = out_.world_from_hand.inverse();
+  // A finger with another marker found is held by it already (a glove's middle marker): its
+  // estimate has not drifted, and its free neighbours' markers are within its reach.
+  const auto held = [&](std::size_t m) {
+    const int f = layout_.finger_of_marker(m);
+    for (std::size_t o = layout_.hand_frame_markers; o < layout_.markers.size(); ++o) {
+      if (o != m && layout_.finger_of_marker(o) == f && marker_point[o] >= 0) return true;
+    }
+    return false;
+  };
+  // How far to the side of marker m's finger's own plane (through its knuckle, along its rest
+  // direction) a point p lies, where the finger reaches p (hand frame) within kReachMiss_m and its
+  // joint limits; none where it cannot.
+  const auto reach_side = [&](std::size_t m, const Eigen::Vector3d& p) -> std::optional<double> {
+    const auto f = static_cast<std::size_t>(layout_.finger_of_marker(m));
+    const FingerChain& chain = solver_.chains()[f];
+    const LayoutMarker& marker = layout_.markers[m];
+    // Farther from the finger's root than the whole finger and the marker's offset, or farther to
+    // the side of its plane than its widest sideways turn takes it: out of reach, without a fit.
+    const Eigen::Vector3d v = p - chain.root_m;
+    const double side_m = std::abs(v.dot(chain.rest_direction.cross(chain.up)));
+    const double slack_m = marker.offset_m.norm() + kReachMiss_m;
+    if (v.norm() > chain.length_m[0] + chain.length_m[1] + chain.length_m[2] + slack_m) return std::nullopt;
+    if (side_m > std::sin(chain.limits.abduction_max_rad) * v.norm() + slack_m) return std::nullopt;
+    const FingerPoint point = finger_point(marker, p, 1.0);
+    const FingerFit fit =
+        fit_finger(chain, std::span<const FingerPoint>(&point, 1), solver_.state().angles[f], finger_fit_settings(static_cast<Finger>(f)));
+    if ((finger_point_at(chain, fit.angles, point) - p).norm() > kReachMiss_m) return std::nullopt;
+    return side_m;
+  };
+  struct Reach {
+    double side_m;
+    double predicted_m;  // from the marker's predicted place
+    int marker, point;
+  };
+  std::vector<Reach> reach;
+  for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
+    if (marker_point[m] >= 0 || layout_.markers[m].colour >= 0 || layout_.finger_of_marker(m) < 0 || held(m)) continue;
+    for (std::size_t q = 0; q < points.size(); ++q) {
+      if (taken[q] || !points[q].allFinite()) continue;
+      const Eigen::Vector3d p = hand_from_world * points[q];
+      const auto side = reach_side(m, p);
+      if (!side) continue;
+      reachable_now_[m].push_back(p);
+      const bool persists = std::any_of(reachable_[m].begin(), reachable_[m].end(),
+                                        [&](const Eigen::Vector3d& before) { return (p - before).norm() < kReachPersist_m; });
+      if (persists) reach.push_back({*side, (p - predicted_marker_[m]).norm(), static_cast<int>(m), static_cast<int>(q)});
+    }
+  }
+  // A point two fingers reach goes to the one in whose plane it lies nearest (curled fingers lie in
+  // their own planes, a neighbour's some 18 mm away); the estimates, which drifted while the markers
+  // were hidden, only break ties.
+  std::sort(reach.begin(), reach.end(),
+            [](const Reach& a, const Reach& b) { return std::tie(a.side_m, a.predicted_m) < std::tie(b.side_m, b.predicted_m); });
+  for (const Reach& r : reach) {
+    int& slot = marker_point[static_cast<std::size_t>(r.marker)];
+    if (slot >= 0 || taken[static_cast<std::size_t>(r.point)]) continue;
+    slot = r.point;
+    taken[static_cast<std::size_t>(r.point)] = true;
+  }
+}
+
 std::vector<Eigen::Vector3d> HandTracker::markers_in_hand() const {
   const HandPose& pose = solver_.state().pose;
   const auto frames = marker_frames(pose, solver_.chains());
@@ -240,7 +308,8 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
                                        std::span<const int> marker_point) {
   // Each finger marker found this frame (hand frame; NaN where not).
   std::vector<Eigen::Vector3d> found(layout_.markers.size(), Eigen::Vector3d::Constant(std::nan("")));
-  reappearing_ = reappearing_now_;
+  reappearing_.swap(reappearing_now_);
+  reachable_.swap(reachable_now_);
   if (out_.hand_seen) {
     const Rigid3d hand_from_world = out_.world_from_hand.inverse();
     for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size() && m < marker_point.size(); ++m) {
@@ -401,6 +470,9 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
     slot = p.point;
     taken[static_cast<std::size_t>(p.point)] = true;
   }
+  // A marker left without a point takes a free one its finger reaches, hand by hand (a point near
+  // both hands goes to the first).
+  for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->reacquire_by_reach(points, taken, tip[h]);
   per_hand([&](std::size_t h) {
     hands[h]->untangle_neighbours(points, tip[h]);
     hands[h]->finish(time_s, points, sigma_m, tip[h]);

@@ -106,6 +106,16 @@ class HandTracker {
   // given (moved by the fits, it gave a hidden finger its neighbour's point: docs/tracking.md).
   // Coloured tips, named by their colour, are left as they are.
   void untangle_neighbours(std::span<const Eigen::Vector3d> points_world, std::span<int> marker_point) const;
+  // Between nearest first and untangle_neighbours: a finger marker left without a point takes a free
+  // point its finger reaches (FingerFit.h: the finger fitted to it misses by at most kReachMiss_m
+  // within its joint limits) that was there the frame before too,
+  // however far its finger's estimate had drifted from it. A hidden finger whose estimate went
+  // astray (a thumb bent at the other fingers' rate while it was hidden) is otherwise never found
+  // again: its marker lies outside every gate. A point several such markers reach goes to the
+  // one in whose plane it lies nearest; `taken` is updated. Only fingers with no other marker found:
+  // a glove's middle marker already holds its finger's estimate, and its free neighbours' markers
+  // are within its reach. Coloured markers, named by their colour, are left to it.
+  void reacquire_by_reach(std::span<const Eigen::Vector3d> points_world, std::vector<bool>& taken, std::span<int> marker_point);
   const TrackedHand& finish(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m,
                             std::span<const int> marker_point);
   const HandLayout& layout() const { return layout_; }
@@ -148,6 +158,10 @@ class HandTracker {
   static constexpr double kUntangleReach_m = 0.04;
   static constexpr double kUntangleMiss_m = 0.004;
   static constexpr double kUntangleMargin_m = 0.002;
+  // reacquire_by_reach: the most a finger fitted to a free point may miss it by, and how far (hand
+  // frame) the point may have moved since the frame before.
+  static constexpr double kReachMiss_m = 0.004;
+  static constexpr double kReachPersist_m = 0.015;
   // The fingertip model: frames with all five tips seen before it is used, how often it is refitted
   // (frames), how long a hidden tip's last offset from the prediction is kept (HiddenMarkerModel::
   // memory_s, the value fitted to the real glove take) and the ridge on its seen tips.
@@ -175,6 +189,8 @@ class HandTracker {
   // Per marker, the free points outside its tight gate but inside its widened one, last frame and
   // this frame (hand frame): where a lost marker may be reappearing.
   std::vector<std::vector<Eigen::Vector3d>> reappearing_, reappearing_now_;
+  // Per marker, the free points its finger reached (reacquire_by_reach), last frame and this one.
+  std::vector<std::vector<Eigen::Vector3d>> reachable_, reachable_now_;
   // The model's markers (layout indices): each fingertip marker, then the other finger markers.
   std::vector<int> modelled_;
   // Each hidden fingertip marker's place from the model (hand frame), fitting it first with this

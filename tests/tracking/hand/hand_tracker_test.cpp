@@ -196,13 +196,58 @@ TEST(HandTracker, AHiddenFingertipIsPlacedWhereTheSeenOnesSayItIs) {
     EXPECT_GE(model.model_frames, HandTracker::kFingertipModelFrames) << "fitted from the frames with all five seen";
     EXPECT_EQ(rule.model_frames, 0);
     EXPECT_GT(model.predicted_confidence_frames, 0.9 * model.hidden_frames) << "a predicted tip says so";
-    // Measured: 3.2 and 1.5 mm mean, 8.0 and 3.5 mm worst with the model; 7.3 and 6.4 mm mean, 39
-    // and 31 mm worst by the rule (the hidden finger bent at the others' rate).
+    // Measured: 3.3 and 1.6 mm mean, 8.0 and 4.5 mm worst with the model; 5.8 and 7.4 mm mean, 14.6
+    // and 24.3 mm worst by the rule (the hidden finger bent at the others' rate times the coupling
+    // learnt while it was seen: HandSolver::coupling). Bent at the others' very rate, as the rule
+    // did before, it was 39 and 31 mm worst.
     EXPECT_LT(model.mean_mm, 5.0);
     EXPECT_LT(model.worst_mm, 15.0);
     EXPECT_LT(model.mean_mm, 0.6 * rule.mean_mm);
-    EXPECT_LT(model.worst_mm, 0.5 * rule.worst_mm);
+    EXPECT_LT(model.worst_mm, 0.6 * rule.worst_mm);
+    EXPECT_LT(rule.worst_mm, 27.0) << "the rule with its learnt coupling";
   }
+}
+
+// A finger whose estimate went astray while its marker was hidden: the index finger curls fully
+// behind something while the other fingers hold still (so the rule holds it where it was last
+// seen, open), and its marker comes back 60 mm and more from that estimate, outside every gate.
+// Followed by its estimate alone, it would stay lost as long as it stays curled; its finger
+// reaches the free point, which is there two frames running, so it is found again.
+TEST(HandTracker, AFingerWhoseEstimateWentAstrayFindsItsMarkerAgainByReach) {
+  const HandLayout layout = low_cost();
+  const HandPose skeleton = reference_open_hand(HandSide::kRight);
+  const auto chains = hand_chains(skeleton, HandSide::kRight);
+  const auto relaxed = HandSolver(HandSide::kRight, skeleton).state().angles;
+  const Rigid3d world_from_hand{Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 1.1, -0.45)};
+  HandTracker tracker(layout, skeleton);
+  auto curled = relaxed;
+  curled[1].flexion_rad = {1.3, 1.5, 1.0};
+  const auto index_tip = static_cast<std::size_t>(chain_joints(Finger::kIndex)[3]);
+  double astray_mm = 0.0;
+  int found_at = -1;
+  for (int f = 0; f < 180; ++f) {
+    const double t = f / 90.0;
+    // Frames 0-59 open and seen; 60-89 curling, hidden; from 90 curled and seen again.
+    const double s = std::clamp((f - 60) / 30.0, 0.0, 1.0);
+    auto angles = relaxed;
+    for (std::size_t k = 0; k < 3; ++k)
+      angles[1].flexion_rad[k] = relaxed[1].flexion_rad[k] + s * (curled[1].flexion_rad[k] - relaxed[1].flexion_rad[k]);
+    const HandPose pose = hand_pose_from_angles(skeleton, chains, angles);
+    std::vector<Eigen::Vector3d> points = markers(layout, world_from_hand, pose);
+    if (f >= 60 && f < 90) points.erase(points.begin() + 5);  // the index tip's marker
+    const TrackedHand& hand = tracker.update(t, points);
+    ASSERT_TRUE(hand.hand_seen) << "frame " << f;
+    const double e = 1000.0 * (hand.joints_world[index_tip] - world_from_hand * pose.position_m[index_tip]).norm();
+    if (f == 89) astray_mm = e;
+    if (f >= 90 && found_at < 0 && hand.state.tip_seen[1]) found_at = f;
+    if (found_at >= 0 && f >= found_at) {
+      EXPECT_TRUE(hand.state.tip_seen[1]) << "frame " << f;
+      EXPECT_LT(e, 3.0) << "frame " << f;
+    }
+  }
+  EXPECT_GT(astray_mm, 1000.0 * HandTracker::kFingertipGateMax_m) << "the estimate went outside every gate";
+  EXPECT_GE(found_at, 90);
+  EXPECT_LE(found_at, 91) << "found again once the point was there two frames running";
 }
 
 TEST(HandTracker, TheHighFidelityLayoutMeasuresEveryBoneOfAFist) {

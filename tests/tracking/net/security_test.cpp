@@ -146,7 +146,7 @@ bool told(const std::vector<std::string>& warnings, const std::string& text) {
 }
 
 CameraRig seated_rig() {
-  auto rig = load_rig(std::string(RHOT_ASSET_DIR) + "/rigs/seated-4.yaml");
+  auto rig = load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / "seated-4.yaml");
   EXPECT_TRUE(rig.has_value());
   return rig ? *rig : CameraRig{};
 }

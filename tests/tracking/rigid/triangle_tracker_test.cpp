@@ -127,7 +127,9 @@ TEST(TriangleTracker, TwoMarkersKeepItFollowedAndALongGapLosesIt) {
     EXPECT_EQ(out.markers_seen, 2);
     EXPECT_EQ(out.point[static_cast<std::size_t>(f % 3)], -1);
     for (std::size_t k = 0; k < 3; ++k) {
-      if (static_cast<int>(k) != f % 3) EXPECT_EQ(out.point[k], s.back[k]);
+      if (static_cast<int>(k) != f % 3) {
+        EXPECT_EQ(out.point[k], s.back[k]);
+      }
     }
     const auto back = glove_back();
     for (std::size_t k = 0; k < 3; ++k) worst_mm = std::max(worst_mm, 1e3 * (out.world_from_body * back[k] - truth * back[k]).norm());

@@ -48,7 +48,9 @@ void expect_same_take(const MarkerTake& a, const MarkerTake& b, double tolerance
   for (int f = 0; f < a.frame_count(); ++f) {
     for (int m = 0; m < a.marker_count(); ++m) {
       ASSERT_EQ(a.seen(f, m), b.seen(f, m)) << "frame " << f << ", marker " << m;
-      if (a.seen(f, m)) EXPECT_LT((a.at(f, m) - b.at(f, m)).cwiseAbs().maxCoeff(), tolerance_m) << "frame " << f << ", marker " << m;
+      if (a.seen(f, m)) {
+        EXPECT_LT((a.at(f, m) - b.at(f, m)).cwiseAbs().maxCoeff(), tolerance_m) << "frame " << f << ", marker " << m;
+      }
     }
   }
 }
