@@ -195,13 +195,16 @@ void HandTracker::untangle_neighbours(std::span<const Eigen::Vector3d> points, s
   const auto usable = [&](int p) {
     return p >= 0 && static_cast<std::size_t>(p) < points.size() && points[static_cast<std::size_t>(p)].allFinite();
   };
+  // A finger that carries other markers is judged with them found; one marked at its tip alone
+  // (the low-cost layout) by its tip's point alone, which it must reach within its joint limits.
   const auto others_found = [&](std::size_t f) {
+    bool carries = false;
     for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
-      if (layout_.finger_of_marker(m) == static_cast<int>(f) && static_cast<int>(m) != layout_.fingertip_marker[f] &&
-          usable(marker_point[m]))
-        return true;
+      if (layout_.finger_of_marker(m) != static_cast<int>(f) || static_cast<int>(m) == layout_.fingertip_marker[f]) continue;
+      carries = true;
+      if (usable(marker_point[m])) return true;
     }
-    return false;
+    return !carries;
   };
   // Finger f's fit miss with its tip's marker on point p and its other markers on theirs.
   const auto miss = [&](std::size_t f, int p) {

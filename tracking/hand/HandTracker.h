@@ -101,7 +101,8 @@ class HandTracker {
   // points put right. Nearest first keeps a swap once two fingers' predictions have crossed (where
   // fingertips crowd, the prediction follows the last solve, which followed the swapped points);
   // a finger's other markers (a glove's middle markers) are not fooled, so where both fingers have
-  // one found, each tip's point is fitted with them (FingerFit.h), and the points change fingers
+  // one found (or carry none: a tip-only finger must reach its tip's point within its joint
+  // limits), each tip's point is fitted with them (FingerFit.h), and the points change fingers
   // when that fits by kUntangleMargin_m better. A lone point between two fingers stays where it was
   // given (moved by the fits, it gave a hidden finger its neighbour's point: docs/tracking.md).
   // Coloured tips, named by their colour, are left as they are.
