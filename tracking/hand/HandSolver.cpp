@@ -146,10 +146,10 @@ const HandState& HandSolver::update(double time_s, const std::array<std::optiona
 
 namespace {
 
-// Evidence that is not finite is none.
 // A finger's flexion rate: its three hinges' together (rad/s).
 double closing_of(const FingerAngles& rate) { return rate.flexion_rad[0] + rate.flexion_rad[1] + rate.flexion_rad[2]; }
 
+// Evidence that is not finite is none.
 FingerEvidence::Kind usable(const FingerEvidence& e) {
   switch (e.kind) {
     case FingerEvidence::Kind::kTip:

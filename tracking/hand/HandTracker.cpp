@@ -311,8 +311,11 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
                                        std::span<const int> marker_point) {
   // Each finger marker found this frame (hand frame; NaN where not).
   std::vector<Eigen::Vector3d> found(layout_.markers.size(), Eigen::Vector3d::Constant(std::nan("")));
+  // This frame's lists become the last frame's; the emptied ones keep their room for the next.
   reappearing_.swap(reappearing_now_);
   reachable_.swap(reachable_now_);
+  for (auto& r : reappearing_now_) r.clear();
+  for (auto& r : reachable_now_) r.clear();
   if (out_.hand_seen) {
     const Rigid3d hand_from_world = out_.world_from_hand.inverse();
     for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size() && m < marker_point.size(); ++m) {
