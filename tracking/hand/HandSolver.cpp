@@ -149,6 +149,21 @@ namespace {
 // A finger's flexion rate: its three hinges' together (rad/s).
 double closing_of(const FingerAngles& rate) { return rate.flexion_rad[0] + rate.flexion_rad[1] + rate.flexion_rad[2]; }
 
+// Each seen finger's flexion rate against the others' mean, added to the coupling's exponentially
+// weighted sums (HandSolver::coupling).
+void learn_coupling(double dt, double closing_sum, int closing_count, const std::array<bool, kFingerCount>& seen,
+                    const std::array<FingerAngles, kFingerCount>& rate, std::array<double, kFingerCount>& xy,
+                    std::array<double, kFingerCount>& xx) {
+  const double forget = std::exp(-dt / HandSolver::kCouplingMemory_s);
+  for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
+    if (!seen[fi]) continue;
+    const double own = closing_of(rate[fi]);
+    const double others = (closing_sum - own) / (closing_count - 1);
+    xy[fi] = forget * xy[fi] + dt * own * others;
+    xx[fi] = forget * xx[fi] + dt * others * others;
+  }
+}
+
 // Evidence that is not finite is none.
 FingerEvidence::Kind usable(const FingerEvidence& e) {
   switch (e.kind) {
@@ -208,17 +223,7 @@ const HandState& HandSolver::update(double time_s, const std::array<FingerEviden
     closing_sum += closing;
     ++closing_count;
   }
-  // Each seen finger's rate against the others' mean, for the coupling learnt.
-  if (dt > 0.0 && closing_count > 1) {
-    const double forget = std::exp(-dt / kCouplingMemory_s);
-    for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
-      if (!state_.tip_seen[fi]) continue;
-      const double own = closing_of(rate_[fi]);
-      const double others = (closing_sum - own) / (closing_count - 1);
-      coupling_xy_[fi] = forget * coupling_xy_[fi] + dt * own * others;
-      coupling_xx_[fi] = forget * coupling_xx_[fi] + dt * others * others;
-    }
-  }
+  if (dt > 0.0 && closing_count > 1) learn_coupling(dt, closing_sum, closing_count, state_.tip_seen, rate_, coupling_xy_, coupling_xx_);
   // Hidden fingers: with other fingers seen, each bends as they do (a hand closes and opens as a
   // whole: a grasp, a release); with none seen, it goes on as it last moved, slowing, holds, and
   // only after kHold_s eases toward relaxed.
