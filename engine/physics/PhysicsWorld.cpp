@@ -93,6 +93,24 @@ std::expected<void, std::string> make_shape(const Mesh& mesh, const glm::vec3& s
   return {};
 }
 
+// Bullet's solver keeps its working arrays from step to step and doubles one the first time a step
+// has more contacts than ever before, which can be late in a long session: in the demo's soak the
+// torsional friction constraints' array went from 32 to 64 (5 KiB of heap for good) after 5,000
+// frames, when a hand held the cube differently. Room for kSolverRowsPresized rows of each kind is
+// made up front (about 40 KiB an array), so a session's memory stays flat.
+constexpr int kSolverRowsPresized = 256;
+class PresizedSolver final : public btSequentialImpulseConstraintSolver {
+ public:
+  PresizedSolver() {
+    for (btConstraintArray* rows : {&m_tmpSolverContactConstraintPool, &m_tmpSolverNonContactConstraintPool,
+                                    &m_tmpSolverContactFrictionConstraintPool, &m_tmpSolverContactRollingFrictionConstraintPool})
+      rows->reserve(kSolverRowsPresized);
+    for (btAlignedObjectArray<int>* order : {&m_orderTmpConstraintPool, &m_orderNonContactConstraintPool, &m_orderFrictionConstraintPool})
+      order->reserve(kSolverRowsPresized);
+    m_tmpSolverBodyPool.reserve(kSolverRowsPresized);
+  }
+};
+
 }  // namespace
 
 PhysicsWorld::PhysicsWorld(PhysicsSettings settings)
@@ -100,7 +118,7 @@ PhysicsWorld::PhysicsWorld(PhysicsSettings settings)
       config_(std::make_unique<btDefaultCollisionConfiguration>()),
       dispatcher_(std::make_unique<btCollisionDispatcher>(config_.get())),
       broadphase_(std::make_unique<btDbvtBroadphase>()),
-      solver_(std::make_unique<btSequentialImpulseConstraintSolver>()),
+      solver_(std::make_unique<PresizedSolver>()),
       world_(std::make_unique<btDiscreteDynamicsWorld>(dispatcher_.get(), broadphase_.get(), solver_.get(), config_.get())) {
   if (!(settings_.rate_hz > 0.0) || !std::isfinite(settings_.rate_hz)) settings_.rate_hz = 90.0;
   settings_.substeps = std::max(1, settings_.substeps);

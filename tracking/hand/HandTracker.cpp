@@ -28,11 +28,14 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   marker_filters_.assign(n, OneEuroFilter<3>(settings.position));
   predicted_marker_.assign(n, Eigen::Vector3d::Zero());
   gate_m_.assign(n, kUnfoundMarkerGate_m);
+  tight_gate_m_.assign(n, kFingertipGate_m);
+  miss2_m2_.assign(n, std::pow(kFingertipGate_m / kGateSigmas, 2));
   marker_found_s_.assign(n, std::nullopt);
-  reappearing_.assign(n, {});
-  reappearing_now_.assign(n, {});
-  reachable_.assign(n, {});
-  reachable_now_.assign(n, {});
+  // Room for the points near each marker made once: the lists never grow while the hand is tracked.
+  for (auto* lists : {&reappearing_, &reappearing_now_, &reachable_, &reachable_now_}) {
+    lists->assign(n, {});
+    for (auto& list : *lists) list.reserve(kNearPointsKept);
+  }
   out_.marker_point.assign(n, -1);
   every_tip_marked_ = std::ranges::all_of(layout.fingertip_marker, [](int m) { return m >= 0; });
   // The model takes 63 markers at most (HiddenMarkerEstimator's sets of visible markers are bits).
@@ -149,7 +152,8 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
   const auto frames = marker_frames(last, solver_.chains());
   for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
     predicted_marker_[m] = layout_marker_in_hand(layout_.markers[m], last, frames);
-    gate_m_[m] = marker_found_s_[m] ? std::min(kFingertipGateMax_m, kFingertipGate_m + kGateGrowth_mps * (time_s - *marker_found_s_[m]))
+    tight_gate_m_[m] = std::clamp(kGateSigmas * std::sqrt(miss2_m2_[m]), kFingertipGateMin_m, kFingertipGate_m);
+    gate_m_[m] = marker_found_s_[m] ? std::min(kFingertipGateMax_m, tight_gate_m_[m] + kGateGrowth_mps * (time_s - *marker_found_s_[m]))
                                     : unfound_gate_m;
   }
 }
@@ -175,11 +179,11 @@ std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(s
         continue;
       }
       if (d >= gate_m_[m]) continue;
-      if (d >= kFingertipGate_m) {
+      if (d >= tight_gate_m_[m]) {
         // Outside the tight gate: a marker found again only if it was there the frame before.
-        reappearing_now_[m].push_back(p);
+        if (reappearing_now_[m].size() < kNearPointsKept) reappearing_now_[m].push_back(p);
         const bool persists = std::any_of(reappearing_[m].begin(), reappearing_[m].end(),
-                                          [&](const Eigen::Vector3d& before) { return (p - before).norm() < kFingertipGate_m; });
+                                          [&](const Eigen::Vector3d& before) { return (p - before).norm() < tight_gate_m_[m]; });
         if (!persists) continue;
       }
       out.push_back({d, static_cast<int>(m), static_cast<int>(q)});
@@ -280,7 +284,7 @@ void HandTracker::reacquire_by_reach(std::span<const Eigen::Vector3d> points, st
       const Eigen::Vector3d p = hand_from_world * points[q];
       const auto side = reach_side(m, p);
       if (!side) continue;
-      reachable_now_[m].push_back(p);
+      if (reachable_now_[m].size() < kNearPointsKept) reachable_now_[m].push_back(p);
       const bool persists = std::any_of(reachable_[m].begin(), reachable_[m].end(),
                                         [&](const Eigen::Vector3d& before) { return (p - before).norm() < kReachPersist_m; });
       if (persists) reach.push_back({*side, (p - predicted_marker_[m]).norm(), static_cast<int>(m), static_cast<int>(q)});
@@ -322,8 +326,13 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
       const int p = marker_point[m];
       if (p < 0 || static_cast<std::size_t>(p) >= points.size() || !points[static_cast<std::size_t>(p)].allFinite()) continue;
       out_.marker_point[m] = p;
-      marker_found_s_[m] = time_s;
       found[m] = hand_from_world * points[static_cast<std::size_t>(p)];
+      // Followed (found the frame before too): how far its predicted place missed it.
+      if (last_time_s_ && marker_found_s_[m] == last_time_s_ && time_s > *last_time_s_) {
+        const double weight = 1.0 - std::exp(-(time_s - *last_time_s_) / kMissMemory_s);
+        miss2_m2_[m] += weight * ((found[m] - predicted_marker_[m]).squaredNorm() - miss2_m2_[m]);
+      }
+      marker_found_s_[m] = time_s;
       const int f = layout_.finger_of_marker(m);
       if (layout_.fingertip_marker[static_cast<std::size_t>(f)] == static_cast<int>(m))
         out_.fingertip_point[static_cast<std::size_t>(f)] = p;
@@ -376,6 +385,7 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
     }
   }
   out_.state = solver_.update(time_s, evidence);
+  last_time_s_ = time_s;
   last_ik_us_ = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   for (std::size_t j = 0; j < kHandJointCount; ++j) out_.joints_world[j] = out_.world_from_hand * out_.state.pose.position_m[j];
   return out_;

@@ -128,14 +128,23 @@ class HandTracker {
   // Time spent in HandSolver::update (the IK) on the last frame.
   double last_ik_us() const { return last_ik_us_; }
 
-  // A fingertip's marker is looked for within a gate of its predicted place: kFingertipGate_m
-  // while the finger is followed frame to frame, widening by kGateGrowth_mps for each second it
-  // has gone without its marker, up to kFingertipGateMax_m. A tight gate keeps a finger from
+  // A fingertip's marker is looked for within a gate of its predicted place: its tight gate while
+  // the finger is followed frame to frame, widening by kGateGrowth_mps for each second it has gone
+  // without its marker, up to kFingertipGateMax_m. The tight gate is the marker's own: kGateSigmas
+  // times the RMS of its predicted place's miss on the frames it was followed (found the frame
+  // before and this one), over about kMissMemory_s, within [kFingertipGateMin_m, kFingertipGate_m].
+  // Where the hand model fits the hand, a hidden finger's marker is not replaced by a ghost of the
+  // matching 15-25 mm away (two views of two different fingertips meeting near the hand, where tips
+  // crowd in a fist); where it misses (a real hand's tips 5-20 mm from the fitted skeleton's), the
+  // gate stays wide enough to keep the marker. A tight gate keeps a finger from
   // jumping to a neighbour's marker, or to a ghost, when its own is hidden for a frame; a finger
   // that has lost its marker widens its search to find it again, but takes a point outside the
-  // tight gate only when a point was there (within kFingertipGate_m, hand frame) the frame before
+  // tight gate only when a point was there (within the tight gate, hand frame) the frame before
   // too: a marker found again persists, a ghost of the matching flickers.
   static constexpr double kFingertipGate_m = 0.025;
+  static constexpr double kFingertipGateMin_m = 0.015;
+  static constexpr double kGateSigmas = 4.0;
+  static constexpr double kMissMemory_s = 1.0;
   static constexpr double kGateGrowth_mps = 0.25;
   static constexpr double kFingertipGateMax_m = 0.04;
   // A marker never yet found is looked for within kUnfoundMarkerGate_m over the first
@@ -185,6 +194,9 @@ class HandTracker {
   // marker's predicted place and its gate (hand frame).
   std::vector<Eigen::Vector3d> predicted_marker_;
   std::vector<double> gate_m_;
+  std::vector<double> tight_gate_m_;                   // this frame's tight gate per marker
+  std::vector<double> miss2_m2_;                       // per marker: the mean square miss of its predicted place (kMissMemory_s)
+  std::optional<double> last_time_s_;                  // the last update's
   std::vector<std::optional<double>> marker_found_s_;  // when each marker last had a point
   std::optional<double> hand_first_seen_s_;
   // Per marker, the free points outside its tight gate but inside its widened one, last frame and
@@ -192,6 +204,8 @@ class HandTracker {
   std::vector<std::vector<Eigen::Vector3d>> reappearing_, reappearing_now_;
   // Per marker, the free points its finger reached (reacquire_by_reach), last frame and this one.
   std::vector<std::vector<Eigen::Vector3d>> reachable_, reachable_now_;
+  // The most points kept in each of those lists (made room for once: nothing allocated per frame).
+  static constexpr std::size_t kNearPointsKept = 16;
   // The model's markers (layout indices): each fingertip marker, then the other finger markers.
   std::vector<int> modelled_;
   // Each hidden fingertip marker's place from the model (hand frame), fitting it first with this
