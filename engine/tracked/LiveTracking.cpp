@@ -30,6 +30,7 @@ LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObj
   } else if (const int threads = threads_or_all(settings_.threads); threads > 1) {
     jobs_ = std::make_shared<JobPool>(threads);
   }
+  matcher_ = std::make_unique<RigMatcher>(tracker_rig());
   for (const TrackedObject& o : objects.objects) object_from_star_.emplace_back(o.star_id, o.object_from_star);
   // One library for the objects' stars and both hand stars (ids -1 and -2, after the objects'), so
   // that one assignment a frame shares the points between them all.
@@ -146,8 +147,7 @@ void LiveTracking::match() {
   results_.point_colours.clear();
   double sum_rms = 0.0;
   // Gates as wide as the detection noise estimated so far; each point's uncertainty from it.
-  const std::vector<MatchedPoint> matched =
-      match_and_triangulate(tracker_rig(), frame_, match_settings_for(pixel_sigma_.sigma_px()), jobs_.get());
+  const std::vector<MatchedPoint> matched = matcher_->match(frame_, match_settings_for(pixel_sigma_.sigma_px()), jobs_.get());
   point_sigma_m_ = point_sigmas_m(matched, pixel_sigma_.update(matched));
   for (const MatchedPoint& m : matched) {
     results_.points.push_back(m.point.position_world);

@@ -82,7 +82,8 @@ class LiveTracking final : public ResultSource {
  private:
   std::unique_ptr<FrameSource> source_;
   LiveTrackingSettings settings_;
-  std::shared_ptr<JobPool> jobs_;  // none with one thread
+  std::shared_ptr<JobPool> jobs_;        // none with one thread
+  std::unique_ptr<RigMatcher> matcher_;  // the tracker's rig, prepared for matching once
   PixelSigmaEstimate pixel_sigma_;
   std::vector<double> point_sigma_m_;                      // this frame's points' standard deviations
   std::vector<std::pair<int, Rigid3d>> object_from_star_;  // per tracked object: star id, where the star sits on it

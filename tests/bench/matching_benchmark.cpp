@@ -82,17 +82,19 @@ const ScaleData& scale_data(int rig, int markers) {
 }
 
 // Matching per frame on room-8 (rig 0) and stage-32 (rig 1), one thread (no job pool) or a job
-// pool of `threads` (the same points: tests/tracking/geometry/matching_threads_test.cpp).
+// pool of `threads` (the same points: tests/tracking/geometry/matching_threads_test.cpp); the rig
+// prepared once (RigMatcher), as the runtime does.
 void BM_MatchScaling(benchmark::State& state) {
   const ScaleData& d = scale_data(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const int threads = static_cast<int>(state.range(2));
   std::optional<rhot::JobPool> jobs;
   if (threads > 1) jobs.emplace(threads);
+  const rhot::RigMatcher matcher(d.rig);
   std::size_t i = 0;
   double found = 0.0;
   std::int64_t runs = 0;
   for (auto _ : state) {
-    const auto points = rhot::match_and_triangulate(d.rig, d.frames[i++ % d.frames.size()], {}, jobs ? &*jobs : nullptr);
+    const auto points = matcher.match(d.frames[i++ % d.frames.size()], {}, jobs ? &*jobs : nullptr);
     found += static_cast<double>(points.size());
     ++runs;
     benchmark::DoNotOptimize(points.data());

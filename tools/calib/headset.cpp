@@ -101,6 +101,7 @@ std::vector<HeadsetPoseSample> collect(const HeadsetOptions& o, XrHeadset& heads
   only.stars.push_back(star);
   StarTracker tracker{StarLibrary(only)};
   PixelSigmaEstimate pixel_sigma;
+  const RigMatcher matcher(rig.cameras);
   std::vector<HeadsetPoseSample> samples;
   const double start_s = steady_now_s();
   double first_s = std::nan(""), last_report_s = start_s, max_turn_deg = 0.0;
@@ -131,7 +132,7 @@ std::vector<HeadsetPoseSample> collect(const HeadsetOptions& o, XrHeadset& heads
     }
     const auto head = rig.simulated ? head_now : headset.stage_from_head(capture_s);
     if (frame && head) {
-      const std::vector<MatchedPoint> matched = match_and_triangulate(rig.cameras, *frame, match_settings_for(pixel_sigma.sigma_px()));
+      const std::vector<MatchedPoint> matched = matcher.match(*frame, match_settings_for(pixel_sigma.sigma_px()));
       std::vector<Eigen::Vector3d> points;
       for (const MatchedPoint& m : matched) points.push_back(m.point.position_world);
       const std::vector<double> sigmas = point_sigmas_m(matched, pixel_sigma.update(matched));

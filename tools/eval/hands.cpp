@@ -50,9 +50,10 @@ rhot::HandPose calibrated_skeleton(const rhot::CameraRig& rig, const rhot::Camer
   rhot::HandTracker tracker(layout, reference);
   rhot::PixelSigmaEstimate pixel_sigma;
   std::vector<rhot::FingertipSample> samples;
+  const rhot::RigMatcher matcher(tracker_rig);
   for (int f = 0; f < static_cast<int>(settings.rate_hz); ++f) {
     const rhot::RigFrame frame = sim.next();
-    const auto matched = rhot::match_and_triangulate(tracker_rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
+    const auto matched = matcher.match(frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
     std::vector<Eigen::Vector3d> points;
     for (const rhot::MatchedPoint& m : matched) points.push_back(m.point.position_world);
     const rhot::TrackedHand& hand = tracker.update(frame.time_s, points, rhot::point_sigmas_m(matched, pixel_sigma.update(matched)));
@@ -99,6 +100,7 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
 
   std::vector<double> tip_errors, hidden_errors, joint_errors, ik_us, tracker_us;
   long joint_frames = 0, confident = 0, tip_frames = 0, tips_seen = 0, hand_frames = 0, segment_stars_seen = 0, reported_wrong = 0;
+  const rhot::RigMatcher matcher(tracker_rig);
   for (int f = 0; f < frames; ++f) {
     const double t = static_cast<double>(f) / settings.rate_hz;
     // The hand's own bones hide its markers.
@@ -107,7 +109,7 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
     sim.set_occluders(bones);
     const rhot::RigFrame frame = sim.next();
     std::vector<Eigen::Vector3d> points;
-    const auto matched = rhot::match_and_triangulate(tracker_rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
+    const auto matched = matcher.match(frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
     for (const rhot::MatchedPoint& m : matched) points.push_back(m.point.position_world);
     const auto tracker_start = std::chrono::steady_clock::now();
     const rhot::TrackedHand& hand = tracker.update(frame.time_s, points, rhot::point_sigmas_m(matched, pixel_sigma.update(matched)));

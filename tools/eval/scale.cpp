@@ -267,10 +267,11 @@ Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, cons
   const int warm = std::min(frames - 1, static_cast<int>(std::lround(kWarmUp_s * a.rate_hz)));
   using Clock = std::chrono::steady_clock;
   const auto ms = [](Clock::time_point from, Clock::time_point to) { return std::chrono::duration<double, std::milli>(to - from).count(); };
+  const RigMatcher matcher(rig);
   for (int f = 0; f < frames; ++f) {
     const RigFrame frame = sim.next();
     const auto t0 = Clock::now();
-    const std::vector<MatchedPoint> matched = match_and_triangulate(rig, frame, match_settings_for(pixel_sigma.sigma_px()), pool);
+    const std::vector<MatchedPoint> matched = matcher.match(frame, match_settings_for(pixel_sigma.sigma_px()), pool);
     const std::vector<double> sigmas = point_sigmas_m(matched, pixel_sigma.update(matched));
     std::vector<Eigen::Vector3d> points;
     points.reserve(matched.size());

@@ -213,6 +213,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
   rhot::JobPool jobs(rhot::threads_or_all(threads));
   StarTally tally;
   std::vector<double> ms;
+  const rhot::RigMatcher matcher(tracker_rig);
   for (int f = 0; f < frames; ++f) {
     if (world->occluding_bodies) {
       // Each star stands on an object that hides markers: a 6 cm cube under the star's base.
@@ -225,8 +226,7 @@ int stars(const std::string& rig_file, const std::string& set_file, int bodies, 
       sim.set_occluders(objects);
     }
     const rhot::RigFrame frame = sim.next();
-    const std::vector<rhot::MatchedPoint> matched =
-        rhot::match_and_triangulate(tracker_rig, frame, rhot::match_settings_for(pixel_sigma.sigma_px()), &jobs);
+    const std::vector<rhot::MatchedPoint> matched = matcher.match(frame, rhot::match_settings_for(pixel_sigma.sigma_px()), &jobs);
     const LabelledPoints labelled = label_points(frame, matched, bodies);
     const auto start = std::chrono::steady_clock::now();
     const std::vector<double> sigmas = rhot::point_sigmas_m(matched, pixel_sigma.update(matched));

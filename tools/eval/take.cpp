@@ -429,12 +429,13 @@ void run_through_rig(const MarkerTake& take, const TakePlan& plan, const TakeRig
   PixelSigmaEstimate pixel_sigma;
   const auto frames = static_cast<int>(std::floor(end_s * r.settings.rate_hz));
   std::vector<Eigen::Vector3d> points;
+  const RigMatcher matcher(r.tracker_rig);
   for (int f = 0; f < frames; ++f) {
     const double t = f / r.settings.rate_hz;
     const int take_frame = std::clamp(static_cast<int>(std::lround(t * take.frame_rate_hz)), 0, take.frame_count() - 1);
     hidden = hide ? plan.hidden_at(take, take_frame) : std::vector<std::size_t>{};
     const RigFrame frame = sim.next();
-    const auto matched = match_and_triangulate(r.tracker_rig, frame, match_settings_for(pixel_sigma.sigma_px()));
+    const auto matched = matcher.match(frame, match_settings_for(pixel_sigma.sigma_px()));
     points.clear();
     for (const MatchedPoint& m : matched) points.push_back(m.point.position_world);
     const TrackedHand& hand = tracker.update(frame.time_s, points, point_sigmas_m(matched, pixel_sigma.update(matched)));

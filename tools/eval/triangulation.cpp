@@ -69,10 +69,11 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   long mixed = 0;
   std::vector<double> ms;
   std::vector<double> errors_mm;  // every found marker's 3D error
+  const rhot::RigMatcher matcher(*rig);
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
     const auto start = std::chrono::steady_clock::now();
-    const auto matched = rhot::match_and_triangulate(*rig, frame, {}, &jobs);
+    const auto matched = matcher.match(frame, {}, &jobs);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     std::vector<int> seen_by(frame.truth_position_m.size(), 0);
     for (const rhot::CameraFrame& cf : frame.cameras) {

@@ -58,9 +58,10 @@ int wand(const std::string& rig_file, double length_mm, double sigma, int frames
   double sum_sq = 0.0;
   double max_abs = 0.0;
   long measured = 0;
+  const rhot::RigMatcher matcher(*rig);
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
-    const auto matched = rhot::match_and_triangulate(*rig, frame, {}, &jobs);
+    const auto matched = matcher.match(frame, {}, &jobs);
     // The wand is measured when exactly one point belongs wholly to each end.
     std::array<const rhot::MatchedPoint*, 2> end_point{nullptr, nullptr};
     int points_per_end[2] = {0, 0};

@@ -71,6 +71,7 @@ std::vector<StillPoint> still_points(const CameraRig& rig, const Detections& det
     long last_frame = 0;
   };
   std::vector<Cluster> clusters;
+  const RigMatcher matcher(rig);
   for (const DetectionFrame& f : detections.frames) {
     RigFrame frame;
     frame.index = static_cast<std::uint64_t>(f.frame);
@@ -80,7 +81,7 @@ std::vector<StillPoint> still_points(const CameraRig& rig, const Detections& det
       if (o.camera < 0 || o.camera >= static_cast<int>(rig.cameras.size()) || !o.pixel.allFinite()) continue;
       frame.cameras[static_cast<std::size_t>(o.camera)].detections.push_back({o.pixel, -1});
     }
-    for (const MatchedPoint& m : match_and_triangulate(rig, frame)) {
+    for (const MatchedPoint& m : matcher.match(frame)) {
       const Eigen::Vector3d p = m.point.position_world;
       if (!p.allFinite()) continue;
       Cluster* nearest = nullptr;

@@ -12,8 +12,10 @@ namespace {
 
 constexpr double kMinDepth_m = 1e-3;
 
-// Distortion of normalised coordinates and its 2x2 Jacobian.
-Eigen::Vector2d distort(const std::array<double, 5>& k, const Eigen::Vector2d& xy, Eigen::Matrix2d* jacobian) {
+// Distortion of normalised coordinates and its 2x2 Jacobian. Inlined where it is called, so that
+// projection (matching's and refinement's innermost work) compiles without the branch and call.
+[[gnu::always_inline]] inline Eigen::Vector2d distort(const std::array<double, 5>& k, const Eigen::Vector2d& xy,
+                                                      Eigen::Matrix2d* jacobian) {
   const double x = xy.x();
   const double y = xy.y();
   const double k1 = k[0], k2 = k[1], p1 = k[2], p2 = k[3], k3 = k[4];

@@ -27,8 +27,11 @@ struct CameraDetections {
   int rows = 0;
   // The grid as compressed rows: detections of cell c are items[cell_start[c] .. cell_start[c + 1]),
   // each with what a lookup needs, so that a lookup reads one run of memory after cell_start.
+  // Plain doubles rather than an Eigen vector, which would pad the item to 32 bytes: the items
+  // of every camera then fit the cache together better.
   struct Item {
-    Eigen::Vector2d pixel;
+    double x = 0.0;
+    double y = 0.0;
     int detection = -1;
     int colour = -1;
   };
@@ -81,7 +84,8 @@ struct CameraDetections {
     std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
     for (std::size_t i = 0; i < pixel.size(); ++i) {
       if (cell_of[i] < 0) continue;
-      items[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = {pixel[i], static_cast<int>(i), colour[i]};
+      items[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = {pixel[i].x(), pixel[i].y(), static_cast<int>(i),
+                                                                                       colour[i]};
     }
     explained.assign(pixel.size(), 0);
     first_link.assign(pixel.size(), -1);
@@ -108,7 +112,9 @@ struct CameraDetections {
         for (int s = cell_start[c]; s < cell_start[c + 1]; ++s) {
           const Item& item = items[static_cast<std::size_t>(s)];
           if (item.colour != of_colour) continue;
-          const double d2 = (item.pixel - p).squaredNorm();
+          const double dx = item.x - p.x();
+          const double dy = item.y - p.y();
+          const double d2 = dx * dx + dy * dy;
           if (d2 <= best_d2) {
             best_d2 = d2;
             best = item.detection;
@@ -214,8 +220,9 @@ namespace {
 // the best without sharing detections.
 class Matcher {
  public:
-  Matcher(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings, JobPool* jobs)
-      : rig_(rig), settings_(settings), jobs_(jobs), n_(rig.cameras.size()), cams_(n_), poses_(camera_projections(rig)) {
+  Matcher(const CameraRig& rig, std::span<const CameraProjection> poses, const CameraVisibility& visibility, const RigFrame& frame,
+          const MatchSettings& settings, JobPool* jobs)
+      : rig_(rig), settings_(settings), jobs_(jobs), n_(rig.cameras.size()), cams_(n_), poses_(poses), visibility_(visibility) {
     for (std::size_t c = 0; c < n_; ++c) {
       RHOT_PRECONDITION(frame.cameras[c].camera == static_cast<int>(c), "match_and_triangulate: cameras in rig order");
     }
@@ -381,8 +388,9 @@ class Matcher {
     cl.detection[i] = static_cast<int>(a);
     cl.detection[j] = static_cast<int>(b);
     int unseen = 0;  // cameras that should see the point and have no detection near it
+    const CameraVisibility::CameraSet seeing = visibility_.cameras_at(x);
     for (std::size_t k = 0; k < n_; ++k) {
-      if (k == i || k == j) continue;
+      if (k == i || k == j || !CameraVisibility::contains(seeing, k)) continue;
       const auto p = poses_[k].project(x);
       if (!p || !poses_[k].in_image(*p)) continue;
       cl.detection[k] = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
@@ -470,8 +478,9 @@ class Matcher {
     // unless the point moves (counted again below if it does).
     bool grew = false;
     int missing = 0;
+    const CameraVisibility::CameraSet seeing = visibility_.cameras_at(cl.point.position_world);
     for (std::size_t k = 0; k < n_; ++k) {
-      if (cl.detection[k] >= 0) continue;
+      if (cl.detection[k] >= 0 || !CameraVisibility::contains(seeing, k)) continue;
       const auto p = poses_[k].project(cl.point.position_world);
       if (!p || !poses_[k].in_image(*p)) continue;
       const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
@@ -517,8 +526,9 @@ class Matcher {
       cl.missing = missing;
       return;
     }
+    const CameraVisibility::CameraSet seeing_now = visibility_.cameras_at(cl.point.position_world);
     for (std::size_t k = 0; k < n_; ++k) {
-      if (cl.detection[k] >= 0) continue;
+      if (cl.detection[k] >= 0 || !CameraVisibility::contains(seeing_now, k)) continue;
       const auto p = poses_[k].project(cl.point.position_world);
       if (p && poses_[k].in_image(*p)) ++cl.missing;
     }
@@ -578,7 +588,8 @@ class Matcher {
   JobPool* jobs_;  // nullptr: everything in order on the caller
   std::size_t n_;
   std::vector<CameraDetections> cams_;
-  std::vector<CameraProjection> poses_;
+  std::span<const CameraProjection> poses_;
+  const CameraVisibility& visibility_;
   // The clusters containing each detection (to skip redundant seeds), as singly linked lists:
   // links_[l] = {cluster, next link}, heads in CameraDetections::first_link. A detection that
   // seeded or joined a cluster three or more cameras confirm seeds nothing more: its marker is
@@ -602,9 +613,30 @@ class Matcher {
 
 }  // namespace
 
+namespace {
+
+// The grid of CameraVisibility: the box where two-view seeds may lie with the default
+// MatchSettings (the tracking volume, twice its size plus 25 cm each way); none without a volume.
+CameraVisibility visibility_over_seed_box(const CameraRig& rig) {
+  if (!rig.volume) return {};
+  const MatchSettings defaults;
+  const Eigen::Vector3d half =
+      0.5 * rig.volume->size_m + defaults.seed_margin * rig.volume->size_m + Eigen::Vector3d::Constant(defaults.seed_margin_m);
+  return CameraVisibility(rig.cameras, rig.volume->centre_m - half, rig.volume->centre_m + half);
+}
+
+}  // namespace
+
+RigMatcher::RigMatcher(const CameraRig& rig)
+    : rig_(rig), projections_(camera_projections(rig)), visibility_(visibility_over_seed_box(rig)) {}
+
+std::vector<MatchedPoint> RigMatcher::match(const RigFrame& frame, const MatchSettings& settings, JobPool* jobs) const {
+  RHOT_PRECONDITION(frame.cameras.size() == rig_.cameras.size(), "match_and_triangulate: one CameraFrame per camera of the rig");
+  return Matcher(rig_, projections_, visibility_, frame, settings, jobs).run();
+}
+
 std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings, JobPool* jobs) {
-  RHOT_PRECONDITION(frame.cameras.size() == rig.cameras.size(), "match_and_triangulate: one CameraFrame per camera of the rig");
-  return Matcher(rig, frame, settings, jobs).run();
+  return RigMatcher(rig).match(frame, settings, jobs);
 }
 
 }  // namespace rhot

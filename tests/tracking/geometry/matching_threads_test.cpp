@@ -1,4 +1,5 @@
-// Matching on a job pool gives the serial points, bit for bit, whatever the thread count.
+// Matching on a job pool gives the serial points, bit for bit, whatever the thread count; and
+// the cameras' visibility grid (CameraVisibility) changes no point.
 
 #include <bit>
 #include <filesystem>
@@ -58,6 +59,33 @@ TEST(MatchingThreads, TheSameSeedGivesTheSamePointsWhateverTheThreadCount) {
     expect_identical(serial, match_and_triangulate(*rig, frame, {}, &two), 2);
     expect_identical(serial, match_and_triangulate(*rig, frame, {}, &three), 3);
     expect_identical(serial, match_and_triangulate(*rig, frame, {}, &eight), 8);
+  }
+}
+
+// The same frames matched with the rig's visibility grid and without one (the same rig with no
+// tracking volume; seeds anywhere in both, so that only the grid differs): the same points.
+TEST(MatchingThreads, TheCamerasVisibilityGridChangesNoPoint) {
+  const auto rig = load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / "stage-32.yaml");
+  ASSERT_TRUE(rig.has_value()) << (rig ? "" : rig.error());
+  const TrackingVolume volume = rig->volume.value();
+  CameraRig no_volume = *rig;
+  no_volume.volume.reset();
+  const RigMatcher with_grid(*rig);
+  const RigMatcher without(no_volume);
+  // Markers over a box wider than the volume, so that cells near its edge, which many cameras do
+  // not see, are used.
+  SimulatedRigSettings settings;
+  settings.dropout = 0.1;
+  settings.sigma_px = 0.3;
+  SimulatedRig sim(*rig, random_trajectories(300, volume.centre_m - 0.8 * volume.size_m, volume.centre_m + 0.8 * volume.size_m, 5),
+                   settings);
+  MatchSettings anywhere;
+  anywhere.seed_margin = -1.0;
+  for (int f = 0; f < 2; ++f) {
+    const RigFrame frame = sim.next();
+    const std::vector<MatchedPoint> plain = without.match(frame, anywhere);
+    ASSERT_GT(plain.size(), 200U);
+    expect_identical(plain, with_grid.match(frame, anywhere), 1);
   }
 }
 
