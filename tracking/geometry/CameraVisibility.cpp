@@ -21,7 +21,8 @@ std::optional<std::array<Eigen::Vector3d, 4>> view_planes(const Camera& camera) 
   for (int s = 0; s <= kSamplesPerEdge; ++s) {
     const double t = static_cast<double>(s) / kSamplesPerEdge;
     const double x = -0.5 + t * (w + 0.5), y = -0.5 + t * (h + 0.5);
-    for (const Eigen::Vector2d& pixel : {Eigen::Vector2d(x, -0.5), Eigen::Vector2d(x, h), Eigen::Vector2d(-0.5, y), Eigen::Vector2d(w, y)}) {
+    for (const Eigen::Vector2d& pixel :
+         {Eigen::Vector2d(x, -0.5), Eigen::Vector2d(x, h), Eigen::Vector2d(-0.5, y), Eigen::Vector2d(w, y)}) {
       const auto xy = undistort_normalised(k.distortion, Eigen::Vector2d((pixel.x() - k.cx) / k.fx, (pixel.y() - k.cy) / k.fy));
       if (!xy) return std::nullopt;
       lo = lo.cwiseMin(*xy);
@@ -63,7 +64,8 @@ CameraVisibility::CameraVisibility(std::span<const Camera> cameras, const Eigen:
             set |= bit;
             continue;
           }
-          const Eigen::Vector3d centre = rotation * (lo_ + cell_m_ * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5)) + cameras[c].cam_from_world.translation;
+          const Eigen::Vector3d centre =
+              rotation * (lo_ + cell_m_ * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5)) + cameras[c].cam_from_world.translation;
           // Every point of the cell at most 1 mm in front: Camera::project refuses it.
           bool seen = centre.z() + radius > 1e-3;
           for (const Eigen::Vector3d& n : *planes) seen = seen && n.dot(centre) <= radius * n.norm();

@@ -27,7 +27,7 @@ Tally check(const CameraRig& rig, const Eigen::Vector3d& lo, const Eigen::Vector
   std::uniform_real_distribution<double> u(0.0, 1.0);
   Tally t;
   for (int n = 0; n < points; ++n) {
-    const Eigen::Vector3d p = lo + Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(hi - lo);
+    const Eigen::Vector3d p = lo + Eigen::Vector3d{u(rng), u(rng), u(rng)}.cwiseProduct(hi - lo);
     const CameraVisibility::CameraSet set = visibility.cameras_at(p);
     for (std::size_t c = 0; c < rig.cameras.size(); ++c) {
       ++t.pairs;
