@@ -37,10 +37,11 @@ const Data& data() {
     }
     rhot::SimulatedRig sim(rig, {}, {});
     sim.set_bodies(bodies);
+    const rhot::RigMatcher matcher(rig);
     for (int f = 0; f < 128; ++f) {
       const rhot::RigFrame frame = sim.next();
       std::vector<Eigen::Vector3d> pts;
-      for (const rhot::MatchedPoint& m : rhot::match_and_triangulate(rig, frame)) pts.push_back(m.point.position_world);
+      for (const rhot::MatchedPoint& m : matcher.match(frame)) pts.push_back(m.point.position_world);
       out.time_s.push_back(frame.time_s);
       out.points.push_back(std::move(pts));
     }

@@ -376,6 +376,7 @@ struct NodesRun {
   const std::vector<Trajectory>& markers;  // without the demo's world
   DemoHands& hands;                        // with it
   MatchSettings match;
+  const RigMatcher& matcher;  // the rig, prepared for matching once
   std::int64_t start_ns;
   std::int64_t period_ns;
   std::int64_t frames_expected;
@@ -533,7 +534,7 @@ void tally_frame(const NodesRun& run, const AssembledFrame& f, NodesTally& tally
     return;
   }
   tally.wrong_markers += wrong_markers_in(run, f, t);
-  const std::vector<MatchedPoint> points = match_and_triangulate(run.rig, frame, run.match);
+  const std::vector<MatchedPoint> points = run.matcher.match(frame, run.match);
   std::vector<Eigen::Vector3d> truth;
   for (const Trajectory& m : run.markers) truth.push_back(m.at(t));
   const int got = markers_found(truth, points);
@@ -815,6 +816,7 @@ int nodes(const NodesArgs& given) {
   DemoHands hands;
   if (demo) set_up_demo_hands(a, *rig, *demo, hands);
   const std::unique_ptr<Chaos> chaos = make_chaos(a, plans, children, log, *source, !keys.dir.empty());
+  const RigMatcher matcher(*rig);
   const NodesRun run{.a = a,
                      .rig = *rig,
                      .demo = demo,
@@ -826,6 +828,7 @@ int nodes(const NodesArgs& given) {
                      .markers = markers,
                      .hands = hands,
                      .match = match_settings_for(a.sigma),
+                     .matcher = matcher,
                      .start_ns = start_ns,
                      .period_ns = static_cast<std::int64_t>(std::llround(1e9 / a.rate_hz)),
                      .frames_expected = static_cast<std::int64_t>(std::floor(a.seconds * a.rate_hz)),

@@ -9,9 +9,30 @@ namespace rhot {
 
 namespace {
 
-// A camera's view as four planes through its centre (camera frame; a point p is inside where
-// n . p <= 0 for every normal n), or nothing where its image border does not undistort.
-std::optional<std::array<Eigen::Vector3d, 4>> view_planes(const Camera& camera) {
+// The radius (x/z, y/z) beyond which the lens's radial distortion folds back (r (1 + k1 r^2 + k2
+// r^4 + k3 r^6) stops growing), infinity where it never does. Scanned in steps of 0.2 % from r =
+// 0.001 to 100 (89.4 degrees off the axis); a fold further out than that is taken to begin there.
+double fold_radius(const std::array<double, 5>& k) {
+  constexpr double kScanTo = 100.0;
+  constexpr int kSteps = 5760;  // 1.002^5760 = 1e5
+  for (int s = 0; s <= kSteps; ++s) {
+    const double r = kScanTo * std::pow(1.002, s - kSteps);
+    const double u = r * r;
+    if (!(1.0 + u * (3.0 * k[0] + u * (5.0 * k[1] + u * 7.0 * k[4])) > 0.0)) return r;
+  }
+  const double leading = k[4] != 0.0 ? k[4] : (k[1] != 0.0 ? k[1] : k[0]);
+  return leading < 0.0 ? kScanTo : std::numeric_limits<double>::infinity();
+}
+
+// A camera's view: four planes through its centre (camera frame; a point p is inside where
+// n . p <= 0 for every unit normal n), and the cone inside which the lens does not fold (tangent
+// of its half-angle; infinity: everywhere). Nothing where the image border does not undistort.
+struct ViewPlanes {
+  std::array<Eigen::Vector3d, 4> normals;
+  double unfolded_tan = std::numeric_limits<double>::infinity();
+};
+
+std::optional<ViewPlanes> view_planes(const Camera& camera) {
   const CameraIntrinsics& k = camera.intrinsics;
   constexpr int kSamplesPerEdge = 32;
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
@@ -33,8 +54,13 @@ std::optional<std::array<Eigen::Vector3d, 4>> view_planes(const Camera& camera) 
   const Eigen::Vector2d margin = 0.01 * (hi - lo) + Eigen::Vector2d::Constant(1e-6);
   lo -= margin;
   hi += margin;
-  return std::array<Eigen::Vector3d, 4>{Eigen::Vector3d(1.0, 0.0, -hi.x()), Eigen::Vector3d(-1.0, 0.0, lo.x()),
-                                        Eigen::Vector3d(0.0, 1.0, -hi.y()), Eigen::Vector3d(0.0, -1.0, lo.y())};
+  ViewPlanes out;
+  out.normals = {Eigen::Vector3d(1.0, 0.0, -hi.x()).normalized(), Eigen::Vector3d(-1.0, 0.0, lo.x()).normalized(),
+                 Eigen::Vector3d(0.0, 1.0, -hi.y()).normalized(), Eigen::Vector3d(0.0, -1.0, lo.y()).normalized()};
+  // Tangential terms (a fraction of a percent in calibrated lenses) move the fold a little: the
+  // cone stops short of it by a tenth.
+  out.unfolded_tan = 0.9 * fold_radius(k.distortion);
+  return out;
 }
 
 }  // namespace
@@ -43,15 +69,24 @@ CameraVisibility::CameraVisibility(std::span<const Camera> cameras, const Eigen:
   const Eigen::Vector3d size = hi - lo;
   if (!(size.allFinite() && size.minCoeff() > 0.0)) return;
   lo_ = lo;
-  cell_m_ = std::cbrt(size.prod() / kMaxCells);
+  // Cubes of the volume's share, grown until the grid fits kMaxCells (a long thin box has cells as
+  // wide as its length allows).
+  cell_m_ = std::max(std::cbrt(size.prod() / kMaxCells), size.maxCoeff() / kMaxCells);
+  if (!(std::isfinite(cell_m_) && cell_m_ > 0.0)) return;
   const auto fit = [&] {
-    for (int a = 0; a < 3; ++a) dims_[static_cast<std::size_t>(a)] = std::max(1, static_cast<int>(std::ceil(size[a] / cell_m_)));
-    return static_cast<long>(dims_[0]) * dims_[1] * dims_[2] <= kMaxCells;
+    double cells = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const double n = std::max(1.0, std::ceil(size[a] / cell_m_));
+      cells *= n;
+      dims_[static_cast<std::size_t>(a)] = static_cast<int>(std::min(n, static_cast<double>(kMaxCells)));
+    }
+    return cells <= kMaxCells;
   };
   while (!fit()) cell_m_ *= 1.05;
   sets_.assign(static_cast<std::size_t>(dims_[0] * dims_[1] * dims_[2]), 0);
 
-  const double radius = 0.5 * std::sqrt(3.0) * cell_m_;  // a cell's bounding sphere
+  // A cell's bounding sphere, a hair wider for the rounding of a point's place in the grid.
+  const double radius = 0.5 * std::sqrt(3.0) * cell_m_ * (1.0 + 1e-9) + 1e-12;
   for (std::size_t c = 0; c < std::min<std::size_t>(cameras.size(), 64); ++c) {
     const CameraSet bit = CameraSet{1} << c;
     const auto planes = view_planes(cameras[c]);
@@ -67,9 +102,15 @@ CameraVisibility::CameraVisibility(std::span<const Camera> cameras, const Eigen:
           const Eigen::Vector3d centre =
               rotation * (lo_ + cell_m_ * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5)) + cameras[c].cam_from_world.translation;
           // Every point of the cell at most 1 mm in front: Camera::project refuses it.
-          bool seen = centre.z() + radius > 1e-3;
-          for (const Eigen::Vector3d& n : *planes) seen = seen && n.dot(centre) <= radius * n.norm();
-          if (seen) set |= bit;
+          if (!(centre.z() + radius > 1e-3)) continue;
+          bool inside = true;
+          for (const Eigen::Vector3d& n : planes->normals) inside = inside && n.dot(centre) <= radius;
+          // Outside the view, but not wholly inside the cone where the lens does not fold: a
+          // point there may still be distorted into the image, and the camera is kept.
+          const double cos_cone = 1.0 / std::sqrt(1.0 + planes->unfolded_tan * planes->unfolded_tan);
+          const bool in_unfolded = !std::isfinite(planes->unfolded_tan) ||
+                                   centre.head<2>().norm() * cos_cone - centre.z() * planes->unfolded_tan * cos_cone <= -radius;
+          if (inside || !in_unfolded) set |= bit;
         }
       }
     }

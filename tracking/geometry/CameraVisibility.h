@@ -8,12 +8,15 @@
 // it and inside its image (Camera::project then Camera::in_image), so skipping it changes no
 // result. Each camera's view is the pyramid through its undistorted image outline (the bounding
 // box of the image border's undistorted points, widened by 1 %), tested against each cell's
-// bounding sphere. A camera whose border does not undistort (a lens model that folds back inside
-// the image) is in every set.
+// bounding sphere. A lens whose radial distortion folds back (r (1 + k1 r^2 + k2 r^4 + k3 r^6)
+// stops growing at some radius, as it does wherever the highest k is negative) distorts points far
+// off its axis back into the image: a camera is left out only of cells wholly inside the cone
+// where its lens does not fold (stopping a tenth short of the fold, for the tangential terms). A
+// camera whose border does not undistort (a model that folds inside the image) is in every set.
 //
-// Sets hold the first 64 cameras; cameras past the 64th are never skipped. A point outside the box
-// (or NaN) has every camera in its set. Built once per rig: a few thousand cells, each tested
-// against every camera (about 0.3 ms for 32 cameras).
+// Sets hold the first 64 cameras; cameras past the 64th are never skipped. A point outside the grid
+// (the box, rounded up to whole cells) or NaN has every camera in its set. Built once per rig: a
+// few thousand cells, each tested against every camera.
 
 #include <array>
 #include <cstdint>

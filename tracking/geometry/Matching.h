@@ -100,9 +100,10 @@ class PixelSigmaEstimate {
 std::vector<double> point_sigmas_m(std::span<const MatchedPoint> points, double sigma_px);
 
 // Matching for one rig, frame after frame: the rig prepared once (its cameras' projections, and
-// which cameras may see each part of its tracking volume: CameraVisibility), so that a point is
-// projected only into the cameras that may see it. Keep one where frames keep coming; it holds a
-// copy of the rig.
+// which cameras may see each part of the box where seeds may lie with the default settings, the
+// tracking volume twice over plus 25 cm each way: CameraVisibility; no grid for a rig without a
+// volume), so that a point is projected only into the cameras that may see it. Keep one where
+// frames keep coming; it holds a copy of the rig.
 class RigMatcher {
  public:
   explicit RigMatcher(const CameraRig& rig);
@@ -122,7 +123,8 @@ class RigMatcher {
 };
 
 // One frame, the rig prepared on the spot (RigMatcher(rig).match(...)): for a frame or a few. The
-// preparation costs about a millisecond on a 32-camera rig.
+// preparation tests every cell of the grid against every camera, more work than a small frame's
+// matching.
 std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings = {},
                                                 JobPool* jobs = nullptr);
 

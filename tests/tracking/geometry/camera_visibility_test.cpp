@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <limits>
+#include <numbers>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -51,7 +52,7 @@ TEST(CameraVisibility, NoCameraThatSeesAPointIsLeftOutOnTheStageAndTheRoom) {
     // The volume twice over, as matching's seeds may lie.
     const Tally t = check(*rig, v.centre_m - v.size_m, v.centre_m + v.size_m, 4000, 3);
     EXPECT_EQ(t.missed, 0) << "of " << t.seen << " views";
-    // Cameras that cannot see the point are left out: on the stage, at least a fifth of all pairs.
+    // Cameras that cannot see the point are left out: at least a fifth of all pairs.
     EXPECT_GT(t.skipped, t.pairs / 5) << t.skipped << " of " << t.pairs << " left out, " << t.seen << " seen";
   }
 }
@@ -80,6 +81,63 @@ TEST(CameraVisibility, ACameraWhoseBorderDoesNotUndistortIsNeverLeftOut) {
   rig.cameras.push_back(folded);
   const Tally t = check(rig, {-3.0, -1.0, -3.0}, {3.0, 3.0, 3.0}, 2000, 7);
   EXPECT_EQ(t.skipped, 0);
+}
+
+// Points on rays through the image's border and corners, at any depth: the view's edge, where a
+// pyramid or a sphere drawn too tight would leave the camera out.
+TEST(CameraVisibility, PointsOnTheImagesBorderKeepTheirCamera) {
+  const auto rig = load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / "room-8.yaml");
+  ASSERT_TRUE(rig.has_value()) << (rig ? "" : rig.error());
+  const TrackingVolume v = rig->volume.value();
+  const CameraVisibility visibility(rig->cameras, v.centre_m - v.size_m, v.centre_m + v.size_m);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  long asked = 0;
+  for (std::size_t c = 0; c < rig->cameras.size(); ++c) {
+    const Camera& camera = rig->cameras[c];
+    const double w = camera.intrinsics.width_px - 0.5, h = camera.intrinsics.height_px - 0.5;
+    for (int n = 0; n < 2000; ++n) {
+      // A pixel on the border (a corner one time in eight), a depth of 0.2 to 8 m.
+      const double t = u(rng);
+      const int edge = n % 4;
+      Eigen::Vector2d pixel = edge == 0   ? Eigen::Vector2d{-0.5 + t * (w + 0.5), -0.5}
+                              : edge == 1 ? Eigen::Vector2d{-0.5 + t * (w + 0.5), h - 1e-6}
+                              : edge == 2 ? Eigen::Vector2d{-0.5, -0.5 + t * (h + 0.5)}
+                                          : Eigen::Vector2d{w - 1e-6, -0.5 + t * (h + 0.5)};
+      if (n % 8 == 0) pixel = {n % 16 == 0 ? -0.5 : w - 1e-6, n % 32 == 0 ? -0.5 : h - 1e-6};
+      const Eigen::Vector3d p = camera.centre_world() + (0.2 + 7.8 * u(rng)) * camera.ray_world(pixel);
+      const auto back = camera.project(p);
+      if (!back || !camera.in_image(*back)) continue;  // rounded off the image
+      ++asked;
+      EXPECT_TRUE(CameraVisibility::contains(visibility.cameras_at(p), c)) << "camera " << c << ", pixel " << pixel.transpose();
+    }
+  }
+  EXPECT_GT(asked, 8000);
+}
+
+// A lens whose radial distortion folds back (k2 < 0, as a calibration often gives): points 65 to
+// 67 degrees off its axis, far outside its view, are distorted back into its image, and the camera
+// must stay in their sets.
+TEST(CameraVisibility, ALensThatFoldsKeepsThePointsItFoldsIntoItsImage) {
+  CameraRig rig;
+  Camera camera;
+  camera.intrinsics = {640, 480, 520.0, 520.0, 320.0, 240.0, {0.02, -0.04, 0.0, 0.0, 0.0}};
+  camera.cam_from_world = cam_from_world_look_at({0.0, 1.5, 3.0}, {0.0, 1.0, 0.0});
+  rig.cameras.push_back(camera);
+  const CameraVisibility visibility(rig.cameras, {-4.0, -1.0, -4.0}, {4.0, 4.0, 6.0});
+  const Rigid3d world_from_cam = camera.cam_from_world.inverse();
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  long folded = 0;
+  for (int n = 0; n < 4000; ++n) {
+    const double r = 2.0 + 0.5 * u(rng), angle = 2.0 * std::numbers::pi * u(rng), z = 0.1 + 0.6 * u(rng);
+    const Eigen::Vector3d p = world_from_cam * Eigen::Vector3d{r * std::cos(angle) * z, r * std::sin(angle) * z, z};
+    const auto pixel = camera.project(p);
+    if (!pixel || !camera.in_image(*pixel)) continue;
+    ++folded;
+    EXPECT_TRUE(CameraVisibility::contains(visibility.cameras_at(p), 0)) << "a folded point at r " << r;
+  }
+  EXPECT_GT(folded, 100) << "points distorted back into the image";
 }
 
 TEST(CameraVisibility, APointOutsideTheGridOrNotANumberHasEveryCamera) {

@@ -86,6 +86,13 @@ TEST(MatchingThreads, TheCamerasVisibilityGridChangesNoPoint) {
     const std::vector<MatchedPoint> plain = without.match(frame, anywhere);
     ASSERT_GT(plain.size(), 200U);
     expect_identical(plain, with_grid.match(frame, anywhere), 1);
+    // The grid was asked, and left cameras out where the points are: it is not all cameras.
+    long left_out = 0;
+    for (const MatchedPoint& m : plain) {
+      EXPECT_EQ(without.visibility().cameras_at(m.point.position_world), CameraVisibility::kAllCameras);
+      left_out += 32 - std::popcount(with_grid.visibility().cameras_at(m.point.position_world) & 0xffffffffU);
+    }
+    EXPECT_GT(left_out, static_cast<long>(plain.size())) << "cameras left out over the frame's points";
   }
 }
 
