@@ -216,6 +216,11 @@ int truth_marker(const RigFrame& frame, const MatchedPoint& point) {
 
 namespace {
 
+// Half the size of the box two-view seeds may lie in (MatchSettings::seed_margin, seed_margin_m).
+Eigen::Vector3d seed_box_half(const TrackingVolume& volume, const MatchSettings& settings) {
+  return 0.5 * volume.size_m + settings.seed_margin * volume.size_m + Eigen::Vector3d::Constant(settings.seed_margin_m);
+}
+
 // One frame's matching, in three phases: seed clusters from epipolar pairs, refine them, accept
 // the best without sharing detections.
 class Matcher {
@@ -228,8 +233,7 @@ class Matcher {
     }
     for_each(n_, [&](std::size_t c) { cams_[c].build(rig.cameras[c], frame.cameras[c]); });
     if (rig.volume && settings.seed_margin >= 0.0) {
-      const Eigen::Vector3d half =
-          0.5 * rig.volume->size_m + settings.seed_margin * rig.volume->size_m + Eigen::Vector3d::Constant(settings.seed_margin_m);
+      const Eigen::Vector3d half = seed_box_half(*rig.volume, settings);
       seed_lo_ = rig.volume->centre_m - half;
       seed_hi_ = rig.volume->centre_m + half;
     }
@@ -611,17 +615,11 @@ class Matcher {
   Eigen::Vector3d seed_hi_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
 };
 
-}  // namespace
-
-namespace {
-
 // The grid of CameraVisibility: the box where two-view seeds may lie with the default
 // MatchSettings (the tracking volume, twice its size plus 25 cm each way); none without a volume.
 CameraVisibility visibility_over_seed_box(const CameraRig& rig) {
   if (!rig.volume) return {};
-  const MatchSettings defaults;
-  const Eigen::Vector3d half =
-      0.5 * rig.volume->size_m + defaults.seed_margin * rig.volume->size_m + Eigen::Vector3d::Constant(defaults.seed_margin_m);
+  const Eigen::Vector3d half = seed_box_half(*rig.volume, MatchSettings{});
   return CameraVisibility(rig.cameras, rig.volume->centre_m - half, rig.volume->centre_m + half);
 }
 
@@ -636,7 +634,11 @@ std::vector<MatchedPoint> RigMatcher::match(const RigFrame& frame, const MatchSe
 }
 
 std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings, JobPool* jobs) {
-  return RigMatcher(rig).match(frame, settings, jobs);
+  RHOT_PRECONDITION(frame.cameras.size() == rig.cameras.size(), "match_and_triangulate: one CameraFrame per camera of the rig");
+  // No grid: for one frame its building would cost more than it saves (the points are the same).
+  static const CameraVisibility kEveryCamera;
+  const std::vector<CameraProjection> projections = camera_projections(rig);
+  return Matcher(rig, projections, kEveryCamera, frame, settings, jobs).run();
 }
 
 }  // namespace rhot

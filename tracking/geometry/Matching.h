@@ -122,9 +122,9 @@ class RigMatcher {
   CameraVisibility visibility_;
 };
 
-// One frame, the rig prepared on the spot (RigMatcher(rig).match(...)): for a frame or a few. The
-// preparation tests every cell of the grid against every camera, more work than a small frame's
-// matching.
+// One frame, without a grid (building one costs more than a frame's matching saves): the same
+// points as RigMatcher(rig).match(...). For a frame or a few; hold a RigMatcher where frames keep
+// coming.
 std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings = {},
                                                 JobPool* jobs = nullptr);
 
