@@ -26,11 +26,15 @@ if(RHOT_SANITIZE)
   # and most command-line tools, tools/CMakeLists.txt) are compiled at -O0: their own code is
   # assertions, flags and set-up, while the libraries they call keep -O1. Measured with Clang 19,
   # the tools' compile steps took 225 s instead of 500 s (docs/PERFORMANCE.md, "Build and test
-  # time"); the checks are the same at either level.
+  # time"); the checks are the same at either level. So are the libraries whose code runs once a
+  # program or a little each frame (RHOT_THIN_LIBRARY, rhot_add_library's THIN: loading scenes and
+  # meshes, the frame loop's bookkeeping, the composition root, streaming out): at -O0 their units
+  # take about half the CPU to compile. Not the renderer, the runtime or the simulated world: at
+  # -O0 the demo's tests ran two to six times longer.
   # The optimisation level is the build tree's own choice: an application on the installed
   # package (tools/examples) gets the sanitizers its libraries need and picks its own level.
   target_compile_options(rhot_options INTERFACE
-    $<BUILD_INTERFACE:$<IF:$<BOOL:$<TARGET_PROPERTY:RHOT_THIN_PROGRAM>>,-O0,-O1>>
+    $<BUILD_INTERFACE:$<IF:$<OR:$<BOOL:$<TARGET_PROPERTY:RHOT_THIN_PROGRAM>>,$<BOOL:$<TARGET_PROPERTY:RHOT_THIN_LIBRARY>>>,-O0,-O1>>
     -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
     $<BUILD_INTERFACE:$<$<CXX_COMPILER_ID:GNU>:-Wno-maybe-uninitialized>>)
   target_link_options(rhot_options INTERFACE -fsanitize=address,undefined)
@@ -46,7 +50,7 @@ if(RHOT_SANITIZE)
   # is why Eigen does not use the attribute there), so GCC's sanitized builds keep plain inline.
   option(RHOT_EIGEN_ALWAYS_INLINE "Sanitized Clang builds: always inline Eigen's expression functions in the libraries" ON)
   if(RHOT_EIGEN_ALWAYS_INLINE AND CMAKE_CXX_COMPILER_ID MATCHES "Clang")
-    set(rhot_plain_inline $<OR:$<BOOL:$<TARGET_PROPERTY:RHOT_THIN_PROGRAM>>,$<BOOL:$<TARGET_PROPERTY:RHOT_EIGEN_PLAIN_INLINE>>>)
+    set(rhot_plain_inline $<OR:$<BOOL:$<TARGET_PROPERTY:RHOT_THIN_PROGRAM>>,$<BOOL:$<TARGET_PROPERTY:RHOT_THIN_LIBRARY>>,$<BOOL:$<TARGET_PROPERTY:RHOT_EIGEN_PLAIN_INLINE>>>)
     target_compile_definitions(rhot_options INTERFACE
       $<BUILD_INTERFACE:$<$<NOT:${rhot_plain_inline}>:EIGEN_STRONG_INLINE=inline\ __attribute__\(\(always_inline\)\)>>)
     unset(rhot_plain_inline)
@@ -87,13 +91,13 @@ set(RHOT_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/rhot)  # rhotConfig.cmak
 set(RHOT_INSTALL_DATADIR ${CMAKE_INSTALL_DATADIR}/rhot)        # assets/, shaders/
 install(TARGETS rhot_options EXPORT rhotTargets)
 
-# rhot_add_library(NAME [INTERFACE] [SOURCES...] [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
+# rhot_add_library(NAME [INTERFACE] [THIN] [SOURCES...] [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
 # One library per folder; the include root is the repository root, so code includes
 # "engine/core/World.h" and "tracking/core/Rigid3.h": a file's folder is its layer. INTERFACE: a
-# folder of headers only. Every library is installed and exported as rhot::<layer>_<folder>
+# folder of headers only. THIN: code that runs little (-O0 under the sanitizers, above). Every library is installed and exported as rhot::<layer>_<folder>
 # (rhot_engine_core: rhot::engine_core), with the include root include/rhot.
 function(rhot_add_library name)
-  cmake_parse_arguments(ARG "INTERFACE" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
+  cmake_parse_arguments(ARG "INTERFACE;THIN" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
   string(REGEX REPLACE "^rhot_" "" export_name "${name}")
   if(ARG_INTERFACE)
     add_library(${name} INTERFACE)
@@ -105,5 +109,8 @@ function(rhot_add_library name)
     target_link_libraries(${name} PUBLIC rhot::options ${ARG_PUBLIC_LIBS} PRIVATE ${ARG_PRIVATE_LIBS})
   endif()
   set_target_properties(${name} PROPERTIES EXPORT_NAME ${export_name})
+  if(ARG_THIN)
+    set_target_properties(${name} PROPERTIES RHOT_THIN_LIBRARY ON)
+  endif()
   install(TARGETS ${name} EXPORT rhotTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
 endfunction()
