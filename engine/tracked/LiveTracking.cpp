@@ -147,8 +147,9 @@ void LiveTracking::match() {
   results_.point_colours.clear();
   double sum_rms = 0.0;
   // Gates as wide as the detection noise estimated so far; each point's uncertainty from it.
-  const std::vector<MatchedPoint> matched = matcher_->match(frame_, match_settings_for(pixel_sigma_.sigma_px()), jobs_.get());
-  point_sigma_m_ = point_sigmas_m(matched, pixel_sigma_.update(matched));
+  // The matcher's own storage, kept from frame to frame (valid until the next frame).
+  const std::span<const MatchedPoint> matched = matcher_->match_frame(frame_, match_settings_for(pixel_sigma_.sigma_px()), jobs_.get());
+  point_sigmas_m(matched, pixel_sigma_.update(matched), point_sigma_m_);
   for (const MatchedPoint& m : matched) {
     results_.points.push_back(m.point.position_world);
     results_.point_cameras.push_back(m.point.cameras);

@@ -18,6 +18,7 @@
 #include <numbers>
 #include <optional>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,7 @@
 #include "tracking/sim/HandMotions.h"
 #include "tracking/sim/SimulatedRig.h"
 
+#include "tools/eval/AllocationCount.h"
 #include "tools/eval/Eval.h"
 
 namespace rhot::eval {
@@ -225,6 +227,10 @@ struct Run {
   long joint_errors = 0;
   std::uint64_t fingerprint = 14695981039346656037ULL;  // FNV-1a of every point and joint, to compare thread counts
   double resident_mb_warm = 0.0, resident_mb_end = 0.0;
+  // Heap allocations per stage over the judged frames (AllocationCount.h), and the frames with any.
+  std::array<std::uint64_t, 3> stage_allocations{};
+  long allocating_frames = 0;
+  std::uint64_t warm_up_allocations = 0;  // the same over the warm-up's frames
 };
 
 Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, const StarSet& hand_set, const Crowd& crowd, const Box& box,
@@ -262,25 +268,41 @@ Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, cons
   JobPool* pool = jobs ? &*jobs : nullptr;
   PixelSigmaEstimate pixel_sigma;
   std::vector<bool> taken;
+  // What each frame's stages hand on, kept from frame to frame as the runtime keeps them.
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> sigmas;
   Run run;
   const int frames = std::max(1, static_cast<int>(std::lround(a.seconds * a.rate_hz)));
   const int warm = std::min(frames - 1, static_cast<int>(std::lround(kWarmUp_s * a.rate_hz)));
+  for (auto& ms : run.stage_ms) ms.reserve(static_cast<std::size_t>(frames - warm));
+  run.frame_ms.reserve(static_cast<std::size_t>(frames - warm));
+  counting_heap_allocations();
   using Clock = std::chrono::steady_clock;
   const auto ms = [](Clock::time_point from, Clock::time_point to) { return std::chrono::duration<double, std::milli>(to - from).count(); };
-  const RigMatcher matcher(rig);
+  RigMatcher matcher(rig);
   for (int f = 0; f < frames; ++f) {
     const RigFrame frame = sim.next();
+    const std::uint64_t a0 = heap_allocations();
     const auto t0 = Clock::now();
-    const std::vector<MatchedPoint> matched = matcher.match(frame, match_settings_for(pixel_sigma.sigma_px()), pool);
-    const std::vector<double> sigmas = point_sigmas_m(matched, pixel_sigma.update(matched));
-    std::vector<Eigen::Vector3d> points;
-    points.reserve(matched.size());
+    const std::span<const MatchedPoint> matched = matcher.match_frame(frame, match_settings_for(pixel_sigma.sigma_px()), pool);
+    point_sigmas_m(matched, pixel_sigma.update(matched), sigmas);
+    points.clear();
     for (const MatchedPoint& m : matched) points.push_back(m.point.position_world);
     const auto t1 = Clock::now();
+    const std::uint64_t a1 = heap_allocations();
     const std::vector<TrackedStar>& tracked = stars.update(frame.time_s, points, sigmas);
     const auto t2 = Clock::now();
+    const std::uint64_t a2 = heap_allocations();
     track_hands(hand_ptrs, hand_star, tracked, frame.time_s, points, sigmas, taken, {}, pool);
     const auto t3 = Clock::now();
+    const std::uint64_t a3 = heap_allocations();
+    if (f < warm) run.warm_up_allocations += a3 - a0;
+    if (f >= warm) {
+      run.stage_allocations[0] += a1 - a0;
+      run.stage_allocations[1] += a2 - a1;
+      run.stage_allocations[2] += a3 - a2;
+      run.allocating_frames += a3 != a0 ? 1 : 0;
+    }
     if (f == warm) run.resident_mb_warm = resident_mb();
     if (verbose && frames >= 20 && (f + 1) % (frames / 10) == 0)
       std::cerr << "rhot-eval: frame " << f + 1 << " of " << frames << " (" << threads << " thread" << (threads == 1 ? "" : "s")
@@ -385,10 +407,19 @@ int scale(const ScaleArgs& a) {
   j["seed"] = a.seed;
   j["sigma_px"] = a.sigma;
   j["judged_frames"] = run.frame_ms.size();
+  const auto per_frame = [&](std::uint64_t n) {
+    return run.frame_ms.empty() ? 0.0 : static_cast<double>(n) / static_cast<double>(run.frame_ms.size());
+  };
   const std::array<const char*, 3> names{"matching", "stars", "hands"};
   for (std::size_t s = 0; s < names.size(); ++s) {
-    j["stages"][names[s]] = {{"p50_ms", percentile(run.stage_ms[s], 0.5)}, {"p99_ms", percentile(run.stage_ms[s], 0.99)}};
+    j["stages"][names[s]] = {{"p50_ms", percentile(run.stage_ms[s], 0.5)},
+                             {"p99_ms", percentile(run.stage_ms[s], 0.99)},
+                             {"allocations_per_frame", per_frame(run.stage_allocations[s])}};
   }
+  // The heap allocations of the three stages together (AllocationCount.h), over the judged frames.
+  j["allocations_per_frame"] = per_frame(run.stage_allocations[0] + run.stage_allocations[1] + run.stage_allocations[2]);
+  j["allocating_frames"] = run.allocating_frames;
+  j["warm_up_allocations"] = run.warm_up_allocations;
   j["frame_p50_ms"] = percentile(run.frame_ms, 0.5);
   j["frame_p99_ms"] = percentile(run.frame_ms, 0.99);
   const auto missed = std::count_if(run.frame_ms.begin(), run.frame_ms.end(), [&](double ms) { return ms > period_ms; });

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include "base/Capacity.h"
 #include "base/Check.h"
 
 namespace rhot {
@@ -38,8 +39,10 @@ void EpipolarIndex::build(const Eigen::Vector3d& epipole, std::span<const Eigen:
 
   points_.clear();
   near_.clear();
-  std::array<std::vector<double>, kTiers> theta;
-  std::array<std::vector<int>, kTiers> member;
+  for (Tier& tier : tiers_) {
+    tier.theta.clear();
+    tier.member.clear();
+  }
   for (std::size_t k = 0; k < normalised.size(); ++k) {
     if (!skip.empty() && skip[k] != 0) continue;
     const Eigen::Vector3d x = normalised[k].homogeneous();
@@ -57,26 +60,31 @@ void EpipolarIndex::build(const Eigen::Vector3d& epipole, std::span<const Eigen:
       ++t;
       s_min *= 4.0;
     }
-    theta[static_cast<std::size_t>(t)].push_back(angle(through));
-    member[static_cast<std::size_t>(t)].push_back(p);
+    tiers_[static_cast<std::size_t>(t)].theta.push_back(angle(through));
+    tiers_[static_cast<std::size_t>(t)].member.push_back(p);
   }
   // Each tier: about one point a bucket, its points sorted into buckets by angle (counting sort).
   double s_min = kNearEpipole;
   for (std::size_t t = 0; t < kTiers; ++t, s_min *= 4.0) {
     Tier& tier = tiers_[t];
     tier.s_min = s_min;
-    const int buckets = std::max(1, static_cast<int>(member[t].size()));
+    const std::vector<int>& member = tier.member;
+    const int buckets = std::max(1, static_cast<int>(member.size()));
+    reserve_room(tier.start, static_cast<std::size_t>(buckets) + 1);
+    reserve_room(tier.fill, static_cast<std::size_t>(buckets));
+    reserve_room(tier.bucket, member.size());
+    reserve_room(tier.items, member.size());
     tier.start.assign(static_cast<std::size_t>(buckets) + 1, 0);
-    std::vector<int> bucket(member[t].size());
-    for (std::size_t m = 0; m < member[t].size(); ++m) {
-      bucket[m] = bucket_of(theta[t][m], buckets);
-      ++tier.start[static_cast<std::size_t>(bucket[m]) + 1];
+    tier.bucket.resize(member.size());
+    for (std::size_t m = 0; m < member.size(); ++m) {
+      tier.bucket[m] = bucket_of(tier.theta[m], buckets);
+      ++tier.start[static_cast<std::size_t>(tier.bucket[m]) + 1];
     }
     for (std::size_t b = 1; b < tier.start.size(); ++b) tier.start[b] += tier.start[b - 1];
-    tier.items.assign(member[t].size(), 0);
-    std::vector<int> fill(tier.start.begin(), tier.start.end() - 1);
-    for (std::size_t m = 0; m < member[t].size(); ++m) {
-      tier.items[static_cast<std::size_t>(fill[static_cast<std::size_t>(bucket[m])]++)] = member[t][m];
+    tier.items.assign(member.size(), 0);
+    tier.fill.assign(tier.start.begin(), tier.start.end() - 1);
+    for (std::size_t m = 0; m < member.size(); ++m) {
+      tier.items[static_cast<std::size_t>(tier.fill[static_cast<std::size_t>(tier.bucket[m])]++)] = member[m];
     }
   }
 }

@@ -48,6 +48,11 @@ class EpipolarIndex {
     double s_min = 0.0;      // every point of the tier is at least this far from the epipole
     std::vector<int> start;  // bucket b holds items[start[b] .. start[b + 1])
     std::vector<int> items;  // indices into points_
+    // build's own, kept so that an index built pair after pair allocates nothing once it has seen
+    // its largest counts: the tier's points (indices into points_), their angles and buckets.
+    std::vector<int> member;
+    std::vector<double> theta;
+    std::vector<int> bucket, fill;
   };
   struct Point {
     int index = 0;

@@ -2,19 +2,23 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <unordered_map>
 
 #include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
 
+#include "base/Capacity.h"
 #include "base/Check.h"
 #include "base/Jobs.h"
 #include "tracking/geometry/EpipolarIndex.h"
 
 namespace rhot {
 
-namespace {
+// The working storage of one frame's matching, named so that MatchScratch (kept by a RigMatcher
+// from frame to frame) can hold it.
+namespace matching_detail {
 
 // Detections of one camera: pixels, undistorted normalised coordinates, and a coarse grid over
 // the image for nearest-detection lookups.
@@ -41,8 +45,22 @@ struct CameraDetections {
   std::vector<char> explained;
   // Per detection: the first link of its list of clusters (see Membership), -1 for none.
   std::vector<int> first_link;
+  // build's own: the detections OpenCV undistorts, and each detection's cell while filling the grid.
+  std::vector<cv::Point2d> hard_in;
+  std::vector<cv::Point2d> hard_out;
+  std::vector<std::size_t> hard;
+  std::vector<int> cell_of;
+  std::vector<int> fill;
 
+  // What the frame's detections replace (the storage is kept).
   void build(const Camera& camera, const CameraFrame& frame) {
+    const std::size_t n = frame.detections.size();
+    for (auto* v : {&pixel, &normalised}) reserve_room(*v, n);
+    for (auto* v : {&colour, &cell_of, &first_link}) reserve_room(*v, n);
+    reserve_room(explained, n);
+    reserve_room(items, n);
+    pixel.clear();
+    colour.clear();
     for (const Detection& d : frame.detections) {
       pixel.push_back(d.pixel);
       colour.push_back(d.colour);
@@ -50,22 +68,21 @@ struct CameraDetections {
     // Undistorted by Newton's method; OpenCV's iteration for the few it does not converge on.
     normalised.resize(pixel.size());
     const CameraIntrinsics& k = camera.intrinsics;
-    std::vector<cv::Point2d> in;
-    std::vector<std::size_t> hard;
+    hard_in.clear();
+    hard.clear();
     for (std::size_t i = 0; i < pixel.size(); ++i) {
       const Eigen::Vector2d distorted((pixel[i].x() - k.cx) / k.fx, (pixel[i].y() - k.cy) / k.fy);
       if (const auto xy = undistort_normalised(k.distortion, distorted)) {
         normalised[i] = *xy;
       } else {
-        in.emplace_back(pixel[i].x(), pixel[i].y());
+        hard_in.emplace_back(pixel[i].x(), pixel[i].y());
         hard.push_back(i);
       }
     }
-    if (!in.empty()) {
-      std::vector<cv::Point2d> out;
-      cv::undistortPoints(in, out, cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1), cv::Vec<double, 5>(k.distortion.data()),
+    if (!hard_in.empty()) {
+      cv::undistortPoints(hard_in, hard_out, cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1), cv::Vec<double, 5>(k.distortion.data()),
                           cv::noArray(), cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 1e-12));
-      for (std::size_t h = 0; h < hard.size(); ++h) normalised[hard[h]] = {out[h].x, out[h].y};
+      for (std::size_t h = 0; h < hard.size(); ++h) normalised[hard[h]] = {hard_out[h].x, hard_out[h].y};
     }
     // About one detection a cell: a lookup visits one to four cells holding a detection or two,
     // and the grid stays small enough to sit in the cache beside the other cameras'.
@@ -73,15 +90,17 @@ struct CameraDetections {
     cell_px = std::clamp(std::sqrt(area / static_cast<double>(std::max<std::size_t>(pixel.size(), 1))), 8.0, 256.0);
     cols = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.width_px / cell_px)) + 1);
     rows = std::max(1, static_cast<int>(std::ceil(camera.intrinsics.height_px / cell_px)) + 1);
+    reserve_room(cell_start, static_cast<std::size_t>(cols * rows) + 1);
+    reserve_room(fill, static_cast<std::size_t>(cols * rows));
     cell_start.assign(static_cast<std::size_t>(cols * rows) + 1, 0);
-    std::vector<int> cell_of(pixel.size());
+    cell_of.resize(pixel.size());
     for (std::size_t i = 0; i < pixel.size(); ++i) {
       cell_of[i] = cell(pixel[i]);
       if (cell_of[i] >= 0) ++cell_start[static_cast<std::size_t>(cell_of[i]) + 1];
     }
     for (std::size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
     items.assign(static_cast<std::size_t>(cell_start.back()), Item{});
-    std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+    fill.assign(cell_start.begin(), cell_start.end() - 1);
     for (std::size_t i = 0; i < pixel.size(); ++i) {
       if (cell_of[i] < 0) continue;
       items[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = {pixel[i].x(), pixel[i].y(), static_cast<int>(i),
@@ -136,8 +155,68 @@ struct Cluster {
   std::vector<Observation> observations;
   // grow_seed's refinement, kept when it is of exactly the detections the cluster holds (refine
   // then starts from it instead of computing it again).
-  std::optional<TriangulatedPoint> seed_refined;
+  bool has_seed_refined = false;
+  TriangulatedPoint seed_refined;
+
+  // Room for a point seen by every camera in each vector (done once: a cluster reused frame after
+  // frame then never grows).
+  void reserve(std::size_t cameras) {
+    if (detection.capacity() >= cameras && observations.capacity() >= cameras && point.cameras.capacity() >= cameras &&
+        seed_refined.cameras.capacity() >= cameras)
+      return;
+    detection.reserve(cameras);
+    observations.reserve(cameras);
+    point.cameras.reserve(cameras);
+    seed_refined.cameras.reserve(cameras);
+  }
 };
+
+// A seed grown into the other cameras (Matcher::grow_seed): a cluster, or a ghost (no detections).
+struct Grown {
+  Cluster cluster;
+  bool confirmed = false;
+};
+
+// One detection's seeds in a pair of cameras: the candidates on its epipolar line that may seed
+// (of its colour, meeting it inside the seed volume), nearest the line first, and those grown
+// ahead of time (Matcher::seed_pair).
+struct Candidate {
+  double residual = 0.0;  // off the epipolar line (normalised units)
+  int b = -1;
+  Eigen::Vector3d x{0, 0, 0};  // where the two rays meet
+  bool operator<(const Candidate& o) const { return residual < o.residual || (residual == o.residual && b < o.b); }
+};
+struct SeedPlan {
+  std::vector<Candidate> candidates;
+  std::vector<char> has_grown;  // per candidate: grown ahead, into MatchScratch::ahead[first_grown + c]
+  std::size_t first_grown = 0;
+};
+
+}  // namespace matching_detail
+
+// One frame's working storage, kept by RigMatcher::match_frame from frame to frame: every vector
+// keeps its capacity, and clusters and points are reused in place (counted, never shrunk), so
+// that once frames have shown it their largest counts, matching allocates nothing.
+struct MatchScratch {
+  std::vector<matching_detail::CameraDetections> cams;
+  std::vector<std::pair<int, int>> links;
+  std::vector<matching_detail::Cluster> clusters;  // the first cluster_count are this frame's
+  std::size_t cluster_count = 0;
+  EpipolarIndex index;
+  std::vector<std::size_t> open;
+  std::vector<matching_detail::SeedPlan> plans;
+  std::vector<matching_detail::Grown> ahead;  // the seeds of a pair's plans grown ahead, plan after plan
+  matching_detail::Grown grown;               // the serial pass's seed
+  std::vector<std::size_t> order;
+  std::vector<std::vector<char>> used;
+  TriangulatedPoint again;
+  std::vector<MatchedPoint> points;  // the first point_count are this frame's
+  std::size_t point_count = 0;
+};
+
+namespace {
+
+using namespace matching_detail;
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
@@ -198,8 +277,13 @@ double PixelSigmaEstimate::sigma_px() const { return std::max(std::sqrt(variance
 std::vector<double> point_sigmas_m(std::span<const MatchedPoint> points, double sigma_px) {
   std::vector<double> out;
   out.reserve(points.size());
-  for (const MatchedPoint& m : points) out.push_back(m.point.sigma_m_per_px * sigma_px);
+  point_sigmas_m(points, sigma_px, out);
   return out;
+}
+
+void point_sigmas_m(std::span<const MatchedPoint> points, double sigma_px, std::vector<double>& out) {
+  out.clear();
+  for (const MatchedPoint& m : points) out.push_back(m.point.sigma_m_per_px * sigma_px);
 }
 
 int truth_marker(const RigFrame& frame, const MatchedPoint& point) {
@@ -226,11 +310,27 @@ Eigen::Vector3d seed_box_half(const TrackingVolume& volume, const MatchSettings&
 class Matcher {
  public:
   Matcher(const CameraRig& rig, std::span<const CameraProjection> poses, const CameraVisibility& visibility, const RigFrame& frame,
-          const MatchSettings& settings, JobPool* jobs)
-      : rig_(rig), settings_(settings), jobs_(jobs), n_(rig.cameras.size()), cams_(n_), poses_(poses), visibility_(visibility) {
+          const MatchSettings& settings, JobPool* jobs, MatchScratch& scratch)
+      : rig_(rig),
+        settings_(settings),
+        jobs_(jobs),
+        n_(rig.cameras.size()),
+        s_(scratch),
+        cams_(scratch.cams),
+        poses_(poses),
+        visibility_(visibility),
+        links_(scratch.links),
+        clusters_(scratch.clusters),
+        index_(scratch.index),
+        open_(scratch.open),
+        plans_(scratch.plans) {
     for (std::size_t c = 0; c < n_; ++c) {
       RHOT_PRECONDITION(frame.cameras[c].camera == static_cast<int>(c), "match_and_triangulate: cameras in rig order");
     }
+    if (cams_.size() < n_) cams_.resize(n_);
+    links_.clear();
+    s_.cluster_count = 0;
+    s_.point_count = 0;
     for_each(n_, [&](std::size_t c) { cams_[c].build(rig.cameras[c], frame.cameras[c]); });
     if (rig.volume && settings.seed_margin >= 0.0) {
       const Eigen::Vector3d half = seed_box_half(*rig.volume, settings);
@@ -239,12 +339,14 @@ class Matcher {
     }
   }
 
-  std::vector<MatchedPoint> run() {
+  // The frame's points: the first point_count of the scratch's.
+  std::span<const MatchedPoint> run() {
     for (std::size_t i = 0; i < n_; ++i) {
       for (std::size_t j = i + 1; j < n_; ++j) seed_pair(i, j);
     }
-    for_each(clusters_.size(), [&](std::size_t k) { refine(clusters_[k]); });
-    return accept();
+    for_each(s_.cluster_count, [&](std::size_t k) { refine(clusters_[k]); });
+    accept();
+    return std::span<const MatchedPoint>(s_.points).first(s_.point_count);
   }
 
  private:
@@ -258,24 +360,6 @@ class Matcher {
       for (std::size_t k = 0; k < n; ++k) fn(k);
     }
   }
-
-  // One detection's seeds in a pair of cameras: the candidates on its epipolar line that may seed
-  // (of its colour, meeting it inside the seed volume), nearest the line first, and those grown
-  // ahead of time (see seed_pair).
-  struct Candidate {
-    double residual = 0.0;  // off the epipolar line (normalised units)
-    int b = -1;
-    Eigen::Vector3d x{0, 0, 0};  // where the two rays meet
-    bool operator<(const Candidate& o) const { return residual < o.residual || (residual == o.residual && b < o.b); }
-  };
-  struct Grown {
-    Cluster cluster;
-    bool confirmed = false;
-  };
-  struct SeedPlan {
-    std::vector<Candidate> candidates;
-    std::vector<std::optional<Grown>> grown;  // per candidate, where it was grown ahead
-  };
 
   // Seeds from every epipolar-consistent detection pair of cameras i < j, each grown into every
   // other camera. In order of i's detections: for each, its candidates nearest the line first,
@@ -293,6 +377,7 @@ class Matcher {
     // Many lines against many detections: index camera j's detections by epipolar line
     // (EpipolarIndex); few: test every one.
     open_.clear();
+    reserve_room(open_, cams_[i].pixel.size());
     for (std::size_t a = 0; a < cams_[i].pixel.size(); ++a) {
       if (cams_[i].explained[a] == 0) open_.push_back(a);
     }
@@ -301,13 +386,32 @@ class Matcher {
     const bool indexed = open_.size() * open_j >= kIndexAbovePairs;
     if (indexed) index_.build(j_from_i.translation, cams_[j].normalised, cams_[j].explained);
     const bool ahead = jobs_ != nullptr && jobs_->threads() > 1 && open_.size() >= kGrowAheadFrom;
-    if (plans_.size() < open_.size()) plans_.resize(open_.size());
-    const auto plan_one = [&](std::size_t k) {
-      plan_seeds(i, open_[k], j, e, indexed, plans_[k]);
-      if (ahead) grow_ahead(i, open_[k], j, plans_[k]);
-    };
+    if (plans_.size() < open_.size()) {
+      // Room for more plans, each for kPlanRoom candidates (a detection's epipolar band holds a few
+      // among a thousand markers), so that a plan that reaches a new count seldom allocates.
+      const std::size_t from = plans_.size();
+      plans_.resize(open_.size() + open_.size() / 2 + 16);
+      for (std::size_t k = from; k < plans_.size(); ++k) {
+        plans_[k].candidates.reserve(kPlanRoom);
+        plans_[k].has_grown.reserve(kPlanRoom);
+      }
+    }
+    const auto plan_one = [&](std::size_t k) { plan_seeds(i, open_[k], j, e, indexed, plans_[k]); };
     if (ahead) {
       for_each(open_.size(), plan_one);
+      // Each plan's seeds grown into its own run of one pool (made ready once for points seen by
+      // every camera), so that growing ahead allocates nothing once frames have filled it.
+      std::size_t total = 0;
+      for (std::size_t k = 0; k < open_.size(); ++k) {
+        plans_[k].first_grown = total;
+        total += plans_[k].candidates.size();
+      }
+      if (s_.ahead.size() < total) {
+        const std::size_t from = s_.ahead.size();
+        s_.ahead.resize(total + total / 2 + 16);
+        for (std::size_t g = from; g < s_.ahead.size(); ++g) s_.ahead[g].cluster.reserve(n_);
+      }
+      for_each(open_.size(), [&](std::size_t k) { grow_ahead(i, open_[k], j, plans_[k]); });
     } else {
       for (std::size_t k = 0; k < open_.size(); ++k) plan_one(k);  // too few to be worth a dispatch
     }
@@ -317,10 +421,14 @@ class Matcher {
       for (std::size_t c = 0; c < plan.candidates.size(); ++c) {
         const auto b = static_cast<std::size_t>(plan.candidates[c].b);
         if (cams_[j].explained[b] != 0 || explained_by_a_cluster(i, a, j, b)) continue;
-        Grown g = plan.grown[c] ? std::move(*plan.grown[c]) : grow_seed(i, a, j, b, plan.candidates[c].x);
-        const bool confirmed = g.confirmed;
-        keep(std::move(g));
-        if (confirmed) break;  // a is explained: no more seeds from it
+        const Grown* g = &s_.grown;
+        if (plan.has_grown[c] != 0) {
+          g = &s_.ahead[plan.first_grown + c];
+        } else {
+          grow_seed(i, a, j, b, plan.candidates[c].x, s_.grown);
+        }
+        keep(*g);
+        if (g->confirmed) break;  // a is explained: no more seeds from it
       }
     }
   }
@@ -329,11 +437,11 @@ class Matcher {
   void plan_seeds(std::size_t i, std::size_t a, std::size_t j, const Eigen::Matrix3d& e, bool indexed, SeedPlan& plan) const {
     thread_local std::vector<int> near_line;
     plan.candidates.clear();
-    plan.grown.clear();
     const double fj = 0.5 * (rig_.cameras[j].intrinsics.fx + rig_.cameras[j].intrinsics.fy);
     const Eigen::Vector3d line = e * cams_[i].normalised[a].homogeneous();
     const double tolerance = settings_.epipolar_tolerance_px * line.head<2>().norm() / fj;
     near_line.clear();
+    reserve_room(near_line, cams_[j].pixel.size());
     if (indexed) {
       index_.query(line, tolerance, near_line);
     } else {
@@ -344,6 +452,7 @@ class Matcher {
       }
     }
     const Eigen::Vector3d ray_a = poses_[i].ray_direction_world(cams_[i].normalised[a]);
+    reserve_room(plan.candidates, near_line.size());
     for (const int candidate : near_line) {
       const auto b = static_cast<std::size_t>(candidate);
       if (cams_[j].colour[b] != cams_[i].colour[a]) continue;
@@ -356,17 +465,21 @@ class Matcher {
     // Nearest the line first: the true match is, more often than not, and once it is confirmed
     // the ghosts behind it are never grown.
     std::sort(plan.candidates.begin(), plan.candidates.end());
-    plan.grown.resize(plan.candidates.size());
+    const std::size_t count = plan.candidates.size();
+    reserve_room(plan.has_grown, count);
+    plan.has_grown.assign(count, 0);
   }
 
   // The plan's seeds grown in order, as the serial pass would with what is explained now, up to
   // the first confirmed one.
-  void grow_ahead(std::size_t i, std::size_t a, std::size_t j, SeedPlan& plan) const {
+  void grow_ahead(std::size_t i, std::size_t a, std::size_t j, SeedPlan& plan) {
     for (std::size_t c = 0; c < plan.candidates.size(); ++c) {
       const auto b = static_cast<std::size_t>(plan.candidates[c].b);
       if (cams_[j].explained[b] != 0 || explained_by_a_cluster(i, a, j, b)) continue;
-      plan.grown[c] = grow_seed(i, a, j, b, plan.candidates[c].x);
-      if (plan.grown[c]->confirmed) return;
+      Grown& grown = s_.ahead[plan.first_grown + c];
+      grow_seed(i, a, j, b, plan.candidates[c].x, grown);
+      plan.has_grown[c] = 1;
+      if (grown.confirmed) return;
     }
   }
 
@@ -381,11 +494,14 @@ class Matcher {
   // The seed (a in camera i, b in camera j, meeting near x) grown into every other camera; a
   // cluster unless it is a ghost (then with no detections). Confirmed when three or more views
   // agree: its detections are then explained and seed nothing more (keep). Reads only the
-  // detections, so seeds can grow side by side.
-  Grown grow_seed(std::size_t i, std::size_t a, std::size_t j, std::size_t b, const Eigen::Vector3d& x) const {
+  // detections, so seeds can grow side by side. Written into `out` (its storage kept).
+  void grow_seed(std::size_t i, std::size_t a, std::size_t j, std::size_t b, const Eigen::Vector3d& x, Grown& out) const {
     thread_local std::vector<Observation> grown;
-    Grown out;
+    out.confirmed = false;
     Cluster& cl = out.cluster;
+    cl.reserve(n_);
+    if (grown.capacity() < n_) grown.reserve(n_);
+    cl.has_seed_refined = false;
     cl.seed_point = x;
     cl.colour = cams_[i].colour[a];
     cl.detection.assign(n_, -1);
@@ -408,25 +524,26 @@ class Matcher {
     // ghost: the acceptance rule would refuse it anyway (more missing than support).
     if (grown.size() == 2 && unseen > 2) {
       cl.detection.clear();
-      return out;
+      return;
     }
     // Three or more views that agree after refinement (every residual small) explain their
     // detections; a coincidental third detection near a ghost rarely survives refinement.
     if (grown.size() >= 3) {
-      auto refined = refine_point(poses_, grown, cl.seed_point, 5);
+      TriangulatedPoint& refined = cl.seed_refined;
+      bool ok = refine_point_into(poses_, grown, cl.seed_point, 5, refined);
       // A neighbouring marker's detection picked up in one or two cameras need not spoil the
       // others' agreement: the worst goes (never a, b), while three views or more remain.
-      for (int drop = 0; drop < 2 && refined && refined->max_residual_px > settings_.max_residual_px && grown.size() > 3; ++drop) {
-        const auto worst = static_cast<std::size_t>(refined->worst_observation);
+      for (int drop = 0; drop < 2 && ok && refined.max_residual_px > settings_.max_residual_px && grown.size() > 3; ++drop) {
+        const auto worst = static_cast<std::size_t>(refined.worst_observation);
         const auto camera = static_cast<std::size_t>(grown[worst].camera);
         if (camera == i || camera == j) break;
         cl.detection[camera] = -1;
         grown.erase(grown.begin() + static_cast<std::ptrdiff_t>(worst));
-        refined = refine_point(poses_, grown, refined->position_world, 5);
+        ok = refine_point_into(poses_, grown, refined.position_world, 5, refined);
       }
-      if (refined) {
-        out.confirmed = refined->max_residual_px <= settings_.max_residual_px;
-        cl.seed_point = refined->position_world;
+      if (ok) {
+        out.confirmed = refined.max_residual_px <= settings_.max_residual_px;
+        cl.seed_point = refined.position_world;
         // Where two markers project close together in one camera, the refined point picks the
         // right detection more often than the two-view seed did.
         bool changed = false;
@@ -440,17 +557,16 @@ class Matcher {
             }
           }
         }
-        if (!changed) cl.seed_refined = std::move(refined);
+        cl.has_seed_refined = !changed;
       }
     }
-    return out;
   }
 
   // A grown seed kept as a cluster (a ghost, with no detections, is not); a confirmed one
   // explains its detections.
-  void keep(Grown&& g) {
+  void keep(const Grown& g) {
     if (g.cluster.detection.empty()) return;
-    const int index = static_cast<int>(clusters_.size());
+    const int index = static_cast<int>(s_.cluster_count);
     for (std::size_t k = 0; k < n_; ++k) {
       if (g.cluster.detection[k] < 0) continue;
       const auto d = static_cast<std::size_t>(g.cluster.detection[k]);
@@ -458,7 +574,28 @@ class Matcher {
       cams_[k].first_link[d] = static_cast<int>(links_.size()) - 1;
       if (g.confirmed) cams_[k].explained[d] = 1;
     }
-    clusters_.push_back(std::move(g.cluster));
+    if (s_.cluster_count == clusters_.size()) {
+      // Room for more clusters at once, each made ready for a point seen by every camera.
+      clusters_.resize(clusters_.size() + clusters_.size() / 2 + 16);
+      for (std::size_t k = s_.cluster_count; k < clusters_.size(); ++k) clusters_[k].reserve(n_);
+    }
+    Cluster& cl = clusters_[s_.cluster_count++];
+    // Copied field by field into a cluster of an earlier frame, whose vectors keep their storage;
+    // what refine fills starts as a new cluster's.
+    cl.detection = g.cluster.detection;
+    cl.colour = g.cluster.colour;
+    cl.seed_point = g.cluster.seed_point;
+    cl.support = 0;
+    cl.missing = 0;
+    cl.point.position_world.setZero();
+    cl.point.reprojection_rms_px = 0.0;
+    cl.point.max_residual_px = 0.0;
+    cl.point.worst_observation = 0;
+    cl.point.cameras.clear();
+    cl.point.sigma_m_per_px = 0.0;
+    cl.observations.clear();
+    cl.has_seed_refined = g.cluster.has_seed_refined;
+    if (cl.has_seed_refined) cl.seed_refined = g.cluster.seed_refined;
   }
 
   // Refines a cluster, counts its support and the cameras that should have seen it.
@@ -467,15 +604,12 @@ class Matcher {
       if (cl.detection[k] >= 0) cl.observations.push_back({static_cast<int>(k), cams_[k].pixel[static_cast<std::size_t>(cl.detection[k])]});
     }
     cl.support = static_cast<int>(cl.observations.size());
-    if (cl.seed_refined) {
-      cl.point = std::move(*cl.seed_refined);
-    } else {
-      const auto t = refine_point(poses_, cl.observations, cl.seed_point, 5);
-      if (!t) {
-        cl.support = 0;
-        return;
-      }
-      cl.point = *t;
+    if (cl.has_seed_refined) {
+      std::swap(cl.point, cl.seed_refined);
+      cl.has_seed_refined = false;
+    } else if (!refine_point_into(poses_, cl.observations, cl.seed_point, 5, cl.point)) {
+      cl.support = 0;
+      return;
     }
     // A two-view seed predicts the other cameras only roughly; with the refined point, look again
     // for detections the first pass missed. The cameras that still see nothing there are missing
@@ -499,12 +633,10 @@ class Matcher {
     if (grew) {
       std::sort(cl.observations.begin(), cl.observations.end(),
                 [](const Observation& a, const Observation& b) { return a.camera < b.camera; });
-      const auto again = refine_point(poses_, cl.observations, cl.point.position_world, 5);
-      if (!again) {
+      if (!refine_point_into(poses_, cl.observations, cl.point.position_world, 5, cl.point)) {
         cl.support = 0;
         return;
       }
-      cl.point = *again;
     }
     // Drop, one at a time, observations that disagree with the others: a neighbouring marker's
     // detection picked up while growing.
@@ -517,12 +649,10 @@ class Matcher {
       }
       cl.detection[static_cast<std::size_t>(cl.observations[worst_at].camera)] = -1;
       cl.observations.erase(cl.observations.begin() + static_cast<std::ptrdiff_t>(worst_at));
-      const auto again = refine_point(poses_, cl.observations, cl.point.position_world, 5);
-      if (!again) {
+      if (!refine_point_into(poses_, cl.observations, cl.point.position_world, 5, cl.point)) {
         cl.observations.clear();
         break;
       }
-      cl.point = *again;
     }
     cl.support = static_cast<int>(cl.observations.size());
     if (cl.support < 2) return;
@@ -539,24 +669,29 @@ class Matcher {
   }
 
   // The clusters, best first (most support, then smallest RMS), each accepted unless it is weak
-  // or shares detections with a better one.
-  std::vector<MatchedPoint> accept() {
-    std::vector<std::size_t> order(clusters_.size());
+  // or shares detections with a better one; into the scratch's points.
+  void accept() {
+    std::vector<std::size_t>& order = s_.order;
+    reserve_room(order, s_.cluster_count);
+    order.resize(s_.cluster_count);
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
       if (clusters_[a].support != clusters_[b].support) return clusters_[a].support > clusters_[b].support;
       return clusters_[a].point.reprojection_rms_px < clusters_[b].point.reprojection_rms_px;
     });
-    std::vector<std::vector<bool>> used(n_);
-    for (std::size_t c = 0; c < n_; ++c) used[c].assign(cams_[c].pixel.size(), false);
-    std::vector<MatchedPoint> out;
+    std::vector<std::vector<char>>& used = s_.used;
+    if (used.size() < n_) used.resize(n_);
+    for (std::size_t c = 0; c < n_; ++c) {
+      reserve_room(used[c], cams_[c].pixel.size());
+      used[c].assign(cams_[c].pixel.size(), 0);
+    }
     for (const std::size_t k : order) {
       Cluster& cl = clusters_[k];
       if (cl.support < 2 || cl.point.reprojection_rms_px > settings_.max_rms_px || cl.missing > cl.support) continue;
       int taken = -1;  // the camera whose detection a better point already took
       int conflicts = 0;
       for (std::size_t c = 0; c < n_; ++c) {
-        if (cl.detection[c] >= 0 && used[c][static_cast<std::size_t>(cl.detection[c])]) {
+        if (cl.detection[c] >= 0 && used[c][static_cast<std::size_t>(cl.detection[c])] != 0) {
           ++conflicts;
           taken = static_cast<int>(c);
         }
@@ -568,30 +703,42 @@ class Matcher {
         // (Two clusters of one marker share two detections or more, so no duplicate comes of this.)
         if (cl.support < 4) continue;
         std::erase_if(cl.observations, [&](const Observation& o) { return o.camera == taken; });
-        const auto again = refine_point(poses_, cl.observations, cl.point.position_world, 5);
-        if (!again || again->max_residual_px > settings_.max_residual_px || again->reprojection_rms_px > settings_.max_rms_px) continue;
-        cl.point = *again;
+        TriangulatedPoint& again = s_.again;
+        if (again.cameras.capacity() < n_) again.cameras.reserve(n_);
+        if (!refine_point_into(poses_, cl.observations, cl.point.position_world, 5, again) ||
+            again.max_residual_px > settings_.max_residual_px || again.reprojection_rms_px > settings_.max_rms_px)
+          continue;
+        std::swap(cl.point, again);
         cl.detection[static_cast<std::size_t>(taken)] = -1;
       }
-      MatchedPoint m;
+      if (s_.point_count == s_.points.size()) {
+        // Room for more points at once, each made ready to be seen by every camera.
+        s_.points.resize(s_.points.size() + s_.points.size() / 2 + 16);
+        for (std::size_t p = s_.point_count; p < s_.points.size(); ++p) {
+          s_.points[p].point.cameras.reserve(n_);
+          s_.points[p].observations.reserve(n_);
+          s_.points[p].detection.reserve(n_);
+        }
+      }
+      MatchedPoint& m = s_.points[s_.point_count++];
       m.point = cl.point;
       m.observations = cl.observations;
       m.colour = cl.colour;
+      m.detection.clear();
       for (std::size_t c = 0; c < n_; ++c) {
         if (cl.detection[c] < 0) continue;
-        used[c][static_cast<std::size_t>(cl.detection[c])] = true;
+        used[c][static_cast<std::size_t>(cl.detection[c])] = 1;
         m.detection.push_back(cl.detection[c]);
       }
-      out.push_back(std::move(m));
     }
-    return out;
   }
 
   const CameraRig& rig_;
   const MatchSettings& settings_;
   JobPool* jobs_;  // nullptr: everything in order on the caller
   std::size_t n_;
-  std::vector<CameraDetections> cams_;
+  MatchScratch& s_;  // the storage below, and the clusters' and points' counts
+  std::vector<CameraDetections>& cams_;
   std::span<const CameraProjection> poses_;
   const CameraVisibility& visibility_;
   // The clusters containing each detection (to skip redundant seeds), as singly linked lists:
@@ -599,17 +746,18 @@ class Matcher {
   // seeded or joined a cluster three or more cameras confirm seeds nothing more: its marker is
   // found, and pairing it with another detection could only make a ghost. This is what keeps
   // seeding near linear in the markers.
-  std::vector<std::pair<int, int>> links_;
-  std::vector<Cluster> clusters_;
+  std::vector<std::pair<int, int>>& links_;
+  std::vector<Cluster>& clusters_;  // the first s_.cluster_count are this frame's
   // seed_pair's: camera j's open detections by epipolar line, camera i's open detections and
   // their plans.
   static constexpr std::size_t kIndexAbovePairs = 512;
   // Seeds are grown ahead in parallel for a pair with at least this many open detections in its
   // first camera (fewer: the dispatch costs more than it saves).
   static constexpr std::size_t kGrowAheadFrom = 16;
-  EpipolarIndex index_;
-  std::vector<std::size_t> open_;
-  std::vector<SeedPlan> plans_;
+  static constexpr std::size_t kPlanRoom = 64;
+  EpipolarIndex& index_;
+  std::vector<std::size_t>& open_;
+  std::vector<SeedPlan>& plans_;
   // Where seeds may lie (MatchSettings::seed_margin): everywhere without a volume.
   Eigen::Vector3d seed_lo_ = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
   Eigen::Vector3d seed_hi_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
@@ -626,11 +774,26 @@ CameraVisibility visibility_over_seed_box(const CameraRig& rig) {
 }  // namespace
 
 RigMatcher::RigMatcher(const CameraRig& rig)
-    : rig_(rig), projections_(camera_projections(rig)), visibility_(visibility_over_seed_box(rig)) {}
+    : rig_(rig),
+      projections_(camera_projections(rig)),
+      visibility_(visibility_over_seed_box(rig)),
+      scratch_(std::make_unique<MatchScratch>()) {}
+
+RigMatcher::~RigMatcher() = default;
+RigMatcher::RigMatcher(RigMatcher&&) noexcept = default;
+RigMatcher& RigMatcher::operator=(RigMatcher&&) noexcept = default;
 
 std::vector<MatchedPoint> RigMatcher::match(const RigFrame& frame, const MatchSettings& settings, JobPool* jobs) const {
   RHOT_PRECONDITION(frame.cameras.size() == rig_.cameras.size(), "match_and_triangulate: one CameraFrame per camera of the rig");
-  return Matcher(rig_, projections_, visibility_, frame, settings, jobs).run();
+  MatchScratch scratch;
+  const std::span<const MatchedPoint> points = Matcher(rig_, projections_, visibility_, frame, settings, jobs, scratch).run();
+  return {std::make_move_iterator(scratch.points.begin()),
+          std::make_move_iterator(scratch.points.begin() + static_cast<std::ptrdiff_t>(points.size()))};
+}
+
+std::span<const MatchedPoint> RigMatcher::match_frame(const RigFrame& frame, const MatchSettings& settings, JobPool* jobs) {
+  RHOT_PRECONDITION(frame.cameras.size() == rig_.cameras.size(), "match_and_triangulate: one CameraFrame per camera of the rig");
+  return Matcher(rig_, projections_, visibility_, frame, settings, jobs, *scratch_).run();
 }
 
 std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigFrame& frame, const MatchSettings& settings, JobPool* jobs) {
@@ -638,7 +801,10 @@ std::vector<MatchedPoint> match_and_triangulate(const CameraRig& rig, const RigF
   // No grid: for one frame its building would cost more than it saves (the points are the same).
   static const CameraVisibility kEveryCamera;
   const std::vector<CameraProjection> projections = camera_projections(rig);
-  return Matcher(rig, projections, kEveryCamera, frame, settings, jobs).run();
+  MatchScratch scratch;
+  const std::span<const MatchedPoint> points = Matcher(rig, projections, kEveryCamera, frame, settings, jobs, scratch).run();
+  return {std::make_move_iterator(scratch.points.begin()),
+          std::make_move_iterator(scratch.points.begin() + static_cast<std::ptrdiff_t>(points.size()))};
 }
 
 }  // namespace rhot

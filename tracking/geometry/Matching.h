@@ -29,6 +29,7 @@
 // of view). A marker hidden by occlusion from most cameras that could see it is refused like a
 // ghost: the rule cannot tell the two apart.
 
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -98,6 +99,10 @@ class PixelSigmaEstimate {
 
 // Per point its standard deviation per axis (metres) under sigma_px of detection noise.
 std::vector<double> point_sigmas_m(std::span<const MatchedPoint> points, double sigma_px);
+// The same into `out` (replacing what it held; its storage is kept).
+void point_sigmas_m(std::span<const MatchedPoint> points, double sigma_px, std::vector<double>& out);
+
+struct MatchScratch;
 
 // Matching for one rig, frame after frame: the rig prepared once (its cameras' projections, and
 // which cameras may see each part of the box where seeds may lie with the default settings, the
@@ -107,11 +112,19 @@ std::vector<double> point_sigmas_m(std::span<const MatchedPoint> points, double 
 class RigMatcher {
  public:
   explicit RigMatcher(const CameraRig& rig);
+  ~RigMatcher();
+  RigMatcher(RigMatcher&&) noexcept;
+  RigMatcher& operator=(RigMatcher&&) noexcept;
 
   // Precondition: frame.cameras[i].camera == i for every camera of the rig. With a job pool, the
   // cameras' detections, the seeds and the clusters' refinement are spread over its threads; the
   // points are the same, bit for bit, whatever the thread count (docs/tracking.md "Threads").
   std::vector<MatchedPoint> match(const RigFrame& frame, const MatchSettings& settings = {}, JobPool* jobs = nullptr) const;
+
+  // The same points, matched with this matcher's own working storage, kept from frame to frame:
+  // once frames have shown it their largest counts (of detections, seeds, points), matching
+  // allocates nothing. The points stay valid until the next call; one frame at a time.
+  std::span<const MatchedPoint> match_frame(const RigFrame& frame, const MatchSettings& settings = {}, JobPool* jobs = nullptr);
 
   const CameraRig& rig() const { return rig_; }
   const CameraVisibility& visibility() const { return visibility_; }
@@ -120,6 +133,7 @@ class RigMatcher {
   CameraRig rig_;
   std::vector<CameraProjection> projections_;
   CameraVisibility visibility_;
+  std::unique_ptr<MatchScratch> scratch_;  // match_frame's
 };
 
 // One frame, without a grid (building one costs more than a frame's matching saves): the same

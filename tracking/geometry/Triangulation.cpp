@@ -58,9 +58,19 @@ std::optional<TriangulatedPoint> refine_point(const CameraRig& rig, std::span<co
 
 std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> cameras, std::span<const Observation> observations,
                                               const Eigen::Vector3d& initial_world, int max_iterations) {
-  if (observations.size() < 2) return std::nullopt;
   TriangulatedPoint out;
-  out.position_world = initial_world;
+  if (!refine_point_into(cameras, observations, initial_world, max_iterations, out)) return std::nullopt;
+  return out;
+}
+
+bool refine_point_into(std::span<const CameraProjection> cameras, std::span<const Observation> observations,
+                       const Eigen::Vector3d& initial_world, int max_iterations, TriangulatedPoint& out) {
+  if (observations.size() < 2) return false;
+  Eigen::Vector3d position = initial_world;  // a copy: initial_world may be out's
+  double max_residual_px = 0.0;
+  int worst_observation = 0;
+  double rms_px = 0.0;
+  double sigma_m_per_px = 0.0;
   Eigen::Matrix<double, 2, 3> j;
   // Each pass evaluates the residuals at the current point; all but the last also take a step.
   // A step below 1e-9 m is not taken, so the residuals reported are those of the point returned.
@@ -68,36 +78,41 @@ std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> 
     Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
     Eigen::Vector3d jtr = Eigen::Vector3d::Zero();
     double sum = 0.0;
-    out.max_residual_px = 0.0;
+    max_residual_px = 0.0;
     for (std::size_t k = 0; k < observations.size(); ++k) {
       const Observation& o = observations[k];
-      const auto pixel = cameras[static_cast<std::size_t>(o.camera)].project(out.position_world, j);
-      if (!pixel) return std::nullopt;
+      const auto pixel = cameras[static_cast<std::size_t>(o.camera)].project(position, j);
+      if (!pixel) return false;
       const Eigen::Vector2d r = o.pixel - *pixel;
       const double r2 = r.squaredNorm();
       sum += r2;
-      if (r2 > out.max_residual_px) {
-        out.max_residual_px = r2;
-        out.worst_observation = static_cast<int>(k);
+      if (r2 > max_residual_px) {
+        max_residual_px = r2;
+        worst_observation = static_cast<int>(k);
       }
       jtj += j.transpose() * j;
       jtr += j.transpose() * r;
     }
-    out.max_residual_px = std::sqrt(out.max_residual_px);
-    out.reprojection_rms_px = std::sqrt(sum / static_cast<double>(observations.size()));
+    max_residual_px = std::sqrt(max_residual_px);
+    rms_px = std::sqrt(sum / static_cast<double>(observations.size()));
     Eigen::Matrix3d inverse;
     bool invertible = false;
     jtj.computeInverseWithCheck(inverse, invertible, 1e-300);
-    out.sigma_m_per_px = invertible ? std::sqrt(std::max(inverse.trace(), 0.0) / 3.0) : 0.0;
+    sigma_m_per_px = invertible ? std::sqrt(std::max(inverse.trace(), 0.0) / 3.0) : 0.0;
     if (it >= max_iterations || !invertible) break;
     const Eigen::Vector3d step = inverse * jtr;
     if (!step.allFinite() || step.norm() < 1e-9) break;
-    out.position_world += step;
+    position += step;
   }
-  if (!out.position_world.allFinite() || !std::isfinite(out.reprojection_rms_px)) return std::nullopt;
-  out.cameras.reserve(observations.size());
+  if (!position.allFinite() || !std::isfinite(rms_px)) return false;
+  out.position_world = position;
+  out.reprojection_rms_px = rms_px;
+  out.max_residual_px = max_residual_px;
+  out.worst_observation = worst_observation;
+  out.sigma_m_per_px = sigma_m_per_px;
+  out.cameras.clear();
   for (const Observation& o : observations) out.cameras.push_back(o.camera);
-  return out;
+  return true;
 }
 
 std::optional<Eigen::Matrix3d> crlb_covariance(const CameraRig& rig, const Eigen::Vector3d& p_world, std::span<const int> cameras,

@@ -47,6 +47,11 @@ std::optional<TriangulatedPoint> refine_point(const CameraRig& rig, std::span<co
 // The same with the rig's cameras prepared (camera_projections(rig)), for code that refines many points.
 std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> cameras, std::span<const Observation> observations,
                                               const Eigen::Vector3d& initial_world, int max_iterations = 10);
+// The same into `out`, written only when the refinement succeeds (returns true); its storage is
+// kept, so refining into one point over and over allocates nothing. initial_world may be out's own
+// position.
+bool refine_point_into(std::span<const CameraProjection> cameras, std::span<const Observation> observations,
+                       const Eigen::Vector3d& initial_world, int max_iterations, TriangulatedPoint& out);
 
 // Linear estimate refined by Gauss-Newton on the pixel reprojection error.
 std::optional<TriangulatedPoint> triangulate(const CameraRig& rig, std::span<const Observation> observations, int max_iterations = 10);

@@ -37,6 +37,10 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
     for (auto& list : *lists) list.reserve(kNearPointsKept);
   }
   out_.marker_point.assign(n, -1);
+  // Room for a frame's candidate points and reachable points, made once (each grows, doubling,
+  // only past it).
+  candidates_.reserve(kPointsRoom);
+  reach_.reserve(kPointsRoom);
   every_tip_marked_ = std::ranges::all_of(layout.fingertip_marker, [](int m) { return m >= 0; });
   // The model takes 63 markers at most (HiddenMarkerEstimator's sets of visible markers are bits).
   if (settings.fingertip_model && every_tip_marked_ && n - layout.hand_frame_markers <= 63) {
@@ -73,7 +77,8 @@ std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::predict_hi
   }
   // Only finite places are statistics: a NaN point handed to update() must not reach the model.
   if (std::ranges::all_of(seen, [](const auto& at) { return at.has_value() && at->allFinite(); })) {
-    Eigen::VectorXd x(static_cast<Eigen::Index>(3 * seen.size()));
+    Eigen::VectorXd& x = tip_sample_;
+    x.resize(static_cast<Eigen::Index>(3 * seen.size()));
     for (std::size_t k = 0; k < seen.size(); ++k) x.segment<3>(static_cast<Eigen::Index>(3 * k)) = *seen[k];
     tip_statistics_->add(x);
     const int frames = tip_statistics_->frames();
@@ -82,7 +87,8 @@ std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::predict_hi
     }
   }
   if (fingertip_model_frames() == 0) return out;
-  std::vector<Eigen::Vector3d> hand(seen.size());
+  std::vector<Eigen::Vector3d>& hand = tip_hand_;
+  hand.resize(seen.size());
   for (std::size_t k = 0; k < seen.size(); ++k) hand[k] = seen[k].value_or(Eigen::Vector3d::Constant(std::nan("")));
   const auto estimated = tip_estimator_->update_in_hand(time_s, hand);
   for (std::size_t f = 0; f < kFingerCount; ++f) {
@@ -158,10 +164,11 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
   }
 }
 
-std::vector<HandTracker::FingertipCandidate> HandTracker::fingertip_candidates(std::span<const Eigen::Vector3d> points,
-                                                                               const std::vector<bool>& taken,
-                                                                               std::span<const int> colour) {
-  std::vector<FingertipCandidate> out;
+const std::vector<HandTracker::FingertipCandidate>& HandTracker::fingertip_candidates(std::span<const Eigen::Vector3d> points,
+                                                                                      const std::vector<bool>& taken,
+                                                                                      std::span<const int> colour) {
+  std::vector<FingertipCandidate>& out = candidates_;
+  out.clear();
   for (auto& r : reappearing_now_) r.clear();
   for (auto& r : reachable_now_) r.clear();
   if (!out_.hand_seen) return out;
@@ -271,12 +278,8 @@ void HandTracker::reacquire_by_reach(std::span<const Eigen::Vector3d> points, st
     if ((finger_point_at(chain, fit.angles, point) - p).norm() > kReachMiss_m) return std::nullopt;
     return side_m;
   };
-  struct Reach {
-    double side_m;
-    double predicted_m;  // from the marker's predicted place
-    int marker, point;
-  };
-  std::vector<Reach> reach;
+  std::vector<Reach>& reach = reach_;
+  reach.clear();
   for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
     if (marker_point[m] >= 0 || layout_.markers[m].colour >= 0 || layout_.finger_of_marker(m) < 0 || held(m)) continue;
     for (std::size_t q = 0; q < points.size(); ++q) {
@@ -314,7 +317,8 @@ std::vector<Eigen::Vector3d> HandTracker::markers_in_hand() const {
 const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m,
                                        std::span<const int> marker_point) {
   // Each finger marker found this frame (hand frame; NaN where not).
-  std::vector<Eigen::Vector3d> found(layout_.markers.size(), Eigen::Vector3d::Constant(std::nan("")));
+  std::vector<Eigen::Vector3d>& found = found_;
+  found.assign(layout_.markers.size(), Eigen::Vector3d::Constant(std::nan("")));
   // This frame's lists become the last frame's; the emptied ones keep their room for the next.
   reappearing_.swap(reappearing_now_);
   reachable_.swap(reachable_now_);
@@ -348,7 +352,8 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
   std::array<FingerEvidence, kFingerCount> evidence{};
   const auto segment_tips = measure_segments(time_s, points, sigma_m, found, evidence);
   const auto start = std::chrono::steady_clock::now();
-  std::vector<std::optional<Eigen::Vector3d>> seen(modelled_.size());
+  std::vector<std::optional<Eigen::Vector3d>>& seen = seen_;
+  seen.assign(modelled_.size(), std::nullopt);
   for (std::size_t k = 0; k < modelled_.size(); ++k) {
     const Eigen::Vector3d& at = found[static_cast<std::size_t>(modelled_[k])];
     if (at.allFinite()) seen[k] = at;
@@ -463,35 +468,36 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
     std::size_t hand;
     int marker, point;
   };
-  std::vector<std::vector<HandTracker::FingertipCandidate>> candidates(hands.size());
+  // Each hand's candidates (and below its points per marker) in its own kept storage; the picks
+  // in the calling thread's (nothing allocated once frames have shown them their largest counts).
   per_hand([&](std::size_t h) {
     if (hand_star[h] < 0 || static_cast<std::size_t>(hand_star[h]) >= stars.size()) {
       hands[h]->begin(time_s, false, {});  // no star to follow this hand by
     } else {
       hands[h]->begin(time_s, stars[static_cast<std::size_t>(hand_star[h])]);
     }
-    candidates[h] = hands[h]->fingertip_candidates(points, taken, colour);
+    hands[h]->fingertip_candidates(points, taken, colour);
   });
-  std::vector<Pick> picks;
+  thread_local std::vector<Pick> picks;
+  picks.clear();
   for (std::size_t h = 0; h < hands.size(); ++h) {
-    for (const auto& c : candidates[h]) picks.push_back({c.distance_m, h, c.marker, c.point});
+    for (const auto& c : hands[h]->candidates_) picks.push_back({c.distance_m, h, c.marker, c.point});
   }
   // Nearest first over every hand: a point goes to the fingertip it fits best, whichever hand's.
   std::sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance_m < b.distance_m; });
-  std::vector<std::vector<int>> tip(hands.size());
-  for (std::size_t h = 0; h < hands.size(); ++h) tip[h].assign(hands[h]->layout().markers.size(), -1);
+  for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->tip_points_.assign(hands[h]->layout().markers.size(), -1);
   for (const Pick& p : picks) {
-    int& slot = tip[p.hand][static_cast<std::size_t>(p.marker)];
+    int& slot = hands[p.hand]->tip_points_[static_cast<std::size_t>(p.marker)];
     if (slot >= 0 || taken[static_cast<std::size_t>(p.point)]) continue;
     slot = p.point;
     taken[static_cast<std::size_t>(p.point)] = true;
   }
   // A marker left without a point takes a free one its finger reaches, hand by hand (a point near
   // both hands goes to the first).
-  for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->reacquire_by_reach(points, taken, tip[h]);
+  for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->reacquire_by_reach(points, taken, hands[h]->tip_points_);
   per_hand([&](std::size_t h) {
-    hands[h]->untangle_neighbours(points, tip[h]);
-    hands[h]->finish(time_s, points, sigma_m, tip[h]);
+    hands[h]->untangle_neighbours(points, hands[h]->tip_points_);
+    hands[h]->finish(time_s, points, sigma_m, hands[h]->tip_points_);
   });
 }
 

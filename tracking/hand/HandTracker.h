@@ -95,8 +95,9 @@ class HandTracker {
   // A fingertip the layout gives a colour takes only points of that colour (when `colour` is given),
   // within kColourGate_m of its predicted marker and without the reappearance rule: the colour
   // names the marker, so a finger lost for a while is found again at once.
-  std::vector<FingertipCandidate> fingertip_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken,
-                                                       std::span<const int> colour = {});
+  // The candidates stay valid until the next call (kept storage: nothing allocated per frame).
+  const std::vector<FingertipCandidate>& fingertip_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken,
+                                                              std::span<const int> colour = {});
   // Between fingertip_candidates and finish: neighbouring fingers' tips that took each other's
   // points put right. Nearest first keeps a swap once two fingers' predictions have crossed (where
   // fingertips crowd, the prediction follows the last solve, which followed the swapped points);
@@ -206,6 +207,25 @@ class HandTracker {
   std::vector<std::vector<Eigen::Vector3d>> reachable_, reachable_now_;
   // The most points kept in each of those lists (made room for once: nothing allocated per frame).
   static constexpr std::size_t kNearPointsKept = 16;
+  // Per-frame working storage, kept from frame to frame (nothing allocated once frames have shown
+  // it their largest counts): fingertip_candidates' result, track_hands' points per marker,
+  // reacquire_by_reach's reachable points, finish's found markers (hand frame) and the modelled
+  // ones seen, predict_hidden_tips' sample and hand.
+  struct Reach {
+    double side_m;
+    double predicted_m;  // from the marker's predicted place
+    int marker, point;
+  };
+  static constexpr std::size_t kPointsRoom = 64;
+  std::vector<FingertipCandidate> candidates_;
+  std::vector<int> tip_points_;
+  std::vector<Reach> reach_;
+  std::vector<Eigen::Vector3d> found_;
+  std::vector<std::optional<Eigen::Vector3d>> seen_;
+  Eigen::VectorXd tip_sample_;
+  std::vector<Eigen::Vector3d> tip_hand_;
+  friend void track_hands(std::span<HandTracker* const>, std::span<const int>, const std::vector<TrackedStar>&, double,
+                          std::span<const Eigen::Vector3d>, std::span<const double>, std::vector<bool>&, std::span<const int>, JobPool*);
   // The model's markers (layout indices): each fingertip marker, then the other finger markers.
   std::vector<int> modelled_;
   // Each hidden fingertip marker's place from the model (hand frame), fitting it first with this

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <tuple>
 
+#include "base/Capacity.h"
 #include "tracking/rigid/RigidFit.h"
 
 namespace rhot {
@@ -162,9 +164,13 @@ std::optional<IdentifiedStar> fit_star(const StarLibrary& library, int star, con
 
 namespace {
 
-// Per point: the points at a star edge's length from it, with the distance (found by a sweep
-// along x).
-using Neighbours = std::vector<std::vector<std::pair<int, double>>>;
+// Point p's neighbours: the points at a star edge's length from it, with the distance (found by a
+// sweep along x, in the order found; edge_candidates).
+std::span<const std::pair<int, double>> neighbours_of(const StarIdentificationScratch& scratch, std::size_t p) {
+  const auto begin = static_cast<std::size_t>(scratch.neighbour_start[p]);
+  const auto end = static_cast<std::size_t>(scratch.neighbour_start[p + 1]);
+  return std::span<const std::pair<int, double>>(scratch.neighbour).subspan(begin, end - begin);
+}
 
 // The tolerance of an edge between two points: gate_sigmas standard deviations of its length, at
 // least the library's least tolerance.
@@ -173,32 +179,51 @@ double edge_tolerance(const StarLibrary& library, const StarPoints& points, std:
   return std::max(library.edge_tolerance_m(), library.settings().gate_sigmas * sd);
 }
 
-Neighbours edge_candidates(const StarLibrary& library, const StarPoints& points) {
+void edge_candidates(const StarLibrary& library, const StarPoints& points, StarIdentificationScratch& scratch) {
   const std::size_t n = points.size();
   double largest_sigma = 0.0;
   for (std::size_t i = 0; i < n; ++i) largest_sigma = std::max(largest_sigma, points.sigma(i));
   const double reach =
       library.longest_edge_m() + std::max(library.edge_tolerance_m(), library.settings().gate_sigmas * std::sqrt(2.0) * largest_sigma);
-  std::vector<std::size_t> by_x(n);
+  std::vector<std::size_t>& by_x = scratch.by_x;
+  reserve_room(by_x, n);
+  by_x.resize(n);
   for (std::size_t i = 0; i < n; ++i) by_x[i] = i;
   std::sort(by_x.begin(), by_x.end(), [&](std::size_t a, std::size_t b) { return points[a].x() < points[b].x(); });
-  Neighbours neighbours(n);  // (point, distance), any order
+  std::vector<StarIdentificationScratch::Edge>& edges = scratch.edges;
+  edges.clear();
   for (std::size_t a = 0; a < n; ++a) {
     const Eigen::Vector3d& p = points[by_x[a]];
     if (!p.allFinite()) continue;
     for (std::size_t b = a + 1; b < n && points[by_x[b]].x() - p.x() <= reach; ++b) {
       const double d = (points[by_x[b]] - p).norm();
       if (!library.is_edge_length(d, edge_tolerance(library, points, by_x[a], by_x[b]))) continue;
-      neighbours[by_x[a]].emplace_back(static_cast<int>(by_x[b]), d);
-      neighbours[by_x[b]].emplace_back(static_cast<int>(by_x[a]), d);
+      edges.push_back({static_cast<int>(by_x[a]), static_cast<int>(by_x[b]), d});
     }
   }
-  return neighbours;
+  // Per point, its edges' other ends in the order found.
+  std::vector<int>& start = scratch.neighbour_start;
+  reserve_room(start, n + 1);
+  reserve_room(scratch.fill, n);
+  reserve_room(scratch.neighbour, 2 * edges.size());
+  start.assign(n + 1, 0);
+  for (const auto& e : edges) {
+    ++start[static_cast<std::size_t>(e.a) + 1];
+    ++start[static_cast<std::size_t>(e.b) + 1];
+  }
+  for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+  scratch.fill.assign(start.begin(), start.end() - 1);
+  scratch.neighbour.resize(static_cast<std::size_t>(start.back()));
+  for (const auto& e : edges) {
+    scratch.neighbour[static_cast<std::size_t>(scratch.fill[static_cast<std::size_t>(e.a)]++)] = {e.b, e.d};
+    scratch.neighbour[static_cast<std::size_t>(scratch.fill[static_cast<std::size_t>(e.b)]++)] = {e.a, e.d};
+  }
 }
 
+// Hypotheses: stars, and per star the faces that found it (support).
 struct Hypotheses {
-  std::vector<IdentifiedStar> stars;
-  std::vector<int> support;  // per hypothesis: faces that found it
+  std::vector<IdentifiedStar>& stars;
+  std::vector<int>& support;
 };
 
 // A three-marker fit with its fourth marker added where the three put it, if a point is there and
@@ -229,17 +254,19 @@ IdentifiedStar with_fourth_marker(const StarLibrary& library, const IdentifiedSt
 
 // Hypotheses from every candidate triangle (i < j < k) that is a face of the set: per triangle, of
 // the stars with a matching face, the reading whose edges match best.
-Hypotheses face_hypotheses(const StarLibrary& library, const StarPoints& points, const Neighbours& neighbours) {
+void face_hypotheses(const StarLibrary& library, const StarPoints& points, StarIdentificationScratch& scratch) {
   auto distance_between = [&](int i, int j) -> double {
-    for (const auto& [k, d] : neighbours[static_cast<std::size_t>(i)]) {
+    for (const auto& [k, d] : neighbours_of(scratch, static_cast<std::size_t>(i))) {
       if (k == j) return d;
     }
     return -1.0;
   };
-  Hypotheses out;
-  std::vector<const StarLibrary::Face*> faces;
+  Hypotheses out{scratch.stars, scratch.support};
+  out.stars.clear();
+  out.support.clear();
+  std::vector<const StarLibrary::Face*>& faces = scratch.faces;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const auto& ni = neighbours[i];
+    const auto ni = neighbours_of(scratch, i);
     for (std::size_t x = 0; x < ni.size(); ++x) {
       const int j = ni[x].first;
       if (j <= static_cast<int>(i)) continue;
@@ -287,19 +314,23 @@ Hypotheses face_hypotheses(const StarLibrary& library, const StarPoints& points,
       }
     }
   }
-  return out;
 }
 
 // A star in view is found from each of its faces whose edges are within the tolerance: the number
 // of faces that found a hypothesis is its support. A chance match rarely has more than one.
 // Hypotheses of one star on the same points become one, their support added.
-Hypotheses merge_duplicates(const Hypotheses& found) {
-  std::vector<std::size_t> order(found.stars.size());
+void merge_duplicates(StarIdentificationScratch& scratch) {
+  const Hypotheses found{scratch.stars, scratch.support};
+  std::vector<std::size_t>& order = scratch.order;
+  reserve_room(order, found.stars.size());
+  order.resize(found.stars.size());
   for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return std::tie(found.stars[a].star, found.stars[a].point) < std::tie(found.stars[b].star, found.stars[b].point);
   });
-  Hypotheses unique;
+  Hypotheses unique{scratch.unique, scratch.unique_support};
+  unique.stars.clear();
+  unique.support.clear();
   for (const std::size_t k : order) {
     const IdentifiedStar& x = found.stars[k];
     if (!unique.stars.empty() && unique.stars.back().star == x.star && unique.stars.back().point == x.point) {
@@ -309,14 +340,14 @@ Hypotheses merge_duplicates(const Hypotheses& found) {
     unique.stars.push_back(x);
     unique.support.push_back(found.support[k]);
   }
-  return unique;
 }
 
 // Choosing among conflicting hypotheses (sharing a point, or one star at two places): a chance
 // triangle takes points from two or three real stars, so it conflicts with more hypotheses than
 // a real star does. Repeatedly take the hypothesis with the most markers, then the most support,
 // then the fewest conflicts left, then the best matching edges; drop what it conflicts with.
-std::vector<IdentifiedStar> resolve_conflicts(const Hypotheses& hypotheses) {
+void resolve_conflicts(StarIdentificationScratch& scratch, std::vector<IdentifiedStar>& out) {
+  const Hypotheses hypotheses{scratch.unique, scratch.unique_support};
   const std::vector<IdentifiedStar>& stars = hypotheses.stars;
   const std::size_t h = stars.size();
   auto conflict = [&](std::size_t a, std::size_t b) {
@@ -326,22 +357,46 @@ std::vector<IdentifiedStar> resolve_conflicts(const Hypotheses& hypotheses) {
     }
     return false;
   };
-  std::vector<std::vector<std::size_t>> conflicts(h);
+  // Per hypothesis, those it conflicts with, in the order the pairs are found.
+  std::vector<std::pair<std::size_t, std::size_t>>& pairs = scratch.conflict_pairs;
+  pairs.clear();
   for (std::size_t a = 0; a < h; ++a) {
     for (std::size_t b = a + 1; b < h; ++b) {
-      if (!conflict(a, b)) continue;
-      conflicts[a].push_back(b);
-      conflicts[b].push_back(a);
+      if (conflict(a, b)) pairs.emplace_back(a, b);
     }
   }
-  std::vector<int> degree(h);
-  for (std::size_t a = 0; a < h; ++a) degree[a] = static_cast<int>(conflicts[a].size());
-  std::vector<bool> alive(h, true);
-  std::vector<IdentifiedStar> out;
+  std::vector<std::size_t>& start = scratch.conflict_start;
+  reserve_room(start, h + 1);
+  reserve_room(scratch.conflict_fill, h);
+  reserve_room(scratch.conflict, 2 * pairs.size());
+  reserve_room(scratch.degree, h);
+  reserve_room(scratch.alive, h);
+  start.assign(h + 1, 0);
+  for (const auto& [a, b] : pairs) {
+    ++start[a + 1];
+    ++start[b + 1];
+  }
+  for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+  std::vector<std::size_t>& fill = scratch.conflict_fill;
+  fill.assign(start.begin(), start.end() - 1);
+  scratch.conflict.resize(start.back());
+  for (const auto& [a, b] : pairs) {
+    scratch.conflict[fill[a]++] = b;
+    scratch.conflict[fill[b]++] = a;
+  }
+  const auto conflicts = [&](std::size_t a) {
+    return std::span<const std::size_t>(scratch.conflict).subspan(start[a], start[a + 1] - start[a]);
+  };
+  std::vector<int>& degree = scratch.degree;
+  degree.resize(h);
+  for (std::size_t a = 0; a < h; ++a) degree[a] = static_cast<int>(conflicts(a).size());
+  std::vector<char>& alive = scratch.alive;
+  alive.assign(h, 1);
+  out.clear();
   for (;;) {
     std::size_t best = h;
     for (std::size_t a = 0; a < h; ++a) {
-      if (!alive[a]) continue;
+      if (alive[a] == 0) continue;
       if (best == h) {
         best = a;
         continue;
@@ -355,21 +410,30 @@ std::vector<IdentifiedStar> resolve_conflicts(const Hypotheses& hypotheses) {
     }
     if (best == h) break;
     out.push_back(stars[best]);
-    alive[best] = false;
-    for (const std::size_t c : conflicts[best]) {
-      if (!alive[c]) continue;
-      alive[c] = false;
-      for (const std::size_t d : conflicts[c]) --degree[d];
+    alive[best] = 0;
+    for (const std::size_t c : conflicts(best)) {
+      if (alive[c] == 0) continue;
+      alive[c] = 0;
+      for (const std::size_t d : conflicts(c)) --degree[d];
     }
   }
-  return out;
 }
 
 }  // namespace
 
 std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, const StarPoints& points) {
-  const Neighbours neighbours = edge_candidates(library, points);
-  return resolve_conflicts(merge_duplicates(face_hypotheses(library, points, neighbours)));
+  StarIdentificationScratch scratch;
+  std::vector<IdentifiedStar> out;
+  identify_stars(library, points, scratch, out);
+  return out;
+}
+
+void identify_stars(const StarLibrary& library, const StarPoints& points, StarIdentificationScratch& scratch,
+                    std::vector<IdentifiedStar>& out) {
+  edge_candidates(library, points, scratch);
+  face_hypotheses(library, points, scratch);
+  merge_duplicates(scratch);
+  resolve_conflicts(scratch, out);
 }
 
 }  // namespace rhot

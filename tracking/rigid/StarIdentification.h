@@ -15,6 +15,7 @@
 #include <array>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -106,6 +107,34 @@ struct IdentifiedStar {
 StarPoints star_points(const StarLibrary& library, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m = {});
 
 std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, const StarPoints& points);
+
+// identify_stars' working storage: kept by a caller that identifies frame after frame, so that
+// once frames have shown it their largest counts identification allocates nothing.
+struct StarIdentificationScratch {
+  std::vector<std::size_t> by_x;
+  // Pairs of points at a star edge's length (point, point, distance), in the order found; then per
+  // point its neighbours (point, distance), point p's at neighbour[neighbour_start[p] ..
+  // neighbour_start[p + 1]).
+  struct Edge {
+    int a, b;
+    double d;
+  };
+  std::vector<Edge> edges;
+  std::vector<int> neighbour_start, fill;
+  std::vector<std::pair<int, double>> neighbour;
+  std::vector<const StarLibrary::Face*> faces;
+  std::vector<IdentifiedStar> stars, unique;  // hypotheses, then with duplicates merged
+  std::vector<int> support, unique_support;   // per hypothesis: faces that found it
+  std::vector<std::size_t> order;
+  // Conflicting pairs of hypotheses, then per hypothesis those it conflicts with (as above).
+  std::vector<std::pair<std::size_t, std::size_t>> conflict_pairs;
+  std::vector<std::size_t> conflict_start, conflict_fill, conflict;
+  std::vector<int> degree;
+  std::vector<char> alive;
+};
+// The same stars as identify_stars, into `out` (replacing what it held), with the scratch's storage.
+void identify_stars(const StarLibrary& library, const StarPoints& points, StarIdentificationScratch& scratch,
+                    std::vector<IdentifiedStar>& out);
 inline std::vector<IdentifiedStar> identify_stars(const StarLibrary& library, std::span<const Eigen::Vector3d> points_world) {
   return identify_stars(library, star_points(library, points_world));
 }

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "base/Capacity.h"
 #include "tracking/rigid/RigidFit.h"
 
 namespace rhot {
@@ -26,6 +27,8 @@ StarTracker::StarTracker(StarLibrary library, StarTrackerSettings settings) : li
     for (const Eigen::Vector3d& m : markers) sum += (m - centre).squaredNorm();
     spread_m_.push_back(std::max(std::sqrt(sum / 4.0), 1e-3));
   }
+  // Room for the pairs of a frame's points and stars' markers (each grows, doubling, only past it).
+  scratch_.pairings.reserve(64 * library_.stars().size() + 64);
 }
 
 void StarTracker::set_motion(int star, const PoseKalmanSettings& motion) {
@@ -123,8 +126,12 @@ bool StarTracker::filter(TrackedStar& s, const IdentifiedStar& fit, double time_
   return true;
 }
 
-StarTracker::Candidate StarTracker::start_candidate(const IdentifiedStar& found, const StarPoints& points, double time_s) const {
-  Candidate c;
+void StarTracker::start_candidate(const IdentifiedStar& found, const StarPoints& points, double time_s, Candidate& c) const {
+  // A candidate of an earlier frame's storage, started afresh (its readings' room kept).
+  c.motion = TrackedStar{};
+  c.readings.clear();
+  c.frames = 0;
+  c.confidence = 0.0;
   c.slot_point = found.point;
   c.motion.star = found.star;
   c.motion.id = library_.stars()[static_cast<std::size_t>(found.star)].id;
@@ -141,7 +148,6 @@ StarTracker::Candidate StarTracker::start_candidate(const IdentifiedStar& found,
     } while (std::next_permutation(marker.begin(), marker.end()));
   }
   weigh(c, points);
-  return c;
 }
 
 void StarTracker::weigh(Candidate& c, const StarPoints& points) const {
@@ -187,15 +193,12 @@ void StarTracker::weigh(Candidate& c, const StarPoints& points) const {
   }
 }
 
-bool StarTracker::follow(Candidate& c, const StarPoints& points, std::vector<bool>& taken, double time_s) const {
+bool StarTracker::follow(Candidate& c, const StarPoints& points, std::vector<char>& taken, double time_s) {
   const Rigid3d predicted = predict(c.motion, time_s);
   const Reading& best = c.readings.front();
   const double since = time_s - c.motion.last_seen_s;
-  struct Pairing {
-    double d;
-    int slot, point;
-  };
-  std::vector<Pairing> pairings;
+  std::vector<Pairing>& pairings = scratch_.pairings;
+  pairings.clear();
   for (std::size_t slot = 0; slot < 4; ++slot) {
     const Eigen::Vector3d at =
         predicted * library_.stars()[static_cast<std::size_t>(best.star)].markers_m[static_cast<std::size_t>(best.slot_marker[slot])];
@@ -204,18 +207,22 @@ bool StarTracker::follow(Candidate& c, const StarPoints& points, std::vector<boo
       const double gate = settings_.gate_m + 0.5 * settings_.max_acceleration_m_s2 * since * since +
                           settings_.gate_sigmas * std::sqrt(3.0) * points.sigma(q);
       const double d = (points[q] - at).norm();
-      if (d <= gate) pairings.push_back({d, static_cast<int>(slot), static_cast<int>(q)});
+      if (d <= gate) pairings.push_back({d, -1, static_cast<int>(slot), static_cast<int>(q)});
     }
   }
   std::sort(pairings.begin(), pairings.end(), [](const Pairing& a, const Pairing& b) { return a.d < b.d; });
   std::array<int, 4> slot_point{-1, -1, -1, -1};
-  std::vector<int> used;
+  std::array<int, 4> used{};
+  std::size_t used_count = 0;
   for (const Pairing& p : pairings) {
-    if (slot_point[static_cast<std::size_t>(p.slot)] >= 0 || std::find(used.begin(), used.end(), p.point) != used.end()) continue;
-    slot_point[static_cast<std::size_t>(p.slot)] = p.point;
-    used.push_back(p.point);
+    if (slot_point[static_cast<std::size_t>(p.marker)] >= 0 ||
+        std::find(used.begin(), used.begin() + static_cast<std::ptrdiff_t>(used_count), p.point) !=
+            used.begin() + static_cast<std::ptrdiff_t>(used_count))
+      continue;
+    slot_point[static_cast<std::size_t>(p.marker)] = p.point;
+    used[used_count++] = p.point;
   }
-  if (used.size() < 3) return false;
+  if (used_count < 3) return false;
   // The constellation must still be rigid as its best reading says.
   std::array<int, 4> point{-1, -1, -1, -1};
   for (std::size_t slot = 0; slot < 4; ++slot) point[static_cast<std::size_t>(best.slot_marker[slot])] = slot_point[slot];
@@ -230,19 +237,19 @@ bool StarTracker::follow(Candidate& c, const StarPoints& points, std::vector<boo
     c.motion.angular_velocity_rad_s = turn.axis() * turn.angle() / since;
   }
   c.motion.last_seen_s = time_s;
-  for (const int q : used) taken[static_cast<std::size_t>(q)] = true;
+  for (std::size_t u = 0; u < used_count; ++u) taken[static_cast<std::size_t>(used[u])] = 1;
   return true;
 }
 
-bool StarTracker::may_settle(const Candidate& c, const std::vector<bool>& updated, const std::vector<Rigid3d>& predicted,
+bool StarTracker::may_settle(const Candidate& c, const std::vector<char>& updated, const std::vector<Rigid3d>& predicted,
                              double time_s) const {
   const auto s = static_cast<std::size_t>(c.motion.star);
-  if (updated[s]) return false;  // the star is already somewhere else this frame
+  if (updated[s] != 0) return false;  // the star is already somewhere else this frame
   if (c.confidence < settings_.min_confidence) return false;
   if (c.motion.markers_seen < 4 && c.frames < settings_.confirm_frames) return false;
   // A label swap: these markers sit where another star, seen moments ago, is predicted.
   for (std::size_t o = 0; o < stars_.size(); ++o) {
-    if (o != s && recent_and_confirmed(stars_[o]) && !updated[o] &&
+    if (o != s && recent_and_confirmed(stars_[o]) && updated[o] == 0 &&
         (predicted[o].translation - c.motion.world_from_star.translation).norm() < settings_.swap_distance_m) {
       return false;
     }
@@ -254,14 +261,11 @@ bool StarTracker::may_settle(const Candidate& c, const std::vector<bool>& update
 }
 
 // Recently seen stars: nearest points to their predicted markers, closest pairs first, refitted.
-void StarTracker::follow_stars(double time_s, const StarPoints& points, std::vector<bool>& taken, std::vector<bool>& updated,
+void StarTracker::follow_stars(double time_s, const StarPoints& points, std::vector<char>& taken, std::vector<char>& updated,
                                std::vector<Rigid3d>& predicted) {
   const std::size_t n = points.size();
-  struct Pairing {
-    double d;
-    int star, marker, point;
-  };
-  std::vector<Pairing> pairings;
+  std::vector<Pairing>& pairings = scratch_.pairings;
+  pairings.clear();
   for (std::size_t s = 0; s < stars_.size(); ++s) {
     if (!recent(stars_[s])) continue;
     predicted[s] = predict(stars_[s], time_s);
@@ -280,33 +284,42 @@ void StarTracker::follow_stars(double time_s, const StarPoints& points, std::vec
   // A point as near two stars' predicted markers as its own noise allows (two objects' markers
   // passing within millimetres) could be either's: neither takes it, and each is fitted from its
   // others.
-  std::vector<int> gated_star(n, -1);
-  std::vector<bool> contested(n, false);
+  std::vector<int>& gated_star = scratch_.gated_star;
+  std::vector<char>& contested = scratch_.contested;
+  reserve_room(gated_star, n);
+  reserve_room(contested, n);
+  gated_star.assign(n, -1);
+  contested.assign(n, 0);
   for (const Pairing& p : pairings) {
     if (p.d > settings_.gate_sigmas * std::sqrt(3.0) * points.sigma(static_cast<std::size_t>(p.point))) continue;
     int& first = gated_star[static_cast<std::size_t>(p.point)];
-    if (first >= 0 && first != p.star) contested[static_cast<std::size_t>(p.point)] = true;
+    if (first >= 0 && first != p.star) contested[static_cast<std::size_t>(p.point)] = 1;
     first = p.star;
   }
   // Nor does a fresh identification this frame (it would find one of the two in it).
   for (std::size_t q = 0; q < n; ++q)
-    if (contested[q]) taken[q] = true;
-  std::vector<std::array<int, 4>> assigned(stars_.size(), {-1, -1, -1, -1});
-  std::vector<bool> point_claimed(n, false);
+    if (contested[q] != 0) taken[q] = 1;
+  std::vector<std::array<int, 4>>& assigned = scratch_.assigned;
+  std::vector<char>& point_claimed = scratch_.point_claimed;
+  assigned.assign(stars_.size(), {-1, -1, -1, -1});
+  reserve_room(point_claimed, n);
+  point_claimed.assign(n, 0);
   for (const Pairing& p : pairings) {
     auto& slot = assigned[static_cast<std::size_t>(p.star)][static_cast<std::size_t>(p.marker)];
-    if (slot >= 0 || point_claimed[static_cast<std::size_t>(p.point)] || contested[static_cast<std::size_t>(p.point)]) continue;
+    if (slot >= 0 || point_claimed[static_cast<std::size_t>(p.point)] != 0 || contested[static_cast<std::size_t>(p.point)] != 0) continue;
     slot = p.point;
-    point_claimed[static_cast<std::size_t>(p.point)] = true;
+    point_claimed[static_cast<std::size_t>(p.point)] = 1;
   }
   for (std::size_t s = 0; s < stars_.size(); ++s) {
     if (!recent(stars_[s])) continue;
     // The prediction says which points are the star's; the edges say which marker each one is (a
     // star turning fast can put a marker nearest another's prediction).
-    std::vector<int> mine;
+    std::array<int, 4> mine_points{};
+    std::size_t mine_count = 0;
     for (const int p : assigned[s]) {
-      if (p >= 0) mine.push_back(p);
+      if (p >= 0) mine_points[mine_count++] = p;
     }
+    const std::span<const int> mine(mine_points.data(), mine_count);
     std::optional<IdentifiedStar> fit;
     // First as predicted (under noise the edges alone may not tell two markers apart), then as the
     // edges say.
@@ -316,8 +329,10 @@ void StarTracker::follow_stars(double time_s, const StarPoints& points, std::vec
       fit = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), mine, points), points);
     // One of four points may be wrong (two markers merged into one point): the best three.
     for (std::size_t drop = 0; !fit && mine.size() == 4 && drop < 4; ++drop) {
-      std::vector<int> three = mine;
-      three.erase(three.begin() + static_cast<std::ptrdiff_t>(drop));
+      std::array<int, 3> three{};
+      for (std::size_t k = 0, t = 0; k < 4; ++k) {
+        if (k != drop) three[t++] = mine[k];
+      }
       auto f = fit_star(library_, static_cast<int>(s), best_correspondence(library_, static_cast<int>(s), three, points), points);
       if (f && (!fit || f->chi2 < fit->chi2)) fit = f;
     }
@@ -326,9 +341,9 @@ void StarTracker::follow_stars(double time_s, const StarPoints& points, std::vec
     // the star's filter finds impossible.
     if (!near_prediction(stars_[s], predicted[s], fit->world_from_star, time_s, mean_sigma(*fit, points))) continue;
     if (!accept(stars_[s], *fit, time_s, points)) continue;
-    updated[s] = true;
+    updated[s] = 1;
     for (const int p : fit->point) {
-      if (p >= 0) taken[static_cast<std::size_t>(p)] = true;
+      if (p >= 0) taken[static_cast<std::size_t>(p)] = 1;
     }
   }
 }
@@ -337,9 +352,13 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
                                                     std::span<const double> sigma_m) {
   const StarPoints points = star_points(library_, positions, sigma_m);
   const std::size_t n = points.size();
-  std::vector<bool> taken(n, false);
-  std::vector<bool> updated(stars_.size(), false);
-  std::vector<Rigid3d> predicted(stars_.size());
+  std::vector<char>& taken = scratch_.taken;
+  std::vector<char>& updated = scratch_.updated;
+  std::vector<Rigid3d>& predicted = scratch_.predicted;
+  reserve_room(taken, n);
+  taken.assign(n, 0);
+  updated.assign(stars_.size(), 0);
+  predicted.assign(stars_.size(), Rigid3d{});
 
   // 1. Recently seen stars, followed to their predicted markers.
   follow_stars(time_s, points, taken, updated, predicted);
@@ -357,45 +376,59 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
     stars_[s].confirmed = true;
     stars_[s].confidence = c.confidence;
     stars_[s].frames_followed = c.frames;
-    updated[s] = true;
+    updated[s] = 1;
     return true;
   };
-  std::vector<Candidate> kept;
-  for (Candidate& c : candidates_) {
+  // The candidates kept, moved up in place (their readings' storage goes with them).
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < candidate_count_; ++k) {
+    Candidate& c = candidates_[k];
     if (c.frames >= settings_.max_candidate_frames || !follow(c, points, taken, time_s)) continue;
     // A settled reading the star's filter refuses stays a candidate.
     if (may_settle(c, updated, predicted, time_s) && settle(c)) continue;
-    kept.push_back(std::move(c));
+    if (kept != k) std::swap(candidates_[kept], c);
+    ++kept;
   }
-  candidates_ = std::move(kept);
+  candidate_count_ = kept;  // the others' storage is kept for new candidates
 
   // 3. Identification from scratch on the points left: each find a candidate.
-  std::vector<Eigen::Vector3d> rest;
-  std::vector<double> rest_sigma;
-  std::vector<int> rest_index;
+  std::vector<Eigen::Vector3d>& rest = scratch_.rest;
+  std::vector<double>& rest_sigma = scratch_.rest_sigma;
+  std::vector<int>& rest_index = scratch_.rest_index;
+  rest.clear();
+  rest_sigma.clear();
+  rest_index.clear();
   for (std::size_t q = 0; q < n; ++q) {
-    if (taken[q]) continue;
+    if (taken[q] != 0) continue;
     rest.push_back(points[q]);
     rest_sigma.push_back(points.sigma(q));
     rest_index.push_back(static_cast<int>(q));
   }
-  for (IdentifiedStar found : identify_stars(library_, star_points(library_, rest, rest_sigma))) {
+  identify_stars(library_, star_points(library_, rest, rest_sigma), scratch_.identification, scratch_.found);
+  for (IdentifiedStar found : scratch_.found) {
     for (int& p : found.point) {
       if (p >= 0) p = rest_index[static_cast<std::size_t>(p)];
     }
     const auto s = static_cast<std::size_t>(found.star);
     // A star seen moments ago found again where it was heading: itself, its identity known.
-    if (!updated[s] && recent_and_confirmed(stars_[s]) &&
+    if (updated[s] == 0 && recent_and_confirmed(stars_[s]) &&
         near_prediction(stars_[s], predicted[s], found.world_from_star, time_s, mean_sigma(found, points))) {
-      if (accept(stars_[s], found, time_s, points)) updated[s] = true;
+      if (accept(stars_[s], found, time_s, points)) updated[s] = 1;
       continue;
     }
-    Candidate c = start_candidate(found, points, time_s);
-    if (!may_settle(c, updated, predicted, time_s) || !settle(c)) candidates_.push_back(std::move(c));
+    if (candidate_count_ == candidates_.size()) {
+      // Room for more candidates at once, each with room for every reading of every star.
+      const std::size_t from = candidates_.size();
+      candidates_.resize(from + from / 2 + 8);
+      for (std::size_t k = from; k < candidates_.size(); ++k) candidates_[k].readings.reserve(kReadingsPerStar * library_.stars().size());
+    }
+    Candidate& c = candidates_[candidate_count_];
+    start_candidate(found, points, time_s, c);
+    if (!may_settle(c, updated, predicted, time_s) || !settle(c)) ++candidate_count_;
   }
 
   for (std::size_t s = 0; s < stars_.size(); ++s) {
-    if (updated[s]) continue;
+    if (updated[s] != 0) continue;
     TrackedStar& t = stars_[s];
     t.markers_seen = 0;
     t.point = {-1, -1, -1, -1};

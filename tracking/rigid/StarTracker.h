@@ -27,6 +27,7 @@
 // measured that frame; after refuse_frames in a row the filter starts again from the fit. Where the star is measured but not certain, it is
 // measured_now() but not seen_now(): the hands, which weigh each fit themselves, use the fit.
 
+#include <array>
 #include <optional>
 #include <span>
 #include <vector>
@@ -113,7 +114,7 @@ class StarTracker {
   // filter): a hand's own star turns and jerks more. Starts its filter again.
   void set_motion(int star, const PoseKalmanSettings& motion);
   // Constellations being weighed (not yet any star).
-  std::size_t candidates() const { return candidates_.size(); }
+  std::size_t candidates() const { return candidate_count_; }
 
  private:
   bool recent(const TrackedStar& s) const { return s.frames_since_seen >= 0 && s.frames_since_seen <= settings_.max_coast_frames; }
@@ -133,7 +134,7 @@ class StarTracker {
   // false where it refuses the fit.
   bool filter(TrackedStar& s, const IdentifiedStar& fit, double time_s, const StarPoints& points, const std::optional<StarMotion>& start);
   // Step 1 of update: the recently seen stars followed; marks their points taken and them updated.
-  void follow_stars(double time_s, const StarPoints& points, std::vector<bool>& taken, std::vector<bool>& updated,
+  void follow_stars(double time_s, const StarPoints& points, std::vector<char>& taken, std::vector<char>& updated,
                     std::vector<Rigid3d>& predicted);
   // One reading of a candidate: its slots (markers of the star it was found as) are this star's
   // markers slot_marker[slot]; chi2 adds up the evidence against it.
@@ -149,19 +150,43 @@ class StarTracker {
     int frames = 0;
     double confidence = 0.0;
   };
-  Candidate start_candidate(const IdentifiedStar& found, const StarPoints& points, double time_s) const;
+  // A candidate from a fresh identification, written into c (its storage kept).
+  void start_candidate(const IdentifiedStar& found, const StarPoints& points, double time_s, Candidate& c) const;
   void weigh(Candidate& c, const StarPoints& points) const;
-  bool follow(Candidate& c, const StarPoints& points, std::vector<bool>& taken, double time_s) const;
+  bool follow(Candidate& c, const StarPoints& points, std::vector<char>& taken, double time_s);
   // Whether a settled reading may become its star now (not a label swap, not too far).
-  bool may_settle(const Candidate& c, const std::vector<bool>& updated, const std::vector<Rigid3d>& predicted, double time_s) const;
+  bool may_settle(const Candidate& c, const std::vector<char>& updated, const std::vector<Rigid3d>& predicted, double time_s) const;
+  // A point near a star's predicted marker (follow_stars), or a candidate's slot (follow: star -1).
+  struct Pairing {
+    double d;
+    int star, marker, point;
+  };
+  // update's working storage, kept from frame to frame so that following stars allocates nothing
+  // once frames have shown it their largest counts.
+  struct Scratch {
+    std::vector<char> taken, updated;  // per point, per star
+    std::vector<Rigid3d> predicted;    // per star
+    std::vector<Pairing> pairings;
+    std::vector<int> gated_star;
+    std::vector<char> contested, point_claimed;
+    std::vector<std::array<int, 4>> assigned;
+    std::vector<Eigen::Vector3d> rest;
+    std::vector<double> rest_sigma;
+    std::vector<int> rest_index;
+    StarIdentificationScratch identification;
+    std::vector<IdentifiedStar> found;
+  };
 
   StarLibrary library_;
   StarTrackerSettings settings_;
   std::vector<TrackedStar> stars_;
-  std::vector<Candidate> candidates_;
+  static constexpr std::size_t kReadingsPerStar = 24;  // a candidate's readings: every order of four markers
+  std::vector<Candidate> candidates_;                  // the first candidate_count_ are being weighed; the rest keep their room
+  std::size_t candidate_count_ = 0;
   std::vector<double> spread_m_;     // per star: RMS distance of its markers from their centre
   std::vector<PoseKalman> filters_;  // per star
   std::vector<int> refused_;         // per star: fits in a row the filter did not take
+  Scratch scratch_;
 };
 
 }  // namespace rhot
