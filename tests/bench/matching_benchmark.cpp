@@ -83,29 +83,45 @@ const ScaleData& scale_data(int rig, int markers) {
 
 // Matching per frame on room-8 (rig 0) and stage-32 (rig 1), one thread (no job pool) or a job
 // pool of `threads` (the same points: tests/tracking/geometry/matching_threads_test.cpp); the rig
-// prepared once (RigMatcher), as the runtime does.
-void BM_MatchScaling(benchmark::State& state) {
+// prepared once and its working storage kept from frame to frame (RigMatcher::match_frame), as the
+// runtime does. BM_MatchScalingFresh: the same with fresh storage each frame (RigMatcher::match,
+// which returns the points as a vector of their own).
+void match_scaling(benchmark::State& state, bool kept_storage) {
   const ScaleData& d = scale_data(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const int threads = static_cast<int>(state.range(2));
   std::optional<rhot::JobPool> jobs;
   if (threads > 1) jobs.emplace(threads);
-  const rhot::RigMatcher matcher(d.rig);
+  rhot::RigMatcher matcher(d.rig);
   std::size_t i = 0;
   double found = 0.0;
   std::int64_t runs = 0;
   for (auto _ : state) {
-    const auto points = matcher.match(d.frames[i++ % d.frames.size()], {}, jobs ? &*jobs : nullptr);
-    found += static_cast<double>(points.size());
+    const rhot::RigFrame& frame = d.frames[i++ % d.frames.size()];
+    if (kept_storage) {
+      const auto points = matcher.match_frame(frame, {}, jobs ? &*jobs : nullptr);
+      found += static_cast<double>(points.size());
+      benchmark::DoNotOptimize(points.data());
+    } else {
+      const auto points = matcher.match(frame, {}, jobs ? &*jobs : nullptr);
+      found += static_cast<double>(points.size());
+      benchmark::DoNotOptimize(points.data());
+    }
     ++runs;
-    benchmark::DoNotOptimize(points.data());
   }
   state.counters["found"] = found / static_cast<double>(std::max<std::int64_t>(runs, 1)) / d.seen;
   state.counters["per_marker"] =
       benchmark::Counter(static_cast<double>(state.range(1)), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
+void BM_MatchScaling(benchmark::State& state) { match_scaling(state, true); }
+void BM_MatchScalingFresh(benchmark::State& state) { match_scaling(state, false); }
 BENCHMARK(BM_MatchScaling)
     ->ArgNames({"rig", "markers", "threads"})
     ->ArgsProduct({{0, 1}, {100, 300, 1000}, {1, 2, 4, 8, 16}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MatchScalingFresh)
+    ->ArgNames({"rig", "markers", "threads"})
+    ->ArgsProduct({{0, 1}, {100, 1000}, {1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 

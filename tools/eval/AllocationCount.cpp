@@ -38,13 +38,15 @@ extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(con
 namespace {
 
 void on_malloc(const volatile void* /*block*/, std::size_t /*bytes*/) { count_one(); }
+void on_free(const volatile void* /*block*/) {}
 
 }  // namespace
 
 namespace rhot::eval {
 
+// The runtime installs hooks only in pairs (it refuses a null free hook, returning 0).
 bool counting_heap_allocations() {
-  static const bool installed = __sanitizer_install_malloc_and_free_hooks(on_malloc, nullptr) != 0;
+  static const bool installed = __sanitizer_install_malloc_and_free_hooks(on_malloc, on_free) != 0;
   return installed;
 }
 

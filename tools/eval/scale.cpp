@@ -231,6 +231,7 @@ struct Run {
   std::array<std::uint64_t, 3> stage_allocations{};
   long allocating_frames = 0;
   std::uint64_t warm_up_allocations = 0;  // the same over the warm-up's frames
+  bool allocations_counted = false;       // whether this build counts them (AllocationCount.h)
 };
 
 Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, const StarSet& hand_set, const Crowd& crowd, const Box& box,
@@ -276,7 +277,7 @@ Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, cons
   const int warm = std::min(frames - 1, static_cast<int>(std::lround(kWarmUp_s * a.rate_hz)));
   for (auto& ms : run.stage_ms) ms.reserve(static_cast<std::size_t>(frames - warm));
   run.frame_ms.reserve(static_cast<std::size_t>(frames - warm));
-  counting_heap_allocations();
+  run.allocations_counted = counting_heap_allocations();
   using Clock = std::chrono::steady_clock;
   const auto ms = [](Clock::time_point from, Clock::time_point to) { return std::chrono::duration<double, std::milli>(to - from).count(); };
   RigMatcher matcher(rig);
@@ -407,8 +408,10 @@ int scale(const ScaleArgs& a) {
   j["seed"] = a.seed;
   j["sigma_px"] = a.sigma;
   j["judged_frames"] = run.frame_ms.size();
+  // Allocations per judged frame; null where this build cannot count them.
   const auto per_frame = [&](std::uint64_t n) {
-    return run.frame_ms.empty() ? 0.0 : static_cast<double>(n) / static_cast<double>(run.frame_ms.size());
+    if (!run.allocations_counted) return nlohmann::json(nullptr);
+    return nlohmann::json(run.frame_ms.empty() ? 0.0 : static_cast<double>(n) / static_cast<double>(run.frame_ms.size()));
   };
   const std::array<const char*, 3> names{"matching", "stars", "hands"};
   for (std::size_t s = 0; s < names.size(); ++s) {
@@ -418,8 +421,8 @@ int scale(const ScaleArgs& a) {
   }
   // The heap allocations of the three stages together (AllocationCount.h), over the judged frames.
   j["allocations_per_frame"] = per_frame(run.stage_allocations[0] + run.stage_allocations[1] + run.stage_allocations[2]);
-  j["allocating_frames"] = run.allocating_frames;
-  j["warm_up_allocations"] = run.warm_up_allocations;
+  j["allocating_frames"] = run.allocations_counted ? nlohmann::json(run.allocating_frames) : nlohmann::json(nullptr);
+  j["warm_up_allocations"] = run.allocations_counted ? nlohmann::json(run.warm_up_allocations) : nlohmann::json(nullptr);
   j["frame_p50_ms"] = percentile(run.frame_ms, 0.5);
   j["frame_p99_ms"] = percentile(run.frame_ms, 0.99);
   const auto missed = std::count_if(run.frame_ms.begin(), run.frame_ms.end(), [&](double ms) { return ms > period_ms; });

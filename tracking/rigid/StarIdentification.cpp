@@ -265,6 +265,7 @@ void face_hypotheses(const StarLibrary& library, const StarPoints& points, StarI
   out.stars.clear();
   out.support.clear();
   std::vector<const StarLibrary::Face*>& faces = scratch.faces;
+  reserve_room(faces, 4 * library.stars().size());  // every face of every star: the most find_faces gives
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto ni = neighbours_of(scratch, i);
     for (std::size_t x = 0; x < ni.size(); ++x) {

@@ -27,8 +27,11 @@ StarTracker::StarTracker(StarLibrary library, StarTrackerSettings settings) : li
     for (const Eigen::Vector3d& m : markers) sum += (m - centre).squaredNorm();
     spread_m_.push_back(std::max(std::sqrt(sum / 4.0), 1e-3));
   }
-  // Room for the pairs of a frame's points and stars' markers (each grows, doubling, only past it).
+  // Room for the pairs of a frame's points and stars' markers (each grows, doubling, only past it),
+  // and for the constellations weighed at once (kCandidatesRoom, each with every star's readings).
   scratch_.pairings.reserve(64 * library_.stars().size() + 64);
+  candidates_.resize(kCandidatesRoom);
+  for (Candidate& c : candidates_) c.readings.reserve(kReadingsPerStar * library_.stars().size());
 }
 
 void StarTracker::set_motion(int star, const PoseKalmanSettings& motion) {
@@ -419,7 +422,7 @@ const std::vector<TrackedStar>& StarTracker::update(double time_s, std::span<con
     if (candidate_count_ == candidates_.size()) {
       // Room for more candidates at once, each with room for every reading of every star.
       const std::size_t from = candidates_.size();
-      candidates_.resize(from + from / 2 + 8);
+      candidates_.resize(2 * from + 8);
       for (std::size_t k = from; k < candidates_.size(); ++k) candidates_[k].readings.reserve(kReadingsPerStar * library_.stars().size());
     }
     Candidate& c = candidates_[candidate_count_];

@@ -181,7 +181,8 @@ class StarTracker {
   StarTrackerSettings settings_;
   std::vector<TrackedStar> stars_;
   static constexpr std::size_t kReadingsPerStar = 24;  // a candidate's readings: every order of four markers
-  std::vector<Candidate> candidates_;                  // the first candidate_count_ are being weighed; the rest keep their room
+  static constexpr std::size_t kCandidatesRoom = 32;
+  std::vector<Candidate> candidates_;  // the first candidate_count_ are being weighed; the rest keep their room
   std::size_t candidate_count_ = 0;
   std::vector<double> spread_m_;     // per star: RMS distance of its markers from their centre
   std::vector<PoseKalman> filters_;  // per star
