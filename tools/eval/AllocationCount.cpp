@@ -86,7 +86,7 @@ void* aligned_alloc(std::size_t alignment, std::size_t bytes) noexcept {
   return __libc_memalign(alignment, bytes);
 }
 int posix_memalign(void** block, std::size_t alignment, std::size_t bytes) noexcept {
-  if (alignment % sizeof(void*) != 0 || (alignment & (alignment - 1)) != 0) return EINVAL;
+  if (alignment == 0 || alignment % sizeof(void*) != 0 || (alignment & (alignment - 1)) != 0) return EINVAL;
   count_one();
   void* p = __libc_memalign(alignment, bytes);
   if (p == nullptr && bytes != 0) return ENOMEM;

@@ -10,7 +10,8 @@
 
 namespace rhot::eval {
 
-// Allocations made so far by the whole process (0 until counting_heap_allocations is called).
+// Allocations made so far by the whole process (under AddressSanitizer, those since
+// counting_heap_allocations was first called; only differences mean anything).
 std::uint64_t heap_allocations();
 
 // Starts counting (under AddressSanitizer: installs the hook; idempotent). False where this build

@@ -793,6 +793,7 @@ std::vector<MatchedPoint> RigMatcher::match(const RigFrame& frame, const MatchSe
 
 std::span<const MatchedPoint> RigMatcher::match_frame(const RigFrame& frame, const MatchSettings& settings, JobPool* jobs) {
   RHOT_PRECONDITION(frame.cameras.size() == rig_.cameras.size(), "match_and_triangulate: one CameraFrame per camera of the rig");
+  if (!scratch_) scratch_ = std::make_unique<MatchScratch>();  // a matcher moved from, assigned to since
   return Matcher(rig_, projections_, visibility_, frame, settings, jobs, *scratch_).run();
 }
 
