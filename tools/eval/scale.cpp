@@ -234,6 +234,46 @@ struct Run {
   bool allocations_counted = false;       // whether this build counts them (AllocationCount.h)
 };
 
+// One judged frame against the truth: the markers found, the bodies and the hands correct.
+void judge_frame(const RigFrame& frame, std::span<const MatchedPoint> matched, const std::vector<TrackedStar>& tracked,
+                 const std::vector<HandTracker*>& hand_ptrs, const Crowd& crowd, Run& run) {
+  // Found markers, as rhot-eval triangulation counts them.
+  std::vector<int> seen_by(frame.truth_position_m.size(), 0);
+  for (const CameraFrame& cf : frame.cameras) {
+    for (const Detection& d : cf.detections)
+      if (d.truth_marker >= 0) ++seen_by[static_cast<std::size_t>(d.truth_marker)];
+  }
+  for (const int n : seen_by) run.findable += n >= 2 ? 1 : 0;
+  for (const MatchedPoint& m : matched) run.found += truth_marker(frame, m) >= 0 ? 1 : 0;
+  const Truth truth = crowd.truth_at(frame.time_s);
+  for (std::size_t b = 0; b < crowd.body_markers_m.size(); ++b) {
+    const TrackedStar& s = tracked[b];
+    ++run.body_frames;
+    if (s.measured_now() && (s.world_from_star.translation - truth.world_from_body[b].translation).norm() <= kBodyCorrect_m)
+      ++run.body_correct;
+  }
+  for (std::size_t h = 0; h < hand_ptrs.size(); ++h) {
+    const TrackedHand& hand = hand_ptrs[h]->last();
+    ++run.hand_frames;
+    if (!hand.hand_seen) continue;
+    const auto error = [&](HandJoint j) {
+      const auto k = static_cast<std::size_t>(j);
+      return (hand.joints_world[k] - truth.world_from_hand[h] * truth.hand_pose[h].position_m[k]).norm();
+    };
+    if (error(HandJoint::kWrist) > kWristCorrect_m) continue;
+    ++run.hand_correct;
+    bool tips = true;
+    for (const HandJoint tip :
+         {HandJoint::kThumbTip, HandJoint::kIndexTip, HandJoint::kMiddleTip, HandJoint::kRingTip, HandJoint::kLittleTip})
+      tips = tips && error(tip) <= kTipCorrect_m;
+    run.tips_correct += tips ? 1 : 0;
+    for (int j = 0; j < kHandJointCount; ++j) {
+      run.joint_error_sum_m += error(static_cast<HandJoint>(j));  // over the correct hands
+      ++run.joint_errors;
+    }
+  }
+}
+
 Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, const StarSet& hand_set, const Crowd& crowd, const Box& box,
               int threads, bool verbose) {
   SimulatedRigSettings settings;
@@ -317,41 +357,7 @@ Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, cons
     run.stage_ms[1].push_back(ms(t1, t2));
     run.stage_ms[2].push_back(ms(t2, t3));
     run.frame_ms.push_back(ms(t0, t3));
-    // Found markers, as rhot-eval triangulation counts them.
-    std::vector<int> seen_by(frame.truth_position_m.size(), 0);
-    for (const CameraFrame& cf : frame.cameras) {
-      for (const Detection& d : cf.detections)
-        if (d.truth_marker >= 0) ++seen_by[static_cast<std::size_t>(d.truth_marker)];
-    }
-    for (const int n : seen_by) run.findable += n >= 2 ? 1 : 0;
-    for (const MatchedPoint& m : matched) run.found += truth_marker(frame, m) >= 0 ? 1 : 0;
-    const Truth truth = crowd.truth_at(frame.time_s);
-    for (std::size_t b = 0; b < crowd.body_markers_m.size(); ++b) {
-      const TrackedStar& s = tracked[b];
-      ++run.body_frames;
-      if (s.measured_now() && (s.world_from_star.translation - truth.world_from_body[b].translation).norm() <= kBodyCorrect_m)
-        ++run.body_correct;
-    }
-    for (std::size_t h = 0; h < hand_ptrs.size(); ++h) {
-      const TrackedHand& hand = hand_ptrs[h]->last();
-      ++run.hand_frames;
-      if (!hand.hand_seen) continue;
-      const auto error = [&](HandJoint j) {
-        const auto k = static_cast<std::size_t>(j);
-        return (hand.joints_world[k] - truth.world_from_hand[h] * truth.hand_pose[h].position_m[k]).norm();
-      };
-      if (error(HandJoint::kWrist) > kWristCorrect_m) continue;
-      ++run.hand_correct;
-      bool tips = true;
-      for (const HandJoint tip :
-           {HandJoint::kThumbTip, HandJoint::kIndexTip, HandJoint::kMiddleTip, HandJoint::kRingTip, HandJoint::kLittleTip})
-        tips = tips && error(tip) <= kTipCorrect_m;
-      run.tips_correct += tips ? 1 : 0;
-      for (int j = 0; j < kHandJointCount; ++j) {
-        run.joint_error_sum_m += error(static_cast<HandJoint>(j));  // over the correct hands
-        ++run.joint_errors;
-      }
-    }
+    judge_frame(frame, matched, tracked, hand_ptrs, crowd, run);
   }
   run.resident_mb_end = resident_mb();
   return run;
