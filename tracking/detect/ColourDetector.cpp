@@ -40,7 +40,9 @@ constexpr double kPairFrom = 1.4;  // two discs overlapping by up to half a radi
 constexpr double kPairElongation = 3.2;
 constexpr double kHalfElongation = 2.0;
 constexpr double kHalfFill = 0.7;
-constexpr double kWaist = 0.75;  // the cut's width over the halves' at most
+constexpr double kWaist = 0.75;   // the cut's width over the halves' at most
+constexpr int kCutSteps = 6;      // the cut is looked for this many steps either side of the centroid,
+constexpr double kCutStep = 0.5;  // px apart
 
 // A marker partly hidden (behind its own finger, a knuckle, an object's edge) is a disc with a
 // bite taken out: not round, not full, but its outer edge still lies on one circle. A blob that
@@ -52,6 +54,30 @@ constexpr double kPartialArc = 2.0 * std::numbers::pi / 3.0;
 constexpr double kPartialCover = 0.3;
 constexpr double kOnCircle = 1.0;  // px: an edge pixel this close to the circle is on it
 constexpr double kRoundAt = 1.15;  // a blob less elongated is a whole marker, its centroid the centre
+
+// Three or more markers of one colour whose images touch (a marker star seen edge-on), or two that
+// the cut above does not part: the blob's distance transform peaks once per disc. A blob not quite
+// one round disc (less full than kOneDiscFill, or elongated) of at least kDiscsMinArea pixels is
+// tried as several: peaks at least kPeakOfLargest of the largest and kPeakSpacing of their radii
+// apart, a waist between neighbours (the transform dips below kDiscWaist of the smaller radius on
+// the way), and the discs together explain the blob (kDiscsExplain of its pixels inside them, as
+// much of them inside it). Each disc's centre: a circle fitted to the blob's outline nearest its
+// peak. Peaks lower than
+// kDiscMinRadius are not markers: a thin cable of a marker's colour peaks all along its length.
+constexpr double kOneDiscFill = 0.9;
+constexpr int kDiscsMinArea = 30;
+constexpr double kPeakOfLargest = 0.6;
+constexpr double kPeakSpacing = 1.4;
+constexpr double kDiscWaist = 0.8;
+constexpr double kDiscsExplain = 0.95;  // a cable of a marker's colour, 6 px wide, 0.88
+constexpr int kMaxDiscs = 6;
+constexpr double kDiscMinRadius = 3.0;  // px, a peak's distance to the outside: a cable's is less
+
+// A peak of a blob's distance transform: a disc's centre, in the blob's mask.
+struct DiscPeak {
+  cv::Point at;
+  double value;  // px to the nearest pixel outside the blob
+};
 
 int find_root(std::vector<int>& parent, int i) {
   while (parent[static_cast<std::size_t>(i)] != i) {
@@ -70,6 +96,32 @@ std::expected<void, std::string> check_image(const cv::Mat& bgr) {
   return {};
 }
 
+// `passes` times: the edge pixels on the circle (c, r), within kOnCircle, and the circle through
+// them (algebraic least squares: x^2 + y^2 = 2 a x + 2 b y + c). False, with c and r left
+// anywhere, when fewer than six pixels are on it or no real circle fits them.
+bool refine_circle(const std::vector<Eigen::Vector2d>& edge, Eigen::Vector2d& c, double& r, int passes) {
+  for (int pass = 0; pass < passes; ++pass) {
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+    int on = 0;
+    for (const Eigen::Vector2d& e : edge) {
+      const Eigen::Vector2d d = e - c;  // about the last centre, for precision
+      if (std::abs(d.norm() - r) > kOnCircle) continue;
+      const Eigen::Vector3d row(2.0 * d.x(), 2.0 * d.y(), 1.0);
+      ata += row * row.transpose();
+      atb += row * d.squaredNorm();
+      ++on;
+    }
+    if (on < 6) return false;
+    const Eigen::Vector3d abc = ata.ldlt().solve(atb);
+    const double r2 = abc.z() + abc.head<2>().squaredNorm();
+    if (!abc.allFinite() || !(r2 > 1.0)) return false;
+    c += abc.head<2>();
+    r = std::sqrt(r2);
+  }
+  return true;
+}
+
 // The circle of a partly hidden marker (kPartial* above) through the edge pixels of a blob of n
 // pixels, as (centre x, centre y, radius), or nothing when they do not hold one no larger than
 // max_radius_px.
@@ -82,27 +134,7 @@ std::optional<Eigen::Vector3d> partial_circle(const std::vector<Eigen::Vector2d>
   cv::minEnclosingCircle(edge_f, centre, radius);
   Eigen::Vector2d c(static_cast<double>(centre.x), static_cast<double>(centre.y));
   double r = static_cast<double>(radius);
-  // Twice: the edge pixels on the circle, and the circle through them (algebraic least squares:
-  // x^2 + y^2 = 2 a x + 2 b y + c).
-  for (int pass = 0; pass < 2; ++pass) {
-    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-    int on = 0;
-    for (const Eigen::Vector2d& e : edge) {
-      const Eigen::Vector2d d = e - c;  // about the last centre, for precision
-      if (std::abs(d.norm() - r) > kOnCircle) continue;
-      const Eigen::Vector3d row(2.0 * d.x(), 2.0 * d.y(), 1.0);
-      ata += row * row.transpose();
-      atb += row * d.squaredNorm();
-      ++on;
-    }
-    if (on < 6) return std::nullopt;
-    const Eigen::Vector3d abc = ata.ldlt().solve(atb);
-    const double r2 = abc.z() + abc.head<2>().squaredNorm();
-    if (!abc.allFinite() || !(r2 > 1.0)) return std::nullopt;
-    c += abc.head<2>();
-    r = std::sqrt(r2);
-  }
+  if (!refine_circle(edge, c, r, 2)) return std::nullopt;
   // The blob inside the circle (pixel centres lie half a pixel inside the edge they mark).
   if (r > max_radius_px) return std::nullopt;
   if (n < kPartialCover * std::numbers::pi * (r + 0.5) * (r + 0.5)) return std::nullopt;
@@ -251,6 +283,7 @@ class BlobMeasure {
       if (m.w / m.n < settings_.min_confidence) continue;
       const Shape sh = shape_of(m);
       if (sh.fill >= settings_.min_fill && sh.elongation > kPairFrom && sh.elongation <= kPairElongation && split(b, m, sh)) continue;
+      if ((sh.fill < kOneDiscFill || sh.elongation > kRoundAt) && m.n >= kDiscsMinArea && several_discs(b, m)) continue;
       if (sh.fill >= settings_.min_fill && sh.elongation <= settings_.max_elongation) {
         // Round enough to be a marker; one not quite round may be a partly hidden one, whose
         // visible part's centroid leans away from the bite by up to a pixel or two.
@@ -308,6 +341,12 @@ class BlobMeasure {
   // centre y, radius), or nothing. Its edge pixels: pixels with a 4-neighbour outside it.
   std::optional<Eigen::Vector3d> circle_of(std::size_t b, double n) const {
     if (n < kPartialMinArea) return std::nullopt;
+    cv::Point corner;
+    return partial_circle(edge_of(mask_of(b, corner), corner), n, std::sqrt(settings_.max_area_px / std::numbers::pi) + 1.0);
+  }
+
+  // Blob b's pixels as a mask with a one-pixel border, and its top-left corner in the image.
+  cv::Mat1b mask_of(std::size_t b, cv::Point& corner) const {
     int x0 = bgr_.cols, x1 = 0, y0 = bgr_.rows, y1 = 0;
     for (std::size_t i = 0; i < runs_.size(); ++i) {
       if (blob_of_run_[i] != static_cast<int>(b)) continue;
@@ -318,20 +357,168 @@ class BlobMeasure {
       if (blob_of_run_[i] != static_cast<int>(b)) continue;
       for (int x = runs_[i].x0; x < runs_[i].x1; ++x) mask(runs_[i].y - y0 + 1, x - x0 + 1) = 1;
     }
+    corner = cv::Point(x0 - 1, y0 - 1);
+    return mask;
+  }
+
+  // A mask's edge pixels (those with a 4-neighbour outside it), in image pixels.
+  static std::vector<Eigen::Vector2d> edge_of(const cv::Mat1b& mask, cv::Point corner) {
     std::vector<Eigen::Vector2d> edge;
     for (int y = 1; y < mask.rows - 1; ++y) {
       for (int x = 1; x < mask.cols - 1; ++x) {
         if (mask(y, x) && (!mask(y - 1, x) || !mask(y + 1, x) || !mask(y, x - 1) || !mask(y, x + 1)))
-          edge.emplace_back(x + x0 - 1, y + y0 - 1);
+          edge.emplace_back(x + corner.x, y + corner.y);
       }
     }
-    return partial_circle(edge, n, std::sqrt(settings_.max_area_px / std::numbers::pi) + 1.0);
+    return edge;
   }
 
-  // Two markers of one colour whose images touch: cut across the major axis at the centroid; both
-  // halves must come out round, full and of similar size, with a waist between them. Emits both.
+  // Several markers of one colour in blob b (kOneDiscFill and on, above): emits each and says so,
+  // or emits nothing.
+  bool several_discs(std::size_t b, const Moments& m) {
+    cv::Point corner;
+    const cv::Mat1b mask = mask_of(b, corner);
+    cv::Mat1f dist;
+    cv::distanceTransform(mask, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    const std::vector<DiscPeak> peaks = disc_peaks(dist);
+    if (peaks.size() < 2 || peaks.size() > static_cast<std::size_t>(kMaxDiscs) || !waists_between(peaks, dist)) return false;
+    // Each disc: a circle through the blob's edge pixels nearest its peak, started at the peak (a
+    // pixel centre on the edge lies half a pixel inside the disc's outline).
+    const std::vector<Eigen::Vector2d> edge = edge_of(mask, corner);
+    std::vector<Eigen::Vector3d> discs;  // centre x, y and radius in the image
+    std::vector<Eigen::Vector2d> own_edge;
+    for (const DiscPeak& p : peaks) {
+      own_edge.clear();
+      for (const Eigen::Vector2d& e : edge) {
+        const Eigen::Vector2d q = e - Eigen::Vector2d(corner.x, corner.y);
+        if (nearest_peak(peaks, q) == &p) own_edge.push_back(e);
+      }
+      const Eigen::Vector2d at(p.at.x + corner.x, p.at.y + corner.y);
+      Eigen::Vector2d c = at;
+      double r = p.value - 0.5;
+      if (!refine_circle(own_edge, c, r, 3) || (c - at).norm() > 0.5 * p.value) return false;
+      discs.emplace_back(c.x(), c.y(), r + 0.5);
+    }
+    if (!discs_explain(discs, mask, corner, m.n)) return false;
+    // Each marker measured over the blob's pixels nearest its centre, placed at its centre.
+    for (const Eigen::Vector3d& disc : discs) {
+      Moments cell;
+      cell.klass = m.klass;
+      for (std::size_t i = 0; i < runs_.size(); ++i) {
+        if (blob_of_run_[i] != static_cast<int>(b)) continue;
+        add_run(cell, runs_[i], [&](int x, int y) {
+          const double own = (Eigen::Vector2d(x, y) - disc.head<2>()).squaredNorm();
+          return std::all_of(discs.begin(), discs.end(),
+                             [&](const Eigen::Vector3d& o) { return own <= (Eigen::Vector2d(x, y) - o.head<2>()).squaredNorm(); });
+        });
+      }
+      if (cell.w > 0.0) emit_at(cell, disc);
+    }
+    return true;
+  }
+
+  // The distance transform's local maxima of at least kDiscMinRadius and kPeakOfLargest of the
+  // largest, each kept when kPeakSpacing of its and the others' values from those kept (largest
+  // first). Mask pixels.
+  static std::vector<DiscPeak> disc_peaks(const cv::Mat1f& dist) {
+    std::vector<DiscPeak> maxima;
+    for (int y = 1; y < dist.rows - 1; ++y) {
+      for (int x = 1; x < dist.cols - 1; ++x) {
+        const float v = dist(y, x);
+        if (static_cast<double>(v) < kDiscMinRadius) continue;
+        bool top = true;
+        for (int dy = -1; dy <= 1 && top; ++dy)
+          for (int dx = -1; dx <= 1 && top; ++dx) top = dist(y + dy, x + dx) <= v;
+        if (top) maxima.push_back({{x, y}, static_cast<double>(v)});
+      }
+    }
+    std::stable_sort(maxima.begin(), maxima.end(), [](const DiscPeak& a, const DiscPeak& c) { return a.value > c.value; });
+    std::vector<DiscPeak> peaks;
+    for (const DiscPeak& p : maxima) {
+      if (p.value < kPeakOfLargest * maxima.front().value) break;
+      const bool apart = std::all_of(peaks.begin(), peaks.end(), [&](const DiscPeak& q) {
+        return std::hypot(p.at.x - q.at.x, p.at.y - q.at.y) >= kPeakSpacing * std::max(p.value, q.value);
+      });
+      if (apart) peaks.push_back(p);
+    }
+    return peaks;
+  }
+
+  static const DiscPeak* nearest_peak(const std::vector<DiscPeak>& peaks, const Eigen::Vector2d& q) {
+    const DiscPeak* nearest = nullptr;
+    double nearest_d2 = 1e18;
+    for (const DiscPeak& p : peaks) {
+      const double d2 = (q - Eigen::Vector2d(p.at.x, p.at.y)).squaredNorm();
+      if (d2 < nearest_d2) nearest_d2 = d2, nearest = &p;
+    }
+    return nearest;
+  }
+
+  // Whether each peak has a waist toward its nearest: the transform dips below kDiscWaist of the
+  // smaller value on the way. Two discs are narrow where they meet; a bar or a box is not.
+  static bool waists_between(const std::vector<DiscPeak>& peaks, const cv::Mat1f& dist) {
+    for (const DiscPeak& p : peaks) {
+      const DiscPeak* nearest = nullptr;
+      double nearest_d = 1e9;
+      for (const DiscPeak& q : peaks) {
+        const double d = std::hypot(p.at.x - q.at.x, p.at.y - q.at.y);
+        if (&q != &p && d < nearest_d) nearest_d = d, nearest = &q;
+      }
+      const int steps = static_cast<int>(std::ceil(nearest_d * 2.0));
+      double lowest = p.value;
+      for (int k = 1; k < steps; ++k) {
+        const double t = static_cast<double>(k) / steps;
+        const int x = static_cast<int>(std::lround(p.at.x + t * (nearest->at.x - p.at.x)));
+        const int y = static_cast<int>(std::lround(p.at.y + t * (nearest->at.y - p.at.y)));
+        lowest = std::min(lowest, static_cast<double>(dist(y, x)));
+      }
+      if (lowest > kDiscWaist * std::min(p.value, nearest->value)) return false;
+    }
+    return true;
+  }
+
+  // Whether the discs (centre x, y, radius) explain a blob of n pixels: kDiscsExplain of its
+  // pixels inside one, and as much of the discs' pixels inside it.
+  static bool discs_explain(const std::vector<Eigen::Vector3d>& discs, const cv::Mat1b& mask, cv::Point corner, double n) {
+    double inside = 0.0, disc_pixels = 0.0, disc_pixels_inside = 0.0;
+    for (int y = 0; y < mask.rows; ++y) {
+      for (int x = 0; x < mask.cols; ++x) {
+        const Eigen::Vector2d q(x + corner.x, y + corner.y);
+        double nearest = 1e9;  // to a disc's outline, negative inside
+        for (const Eigen::Vector3d& d : discs) nearest = std::min(nearest, (q - d.head<2>()).norm() - d.z());
+        inside += mask(y, x) && nearest <= 0.5 ? 1.0 : 0.0;
+        disc_pixels += nearest <= -0.5 ? 1.0 : 0.0;
+        disc_pixels_inside += mask(y, x) && nearest <= -0.5 ? 1.0 : 0.0;
+      }
+    }
+    return inside >= kDiscsExplain * n && disc_pixels_inside >= kDiscsExplain * disc_pixels;
+  }
+
+  // Two markers of one colour whose images touch: cut across the major axis at its narrowest near
+  // the centroid; both halves must come out round, full and of similar size, with a waist between
+  // them. Emits both.
   bool split(std::size_t b, const Moments& m, const Shape& sh) {
-    const double mx = m.sx / m.n, my = m.sy / m.n, ux = std::cos(sh.angle), uy = std::sin(sh.angle);
+    const double ux = std::cos(sh.angle), uy = std::sin(sh.angle);
+    // The cut: the narrowest one-pixel strip across the axis within kCutReach of the centroid (two
+    // discs of different sizes, or one partly hidden, meet off their joint centroid).
+    double mx = m.sx / m.n, my = m.sy / m.n;
+    {
+      std::array<int, 2 * kCutSteps + 1> strip{};
+      for (std::size_t i = 0; i < runs_.size(); ++i) {
+        if (blob_of_run_[i] != static_cast<int>(b)) continue;
+        for (int x = runs_[i].x0; x < runs_[i].x1; ++x) {
+          const double t = (x - mx) * ux + (runs_[i].y - my) * uy;
+          for (int k = -kCutSteps; k <= kCutSteps; ++k)
+            strip[static_cast<std::size_t>(k + kCutSteps)] += std::abs(t - k * kCutStep) < 0.5 ? 1 : 0;
+        }
+      }
+      int best = 0;  // the narrowest, the nearest the centroid among equals
+      for (int k = -kCutSteps; k <= kCutSteps; ++k) {
+        const int w = strip[static_cast<std::size_t>(k + kCutSteps)], w_best = strip[static_cast<std::size_t>(best + kCutSteps)];
+        if (w < w_best || (w == w_best && std::abs(k) < std::abs(best))) best = k;
+      }
+      mx += best * kCutStep * ux, my += best * kCutStep * uy;
+    }
     Moments half[2];
     half[0].klass = half[1].klass = m.klass;
     for (std::size_t i = 0; i < runs_.size(); ++i) {

@@ -13,8 +13,12 @@
 //    mean membership) at least min_confidence: skin, wood and painted objects that reach a colour
 //    window do so in large, ragged or pale regions, and a partly hidden marker is not round.
 //    A blob too elongated for one marker but no more than two discs side by side (two markers of
-//    one colour whose images touch) is cut across its major axis at its centroid: when both
-//    halves are round, full and of similar size, with a waist between them, each is a marker.
+//    one colour whose images touch) is cut across its major axis where it is narrowest within
+//    3 px of its centroid: when both halves are round, full and of similar size, with a waist
+//    between them, each is a marker. A blob not one round disc that the cut does not part (three
+//    or more markers touching: a star seen edge-on) is tried as several discs: one peak of its
+//    distance transform per disc, a waist between neighbours, the discs covering the blob and
+//    lying inside it; each marker at a circle fitted to the outline nearest its peak.
 //    A partly hidden marker (behind its own finger, an edge) is a disc with a bite: a blob that
 //    is not quite round (elongation above 1.15) or fails the shape tests is tried as one. A
 //    circle fitted to its edge pixels on the far side from the bite must hold the whole blob,
