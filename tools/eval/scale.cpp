@@ -315,8 +315,10 @@ Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, cons
   Run run;
   const int frames = std::max(1, static_cast<int>(std::lround(a.seconds * a.rate_hz)));
   const int warm = std::min(frames - 1, static_cast<int>(std::lround(kWarmUp_s * a.rate_hz)));
-  for (auto& ms : run.stage_ms) ms.reserve(static_cast<std::size_t>(frames - warm));
-  run.frame_ms.reserve(static_cast<std::size_t>(frames - warm));
+  // The record of the judged frames' times, every page of it written now: the resident memory
+  // after the warm-up then holds it, and what grows after is the tracking's own.
+  for (auto& ms : run.stage_ms) ms.assign(static_cast<std::size_t>(frames - warm), 0.0);
+  run.frame_ms.assign(static_cast<std::size_t>(frames - warm), 0.0);
   run.allocations_counted = counting_heap_allocations();
   using Clock = std::chrono::steady_clock;
   const auto ms = [](Clock::time_point from, Clock::time_point to) { return std::chrono::duration<double, std::milli>(to - from).count(); };
@@ -353,10 +355,11 @@ Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, cons
       for (const Eigen::Vector3d& j : h->last().joints_world) fold(run.fingerprint, j);
     }
     if (f < warm) continue;
-    run.stage_ms[0].push_back(ms(t0, t1));
-    run.stage_ms[1].push_back(ms(t1, t2));
-    run.stage_ms[2].push_back(ms(t2, t3));
-    run.frame_ms.push_back(ms(t0, t3));
+    const auto judged = static_cast<std::size_t>(f - warm);
+    run.stage_ms[0][judged] = ms(t0, t1);
+    run.stage_ms[1][judged] = ms(t1, t2);
+    run.stage_ms[2][judged] = ms(t2, t3);
+    run.frame_ms[judged] = ms(t0, t3);
     judge_frame(frame, matched, tracked, hand_ptrs, crowd, run);
   }
   run.resident_mb_end = resident_mb();
