@@ -14,9 +14,11 @@
 #include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
 #include <Eigen/Geometry>
 
+#include "engine/core/World.h"
 #include "engine/interact/GraspSystem.h"
 #include "engine/physics/HandColliders.h"
 #include "engine/physics/BulletMath.h"
+#include "engine/scene/Components.h"
 #include "engine/physics/PhysicsWorld.h"
 
 namespace rhot {
@@ -43,7 +45,8 @@ DigitChain digit_chain(int digit) {
   return {{base, base + 1, base + 2, base + 3}, {1.0, 1.0, 0.7}, 4};
 }
 
-constexpr double kFlicker_s = 0.3;  // a digit hidden no longer than this was only flickering
+constexpr double kFlicker_s = 0.3;   // a digit hidden no longer than this was only flickering
+constexpr double kReaching_s = 0.5;  // a closing digit hidden no longer than this reaches for what is within its length
 
 bool all_finite(const HandInput& hand) {
   for (const Eigen::Vector3d& j : hand.joints_world)
@@ -211,7 +214,8 @@ void FingerContact::follow(std::size_t side, double t_s, const HandInput& hand) 
   }
 }
 
-std::optional<Entity> FingerContact::object_for(HandSide side, const HandInput& hand, bool closing) const {
+std::optional<Entity> FingerContact::object_for(const World& world, HandSide side, const HandInput& hand,
+                                                const std::array<bool, 5>& closing, const std::array<bool, 5>& reaching) const {
   if (const auto held = grasp_.holding(side)) return held;
   // The body (not a static one) that the most bones of measured digits touched.
   const auto& touched = grasp_.contacts()[side == HandSide::kLeft ? 0 : 1];
@@ -228,19 +232,35 @@ std::optional<Entity> FingerContact::object_for(HandSide side, const HandInput& 
       best = object;
     }
   }
-  if (best || !closing) return best;
-  // The hand closing within reach: the body whose bounding box is nearest the palm.
+  if (best || std::none_of(closing.begin(), closing.end(), [](bool c) { return c; })) return best;
+  // The hand closing within reach: of the bodies whose bounding box the palm is within
+  // hover_distance_m of, or, for a grabbable one, a `reaching` digit could reach (within its own
+  // length of its first knuckle), the one nearest the palm. (A finger curled beside a button the
+  // index pokes is not closing on the button.)
   const btVector3 palm = to_bt(hand.joints_world[static_cast<std::size_t>(HandJoint::kPalm)]);
-  double nearest = settings_.hover_distance_m;
+  const auto gap_m = [](const btVector3& lo, const btVector3& hi, const btVector3& p) {
+    btVector3 gap(0, 0, 0);
+    for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - p[a], p[a] - hi[a], btScalar(0)});
+    return static_cast<double>(gap.length());
+  };
+  double nearest = 1e9;
   for (const Entity e : physics_.entities()) {
     const btRigidBody* body = physics_.body(e);
     if (!body || body->isStaticObject()) continue;
     btVector3 lo, hi;
     body->getAabb(lo, hi);
-    btVector3 gap(0, 0, 0);
-    for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - palm[a], palm[a] - hi[a], btScalar(0)});
-    const double d = static_cast<double>(gap.length());
-    if (d <= nearest) {
+    const double d = gap_m(lo, hi, palm);
+    bool reach = d <= settings_.hover_distance_m;
+    const bool grabbable = world.alive(e) && world.has<Grabbable>(e);
+    for (int digit = 0; digit < 5 && !reach && grabbable; ++digit) {
+      if (!reaching[static_cast<std::size_t>(digit)]) continue;
+      const DigitChain chain = digit_chain(digit);
+      const auto at = [&](int k) { return hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)])]; };
+      double length = 0.0;
+      for (int k = 0; k + 1 < chain.count; ++k) length += (at(k + 1) - at(k)).norm();
+      reach = gap_m(lo, hi, to_bt(at(0))) <= length;
+    }
+    if (reach && d < nearest) {
       nearest = d;
       best = e;
     }
@@ -248,7 +268,7 @@ std::optional<Entity> FingerContact::object_for(HandSide side, const HandInput& 
   return best;
 }
 
-FingerPlacement FingerContact::place(HandSide side, double t_s, HandInput& hand) {
+FingerPlacement FingerContact::place(const World& world, HandSide side, double t_s, HandInput& hand) {
   FingerPlacement result;
   const std::size_t s = side == HandSide::kLeft ? 0 : 1;
   if (!all_finite(hand)) return result;
@@ -263,13 +283,15 @@ FingerPlacement FingerContact::place(HandSide side, double t_s, HandInput& hand)
     any_hidden = any_hidden || m.hidden;
   }
   if (!any_hidden) return result;
-  bool any_closing = false;
+  // Reaching: closing, and hidden only a moment ago (a digit hidden since before a grasp, still
+  // "closing" as it was last seen, reaches for nothing after the release).
+  std::array<bool, 5> reaching{};
   for (std::size_t digit = 0; digit < 5; ++digit) {
     const DigitMotion& m = motion_[s][digit];
     closing[digit] = m.hidden && (measured_closing || m.rate_rad_s > settings_.closing_rad_s);
-    any_closing = any_closing || closing[digit];
+    reaching[digit] = closing[digit] && m.t_s >= 0.0 && t_s - m.t_s <= kReaching_s;
   }
-  result.object = object_for(side, hand, any_closing);
+  result.object = object_for(world, side, hand, closing, reaching);
   if (!result.object) return result;
   const btRigidBody* body = physics_.body(*result.object);
   if (!body) {

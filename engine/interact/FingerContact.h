@@ -7,11 +7,12 @@
 // own knuckles until its bones meet that object's surface: so an object in the hand is held
 // between the measured digits and the hidden ones, never with a hidden finger inside it or
 // relaxed away from it. A hand closes on an object when a measured digit of it touched the object
-// in the last step, or when its palm is within `hover_distance_m` of the object and the hidden
-// finger was closing when it was last seen (or a measured finger of the hand is closing now). A
-// finger bends in its own plane (about the hand's lateral axis); the thumb turns toward the
-// object. A hidden finger whose curl does not meet the object within `max_curl_rad` is left
-// where the tracker put it (it points elsewhere); one already inside is uncurled to the surface.
+// in the last step, or when the hidden finger was closing when it was last seen (or a measured
+// finger of the hand is closing now) and the object is within reach: the palm within
+// `hover_distance_m` of its bounding box, or, for a grabbable object, the box within the length of
+// a closing digit hidden in the last 0.5 s from its first knuckle. A finger bends in its own plane (about the hand's lateral axis); the
+// thumb turns toward the object. A hidden finger whose curl does not meet the object within `max_curl_rad` is left where the tracker put it
+// (it points elsewhere); one already inside is uncurled to the surface.
 //
 // This lives in the engine, not in the tracker, because it needs the physics world's shapes:
 // tracking stays free of engine types (docs/tracking.md, "Hidden fingers and objects"). The
@@ -30,6 +31,7 @@ namespace rhot {
 
 class GraspSystem;
 class PhysicsWorld;
+class World;
 
 struct FingerContactSettings {
   double confident = 0.95;      // a tip with confidence below this is hidden (GraspSettings::confident)
@@ -58,7 +60,7 @@ class FingerContact {
   // One hand's input at time t_s, before its colliders are driven: its hidden digits placed against
   // the object it holds or closes on. The hand is left as it is when it holds nothing and closes
   // on nothing, or is not seen.
-  FingerPlacement place(HandSide side, double t_s, HandInput& hand);
+  FingerPlacement place(const World& world, HandSide side, double t_s, HandInput& hand);
 
   const FingerContactSettings& settings() const { return settings_; }
 
@@ -71,7 +73,8 @@ class FingerContact {
     bool hidden = true;
   };
   void follow(std::size_t side, double t_s, const HandInput& hand);
-  std::optional<Entity> object_for(HandSide side, const HandInput& hand, bool closing) const;
+  std::optional<Entity> object_for(const World& world, HandSide side, const HandInput& hand, const std::array<bool, 5>& closing,
+                                   const std::array<bool, 5>& reaching) const;
 
   const PhysicsWorld& physics_;
   const GraspSystem& grasp_;

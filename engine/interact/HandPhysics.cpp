@@ -38,7 +38,7 @@ std::expected<std::unique_ptr<HandPhysics>, std::string> HandPhysics::create(Wor
 void HandPhysics::step(World& world, const std::array<HandInput, 2>& hands) {
   std::array<HandInput, 2> placed = hands;
   for (std::size_t h = 0; h < 2; ++h) {
-    placements_[h] = finger_contact_->place(h == 0 ? HandSide::kLeft : HandSide::kRight, physics_->time_s(), placed[h]);
+    placements_[h] = finger_contact_->place(world, h == 0 ? HandSide::kLeft : HandSide::kRight, physics_->time_s(), placed[h]);
     hands_[h]->drive(placed[h]);
   }
   grasp_->pre_step(world);

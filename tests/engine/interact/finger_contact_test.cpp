@@ -18,9 +18,9 @@ namespace {
 
 // A 5 cm cube on a pedestal (top at 0.8 m) and the right hand's three-digit grasp of it; the
 // scene's hidden_finger_curl_rad as given.
-std::string bench_scene(double curl_rad) {
-  return std::string(R"({"settings": {"grasp": {"hidden_finger_curl_rad": )") + std::to_string(curl_rad) + R"(}}, "entities": [)" +
-         test::kFloor +
+std::string bench_scene(double curl_rad, double hover_m) {
+  return std::string(R"({"settings": {"grasp": {"hidden_finger_curl_rad": )") + std::to_string(curl_rad) + R"(, "hover_distance_m": )" +
+         std::to_string(hover_m) + R"(}}, "entities": [)" + test::kFloor +
          R"(, {"name": "pedestal", "transform": {"position": [0, 0.4, 0]}, "mesh": {"shape": "box", "size_m": [0.12, 0.8, 0.12]},
                "body": {"type": "static", "friction": 0.8}},
              {"name": "cube", "transform": {"position": [0, 0.825, 0]}, "mesh": {"shape": "box", "size_m": [0.05, 0.05, 0.05]},
@@ -44,8 +44,8 @@ struct CurlBench {
   double hidden_closure = 0.0;  // where the tracker's estimate keeps them (0: open)
   std::vector<InteractionEvent> events;
 
-  explicit CurlBench(double curl_rad = GraspSettings{}.hidden_finger_curl_rad) {
-    physics = test::physics_for(world, test::parse(bench_scene(curl_rad)));
+  explicit CurlBench(double curl_rad = GraspSettings{}.hidden_finger_curl_rad, double hover_m = GraspSettings{}.hover_distance_m) {
+    physics = test::physics_for(world, test::parse(bench_scene(curl_rad, hover_m)));
     cube = find_named(world, "cube");
   }
   // One step with the right hand at `closure` (0 open .. 1 closed), `lift_m` above the cube's
@@ -126,6 +126,36 @@ TEST(FingerContact, AThumbAndIndexHiddenByTheCubeStillGraspIt) {
   for (int i = 0; i < 90; ++i) b.step(1.0, 0.1 * i / 89.0);
   EXPECT_GT(b.cube_height(), 0.825 + 0.08);
   EXPECT_EQ(b.physics->grasp().holding(HandSide::kRight), b.cube) << "held up with the hidden digits";
+}
+
+TEST(FingerContact, HiddenDigitsCloseOnWhatTheyReachWhereThePalmIsNotNearIt) {
+  // The workshop's tool handover: thumb, index and middle hid together as they closed on the
+  // tool's handle, ring and little held still, and the palm was 50.5-51 mm from the handle's
+  // bounding box, just past hover_distance_m (50 mm): nothing was closed on, the hidden digits
+  // stayed 2-4 cm open, and the tool was never taken (seeds 203, 205, 210, ...). Here the palm is
+  // kept out of reach by a hover distance of 2 mm; the closing digits reach the cube themselves.
+  const auto palm_gap_m = [](const CurlBench& b) {
+    const btRigidBody& body = *b.physics->physics().body(b.cube);
+    btVector3 lo, hi;
+    body.getAabb(lo, hi);
+    const HandInput& hand = b.physics->hand(HandSide::kRight).input();
+    const Eigen::Vector3d palm = hand.joints_world[static_cast<std::size_t>(HandJoint::kPalm)];
+    double gap2 = 0.0;
+    for (int a = 0; a < 3; ++a)
+      gap2 += std::pow(std::max({static_cast<double>(lo[a]) - palm[a], palm[a] - static_cast<double>(hi[a]), 0.0}), 2.0);
+    return std::sqrt(gap2);
+  };
+  CurlBench b(GraspSettings{}.hidden_finger_curl_rad, 0.002);
+  for (int i = 0; i < 45; ++i) b.step(0.0, 0.15 * (1.0 - i / 44.0));
+  EXPECT_GT(palm_gap_m(b), 0.002) << "the palm is beyond the hover distance";
+  // Seen as they start to close, then hidden where they were last seen, open.
+  for (int i = 0; i < 5; ++i) b.step(i / 44.0);
+  b.hidden = {0, 1};
+  b.hidden_closure = 4.0 / 44.0;
+  for (int i = 5; i < 45; ++i) b.step(i / 44.0);
+  ASSERT_EQ(b.grasps(), 1);
+  EXPECT_EQ(b.physics->grasp().holding(HandSide::kRight), b.cube);
+  EXPECT_TRUE(b.physics->placements()[1].placed[0] && b.physics->placements()[1].placed[1]);
 }
 
 TEST(FingerContact, AHiddenFingerRestsOnWhatItsHandHoldsNeitherInsideNorAway) {
