@@ -235,8 +235,8 @@ std::optional<Entity> FingerContact::object_for(const World& world, HandSide sid
   if (best || std::none_of(closing.begin(), closing.end(), [](bool c) { return c; })) return best;
   // The hand closing within reach: of the bodies whose bounding box the palm is within
   // hover_distance_m of, or, for a grabbable one, a `reaching` digit could reach (within its own
-  // length of its first knuckle), the one nearest the palm. (A finger curled beside a button the
-  // index pokes is not closing on the button.)
+  // length of its first knuckle), the one nearest the palm. (Only grabbable ones by a digit's reach:
+  // fingers curled beside a button the index pokes are not closing on the button.)
   const btVector3 palm = to_bt(hand.joints_world[static_cast<std::size_t>(HandJoint::kPalm)]);
   const auto gap_m = [](const btVector3& lo, const btVector3& hi, const btVector3& p) {
     btVector3 gap(0, 0, 0);

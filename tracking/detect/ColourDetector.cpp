@@ -62,8 +62,8 @@ constexpr double kRoundAt = 1.15;  // a blob less elongated is a whole marker, i
 // apart, a waist between neighbours (the transform dips below kDiscWaist of the smaller radius on
 // the way), and the discs together explain the blob (kDiscsExplain of its pixels inside them, as
 // much of them inside it). Each disc's centre: a circle fitted to the blob's outline nearest its
-// peak. Peaks lower than
-// kDiscMinRadius are not markers: a thin cable of a marker's colour peaks all along its length.
+// peak. Peaks lower than kDiscMinRadius are left alone. A cable of a marker's colour peaks all
+// along its length (3 px for one 6 px wide); what keeps it out is that discs cover it poorly.
 constexpr double kOneDiscFill = 0.9;
 constexpr int kDiscsMinArea = 30;
 constexpr double kPeakOfLargest = 0.6;
@@ -71,7 +71,7 @@ constexpr double kPeakSpacing = 1.4;
 constexpr double kDiscWaist = 0.8;
 constexpr double kDiscsExplain = 0.95;  // a cable of a marker's colour, 6 px wide, 0.88
 constexpr int kMaxDiscs = 6;
-constexpr double kDiscMinRadius = 3.0;  // px, a peak's distance to the outside: a cable's is less
+constexpr double kDiscMinRadius = 3.0;  // px, a peak's distance to the outside (a disc of radius about 2.5 px and more)
 
 // A peak of a blob's distance transform: a disc's centre, in the blob's mask.
 struct DiscPeak {
@@ -432,7 +432,11 @@ class BlobMeasure {
         if (top) maxima.push_back({{x, y}, static_cast<double>(v)});
       }
     }
-    std::stable_sort(maxima.begin(), maxima.end(), [](const DiscPeak& a, const DiscPeak& c) { return a.value > c.value; });
+    // Largest first; equals in the order found (row by row), for the same peaks on every run.
+    std::sort(maxima.begin(), maxima.end(), [](const DiscPeak& a, const DiscPeak& c) {
+      if (a.value != c.value) return a.value > c.value;
+      return a.at.y != c.at.y ? a.at.y < c.at.y : a.at.x < c.at.x;
+    });
     std::vector<DiscPeak> peaks;
     for (const DiscPeak& p : maxima) {
       if (p.value < kPeakOfLargest * maxima.front().value) break;
@@ -480,15 +484,24 @@ class BlobMeasure {
   // Whether the discs (centre x, y, radius) explain a blob of n pixels: kDiscsExplain of its
   // pixels inside one, and as much of the discs' pixels inside it.
   static bool discs_explain(const std::vector<Eigen::Vector3d>& discs, const cv::Mat1b& mask, cv::Point corner, double n) {
+    // Over the mask and every disc's square: a disc bulging out of the blob's box counts too.
+    int x0 = 0, y0 = 0, x1 = mask.cols, y1 = mask.rows;  // in mask pixels, [x0, x1) x [y0, y1)
+    for (const Eigen::Vector3d& d : discs) {
+      x0 = std::min(x0, static_cast<int>(std::floor(d.x() - d.z())) - corner.x - 1);
+      y0 = std::min(y0, static_cast<int>(std::floor(d.y() - d.z())) - corner.y - 1);
+      x1 = std::max(x1, static_cast<int>(std::ceil(d.x() + d.z())) - corner.x + 2);
+      y1 = std::max(y1, static_cast<int>(std::ceil(d.y() + d.z())) - corner.y + 2);
+    }
     double inside = 0.0, disc_pixels = 0.0, disc_pixels_inside = 0.0;
-    for (int y = 0; y < mask.rows; ++y) {
-      for (int x = 0; x < mask.cols; ++x) {
+    for (int y = y0; y < y1; ++y) {
+      for (int x = x0; x < x1; ++x) {
+        const bool in_blob = x >= 0 && y >= 0 && x < mask.cols && y < mask.rows && mask(y, x);
         const Eigen::Vector2d q(x + corner.x, y + corner.y);
         double nearest = 1e9;  // to a disc's outline, negative inside
         for (const Eigen::Vector3d& d : discs) nearest = std::min(nearest, (q - d.head<2>()).norm() - d.z());
-        inside += mask(y, x) && nearest <= 0.5 ? 1.0 : 0.0;
+        inside += in_blob && nearest <= 0.5 ? 1.0 : 0.0;
         disc_pixels += nearest <= -0.5 ? 1.0 : 0.0;
-        disc_pixels_inside += mask(y, x) && nearest <= -0.5 ? 1.0 : 0.0;
+        disc_pixels_inside += in_blob && nearest <= -0.5 ? 1.0 : 0.0;
       }
     }
     return inside >= kDiscsExplain * n && disc_pixels_inside >= kDiscsExplain * disc_pixels;
@@ -499,7 +512,7 @@ class BlobMeasure {
   // them. Emits both.
   bool split(std::size_t b, const Moments& m, const Shape& sh) {
     const double ux = std::cos(sh.angle), uy = std::sin(sh.angle);
-    // The cut: the narrowest one-pixel strip across the axis within kCutReach of the centroid (two
+    // The cut: the narrowest one-pixel strip across the axis, within kCutSteps x kCutStep of the centroid (two
     // discs of different sizes, or one partly hidden, meet off their joint centroid).
     double mx = m.sx / m.n, my = m.sy / m.n;
     {
@@ -512,10 +525,10 @@ class BlobMeasure {
             strip[static_cast<std::size_t>(k + kCutSteps)] += std::abs(t - k * kCutStep) < 0.5 ? 1 : 0;
         }
       }
-      int best = 0;  // the narrowest, the nearest the centroid among equals
+      int best = 0;  // the narrowest within the blob (an empty strip lies beyond its end), the nearest the centroid among equals
       for (int k = -kCutSteps; k <= kCutSteps; ++k) {
         const int w = strip[static_cast<std::size_t>(k + kCutSteps)], w_best = strip[static_cast<std::size_t>(best + kCutSteps)];
-        if (w < w_best || (w == w_best && std::abs(k) < std::abs(best))) best = k;
+        if (w > 0 && (w < w_best || (w == w_best && std::abs(k) < std::abs(best)))) best = k;
       }
       mx += best * kCutStep * ux, my += best * kCutStep * uy;
     }
