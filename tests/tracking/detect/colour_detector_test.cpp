@@ -208,7 +208,7 @@ TEST(ColourDetector, ThreeOrFourTouchingMarkersOfOneColourAreEachFound) {
     const double r = trial % 2 == 0 ? 4.6 : 6.0;
     const int count = 3 + trial % 3 / 2;  // 3, 3, 4, ...
     std::vector<ColourMarkerDrawing> truth;
-    Eigen::Vector2d p(150.0 + sub(rng), 150.0 + sub(rng));
+    Eigen::Vector2d p{150.0 + sub(rng), 150.0 + sub(rng)};
     double heading = 2.0 * std::numbers::pi * sub(rng);
     for (int i = 0; i < count; ++i) {
       // Each next to the last, never closer than 1.6 radii to any other.
