@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/support/RunCommand.h"
+#include "tracking/camera/Camera.h"
+#include "tracking/camera/RigFile.h"
 #include "tracking/hand/HandLayout.h"
 #include "tracking/sim/HandMotions.h"
 #include "tracking/sim/Realism.h"
@@ -467,7 +469,17 @@ TEST(EvalCli, ATakePhotographedByTheSeatedRigIsTrackedThroughItsCameras) {
 // hand frames with a "left hand" 0.5 m from the true one, fingertips 90 mm off on average. Measured
 // now: none, 2.2 mm.
 TEST(EvalCli, ColourFingertipsAreNeverTakenForAHandStar) {
-  const EvalRun r = run_eval("colour --frames 30 --start-s 6.5 --json");
+  // The shipped pair moved to head height and aimed past the mug (as it was before it was aimed at
+  // the whole desk), so that at 6.5 s the left hand, at the mug, is out of view.
+  auto pair = rhot::load_rig(std::string(RHOT_ASSET_DIR) + "/rigs/stereo-640.yaml");
+  ASSERT_TRUE(pair) << pair.error();
+  for (rhot::Camera& camera : pair->cameras) {
+    const double side = camera.name == "left" ? -0.15 : 0.15;
+    camera.cam_from_world = rhot::cam_from_world_look_at({side, 1.65, 0.2}, {0.0, 0.95, -0.45});
+  }
+  const std::string rig = ::testing::TempDir() + "/eval_cli_pair_ahead.yaml";
+  ASSERT_TRUE(rhot::save_rig(*pair, rig));
+  const EvalRun r = run_eval("colour --rig " + rig + " --frames 30 --start-s 6.5 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["frames"], 30);

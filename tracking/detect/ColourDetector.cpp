@@ -62,7 +62,10 @@ constexpr double kRoundAt = 1.15;  // a blob less elongated is a whole marker, i
 // apart, a waist between neighbours (the transform dips below kDiscWaist of the smaller radius on
 // the way), and the discs together explain the blob (kDiscsExplain of its pixels inside them, as
 // much of them inside it). Each disc's centre: a circle fitted to the blob's outline nearest its
-// peak. Peaks lower than kDiscMinRadius are left alone. A cable of a marker's colour peaks all
+// peak, or for a disc too small to hold a circle (a peak under kFitFromRadius: a star's markers
+// 3-4 px in radius, about 1 m away, whose shaded rims are not classified) the centroid of the
+// pixels nearest its peak (three or more such discs: two are the shape of a short stub of cable
+// as thick). Peaks lower than kDiscMinRadius are left alone. A cable of a marker's colour peaks all
 // along its length (3 px for one 6 px wide); what keeps it out is that discs cover it poorly.
 constexpr double kOneDiscFill = 0.9;
 constexpr int kDiscsMinArea = 30;
@@ -70,8 +73,10 @@ constexpr double kPeakOfLargest = 0.6;
 constexpr double kPeakSpacing = 1.4;
 constexpr double kDiscWaist = 0.8;
 constexpr double kDiscsExplain = 0.95;  // a cable of a marker's colour, 6 px wide, 0.88
+constexpr double kOutlineSlack = 0.1;   // or, where more, this many pixels per pixel of the discs' outline
 constexpr int kMaxDiscs = 6;
-constexpr double kDiscMinRadius = 3.0;  // px, a peak's distance to the outside (a disc of radius about 2.5 px and more)
+constexpr double kDiscMinRadius = 2.0;  // px, a peak's distance to the outside (a disc of radius about 2.5 px and more)
+constexpr double kFitFromRadius = 3.0;  // px: a lower peak's disc is centred on its own pixels' centroid
 
 // A peak of a blob's distance transform: a disc's centre, in the blob's mask.
 struct DiscPeak {
@@ -282,8 +287,11 @@ class BlobMeasure {
       if (m.clipped || m.n < settings_.min_area_px || m.n > settings_.max_area_px || m.w <= 0.0) continue;
       if (m.w / m.n < settings_.min_confidence) continue;
       const Shape sh = shape_of(m);
+      // Three or more discs first: a chain of four can pass as two round halves and be cut in two.
+      const bool discs = (sh.fill < kOneDiscFill || sh.elongation > kRoundAt) && m.n >= kDiscsMinArea;
+      if (discs && several_discs(b, m, 3)) continue;
       if (sh.fill >= settings_.min_fill && sh.elongation > kPairFrom && sh.elongation <= kPairElongation && split(b, m, sh)) continue;
-      if ((sh.fill < kOneDiscFill || sh.elongation > kRoundAt) && m.n >= kDiscsMinArea && several_discs(b, m)) continue;
+      if (discs && several_discs(b, m, 2)) continue;
       if (sh.fill >= settings_.min_fill && sh.elongation <= settings_.max_elongation) {
         // Round enough to be a marker; one not quite round may be a partly hidden one, whose
         // visible part's centroid leans away from the bite by up to a pixel or two.
@@ -373,15 +381,17 @@ class BlobMeasure {
     return edge;
   }
 
-  // Several markers of one colour in blob b (kOneDiscFill and on, above): emits each and says so,
-  // or emits nothing.
-  bool several_discs(std::size_t b, const Moments& m) {
+  // At least min_discs markers of one colour in blob b (kOneDiscFill and on, above): emits each and
+  // says so, or emits nothing.
+  bool several_discs(std::size_t b, const Moments& m, std::size_t min_discs) {
     cv::Point corner;
     const cv::Mat1b mask = mask_of(b, corner);
     cv::Mat1f dist;
     cv::distanceTransform(mask, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
     const std::vector<DiscPeak> peaks = disc_peaks(dist);
-    if (peaks.size() < 2 || peaks.size() > static_cast<std::size_t>(kMaxDiscs) || !waists_between(peaks, dist)) return false;
+    if (peaks.size() < min_discs || peaks.size() > static_cast<std::size_t>(kMaxDiscs) || !waists_between(peaks, dist)) return false;
+    // Two small discs alone are refused: a short stub of cable as thick is the same shape.
+    if (peaks.size() == 2 && peaks.front().value < kFitFromRadius) return false;
     // Each disc: a circle through the blob's edge pixels nearest its peak, started at the peak (a
     // pixel centre on the edge lies half a pixel inside the disc's outline).
     const std::vector<Eigen::Vector2d> edge = edge_of(mask, corner);
@@ -396,7 +406,13 @@ class BlobMeasure {
       const Eigen::Vector2d at(p.at.x + corner.x, p.at.y + corner.y);
       Eigen::Vector2d c = at;
       double r = p.value - 0.5;
-      if (!refine_circle(own_edge, c, r, 3) || (c - at).norm() > 0.5 * p.value) return false;
+      if (!refine_circle(own_edge, c, r, 3) || (c - at).norm() > 0.5 * p.value) {
+        // Too few outline pixels to hold a circle (a disc of radius under 3 px): the centroid of
+        // the blob's pixels nearest its peak.
+        if (p.value >= kFitFromRadius) return false;
+        c = cell_centroid(mask, corner, peaks, p);
+        r = p.value;
+      }
       discs.emplace_back(c.x(), c.y(), r + 0.5);
     }
     if (!discs_explain(discs, mask, corner, m.n)) return false;
@@ -446,6 +462,20 @@ class BlobMeasure {
       if (apart) peaks.push_back(p);
     }
     return peaks;
+  }
+
+  // The centroid (image pixels) of the mask's pixels nearest peak p.
+  static Eigen::Vector2d cell_centroid(const cv::Mat1b& mask, cv::Point corner, const std::vector<DiscPeak>& peaks, const DiscPeak& p) {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    int n = 0;
+    for (int y = 0; y < mask.rows; ++y) {
+      for (int x = 0; x < mask.cols; ++x) {
+        if (!mask(y, x) || nearest_peak(peaks, Eigen::Vector2d(x, y)) != &p) continue;
+        sum += Eigen::Vector2d(x, y);
+        ++n;
+      }
+    }
+    return sum / std::max(n, 1) + Eigen::Vector2d(corner.x, corner.y);
   }
 
   static const DiscPeak* nearest_peak(const std::vector<DiscPeak>& peaks, const Eigen::Vector2d& q) {
@@ -504,7 +534,13 @@ class BlobMeasure {
         disc_pixels_inside += in_blob && nearest <= -0.5 ? 1.0 : 0.0;
       }
     }
-    return inside >= kDiscsExplain * n && disc_pixels_inside >= kDiscsExplain * disc_pixels;
+    // Small discs (radius 2.5-3.5 px) have most of their pixels on the outline, where a pixel is in
+    // or out by a fraction of a pixel: there the slack is kOutlineSlack of the discs' outline.
+    double outline = 0.0;
+    for (const Eigen::Vector3d& d : discs) outline += 2.0 * std::numbers::pi * d.z();
+    const double slack_px = kOutlineSlack * outline;
+    return n - inside <= std::max((1.0 - kDiscsExplain) * n, slack_px) &&
+           disc_pixels - disc_pixels_inside <= std::max((1.0 - kDiscsExplain) * disc_pixels, slack_px);
   }
 
   // Two markers of one colour whose images touch: cut across the major axis at its narrowest near

@@ -4,6 +4,8 @@
 
 #include "tracking/detect/ColourDetector.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -194,28 +196,34 @@ TEST(ColourDetector, TwoTouchingMarkersOfOneColourAreCutInTwo) {
   }
 }
 
-TEST(ColourDetector, ThreeOrFourTouchingMarkersOfOneColourAreEachFound) {
-  // A marker star seen edge-on: its markers' images in a chain, a bend or a cluster, touching or
-  // overlapping (what rhot-eval colour found on the demo's bar, missed in every frame). Centres
-  // 1.6 to 2.1 radii apart, radius 4.6 px as there, and 6 px; each with noise and clutter.
+// Chains, bends and clusters of three or four markers of one colour (a marker star seen edge-on)
+// drawn with noise and clutter, trial k with radius radii[k % 2], centres `closest` to 2.1 radii apart;
+// each trial expects every marker found. Returns the RMS error of those found, and counts false
+// detections: near the markers (the clutter elsewhere is the cluttered table's test) and none of them.
+struct ChainScore {
+  int found = 0, markers = 0, false_detections = 0;
+  double rms_px = 0.0;
+};
+
+ChainScore touching_chains(const std::array<double, 2>& radii, double closest, int trials) {
   ColourDetector detector(default_colour_model());
   ColourImageSettings settings;
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> step(1.6, 2.1), turn(-1.2, 1.2), sub(0.0, 1.0);
-  int found = 0, markers = 0, false_detections = 0;
+  std::uniform_real_distribution<double> step(closest, 2.1), turn(-1.2, 1.2), sub(0.0, 1.0);
+  ChainScore out;
   double sum2 = 0.0;
-  for (int trial = 0; trial < 24; ++trial) {
-    const double r = trial % 2 == 0 ? 4.6 : 6.0;
+  for (int trial = 0; trial < trials; ++trial) {
+    const double r = radii[static_cast<std::size_t>(trial % 2)];
     const int count = 3 + trial % 3 / 2;  // 3, 3, 4, ...
     std::vector<ColourMarkerDrawing> truth;
     Eigen::Vector2d p{150.0 + sub(rng), 150.0 + sub(rng)};
     double heading = 2.0 * std::numbers::pi * sub(rng);
     for (int i = 0; i < count; ++i) {
-      // Each next to the last, never closer than 1.6 radii to any other.
+      // Each next to the last, never closer than `closest` radii to any other.
       for (;;) {
         const double h = heading + (i == 0 ? 0.0 : turn(rng));
         const Eigen::Vector2d q = i == 0 ? p : Eigen::Vector2d(p + step(rng) * r * Eigen::Vector2d(std::cos(h), std::sin(h)));
-        if (std::all_of(truth.begin(), truth.end(), [&](const ColourMarkerDrawing& m) { return (m.pixel - q).norm() >= 1.6 * r; })) {
+        if (std::all_of(truth.begin(), truth.end(), [&](const ColourMarkerDrawing& m) { return (m.pixel - q).norm() >= closest * r; })) {
           truth.push_back({q, r, 5});
           p = q, heading = h;
           break;
@@ -224,21 +232,39 @@ TEST(ColourDetector, ThreeOrFourTouchingMarkersOfOneColourAreEachFound) {
     }
     settings.seed = static_cast<std::uint64_t>(trial + 1);
     const auto detections = detector.detect(draw_colour_markers(300, 300, truth, settings));
-    ASSERT_TRUE(detections);
+    EXPECT_TRUE(detections);
+    if (!detections) continue;
     const Score s = score(truth, *detections);
-    found += s.found, markers += count;
+    out.found += s.found, out.markers += count;
     sum2 += s.rms_px * s.rms_px * s.found;
-    // False: a detection near the markers (the clutter elsewhere is the cluttered table's test)
-    // that is none of them.
     for (const Detection& d : *detections) {
       double nearest = 1e9;
       for (const ColourMarkerDrawing& m : truth) nearest = std::min(nearest, (m.pixel - d.pixel).norm());
-      false_detections += nearest >= 2.0 && nearest < 4.0 * r ? 1 : 0;
+      out.false_detections += nearest >= 2.0 && nearest < 4.0 * r ? 1 : 0;
     }
     EXPECT_EQ(s.found, count) << "trial " << trial << ", " << count << " markers of radius " << r;
   }
-  EXPECT_EQ(false_detections, 0);
-  EXPECT_LT(std::sqrt(sum2 / found), 0.5) << found << " of " << markers;
+  out.rms_px = out.found > 0 ? std::sqrt(sum2 / out.found) : 0.0;
+  return out;
+}
+
+TEST(ColourDetector, ThreeOrFourTouchingMarkersOfOneColourAreEachFound) {
+  // What rhot-eval colour found on the demo's bar, missed in every frame: radius 4.6 px as there,
+  // and 6 px.
+  const ChainScore s = touching_chains({4.6, 6.0}, 1.6, 24);
+  EXPECT_EQ(s.false_detections, 0);
+  EXPECT_LT(s.rms_px, 0.5) << s.found << " of " << s.markers;
+}
+
+TEST(ColourDetector, SmallTouchingMarkersOfAStarAboutAMetreAwayAreEachFound) {
+  // The stars on the demo's bar and box as the stereo pair sees them from about 1.1 m: markers
+  // 3-3.7 px in radius whose shaded rims are not classified, leaving discs of 2.5-3.3 px that
+  // touch. Too small to hold a fitted circle: each is placed at its own pixels' centroid. Centres
+  // at least 1.8 radii apart: closer, the neck between discs this small is within a pixel of their
+  // width and no waist shows in the distance transform.
+  const ChainScore s = touching_chains({2.8, 3.4}, 1.8, 24);
+  EXPECT_EQ(s.false_detections, 0);
+  EXPECT_LT(s.rms_px, 0.6) << s.found << " of " << s.markers;
 }
 
 TEST(ColourDetector, AMarkerHalfHiddenByAFingerIsFoundAtItsCircleNotItsVisibleCentroid) {
