@@ -63,9 +63,11 @@ constexpr double kRoundAt = 1.15;  // a blob less elongated is a whole marker, i
 // the way), and the discs together explain the blob (kDiscsExplain of its pixels inside them, as
 // much of them inside it). Each disc's centre: a circle fitted to the blob's outline nearest its
 // peak, or for a disc too small to hold a circle (a peak under kFitFromRadius: a star's markers
-// 3-4 px in radius, about 1 m away, whose shaded rims are not classified) the centroid of the
-// pixels nearest its peak (three or more such discs: two are the shape of a short stub of cable
-// as thick). Peaks lower than kDiscMinRadius are left alone. A cable of a marker's colour peaks all
+// 3-4 px in radius about 1.1 m away, whose shaded rims are not classified) the centroid of its own
+// pixels. Two discs alone whose larger peak is that small are refused: a short stub of cable as
+// thick is the same shape. Where discs are small, the cover may miss by kOutlineSlack of a pixel
+// per pixel of their outline (pixels there are in or out by a fraction of a pixel) instead of
+// 1 - kDiscsExplain of the blob. Peaks lower than kDiscMinRadius are left alone. A cable of a marker's colour peaks all
 // along its length (3 px for one 6 px wide); what keeps it out is that discs cover it poorly.
 constexpr double kOneDiscFill = 0.9;
 constexpr int kDiscsMinArea = 30;
@@ -82,6 +84,14 @@ constexpr double kFitFromRadius = 3.0;  // px: a lower peak's disc is centred on
 struct DiscPeak {
   cv::Point at;
   double value;  // px to the nearest pixel outside the blob
+};
+
+// A blob's mask (its box, at corner in the image), distance transform and peaks.
+struct BlobPeaks {
+  cv::Mat1b mask;
+  cv::Point corner;
+  cv::Mat1f dist;
+  std::vector<DiscPeak> peaks;
 };
 
 int find_root(std::vector<int>& parent, int i) {
@@ -287,11 +297,13 @@ class BlobMeasure {
       if (m.clipped || m.n < settings_.min_area_px || m.n > settings_.max_area_px || m.w <= 0.0) continue;
       if (m.w / m.n < settings_.min_confidence) continue;
       const Shape sh = shape_of(m);
-      // Three or more discs first: a chain of four can pass as two round halves and be cut in two.
-      const bool discs = (sh.fill < kOneDiscFill || sh.elongation > kRoundAt) && m.n >= kDiscsMinArea;
-      if (discs && several_discs(b, m, 3)) continue;
+      // Three or more discs before the cut (a chain of four can pass as two round halves and be cut
+      // in two), two after it. The blob's distance transform is made once.
+      std::optional<BlobPeaks> peaks;
+      if ((sh.fill < kOneDiscFill || sh.elongation > kRoundAt) && m.n >= kDiscsMinArea) peaks = blob_peaks(b);
+      if (peaks && peaks->peaks.size() >= 3 && several_discs(b, m, *peaks)) continue;
       if (sh.fill >= settings_.min_fill && sh.elongation > kPairFrom && sh.elongation <= kPairElongation && split(b, m, sh)) continue;
-      if (discs && several_discs(b, m, 2)) continue;
+      if (peaks && peaks->peaks.size() == 2 && several_discs(b, m, *peaks)) continue;
       if (sh.fill >= settings_.min_fill && sh.elongation <= settings_.max_elongation) {
         // Round enough to be a marker; one not quite round may be a partly hidden one, whose
         // visible part's centroid leans away from the bite by up to a pixel or two.
@@ -381,15 +393,22 @@ class BlobMeasure {
     return edge;
   }
 
-  // At least min_discs markers of one colour in blob b (kOneDiscFill and on, above): emits each and
-  // says so, or emits nothing.
-  bool several_discs(std::size_t b, const Moments& m, std::size_t min_discs) {
-    cv::Point corner;
-    const cv::Mat1b mask = mask_of(b, corner);
-    cv::Mat1f dist;
-    cv::distanceTransform(mask, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
-    const std::vector<DiscPeak> peaks = disc_peaks(dist);
-    if (peaks.size() < min_discs || peaks.size() > static_cast<std::size_t>(kMaxDiscs) || !waists_between(peaks, dist)) return false;
+  // Blob b's mask, its distance transform and the transform's peaks (disc_peaks).
+  BlobPeaks blob_peaks(std::size_t b) const {
+    BlobPeaks out;
+    out.mask = mask_of(b, out.corner);
+    cv::distanceTransform(out.mask, out.dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    out.peaks = disc_peaks(out.dist);
+    return out;
+  }
+
+  // Several markers of one colour in blob b, one per peak (kOneDiscFill and on, above): emits each
+  // and says so, or emits nothing.
+  bool several_discs(std::size_t b, const Moments& m, const BlobPeaks& blob) {
+    const cv::Mat1b& mask = blob.mask;
+    const cv::Point corner = blob.corner;
+    const std::vector<DiscPeak>& peaks = blob.peaks;
+    if (peaks.size() < 2 || peaks.size() > static_cast<std::size_t>(kMaxDiscs) || !waists_between(peaks, blob.dist)) return false;
     // Two small discs alone are refused: a short stub of cable as thick is the same shape.
     if (peaks.size() == 2 && peaks.front().value < kFitFromRadius) return false;
     // Each disc: a circle through the blob's edge pixels nearest its peak, started at the peak (a
@@ -406,14 +425,17 @@ class BlobMeasure {
       const Eigen::Vector2d at(p.at.x + corner.x, p.at.y + corner.y);
       Eigen::Vector2d c = at;
       double r = p.value - 0.5;
-      if (!refine_circle(own_edge, c, r, 3) || (c - at).norm() > 0.5 * p.value) {
-        // Too few outline pixels to hold a circle (a disc of radius under 3 px): the centroid of
-        // the blob's pixels nearest its peak.
-        if (p.value >= kFitFromRadius) return false;
-        c = cell_centroid(mask, corner, peaks, p);
-        r = p.value;
+      if (refine_circle(own_edge, c, r, 3)) {
+        if ((c - at).norm() > 0.5 * p.value) return false;  // a circle that wandered off its peak: no disc
+        discs.emplace_back(c.x(), c.y(), r + 0.5);
+        continue;
       }
-      discs.emplace_back(c.x(), c.y(), r + 0.5);
+      // Too few outline pixels to hold a circle (a peak under kFitFromRadius): the centroid of its
+      // own pixels, and an outline half a pixel past its peak's value (where the fits of discs
+      // this small came out, 0.3-0.5 px past).
+      if (p.value >= kFitFromRadius) return false;
+      const Eigen::Vector2d centre = cell_centroid(mask, corner, peaks, p);
+      discs.emplace_back(centre.x(), centre.y(), p.value + 0.5);
     }
     if (!discs_explain(discs, mask, corner, m.n)) return false;
     // Each marker measured over the blob's pixels nearest its centre, placed at its centre.
@@ -464,18 +486,27 @@ class BlobMeasure {
     return peaks;
   }
 
-  // The centroid (image pixels) of the mask's pixels nearest peak p.
+  // The centroid (image pixels) of the mask's pixels that are p's: nearest its disc's outline,
+  // so that a small disc beside a larger one does not take the larger one's rim. Never empty: p's
+  // own pixel is p's.
   static Eigen::Vector2d cell_centroid(const cv::Mat1b& mask, cv::Point corner, const std::vector<DiscPeak>& peaks, const DiscPeak& p) {
     Eigen::Vector2d sum = Eigen::Vector2d::Zero();
     int n = 0;
     for (int y = 0; y < mask.rows; ++y) {
       for (int x = 0; x < mask.cols; ++x) {
-        if (!mask(y, x) || nearest_peak(peaks, Eigen::Vector2d(x, y)) != &p) continue;
+        if (!mask(y, x)) continue;
+        const DiscPeak* owner = &p;
+        double owner_d = std::hypot(x - p.at.x, y - p.at.y) - p.value;
+        for (const DiscPeak& q : peaks) {
+          const double d = std::hypot(x - q.at.x, y - q.at.y) - q.value;
+          if (d < owner_d) owner_d = d, owner = &q;
+        }
+        if (owner != &p) continue;
         sum += Eigen::Vector2d(x, y);
         ++n;
       }
     }
-    return sum / std::max(n, 1) + Eigen::Vector2d(corner.x, corner.y);
+    return sum / n + Eigen::Vector2d(corner.x, corner.y);
   }
 
   static const DiscPeak* nearest_peak(const std::vector<DiscPeak>& peaks, const Eigen::Vector2d& q) {
@@ -512,7 +543,7 @@ class BlobMeasure {
   }
 
   // Whether the discs (centre x, y, radius) explain a blob of n pixels: kDiscsExplain of its
-  // pixels inside one, and as much of the discs' pixels inside it.
+  // pixels inside one, and as much of the discs' pixels inside it (each to within the slack below).
   static bool discs_explain(const std::vector<Eigen::Vector3d>& discs, const cv::Mat1b& mask, cv::Point corner, double n) {
     // Over the mask and every disc's square: a disc bulging out of the blob's box counts too.
     int x0 = 0, y0 = 0, x1 = mask.cols, y1 = mask.rows;  // in mask pixels, [x0, x1) x [y0, y1)
@@ -534,8 +565,8 @@ class BlobMeasure {
         disc_pixels_inside += in_blob && nearest <= -0.5 ? 1.0 : 0.0;
       }
     }
-    // Small discs (radius 2.5-3.5 px) have most of their pixels on the outline, where a pixel is in
-    // or out by a fraction of a pixel: there the slack is kOutlineSlack of the discs' outline.
+    // Whichever is more: 1 - kDiscsExplain of the pixels, or kOutlineSlack per pixel of the discs'
+    // outline (more for discs under 4 px in radius, most of whose pixels lie on the outline).
     double outline = 0.0;
     for (const Eigen::Vector3d& d : discs) outline += 2.0 * std::numbers::pi * d.z();
     const double slack_px = kOutlineSlack * outline;
