@@ -257,9 +257,15 @@ std::array<std::optional<HandTruth>, 2> users_hands(const ScenarioHands& hands, 
 // fingertip marker while holding.
 class ScenarioWorld final : public SimulatedWorld {
  public:
-  ScenarioWorld(const ScenarioHands& hands, const std::array<HandLayout, 2>& layouts, std::vector<Occluder> fixed,
-                const btRigidBody* object, const SceneDesc& scene, bool occluding_bodies)
-      : hands_(hands), layouts_(layouts), fixed_(std::move(fixed)), object_(object), occluding_bodies_(occluding_bodies) {
+  // independent_seed: users_hands' (0: the script's hands), the one the truth is taken with.
+  ScenarioWorld(const ScenarioHands& hands, unsigned independent_seed, const std::array<HandLayout, 2>& layouts,
+                std::vector<Occluder> fixed, const btRigidBody* object, const SceneDesc& scene, bool occluding_bodies)
+      : hands_(hands),
+        independent_seed_(independent_seed),
+        layouts_(layouts),
+        fixed_(std::move(fixed)),
+        object_(object),
+        occluding_bodies_(occluding_bodies) {
     for (const EntityDesc& e : scene.entities) {
       if (e.name != "object" || !e.mesh) continue;
       if (const auto* box = std::get_if<BoxShape>(&e.mesh->shape)) object_half_ = 0.5 * to_eigen(box->size_m);
@@ -297,7 +303,7 @@ class ScenarioWorld final : public SimulatedWorld {
   }
 
   const ScenarioHands& hands_;
-  unsigned independent_seed_;
+  unsigned independent_seed_ = 0;
   std::array<HandLayout, 2> layouts_;
   std::vector<Occluder> fixed_;
   const btRigidBody* object_;
@@ -322,8 +328,8 @@ class CameraHands {
       }
     }
     auto source = std::make_unique<SimulatedRig>(rig, std::vector<Trajectory>{}, cameras.world.rig_settings(cameras.seed, rate_hz));
-    source->set_world(
-        std::make_shared<ScenarioWorld>(hands, cameras.layouts, std::move(fixed), object, scene, cameras.world.occluding_bodies));
+    source->set_world(std::make_shared<ScenarioWorld>(hands, independent_seed_, cameras.layouts, std::move(fixed), object, scene,
+                                                      cameras.world.occluding_bodies));
     LiveTrackingSettings settings;
     if (cameras.world.calib_error_px > 0.0) settings.tracker_rig = perturbed_rig(rig, cameras.world.calib_error_px, cameras.seed);
     live_ = std::make_unique<LiveTracking>(std::move(source), TrackedObjects{}, cameras.layouts, settings);
@@ -351,15 +357,25 @@ class CameraHands {
       const double turn = Eigen::AngleAxisd(tracked.world_from_hand.rotation * truth[h]->world_from_hand.rotation.conjugate()).angle();
       if ((reported - wrist[h]).norm() > 0.010 || turn > 5.0 * std::numbers::pi / 180.0) ++result.reported_wrong_frames;
       if (truth[1 - h] && hand_confused(reported, wrist[h], wrist[1 - h])) confused = true;
+      for (int k = 0; k < kFingerCount; ++k) {
+        const auto tip = static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3]);
+        tip_sum_m_ += (tracked.joints_world[tip] - truth[h]->world_from_hand * truth[h]->pose.position_m[tip]).norm();
+        ++tips_;
+      }
     }
     if (confused) ++result.hand_confusion_frames;
     return inputs;
   }
 
+  // The seen hands' fingertip joints against the truth, mean over every frame so far (mm).
+  double fingertip_mean_mm() const { return tips_ > 0 ? 1000.0 * tip_sum_m_ / static_cast<double>(tips_) : 0.0; }
+
  private:
   const ScenarioHands& hands_;
   unsigned independent_seed_;
   std::unique_ptr<LiveTracking> live_;
+  double tip_sum_m_ = 0.0;
+  long tips_ = 0;
 };
 
 // What a scenario measures, step by step.
@@ -479,7 +495,9 @@ std::expected<GraspScenarioResult, std::string> run_grasp_scenario(std::string_v
     measure.result().step_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count());
     measure.observe(t, dt, physics, inputs);
   }
-  return measure.finish();
+  GraspScenarioResult out = measure.finish();
+  if (camera_hands) out.fingertip_mean_mm = camera_hands->fingertip_mean_mm();
+  return out;
 }
 
 }  // namespace rhot

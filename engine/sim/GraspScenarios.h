@@ -59,6 +59,7 @@ struct GraspScenarioResult {
   long hand_frames_seen = 0;
   long reported_wrong_frames = 0;
   long hand_confusion_frames = 0;
+  double fingertip_mean_mm = 0.0;  // the seen hands' fingertip joints against the truth, mean
 };
 
 struct ScenarioCameras {

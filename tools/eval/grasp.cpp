@@ -122,6 +122,7 @@ int grasp(const GraspArgs& args) {
       s["hand_frames_seen"] = r->hand_frames_seen;
       s["reported_wrong_frames"] = r->reported_wrong_frames;
       s["hand_confusion_frames"] = r->hand_confusion_frames;
+      s["fingertip_mean_mm"] = r->fingertip_mean_mm;
       seen += r->hand_frames_seen;
       wrong += r->reported_wrong_frames;
       confusion += r->hand_confusion_frames;
