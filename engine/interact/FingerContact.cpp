@@ -217,6 +217,7 @@ void FingerContact::follow(std::size_t side, double t_s, const HandInput& hand) 
 std::optional<Entity> FingerContact::object_for(const World& world, HandSide side, const HandInput& hand,
                                                 const std::array<bool, 5>& closing, const std::array<bool, 5>& reaching) const {
   if (const auto held = grasp_.holding(side)) return held;
+  if (const Carry& c = carry_[side == HandSide::kLeft ? 0 : 1]; c.carried) return c.object;
   // The body (not a static one) that the most bones of measured digits touched.
   const auto& touched = grasp_.contacts()[side == HandSide::kLeft ? 0 : 1];
   std::optional<Entity> best;
@@ -268,11 +269,85 @@ std::optional<Entity> FingerContact::object_for(const World& world, HandSide sid
   return best;
 }
 
+void FingerContact::follow_carry(const World& world, std::size_t side, double t_s, const HandInput& hand) {
+  Carry& c = carry_[side];
+  // The tracked object whose bounding box is nearest the palm, within hover_distance_m.
+  const btVector3 palm = to_bt(hand.joints_world[static_cast<std::size_t>(HandJoint::kPalm)]);
+  std::optional<Entity> near;
+  double nearest = settings_.hover_distance_m;
+  for (const Entity e : physics_.entities()) {
+    const btRigidBody* body = physics_.body(e);
+    if (!body || !body->isKinematicObject() || !world.alive(e) || !world.has<TrackedBy>(e)) continue;
+    btVector3 lo, hi;
+    body->getAabb(lo, hi);
+    btVector3 gap(0, 0, 0);
+    for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - palm[a], palm[a] - hi[a], btScalar(0)});
+    const double d = static_cast<double>(gap.length());
+    if (d <= nearest) {
+      nearest = d;
+      near = e;
+    }
+  }
+  if (!near) {
+    c = Carry{};
+    return;
+  }
+  const Rigid3d world_from_object = to_rigid(physics_.body(*near)->getWorldTransform());
+  const Rigid3d hand_from_object = hand.world_from_hand.inverse() * world_from_object;
+  if (!world_from_object.is_finite() || !hand_from_object.is_finite()) {
+    c = Carry{};
+    return;
+  }
+  const bool same = c.object == near && (hand_from_object.translation - c.hand_from_object.translation).norm() <= settings_.carry_slack_m &&
+                    hand_from_object.rotation.angularDistance(c.hand_from_object.rotation) <= settings_.carry_turn_rad;
+  // The object begins moving with the hand from here: each digit's curl as last measured then.
+  const auto start = [&] {
+    c = Carry{near, hand_from_object, world_from_object.translation, false, {}, {}};
+    for (std::size_t d = 0; d < 5; ++d) {
+      c.curl_rad[d] = motion_[side][d].t_s >= 0.0 ? motion_[side][d].curl_rad : -2.0;
+      // Hidden then for longer than a flicker: the object hides it.
+      c.hidden[d] = motion_[side][d].hidden && t_s - motion_[side][d].t_s > kFlicker_s;
+    }
+  };
+  if (!same) {
+    start();  // another object, or this one moved in the hand (set down, or the hand let go of it)
+    return;
+  }
+  // The hand letting go: a measured digit straighter by carry_open_rad than it was (measured) when
+  // the object began moving with the hand, or one hidden then (the object hid it) seen again
+  // more than carry_slack_m off the object's surface, or two of those seen again wherever they are.
+  // Carried no longer, until it moves the object with the hand again.
+  const auto& digits = motion_[side];
+  const btRigidBody& body = *physics_.body(*near);
+  int uncovered = 0;
+  for (std::size_t d = 0; d < 5; ++d) uncovered += c.hidden[d] && !digits[d].hidden ? 1 : 0;
+  if (uncovered >= 2) {
+    start();
+    return;
+  }
+  for (std::size_t d = 0; d < 5; ++d) {
+    if (digits[d].hidden || digits[d].t_s < 0.0) continue;
+    const bool straighter = c.curl_rad[d] >= -1.0 && digits[d].curl_rad < c.curl_rad[d] - settings_.carry_open_rad;
+    bool lifted = false;
+    if (c.hidden[d]) {
+      const DigitChain chain = digit_chain(static_cast<int>(d));
+      const auto at = [&](int k) { return hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)])]; };
+      lifted = capsule_distance_m(body, at(chain.count - 2), at(chain.count - 1), 0.0) > settings_.carry_slack_m;
+    }
+    if (straighter || lifted) {
+      start();
+      return;
+    }
+  }
+  c.carried = c.carried || (world_from_object.translation - c.from_m).norm() >= settings_.carry_moved_m;
+}
+
 FingerPlacement FingerContact::place(const World& world, HandSide side, double t_s, HandInput& hand) {
   FingerPlacement result;
   const std::size_t s = side == HandSide::kLeft ? 0 : 1;
   if (!all_finite(hand)) return result;
   follow(s, t_s, hand);
+  if (hand.seen) follow_carry(world, s, t_s, hand);
   if (!hand.seen || settings_.max_curl_rad <= 0.0) return result;
   // Which hidden digits are closing: they were when last seen, or a measured digit is now.
   bool measured_closing = false, any_hidden = false;
@@ -300,7 +375,7 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
   }
   // Held, or touched by a measured digit or the palm: every hidden digit goes to the object; else
   // only the closing ones.
-  bool in_hand = grasp_.holding(side) == result.object;
+  bool in_hand = grasp_.holding(side) == result.object || (carry_[s].carried && carry_[s].object == result.object);
   if (const auto touched = grasp_.contacts()[s].find(*result.object); touched != grasp_.contacts()[s].end()) {
     for (const GraspSystem::Contact& c : touched->second) in_hand = in_hand || measured_contact_of(hand, c, settings_.confident);
   }

@@ -6,13 +6,13 @@
 // relaxed. Where the hand holds an object, or closes on one, such a finger is curled about its
 // own knuckles until its bones meet that object's surface: so an object in the hand is held
 // between the measured digits and the hidden ones, never with a hidden finger inside it or
-// relaxed away from it. A hand closes on an object when a measured digit of it touched the object
-// in the last step, or when the hidden finger was closing when it was last seen (or a measured
-// finger of the hand is closing now) and the object is within reach: the palm within
-// `hover_distance_m` of its bounding box, or, for a grabbable object, the box within the length of
-// a closing digit hidden in the last 0.5 s from its first knuckle. A finger bends in its own plane (about the hand's lateral axis); the
-// thumb turns toward the object. A hidden finger whose curl does not meet the object within `max_curl_rad` is left where the tracker put it
-// (it points elsewhere); one already inside is uncurled to the surface.
+// relaxed away from it. A hand holds an object the grasp system holds, or a tracked object it
+// carries (one that moves with the hand: FingerContactSettings::carry_moved_m). A hand closes on an object when a measured digit of it
+// touched the object in the last step, or when the hidden finger was closing when it was last seen (or a measured finger of the hand is
+// closing now) and the object is within reach: the palm within `hover_distance_m` of its bounding box, or, for a grabbable object, the box
+// within the length of a closing digit hidden in the last 0.5 s from its first knuckle. A finger bends in its own plane (about the hand's
+// lateral axis); the thumb turns toward the object. A hidden finger whose curl does not meet the object within `max_curl_rad` is left where
+// the tracker put it (it points elsewhere); one already inside is uncurled to the surface.
 //
 // This lives in the engine, not in the tracker, because it needs the physics world's shapes:
 // tracking stays free of engine types (docs/tracking.md, "Hidden fingers and objects"). The
@@ -42,6 +42,16 @@ struct FingerContactSettings {
   double squeeze_m = 0.001;
   double hover_distance_m = 0.05;  // the palm this close to an object's bounding box: within reach
   double closing_rad_s = 0.3;      // a finger curling faster than this is closing
+  // A tracked object (kinematic, following its own marker star: the grasp system never holds it)
+  // is carried by a hand once it has moved carry_moved_m with the hand, its pose in the hand frame
+  // within carry_slack_m and carry_turn_rad of where it began, the palm within hover_distance_m of
+  // its bounding box; it is carried until its pose in the hand changes by more, the palm leaves, or
+  // the hand opens.
+  double carry_moved_m = 0.03;
+  double carry_slack_m = 0.015;
+  double carry_turn_rad = 0.2;
+  double carry_open_rad = 0.3;  // ... or until a measured digit is this much straighter than when it began,
+                                // or one hidden then is seen carry_slack_m off the object
 };
 
 // What place() did to one hand.
@@ -73,6 +83,8 @@ class FingerContact {
     bool hidden = true;
   };
   void follow(std::size_t side, double t_s, const HandInput& hand);
+  // Which tracked object the hand carries (see FingerContactSettings::carry_moved_m).
+  void follow_carry(const World& world, std::size_t side, double t_s, const HandInput& hand);
   std::optional<Entity> object_for(const World& world, HandSide side, const HandInput& hand, const std::array<bool, 5>& closing,
                                    const std::array<bool, 5>& reaching) const;
 
@@ -80,6 +92,16 @@ class FingerContact {
   const GraspSystem& grasp_;
   FingerContactSettings settings_;
   std::array<std::array<DigitMotion, 5>, 2> motion_{};
+  // Per hand, the tracked object near its palm and how it has moved with the hand.
+  struct Carry {
+    std::optional<Entity> object;
+    Rigid3d hand_from_object;         // when it began moving with the hand
+    Eigen::Vector3d from_m{0, 0, 0};  // where it was then (world)
+    bool carried = false;
+    std::array<double, 5> curl_rad{};  // each digit's curl as last measured then (below -1: never measured)
+    std::array<bool, 5> hidden{};      // each digit hidden then (for longer than a flicker)
+  };
+  std::array<Carry, 2> carry_{};
 };
 
 // A digit's curl (radians): the angle between its root bone (a finger's metacarpal, the thumb's

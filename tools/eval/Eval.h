@@ -179,6 +179,7 @@ struct ColourArgs {
   bool clutter = true;
   std::string device = "auto";
   std::string pictures_dir;  // non-empty: the first frame's images and what the model classifies in them
+  bool drawn = false;        // also the demo's runtime on the same script and cameras: the drawn hands' fingertips
 };
 int colour(const ColourArgs& args);
 int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);

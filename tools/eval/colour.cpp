@@ -27,6 +27,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <expected>
 #include <iostream>
 #include <map>
 
@@ -38,6 +39,8 @@
 #include <spdlog/spdlog.h>
 #include <opencv2/imgproc.hpp>
 
+#include "engine/core/World.h"
+#include "engine/hand/HandComponents.h"
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/ColourCameras.h"
 #include "engine/sim/Demo.h"
@@ -298,6 +301,74 @@ nlohmann::ordered_json report(const ColourArgs& a, const std::string& device_nam
 
 }  // namespace
 
+// --drawn: the demo's runtime (tracking, physics, grasps, hidden digits placed against what a hand
+// holds or carries: engine/interact/FingerContact.h) on the same script and colour cameras, the
+// drawn hands (the physical hand's joints, HandBody) against the truth, beside the tracked hands of
+// the same frames. The runtime's colour model is the demo's (rhot's six colours, no white
+// reference taken, or --colours), so its detections may differ a little from the pass above.
+std::expected<nlohmann::ordered_json, std::string> drawn_fingertips(const ColourArgs& a, const SceneDesc& scene) {
+  DemoSettings settings;
+  settings.asset_dir = RHOT_ASSET_DIR;
+  settings.colour_markers = true;
+  settings.rig_file = a.rig_file;
+  if (!a.colours_file.empty()) settings.colours = a.colours_file;
+  settings.colour_cameras.noise_sigma = a.noise;
+  settings.colour_cameras.clutter = a.clutter;
+  settings.colour_cameras.kelvin = a.kelvin;
+  settings.colour_cameras.device = a.device;
+  settings.seed = a.seed;
+  auto created = Demo::create(scene, nullptr, settings);
+  if (!created) return std::unexpected(created.error());
+  Demo& demo = **created;
+  struct Sums {
+    double tracked_m = 0.0, drawn_m = 0.0;
+    long tips = 0;
+    void add(double tracked, double drawn) {
+      tracked_m += tracked;
+      drawn_m += drawn;
+      ++tips;
+    }
+    double tracked_mm() const { return tips > 0 ? 1000.0 * tracked_m / static_cast<double>(tips) : 0.0; }
+    double drawn_mm() const { return tips > 0 ? 1000.0 * drawn_m / static_cast<double>(tips) : 0.0; }
+  };
+  Sums all, hidden, window;
+  long hand_frames = 0;
+  const double rate_hz = scene.settings.headset.refresh_hz;
+  for (int f = 0; f < a.frames; ++f) {
+    const double t = a.start_s + f / rate_hz;
+    demo.runtime().run_frame(t);
+    const SceneTruth truth = demo.script().at(t);
+    demo.world().view<Hand, HandBody>().each([&](Entity, Hand& hand, HandBody& body) {
+      const std::size_t h = hand.side == HandSide::kLeft ? 0 : 1;
+      const TrackedHand& tracked = demo.live()->tracked_hand(hand.side);
+      if (!tracked.hand_seen || !body.active || h >= truth.hands.size()) return;
+      ++hand_frames;
+      for (int k = 0; k < kFingerCount; ++k) {
+        const auto tip = static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3]);
+        const Eigen::Vector3d truth_m = truth.hands[h].world_from_hand * truth.hands[h].pose.position_m[tip];
+        const double tracked_m = (tracked.joints_world[tip] - truth_m).norm();
+        const double drawn_m = (body.joints_world[tip] - truth_m).norm();
+        all.add(tracked_m, drawn_m);
+        window.add(tracked_m, drawn_m);
+        if (!tracked.state.tip_seen[static_cast<std::size_t>(k)]) hidden.add(tracked_m, drawn_m);
+      }
+    });
+    if ((f + 1) % 90 == 0 || f + 1 == a.frames) {
+      std::cerr << fmt::format(
+          "rhot-eval colour --drawn: {}/{} frames (t = {:.1f} s; since the last line: fingertips tracked {:.1f} mm, drawn {:.1f} mm)\n",
+          f + 1, a.frames, t, window.tracked_mm(), window.drawn_mm());
+      window = {};
+    }
+  }
+  nlohmann::ordered_json j;
+  j["drawn_fingertip_mean_mm"] = all.drawn_mm();
+  j["drawn_tracked_fingertip_mean_mm"] = all.tracked_mm();
+  j["drawn_hidden_fingertip_mean_mm"] = hidden.drawn_mm();
+  j["drawn_tracked_hidden_fingertip_mean_mm"] = hidden.tracked_mm();
+  j["drawn_hand_frames"] = hand_frames;
+  return j;
+}
+
 int colour(const ColourArgs& a) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));  // stdout is the JSON
   const auto scene = load_scene_file(a.scene_file);
@@ -356,7 +427,16 @@ int colour(const ColourArgs& a) {
       std::cerr << "rhot-eval colour: " << (f + 1) << "/" << a.frames << " frames (t = " << fmt::format("{:.1f}", t)
                 << " s; since the last line: " << window_summary(tally) << ")\n";
   }
-  std::cout << report(a, cams->renderer_info().device_name, tally).dump(2) << "\n";
+  nlohmann::ordered_json j = report(a, cams->renderer_info().device_name, tally);
+  if (a.drawn) {
+    const auto drawn = drawn_fingertips(a, *scene);
+    if (!drawn) {
+      std::cerr << "rhot-eval: " << drawn.error() << "\n";
+      return 1;
+    }
+    for (auto it = drawn->begin(); it != drawn->end(); ++it) j[it.key()] = it.value();
+  }
+  std::cout << j.dump(2) << "\n";
   return 0;
 }
 

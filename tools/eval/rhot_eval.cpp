@@ -14,7 +14,7 @@
 //   rhot-eval nodes [--nodes N] [--markers M] [--rate-hz R] [--seconds S] [--kill-node-at T --restart-node-at T2]
 //                   [--clock-offset-ms X --clock-drift-ppm Y] [--delay-ms D] --json
 //   rhot-eval colour [--rig FILE] [--frames N] [--seed S] [--noise SIGMA] [--white-balance-k KELVIN]
-//                    [--clutter on|off] [--colours FILE] [--device D] --json
+//                    [--clutter on|off] [--colours FILE] [--device D] [--drawn] --json
 //   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
 //                  [--volume-m X Y Z] [--volume-centre-m X Y Z] [--threads T] --json
 //
@@ -376,6 +376,9 @@ CLI::App* add_colour_command(CLI::App& app, ColourArgs& a, std::string& clutter,
   cmd->add_option("--device", a.device, "Vulkan device: auto, gpu, cpu, an index or part of its name")->capture_default_str();
   cmd->add_option("--pictures", a.pictures_dir,
                   "write the first frame's images (cam<i>.png) and what the colour model takes in them (cam<i>_colours.png) here");
+  cmd->add_flag("--drawn", a.drawn,
+                "also run the demo's runtime (physics, grasps, hidden fingers placed against what a hand holds or carries) on the "
+                "same script and cameras: the drawn hands' fingertips against the truth (drawn_* keys)");
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }

@@ -9,6 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "engine/core/Transform.h"
 #include "engine/physics/BulletMath.h"
 #include "engine/sim/ScriptedHands.h"
 #include "tests/engine/physics/PhysicsTestScenes.h"
@@ -183,6 +186,79 @@ TEST(FingerContact, AnOpenHandOverTheCubeLeavesItsHiddenFingersAlone) {
   for (int i = 0; i < 90; ++i) b.step(0.0, 0.01);
   for (const bool placed : b.physics->placements()[1].placed) EXPECT_FALSE(placed);
   EXPECT_EQ(b.grasps(), 0);
+}
+
+// A tracked object (kinematic, following its own marker star) in a hand whose thumb, index and
+// middle it hides: the demo's left hand carrying the mug, where the tracker's estimate left
+// those digits 3-6 cm from the truth (rhot-eval colour). The grasp system never holds a tracked
+// object, and the measured ring and little fingers touch nothing, so nothing placed them.
+struct CarryBench {
+  World world;
+  std::unique_ptr<HandPhysics> physics;
+  Entity mug;
+  GraspPose grasp = make_grasp(HandSide::kRight, 0.05, 0.006, 2);
+  std::vector<int> hidden{0, 1, 2};
+  double lift_m = 0.0;
+
+  CarryBench() {
+    physics = test::physics_for(world, test::parse(std::string(R"({"entities": [)") + test::kFloor +
+                                                   R"(, {"name": "mug", "transform": {"position": [0, 0.825, 0]},
+                                                          "mesh": {"shape": "box", "size_m": [0.05, 0.05, 0.05]},
+                                                          "body": {"type": "kinematic", "friction": 0.8}, "tracked_by": 0}]})"));
+    mug = find_named(world, "mug");
+  }
+  // One step with the closed hand around the mug and both `lift_m` up; the hidden digits where the
+  // tracker left them (open), `seen` digits measured where they truly are at `seen_closure`.
+  void step(double seen_closure = 1.0, const std::vector<int>& seen = {}) {
+    const Eigen::Vector3d at(0.0, 0.825 + lift_m, 0.0);
+    world.get<WorldTransform>(mug).world_from_local = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, static_cast<float>(at.y()), 0.0f));
+    const Rigid3d frame = grasp.place(at, Eigen::Vector3d::UnitX());
+    std::array<HandInput, 2> hands;
+    hands[1] = hand_input(frame, grasp.pose(1.0));
+    const HandInput estimate = hand_input(frame, grasp.pose(0.0));
+    const HandInput opened = hand_input(frame, grasp.pose(seen_closure));
+    for (const int digit : hidden) {
+      const bool now_seen = std::find(seen.begin(), seen.end(), digit) != seen.end();
+      for (const HandJoint j : inferred_joints(digit)) {
+        const auto i = static_cast<std::size_t>(j);
+        hands[1].joints_world[i] = now_seen ? opened.joints_world[i] : estimate.joints_world[i];
+        hands[1].confidence[i] = now_seen ? 1.0 : 0.6;
+      }
+    }
+    physics->step(world, hands);
+  }
+  const FingerPlacement& placement() const { return physics->placements()[1]; }
+};
+
+TEST(FingerContact, HiddenDigitsRestOnATrackedObjectTheHandCarriesAndLeaveItWhenTheHandOpens) {
+  CarryBench still;
+  for (int i = 0; i < 60; ++i) still.step();
+  EXPECT_FALSE(still.placement().object) << "a hand around a tracked object that does not move with it is not carrying it";
+
+  CarryBench b;
+  for (int i = 0; i < 10; ++i) b.step();
+  EXPECT_FALSE(b.placement().object);
+  for (int i = 0; i < 45; ++i) {
+    b.lift_m = 0.1 * (i + 1) / 45.0;
+    b.step();
+  }
+  ASSERT_EQ(b.placement().object, b.mug) << "carried 10 cm with the hand";
+  EXPECT_TRUE(b.placement().placed[0] && b.placement().placed[1] && b.placement().placed[2]);
+  EXPECT_FALSE(b.placement().placed[3] || b.placement().placed[4]) << "the measured digits are where they were measured";
+  // The physical digits on the mug's surface, where the tracker's estimate left them 2-3 cm off.
+  const std::vector<HandCapsule> capsules = b.physics->hand(HandSide::kRight).capsules();
+  const btRigidBody& body = *b.physics->physics().body(b.mug);
+  for (const int digit : {0, 1, 2}) {
+    double gap = 1e9;
+    for (std::size_t i = 0; i < capsules.size(); ++i) {
+      if (hand_bones()[i].group == digit)
+        gap = std::min(gap, capsule_distance_m(body, capsules[i].a_world, capsules[i].b_world, capsules[i].radius_m));
+    }
+    EXPECT_LT(std::abs(gap), 0.004) << "digit " << digit;
+  }
+  // Thumb and index seen again, opened: the hand let go, and nothing is placed against the mug.
+  for (int i = 0; i < 5; ++i) b.step(0.3, {0, 1});
+  EXPECT_FALSE(b.placement().object);
 }
 
 }  // namespace
