@@ -13,7 +13,9 @@
 #include <BulletCollision/NarrowPhaseCollision/btPointCollector.h>
 #include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
 #include <Eigen/Geometry>
+#include <glm/gtc/quaternion.hpp>
 
+#include "engine/core/Transform.h"
 #include "engine/core/World.h"
 #include "engine/interact/GraspSystem.h"
 #include "engine/physics/HandColliders.h"
@@ -47,6 +49,18 @@ DigitChain digit_chain(int digit) {
 
 constexpr double kFlicker_s = 0.3;   // a digit hidden no longer than this was only flickering
 constexpr double kReaching_s = 0.5;  // a closing digit hidden no longer than this reaches for what is within its length
+
+// A world transform without its scale.
+Rigid3d rigid_from(const glm::mat4& world_from_local) {
+  glm::mat3 r(world_from_local);
+  for (int k = 0; k < 3; ++k) {
+    const float length = glm::length(r[k]);
+    if (length > 0.0f) r[k] /= length;
+  }
+  const glm::quat q = glm::quat_cast(r);
+  const glm::vec3 t(world_from_local[3]);
+  return Rigid3d{Eigen::Quaternionf(q.w, q.x, q.y, q.z).cast<double>().normalized(), Eigen::Vector3f(t.x, t.y, t.z).cast<double>()};
+}
 
 bool all_finite(const HandInput& hand) {
   for (const Eigen::Vector3d& j : hand.joints_world)
@@ -292,7 +306,10 @@ void FingerContact::follow_carry(const World& world, std::size_t side, double t_
     c = Carry{};
     return;
   }
-  const Rigid3d world_from_object = to_rigid(physics_.body(*near)->getWorldTransform());
+  // Where the object is this frame (its entity's pose; the kinematic body takes it only in the
+  // step after this, and a step behind, a hand at 1.3 m/s is 15 mm from it at 90 Hz).
+  const WorldTransform* wt = world.find<WorldTransform>(*near);
+  const Rigid3d world_from_object = wt ? rigid_from(wt->world_from_local) : to_rigid(physics_.body(*near)->getWorldTransform());
   const Rigid3d hand_from_object = hand.world_from_hand.inverse() * world_from_object;
   if (!world_from_object.is_finite() || !hand_from_object.is_finite()) {
     c = Carry{};
@@ -311,6 +328,16 @@ void FingerContact::follow_carry(const World& world, std::size_t side, double t_
   };
   if (!same) {
     start();  // another object, or this one moved in the hand (set down, or the hand let go of it)
+    return;
+  }
+  if (!c.carried) {
+    // Not carried yet: each digit as it is now, so that the hand's opening is judged against the
+    // grip it carries with (a hand reaches the object open and closes on it before lifting it).
+    const Carry began = c;
+    start();
+    c.hand_from_object = began.hand_from_object;
+    c.from_m = began.from_m;
+    c.carried = (world_from_object.translation - c.from_m).norm() >= settings_.carry_moved_m;
     return;
   }
   // The hand letting go: a measured digit straighter by carry_open_rad than it was (measured) when
@@ -332,14 +359,16 @@ void FingerContact::follow_carry(const World& world, std::size_t side, double t_
     if (c.hidden[d]) {
       const DigitChain chain = digit_chain(static_cast<int>(d));
       const auto at = [&](int k) { return hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)])]; };
-      lifted = capsule_distance_m(body, at(chain.count - 2), at(chain.count - 1), 0.0) > settings_.carry_slack_m;
+      const auto tip = static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)]);
+      const auto before = static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 2)]);
+      const double radius_m = std::max(HandColliderSettings{}.min_radius_m, std::min(hand.radius_m[before], hand.radius_m[tip]));
+      lifted = capsule_distance_m(body, at(chain.count - 2), at(chain.count - 1), radius_m) > settings_.carry_slack_m;
     }
     if (straighter || lifted) {
       start();
       return;
     }
   }
-  c.carried = c.carried || (world_from_object.translation - c.from_m).norm() >= settings_.carry_moved_m;
 }
 
 FingerPlacement FingerContact::place(const World& world, HandSide side, double t_s, HandInput& hand) {

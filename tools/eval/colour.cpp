@@ -303,8 +303,9 @@ nlohmann::ordered_json report(const ColourArgs& a, const std::string& device_nam
 
 // --drawn: the demo's runtime (tracking, physics, grasps, hidden digits placed against what a hand
 // holds or carries: engine/interact/FingerContact.h) on the same script and colour cameras, the
-// drawn hands (the physical hand's joints, HandBody) against the truth, beside the tracked hands of
-// the same frames. The runtime's colour model is the demo's (rhot's six colours, no white
+// physical hands (HandBody's joints: what the renderer draws, before it predicts them forward to the
+// display's time) against the truth at the frame's capture, beside the tracked hands of the same
+// frames. The runtime's colour model is the demo's (rhot's six colours, no white
 // reference taken, or --colours), so its detections may differ a little from the pass above.
 std::expected<nlohmann::ordered_json, std::string> drawn_fingertips(const ColourArgs& a, const SceneDesc& scene) {
   DemoSettings settings;
@@ -336,8 +337,9 @@ std::expected<nlohmann::ordered_json, std::string> drawn_fingertips(const Colour
   const double rate_hz = scene.settings.headset.refresh_hz;
   for (int f = 0; f < a.frames; ++f) {
     const double t = a.start_s + f / rate_hz;
+    // The truth the cameras photograph, before the frame's own stages (the look stage re-aims the script).
+    const SceneTruth truth = demo.simulated()->truth_at(t);
     demo.runtime().run_frame(t);
-    const SceneTruth truth = demo.script().at(t);
     demo.world().view<Hand, HandBody>().each([&](Entity, Hand& hand, HandBody& body) {
       const std::size_t h = hand.side == HandSide::kLeft ? 0 : 1;
       const TrackedHand& tracked = demo.live()->tracked_hand(hand.side);

@@ -378,7 +378,8 @@ CLI::App* add_colour_command(CLI::App& app, ColourArgs& a, std::string& clutter,
                   "write the first frame's images (cam<i>.png) and what the colour model takes in them (cam<i>_colours.png) here");
   cmd->add_flag("--drawn", a.drawn,
                 "also run the demo's runtime (physics, grasps, hidden fingers placed against what a hand holds or carries) on the "
-                "same script and cameras: the drawn hands' fingertips against the truth (drawn_* keys)");
+                "same script and cameras: the physical hands' fingertips (drawn, before prediction to display time) against the truth "
+                "(drawn_* keys; the default 90 frames hold no grasp: pass --frames 2700 for the whole script)");
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }

@@ -189,8 +189,8 @@ TEST(FingerContact, AnOpenHandOverTheCubeLeavesItsHiddenFingersAlone) {
 }
 
 // A tracked object (kinematic, following its own marker star) in a hand whose thumb, index and
-// middle it hides: the demo's left hand carrying the mug, where the tracker's estimate left
-// those digits 3-6 cm from the truth (rhot-eval colour). The grasp system never holds a tracked
+// middle it hides: as the demo's left hand carries the mug, where the tracker's estimate left
+// those digits 2-6 cm from the truth (rhot-eval colour). The grasp system never holds a tracked
 // object, and the measured ring and little fingers touch nothing, so nothing placed them.
 struct CarryBench {
   World world;
@@ -207,14 +207,15 @@ struct CarryBench {
                                                           "body": {"type": "kinematic", "friction": 0.8}, "tracked_by": 0}]})"));
     mug = find_named(world, "mug");
   }
-  // One step with the closed hand around the mug and both `lift_m` up; the hidden digits where the
-  // tracker left them (open), `seen` digits measured where they truly are at `seen_closure`.
+  // One step with the hand around the mug at `closure` and both `lift_m` up; the hidden digits where
+  // the tracker left them (open), `seen` digits measured where they truly are at `seen_closure`.
+  double closure = 1.0;
   void step(double seen_closure = 1.0, const std::vector<int>& seen = {}) {
     const Eigen::Vector3d at(0.0, 0.825 + lift_m, 0.0);
     world.get<WorldTransform>(mug).world_from_local = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, static_cast<float>(at.y()), 0.0f));
     const Rigid3d frame = grasp.place(at, Eigen::Vector3d::UnitX());
     std::array<HandInput, 2> hands;
-    hands[1] = hand_input(frame, grasp.pose(1.0));
+    hands[1] = hand_input(frame, grasp.pose(closure));
     const HandInput estimate = hand_input(frame, grasp.pose(0.0));
     const HandInput opened = hand_input(frame, grasp.pose(seen_closure));
     for (const int digit : hidden) {
@@ -256,9 +257,37 @@ TEST(FingerContact, HiddenDigitsRestOnATrackedObjectTheHandCarriesAndLeaveItWhen
     }
     EXPECT_LT(std::abs(gap), 0.004) << "digit " << digit;
   }
+  // The thumb seen again on the mug: still carried.
+  for (int i = 0; i < 5; ++i) b.step(1.0, {0});
+  EXPECT_EQ(b.placement().object, b.mug);
   // Thumb and index seen again, opened: the hand let go, and nothing is placed against the mug.
   for (int i = 0; i < 5; ++i) b.step(0.3, {0, 1});
   EXPECT_FALSE(b.placement().object);
+}
+
+TEST(FingerContact, AHandThatClosedOnATrackedObjectBeforeCarryingItLetsGoOfItWhenItOpens) {
+  // The demo's left hand reaches the mug open, every digit measured, closes on it without moving
+  // it, and only then lifts it. How far it opens is judged against the grip it carried with, not
+  // against the open hand that arrived (then a hand opening over the set-down mug kept its hidden
+  // middle finger curled on it).
+  CarryBench b;
+  const std::vector<int> hides = b.hidden;
+  b.hidden = {};
+  for (int i = 0; i < 20; ++i) {
+    b.closure = i / 19.0;
+    b.step();
+  }
+  b.hidden = hides;  // the mug hides them as the hand holds it
+  for (int i = 0; i < 40; ++i) b.step();
+  for (int i = 0; i < 45; ++i) {
+    b.lift_m = 0.1 * (i + 1) / 45.0;
+    b.step();
+  }
+  ASSERT_EQ(b.placement().object, b.mug);
+  // Set down (the mug stays where the hand leaves it) and the hand opens: the thumb seen again,
+  // off the mug.
+  for (int i = 0; i < 5; ++i) b.step(0.0, {0});
+  EXPECT_FALSE(b.placement().object) << "the thumb the mug hid, seen opened off it, is the hand letting go";
 }
 
 }  // namespace
