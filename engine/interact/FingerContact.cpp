@@ -62,6 +62,19 @@ Rigid3d rigid_from(const glm::mat4& world_from_local) {
   return Rigid3d{Eigen::Quaternionf(q.w, q.x, q.y, q.z).cast<double>().normalized(), Eigen::Vector3f(t.x, t.y, t.z).cast<double>()};
 }
 
+// The distance from p to the box from lo to hi (0 inside it).
+double box_gap_m(const btVector3& lo, const btVector3& hi, const btVector3& p) {
+  btVector3 gap(0, 0, 0);
+  for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - p[a], p[a] - hi[a], btScalar(0)});
+  return static_cast<double>(gap.length());
+}
+
+// The collider's radius of the bone from joint a to joint b (HandColliders: the smaller of its
+// joints', at least min_radius_m).
+double bone_radius_m(const HandInput& hand, std::size_t a, std::size_t b) {
+  return std::max(HandColliderSettings{}.min_radius_m, std::min(hand.radius_m[a], hand.radius_m[b]));
+}
+
 bool all_finite(const HandInput& hand) {
   for (const Eigen::Vector3d& j : hand.joints_world)
     if (!j.allFinite()) return false;
@@ -94,11 +107,7 @@ std::optional<double> rest_digit(HandInput& hand, const DigitChain& chain, int f
     }
     return p;
   };
-  // The collider's radius of bone k (HandColliders: the smaller of its joints', at least
-  // min_radius_m).
-  const auto radius = [&](int k) {
-    return std::max(HandColliderSettings{}.min_radius_m, std::min(hand.radius_m[at(k)], hand.radius_m[at(k + 1)]));
-  };
+  const auto radius = [&](int k) { return bone_radius_m(hand, at(k), at(k + 1)); };
   // How far the curled digit's bones are out of the body, less the rest: <= 0 is resting on it.
   const auto gap = [&](double theta) {
     const auto p = curled(theta);
@@ -253,18 +262,13 @@ std::optional<Entity> FingerContact::object_for(const World& world, HandSide sid
   // length of its first knuckle), the one nearest the palm. (Only grabbable ones by a digit's reach:
   // fingers curled beside a button the index pokes are not closing on the button.)
   const btVector3 palm = to_bt(hand.joints_world[static_cast<std::size_t>(HandJoint::kPalm)]);
-  const auto gap_m = [](const btVector3& lo, const btVector3& hi, const btVector3& p) {
-    btVector3 gap(0, 0, 0);
-    for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - p[a], p[a] - hi[a], btScalar(0)});
-    return static_cast<double>(gap.length());
-  };
   double nearest = 1e9;
   for (const Entity e : physics_.entities()) {
     const btRigidBody* body = physics_.body(e);
     if (!body || body->isStaticObject()) continue;
     btVector3 lo, hi;
     body->getAabb(lo, hi);
-    const double d = gap_m(lo, hi, palm);
+    const double d = box_gap_m(lo, hi, palm);
     bool reach = d <= settings_.hover_distance_m;
     const bool grabbable = world.alive(e) && world.has<Grabbable>(e);
     for (int digit = 0; digit < 5 && !reach && grabbable; ++digit) {
@@ -273,7 +277,7 @@ std::optional<Entity> FingerContact::object_for(const World& world, HandSide sid
       const auto at = [&](int k) { return hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)])]; };
       double length = 0.0;
       for (int k = 0; k + 1 < chain.count; ++k) length += (at(k + 1) - at(k)).norm();
-      reach = gap_m(lo, hi, to_bt(at(0))) <= length;
+      reach = box_gap_m(lo, hi, to_bt(at(0))) <= length;
     }
     if (reach && d < nearest) {
       nearest = d;
@@ -294,9 +298,7 @@ void FingerContact::follow_carry(const World& world, std::size_t side, double t_
     if (!body || !body->isKinematicObject() || !world.alive(e) || !world.has<TrackedBy>(e)) continue;
     btVector3 lo, hi;
     body->getAabb(lo, hi);
-    btVector3 gap(0, 0, 0);
-    for (int a = 0; a < 3; ++a) gap[a] = std::max({lo[a] - palm[a], palm[a] - hi[a], btScalar(0)});
-    const double d = static_cast<double>(gap.length());
+    const double d = box_gap_m(lo, hi, palm);
     if (d <= nearest) {
       nearest = d;
       near = e;
@@ -359,9 +361,8 @@ void FingerContact::follow_carry(const World& world, std::size_t side, double t_
     if (c.hidden[d]) {
       const DigitChain chain = digit_chain(static_cast<int>(d));
       const auto at = [&](int k) { return hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)])]; };
-      const auto tip = static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)]);
-      const auto before = static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 2)]);
-      const double radius_m = std::max(HandColliderSettings{}.min_radius_m, std::min(hand.radius_m[before], hand.radius_m[tip]));
+      const double radius_m = bone_radius_m(hand, static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 2)]),
+                                            static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)]));
       lifted = capsule_distance_m(body, at(chain.count - 2), at(chain.count - 1), radius_m) > settings_.carry_slack_m;
     }
     if (straighter || lifted) {

@@ -299,8 +299,6 @@ nlohmann::ordered_json report(const ColourArgs& a, const std::string& device_nam
   return j;
 }
 
-}  // namespace
-
 // --drawn: the demo's runtime (tracking, physics, grasps, hidden digits placed against what a hand
 // holds or carries: engine/interact/FingerContact.h) on the same script and colour cameras, the
 // physical hands (HandBody's joints: what the renderer draws, before it predicts them forward to the
@@ -370,6 +368,8 @@ std::expected<nlohmann::ordered_json, std::string> drawn_fingertips(const Colour
   j["drawn_hand_frames"] = hand_frames;
   return j;
 }
+
+}  // namespace
 
 int colour(const ColourArgs& a) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));  // stdout is the JSON
