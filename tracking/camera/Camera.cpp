@@ -42,14 +42,31 @@ Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::
 
 std::optional<Eigen::Vector2d> undistort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& distorted) {
   if (!distorted.allFinite()) return std::nullopt;
-  Eigen::Vector2d xy = distorted;
-  Eigen::Matrix2d jacobian;
+  const double k1 = k[0], k2 = k[1], p1 = k[2], p2 = k[3], k3 = k[4];
+  const double u = distorted.x();
+  const double v = distorted.y();
+  // From the distorted point with the radial factor there divided out: the radial part undone to
+  // first order, a Newton step or two fewer than from the distorted point itself.
+  const double r2_distorted = u * u + v * v;
+  const double radial_start = 1.0 + r2_distorted * (k1 + r2_distorted * (k2 + r2_distorted * k3));
+  double x = radial_start > 0.5 ? u / radial_start : u;
+  double y = radial_start > 0.5 ? v / radial_start : v;
+  // Newton's method on distort(x, y) = (u, v), written out (distort's model and its Jacobian).
   for (int step = 0; step < 20; ++step) {
-    const Eigen::Vector2d error = distort(k, xy, &jacobian) - distorted;
-    if (!(jacobian.determinant() > 1e-9 && jacobian(0, 0) > 0.0 && jacobian(1, 1) > 0.0)) return std::nullopt;
-    if (error.squaredNorm() < 1e-28) return xy;
-    xy -= jacobian.inverse() * error;
-    if (!xy.allFinite() || xy.squaredNorm() > 1e6) return std::nullopt;
+    const double r2 = x * x + y * y;
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const double d = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r2)
+    const double ex = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - u;
+    const double ey = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - v;
+    const double j00 = radial + 2.0 * x * x * d + 2.0 * p1 * y + 6.0 * p2 * x;
+    const double j01 = 2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y;
+    const double j11 = radial + 2.0 * y * y * d + 6.0 * p1 * y + 2.0 * p2 * x;
+    const double det = j00 * j11 - j01 * j01;
+    if (!(det > 1e-9 && j00 > 0.0 && j11 > 0.0)) return std::nullopt;
+    if (ex * ex + ey * ey < 1e-28) return Eigen::Vector2d(x, y);
+    x -= (j11 * ex - j01 * ey) / det;
+    y -= (j00 * ey - j01 * ex) / det;
+    if (!std::isfinite(x) || !std::isfinite(y) || x * x + y * y > 1e6) return std::nullopt;
   }
   return std::nullopt;
 }

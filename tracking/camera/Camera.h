@@ -48,8 +48,9 @@ struct Camera {
 // Normalised undistorted image coordinates -> distorted normalised coordinates (OpenCV's model).
 Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy);
 // The inverse: distorted -> undistorted normalised coordinates, by Newton's method from the
-// distorted point (quadratic convergence: 2-4 steps for lenses like the shipped rigs', against
-// OpenCV's fixed-point iteration, 8 times slower for the same 1e-13). Nothing where it does not
+// distorted point with its radial factor divided out (quadratic convergence: 1-3 steps for
+// lenses like the shipped rigs', against OpenCV's fixed-point iteration, 8 times slower for the
+// same 1e-13). Nothing where it does not
 // converge or the model folds over (its Jacobian is not positive there).
 std::optional<Eigen::Vector2d> undistort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& distorted);
 

@@ -115,8 +115,9 @@ struct CameraDetections {
     return (x < 0 || y < 0 || x >= cols || y >= rows) ? -1 : y * cols + x;
   }
   // Nearest detection of a colour (-1: uncoloured) within `radius` of p, or -1. Visits only the
-  // cells the disc overlaps.
-  int nearest(const Eigen::Vector2d& p, double radius, int of_colour) const {
+  // cells the disc overlaps. With `alone`: whether it is the only one of its colour within `radius`.
+  int nearest(const Eigen::Vector2d& p, double radius, int of_colour, bool* alone = nullptr) const {
+    if (alone != nullptr) *alone = true;
     // Far outside the grid (or NaN): nothing to find, and the cell arithmetic below would overflow.
     if (!(p.x() > -radius - 1.0 && p.y() > -radius - 1.0 && p.x() < cols * cell_px && p.y() < rows * cell_px)) return -1;
     const int x0 = std::max(0, static_cast<int>(std::floor((p.x() + 0.5 - radius) / cell_px)));
@@ -134,6 +135,7 @@ struct CameraDetections {
           const double dx = item.x - p.x();
           const double dy = item.y - p.y();
           const double d2 = dx * dx + dy * dy;
+          if (alone != nullptr && best >= 0 && d2 <= radius * radius) *alone = false;
           if (d2 <= best_d2) {
             best_d2 = d2;
             best = item.detection;
@@ -497,6 +499,14 @@ class Matcher {
   // detections, so seeds can grow side by side. Written into `out` (its storage kept).
   void grow_seed(std::size_t i, std::size_t a, std::size_t j, std::size_t b, const Eigen::Vector3d& x, Grown& out) const {
     thread_local std::vector<Observation> grown;
+    // Per camera: where the seed projects, and whether the detection found there was the only one
+    // of its colour within the tolerance (then the refined point's lookup can be skipped, below).
+    thread_local std::vector<Eigen::Vector2d> seen_at;
+    thread_local std::vector<char> alone;
+    if (seen_at.size() < n_) {
+      seen_at.resize(n_);
+      alone.resize(n_);
+    }
     out.confirmed = false;
     Cluster& cl = out.cluster;
     cl.reserve(n_);
@@ -513,7 +523,10 @@ class Matcher {
       if (k == i || k == j || !CameraVisibility::contains(seeing, k)) continue;
       const auto p = poses_[k].project(x);
       if (!p || !poses_[k].in_image(*p)) continue;
-      cl.detection[k] = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
+      bool only = false;
+      cl.detection[k] = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour, &only);
+      seen_at[k] = *p;
+      alone[k] = only ? 1 : 0;
       if (cl.detection[k] < 0) ++unseen;
     }
     grown.clear();
@@ -550,6 +563,13 @@ class Matcher {
         for (std::size_t k = 0; k < n_; ++k) {
           if (k == i || k == j || cl.detection[k] < 0) continue;
           if (const auto p = poses_[k].project(cl.seed_point)) {
+            // The detection found from the seed, alone within the tolerance there, is still the
+            // nearest from here if it is within the tolerance less the distance moved: every
+            // other detection is further than the tolerance from the seed's projection, so
+            // further than that from here. The lookup would return it again.
+            const double moved = (*p - seen_at[k]).norm();
+            const double off = (*p - cams_[k].pixel[static_cast<std::size_t>(cl.detection[k])]).norm();
+            if (alone[k] != 0 && off + moved < settings_.reprojection_tolerance_px) continue;
             const int d = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour);
             if (d >= 0 && d != cl.detection[k]) {
               cl.detection[k] = d;
