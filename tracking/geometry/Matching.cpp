@@ -518,6 +518,7 @@ class Matcher {
     cl.detection[i] = static_cast<int>(a);
     cl.detection[j] = static_cast<int>(b);
     int unseen = 0;  // cameras that should see the point and have no detection near it
+    int third = 0;   // cameras other than i and j that have one
     const CameraVisibility::CameraSet seeing = visibility_.cameras_at(x);
     for (std::size_t k = 0; k < n_; ++k) {
       if (k == i || k == j || !CameraVisibility::contains(seeing, k)) continue;
@@ -527,7 +528,17 @@ class Matcher {
       cl.detection[k] = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour, &only);
       seen_at[k] = *p;
       alone[k] = only ? 1 : 0;
-      if (cl.detection[k] < 0) ++unseen;
+      if (cl.detection[k] >= 0) {
+        ++third;
+      } else if (++unseen > 2 && third == 0) {
+        // Three cameras that should see the point see nothing there, and none has: a ghost (two
+        // rays that pass close by chance) almost always, and the rule below would drop it unless a
+        // later camera happened to have a detection near it. Dropped now, before it is projected
+        // into the rest of the rig. A true marker hidden from those three but seen by others is
+        // still found from a pair of the cameras that see it: its detections stay open.
+        cl.detection.clear();
+        return;
+      }
     }
     grown.clear();
     for (std::size_t k = 0; k < n_; ++k) {
