@@ -211,6 +211,9 @@ struct MatchScratch {
   matching_detail::Grown grown;               // the serial pass's seed
   std::vector<std::size_t> order;
   std::vector<std::vector<char>> used;
+  std::vector<std::vector<char>> contested;  // per camera and detection: wanted by two markers' points (Matcher::accept)
+  bool any_contested = false;
+  Observation dropped;
   TriangulatedPoint again;
   std::vector<MatchedPoint> points;  // the first point_count are this frame's
   std::size_t point_count = 0;
@@ -711,11 +714,16 @@ class Matcher {
       return clusters_[a].point.reprojection_rms_px < clusters_[b].point.reprojection_rms_px;
     });
     std::vector<std::vector<char>>& used = s_.used;
+    std::vector<std::vector<char>>& contested = s_.contested;
     if (used.size() < n_) used.resize(n_);
+    if (contested.size() < n_) contested.resize(n_);
     for (std::size_t c = 0; c < n_; ++c) {
       reserve_room(used[c], cams_[c].pixel.size());
       used[c].assign(cams_[c].pixel.size(), 0);
+      reserve_room(contested[c], cams_[c].pixel.size());
+      contested[c].assign(cams_[c].pixel.size(), 0);
     }
+    s_.any_contested = false;
     for (const std::size_t k : order) {
       Cluster& cl = clusters_[k];
       if (cl.support < 2 || cl.point.reprojection_rms_px > settings_.max_rms_px || cl.missing > cl.support) continue;
@@ -732,6 +740,10 @@ class Matcher {
         // Two markers whose projections nearly coincide in one camera share a detection there;
         // the point seen by three or more other cameras is still found, without that camera.
         // (Two clusters of one marker share two detections or more, so no duplicate comes of this.)
+        // The detection both want is contested: most likely the two markers' blobs merged into
+        // one, which lies off both (see drop_contested).
+        contested[static_cast<std::size_t>(taken)][static_cast<std::size_t>(cl.detection[static_cast<std::size_t>(taken)])] = 1;
+        s_.any_contested = true;
         if (cl.support < 4) continue;
         std::erase_if(cl.observations, [&](const Observation& o) { return o.camera == taken; });
         TriangulatedPoint& again = s_.again;
@@ -760,6 +772,38 @@ class Matcher {
         if (cl.detection[c] < 0) continue;
         used[c][static_cast<std::size_t>(cl.detection[c])] = 1;
         m.detection.push_back(cl.detection[c]);
+      }
+    }
+    if (s_.any_contested) drop_contested();
+  }
+
+  // A detection that two markers' points both wanted (accept) is taken out of the point that kept
+  // it, where three or more observations remain and agree without it: two markers projecting onto
+  // one detection in a camera are, most often, two blobs merged into one, which lies between them
+  // and is neither marker's. The point is then its own marker's alone. A point with three
+  // observations or fewer keeps it.
+  void drop_contested() {
+    for (std::size_t p = 0; p < s_.point_count; ++p) {
+      MatchedPoint& m = s_.points[p];
+      for (std::size_t o = 0; o < m.observations.size() && m.observations.size() >= 4;) {
+        const auto camera = static_cast<std::size_t>(m.observations[o].camera);
+        const auto detection = m.detection[o];
+        if (s_.contested[camera][static_cast<std::size_t>(detection)] == 0) {
+          ++o;
+          continue;
+        }
+        s_.dropped = m.observations[o];
+        m.observations.erase(m.observations.begin() + static_cast<std::ptrdiff_t>(o));
+        TriangulatedPoint& again = s_.again;
+        if (again.cameras.capacity() < n_) again.cameras.reserve(n_);
+        if (refine_point_into(poses_, m.observations, m.point.position_world, 5, again) &&
+            again.max_residual_px <= settings_.max_residual_px && again.reprojection_rms_px <= settings_.max_rms_px) {
+          std::swap(m.point, again);
+          m.detection.erase(m.detection.begin() + static_cast<std::ptrdiff_t>(o));
+        } else {
+          m.observations.insert(m.observations.begin() + static_cast<std::ptrdiff_t>(o), s_.dropped);
+          ++o;
+        }
       }
     }
   }

@@ -167,8 +167,9 @@ TEST(Matching, CoincidentalEpipolarGhostsAreRejected) {
   EXPECT_EQ(points.size(), 2u);
 }
 
-// Two markers on one ray of camera 0 make one blob there: one detection for both, so one of the
-// two points must do without camera 0. Both are still found, each at its marker.
+// Two markers on one ray of camera 0 make one blob there: one detection for both. Neither point
+// keeps it (a merged blob lies between its markers, here on both: Matcher::drop_contested), and
+// both are still found, each at its marker from the three cameras that see it alone.
 TEST(Matching, MarkersProjectingToOnePixelAreBothFound) {
   const CameraRig r = rig("seated-4.yaml");
   const Eigen::Vector3d near{0.05, 1.05, -0.5};
@@ -198,7 +199,46 @@ TEST(Matching, MarkersProjectingToOnePixelAreBothFound) {
     EXPECT_EQ(at, 1) << "marker at " << truth.transpose();
   }
   std::sort(views.begin(), views.end());
-  EXPECT_EQ(views, (std::vector<std::size_t>{3, 4})) << "one point takes camera 0's detection, the other does without";
+  EXPECT_EQ(views, (std::vector<std::size_t>{3, 3})) << "neither point keeps camera 0's detection, which both wanted";
+}
+
+// Two markers whose blobs merge in camera 0 without lying on one ray: the merged detection, at
+// their mean pixel, is a pixel off each. Before, the point accepted first kept it and lay off its
+// marker (and, where the blob was credited to the other, was made of two markers' detections);
+// now neither point keeps it, and both lie exactly at their markers from their own detections.
+TEST(Matching, AMergedBlobBelongsToNeitherPoint) {
+  const CameraRig r = rig("seated-4.yaml");
+  const Camera& first = r.cameras[0];
+  const Eigen::Vector3d near{0.05, 1.05, -0.5};
+  const Eigen::Vector3d along = (near - first.centre_world()).normalized();
+  const Eigen::Vector3d across = along.cross(Eigen::Vector3d::UnitY()).normalized();
+  // Behind the first marker on camera 0's ray, then sideways until the two project 2 px apart.
+  Eigen::Vector3d behind = near + 0.15 * along;
+  const double px_per_m = (*first.project(behind + 1e-3 * across) - *first.project(behind)).norm() / 1e-3;
+  behind += (2.0 / px_per_m) * across;
+  Trajectory a;
+  a.centre_m = near;
+  Trajectory b;
+  b.centre_m = behind;
+  SimulatedRigSettings s;
+  s.sigma_px = 0.0;
+  s.merge_distance_px = 3.0;
+  SimulatedRig sim(r, {a, b}, s);
+  const RigFrame frame = sim.next();
+  ASSERT_EQ(frame.cameras[0].detections.size(), 1u);
+  for (std::size_t c = 1; c < 4; ++c) ASSERT_EQ(frame.cameras[c].detections.size(), 2u) << "camera " << c;
+  const auto points = match_and_triangulate(r, frame);
+  ASSERT_EQ(points.size(), 2u);
+  std::vector<int> markers;
+  for (const MatchedPoint& p : points) {
+    const int marker = truth_marker(frame, p);
+    ASSERT_GE(marker, 0) << "a point made of both markers' detections";
+    markers.push_back(marker);
+    EXPECT_EQ(p.observations.size(), 3u);
+    EXPECT_LT((p.point.position_world - frame.truth_position_m[static_cast<std::size_t>(marker)]).norm(), 1e-6)
+        << "marker " << marker << " (the merged blob is a pixel off it)";
+  }
+  EXPECT_NE(markers[0], markers[1]);
 }
 
 }  // namespace
