@@ -210,8 +210,8 @@ struct MatchScratch {
   std::vector<matching_detail::Grown> ahead;  // the seeds of a pair's plans grown ahead, plan after plan
   matching_detail::Grown grown;               // the serial pass's seed
   std::vector<std::size_t> order;
+  // Per camera and detection: kUsed, a point took it; kContested, two markers' points wanted it (Matcher::accept).
   std::vector<std::vector<char>> used;
-  std::vector<std::vector<char>> contested;  // per camera and detection: wanted by two markers' points (Matcher::accept)
   bool any_contested = false;
   Observation dropped;
   TriangulatedPoint again;
@@ -346,6 +346,13 @@ class Matcher {
 
   // The frame's points: the first point_count of the scratch's.
   std::span<const MatchedPoint> run() {
+    // Room for the clusters ahead, from the most detections a camera has: a frame has about one
+    // cluster a marker and seldom more than three, and clusters made ready one growth at a time
+    // would reserve their per-camera storage in whichever later frame first needs more (thousands
+    // of allocations at once on a large rig).
+    std::size_t most = 0;
+    for (const CameraDetections& c : cams_) most = std::max(most, c.pixel.size());
+    if (clusters_.size() < 3 * most) grow_clusters(4 * most);  // with room for a third more detections
     for (std::size_t i = 0; i < n_; ++i) {
       for (std::size_t j = i + 1; j < n_; ++j) seed_pair(i, j);
     }
@@ -608,11 +615,7 @@ class Matcher {
       cams_[k].first_link[d] = static_cast<int>(links_.size()) - 1;
       if (g.confirmed) cams_[k].explained[d] = 1;
     }
-    if (s_.cluster_count == clusters_.size()) {
-      // Room for more clusters at once, each made ready for a point seen by every camera.
-      clusters_.resize(clusters_.size() + clusters_.size() / 2 + 16);
-      for (std::size_t k = s_.cluster_count; k < clusters_.size(); ++k) clusters_[k].reserve(n_);
-    }
+    if (s_.cluster_count == clusters_.size()) grow_clusters(2 * clusters_.size() + 16);
     Cluster& cl = clusters_[s_.cluster_count++];
     // Copied field by field into a cluster of an earlier frame, whose vectors keep their storage;
     // what refine fills starts as a new cluster's.
@@ -630,6 +633,13 @@ class Matcher {
     cl.observations.clear();
     cl.has_seed_refined = g.cluster.has_seed_refined;
     if (cl.has_seed_refined) cl.seed_refined = g.cluster.seed_refined;
+  }
+
+  // Room for `count` clusters, each made ready for a point seen by every camera.
+  void grow_clusters(std::size_t count) {
+    const std::size_t from = clusters_.size();
+    clusters_.resize(count);
+    for (std::size_t k = from; k < count; ++k) clusters_[k].reserve(n_);
   }
 
   // Refines a cluster, counts its support and the cameras that should have seen it.
@@ -714,14 +724,10 @@ class Matcher {
       return clusters_[a].point.reprojection_rms_px < clusters_[b].point.reprojection_rms_px;
     });
     std::vector<std::vector<char>>& used = s_.used;
-    std::vector<std::vector<char>>& contested = s_.contested;
     if (used.size() < n_) used.resize(n_);
-    if (contested.size() < n_) contested.resize(n_);
     for (std::size_t c = 0; c < n_; ++c) {
       reserve_room(used[c], cams_[c].pixel.size());
       used[c].assign(cams_[c].pixel.size(), 0);
-      reserve_room(contested[c], cams_[c].pixel.size());
-      contested[c].assign(cams_[c].pixel.size(), 0);
     }
     s_.any_contested = false;
     for (const std::size_t k : order) {
@@ -730,7 +736,7 @@ class Matcher {
       int taken = -1;  // the camera whose detection a better point already took
       int conflicts = 0;
       for (std::size_t c = 0; c < n_; ++c) {
-        if (cl.detection[c] >= 0 && used[c][static_cast<std::size_t>(cl.detection[c])] != 0) {
+        if (cl.detection[c] >= 0 && (used[c][static_cast<std::size_t>(cl.detection[c])] & kUsed) != 0) {
           ++conflicts;
           taken = static_cast<int>(c);
         }
@@ -742,7 +748,7 @@ class Matcher {
         // (Two clusters of one marker share two detections or more, so no duplicate comes of this.)
         // The detection both want is contested: most likely the two markers' blobs merged into
         // one, which lies off both (see drop_contested).
-        contested[static_cast<std::size_t>(taken)][static_cast<std::size_t>(cl.detection[static_cast<std::size_t>(taken)])] = 1;
+        used[static_cast<std::size_t>(taken)][static_cast<std::size_t>(cl.detection[static_cast<std::size_t>(taken)])] |= kContested;
         s_.any_contested = true;
         if (cl.support < 4) continue;
         std::erase_if(cl.observations, [&](const Observation& o) { return o.camera == taken; });
@@ -770,7 +776,7 @@ class Matcher {
       m.detection.clear();
       for (std::size_t c = 0; c < n_; ++c) {
         if (cl.detection[c] < 0) continue;
-        used[c][static_cast<std::size_t>(cl.detection[c])] = 1;
+        used[c][static_cast<std::size_t>(cl.detection[c])] |= kUsed;
         m.detection.push_back(cl.detection[c]);
       }
     }
@@ -788,7 +794,7 @@ class Matcher {
       for (std::size_t o = 0; o < m.observations.size() && m.observations.size() >= 4;) {
         const auto camera = static_cast<std::size_t>(m.observations[o].camera);
         const auto detection = m.detection[o];
-        if (s_.contested[camera][static_cast<std::size_t>(detection)] == 0) {
+        if ((s_.used[camera][static_cast<std::size_t>(detection)] & kContested) == 0) {
           ++o;
           continue;
         }
@@ -830,6 +836,8 @@ class Matcher {
   // first camera (fewer: the dispatch costs more than it saves).
   static constexpr std::size_t kGrowAheadFrom = 16;
   static constexpr std::size_t kPlanRoom = 64;
+  static constexpr char kUsed = 1;
+  static constexpr char kContested = 2;
   EpipolarIndex& index_;
   std::vector<std::size_t>& open_;
   std::vector<SeedPlan>& plans_;
