@@ -528,7 +528,6 @@ class Matcher {
     cl.detection[i] = static_cast<int>(a);
     cl.detection[j] = static_cast<int>(b);
     int unseen = 0;  // cameras that should see the point and have no detection near it
-    int third = 0;   // cameras other than i and j that have one
     const CameraVisibility::CameraSet seeing = visibility_.cameras_at(x);
     for (std::size_t k = 0; k < n_; ++k) {
       if (k == i || k == j || !CameraVisibility::contains(seeing, k)) continue;
@@ -538,17 +537,7 @@ class Matcher {
       cl.detection[k] = cams_[k].nearest(*p, settings_.reprojection_tolerance_px, cl.colour, &only);
       seen_at[k] = *p;
       alone[k] = only ? 1 : 0;
-      if (cl.detection[k] >= 0) {
-        ++third;
-      } else if (++unseen > 2 && third == 0) {
-        // Three cameras that should see the point see nothing there, and none has: a ghost (two
-        // rays that pass close by chance) almost always, and the rule below would drop it unless a
-        // later camera happened to have a detection near it. Dropped now, before it is projected
-        // into the rest of the rig. A true marker hidden from those three but seen by others is
-        // still found from a pair of the cameras that see it: its detections stay open.
-        cl.detection.clear();
-        return;
-      }
+      if (cl.detection[k] < 0) ++unseen;
     }
     grown.clear();
     for (std::size_t k = 0; k < n_; ++k) {
@@ -746,10 +735,13 @@ class Matcher {
         // Two markers whose projections nearly coincide in one camera share a detection there;
         // the point seen by three or more other cameras is still found, without that camera.
         // (Two clusters of one marker share two detections or more, so no duplicate comes of this.)
-        // The detection both want is contested: most likely the two markers' blobs merged into
-        // one, which lies off both (see drop_contested).
-        used[static_cast<std::size_t>(taken)][static_cast<std::size_t>(cl.detection[static_cast<std::size_t>(taken)])] |= kContested;
-        s_.any_contested = true;
+        // Wanted by a point three or more cameras see (two views that share a detection with a
+        // better point are as likely a ghost), the detection is contested: most likely the two
+        // markers' blobs merged into one, which lies off both (see drop_contested).
+        if (cl.support >= 3) {
+          used[static_cast<std::size_t>(taken)][static_cast<std::size_t>(cl.detection[static_cast<std::size_t>(taken)])] |= kContested;
+          s_.any_contested = true;
+        }
         if (cl.support < 4) continue;
         std::erase_if(cl.observations, [&](const Observation& o) { return o.camera == taken; });
         TriangulatedPoint& again = s_.again;

@@ -68,9 +68,10 @@ bool refine_point_into(std::span<const CameraProjection> cameras, std::span<cons
                        const Eigen::Vector3d& initial_world, int max_iterations, TriangulatedPoint& out) {
   if (observations.size() < 2) return false;
   // A step this small is taken without projecting again: the residuals at the point it reaches are
-  // those of the last pass less the Jacobian times the step, correct to the step's square (below
-  // 1e-12 m of position, 1e-9 px of residual). It saves a projection of every observation, which is
-  // a third to a half of a refinement from a two-view seed.
+  // those of the last pass less the Jacobian times the step, correct to the step's square times
+  // the projection's curvature (about 1e-10 px). It saves a projection of every observation, a
+  // third to a half of a refinement from a two-view seed. The point's sigma is then the one at
+  // the point before the step, a micrometre away.
   constexpr double kLinearisedStep_m = 1e-6;
   constexpr std::size_t kLinearisedUpTo = 64;  // observations whose pass is kept for it (on the stack)
   const bool linearise = observations.size() <= kLinearisedUpTo;
@@ -98,7 +99,8 @@ bool refine_point_into(std::span<const CameraProjection> cameras, std::span<cons
     rms_px = std::sqrt(sum / static_cast<double>(observations.size()));
   };
   // Each pass evaluates the residuals at the current point; all but the last also take a step.
-  // A step below 1e-9 m is not taken, so the residuals reported are those of the point returned.
+  // A step below 1e-9 m is not taken; one below kLinearisedStep_m is, with its residuals predicted
+  // as above. Either way the residuals reported are those of the point returned.
   for (int it = 0;; ++it) {
     Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
     Eigen::Vector3d jtr = Eigen::Vector3d::Zero();

@@ -202,6 +202,27 @@ TEST(Matching, MarkersProjectingToOnePixelAreBothFound) {
   EXPECT_EQ(views, (std::vector<std::size_t>{3, 3})) << "neither point keeps camera 0's detection, which both wanted";
 }
 
+// A marker hidden from cameras 0, 1 and 2 (a body in the way) and seen by the other five is
+// found: every pair of the cameras that see it looks into 0, 1 and 2 first and finds nothing
+// there, which a rule dropping a seed after three empty cameras would take for a ghost.
+TEST(Matching, AMarkerHiddenFromTheFirstCamerasIsFoundByTheOthers) {
+  const CameraRig r = rig("room-8.yaml");
+  Trajectory t;
+  t.centre_m = {0.1, 1.1, 0.05};
+  SimulatedRigSettings s;
+  s.sigma_px = 0.2;
+  s.seed = 3;
+  SimulatedRig sim(r, {t}, s);
+  RigFrame frame = sim.next();
+  for (std::size_t c = 0; c < 8; ++c) ASSERT_EQ(frame.cameras[c].detections.size(), 1u) << "camera " << c;
+  for (std::size_t c = 0; c < 3; ++c) frame.cameras[c].detections.clear();
+  const auto points = match_and_triangulate(r, frame);
+  ASSERT_EQ(points.size(), 1u);
+  EXPECT_EQ(points[0].observations.size(), 5u);
+  EXPECT_EQ(truth_marker(frame, points[0]), 0);
+  EXPECT_LT((points[0].point.position_world - frame.truth_position_m[0]).norm(), 1e-3);
+}
+
 // Two markers whose blobs merge in camera 0 without lying on one ray: the merged detection, at
 // their mean pixel, is a pixel off each. Before, the point accepted first kept it and lay off its
 // marker (and, where the blob was credited to the other, was made of two markers' detections);
