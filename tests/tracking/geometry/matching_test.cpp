@@ -167,6 +167,20 @@ TEST(Matching, CoincidentalEpipolarGhostsAreRejected) {
   EXPECT_EQ(points.size(), 2u);
 }
 
+// One noiseless frame of two still markers at a and b, whose detections merge where they lie
+// within 3 px of each other in a camera.
+RigFrame two_markers_merging(const CameraRig& r, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  Trajectory ta;
+  ta.centre_m = a;
+  Trajectory tb;
+  tb.centre_m = b;
+  SimulatedRigSettings s;
+  s.sigma_px = 0.0;
+  s.merge_distance_px = 3.0;
+  SimulatedRig sim(r, {ta, tb}, s);
+  return sim.next();
+}
+
 // Two markers on one ray of camera 0 make one blob there: one detection for both. Neither point
 // keeps it (a merged blob lies between its markers, here on both: Matcher::drop_contested), and
 // both are still found, each at its marker from the three cameras that see it alone.
@@ -174,21 +188,14 @@ TEST(Matching, MarkersProjectingToOnePixelAreBothFound) {
   const CameraRig r = rig("seated-4.yaml");
   const Eigen::Vector3d near{0.05, 1.05, -0.5};
   const Eigen::Vector3d along = (near - r.cameras[0].centre_world()).normalized();
-  Trajectory a;
-  a.centre_m = near;
-  Trajectory b;
-  b.centre_m = near + 0.15 * along;
-  SimulatedRigSettings s;
-  s.sigma_px = 0.0;
-  s.merge_distance_px = 3.0;
-  SimulatedRig sim(r, {a, b}, s);
-  const RigFrame frame = sim.next();
+  const Eigen::Vector3d behind = near + 0.15 * along;
+  const RigFrame frame = two_markers_merging(r, near, behind);
   ASSERT_EQ(frame.cameras[0].detections.size(), 1u);
   for (std::size_t c = 1; c < 4; ++c) ASSERT_EQ(frame.cameras[c].detections.size(), 2u) << "camera " << c;
   const auto points = match_and_triangulate(r, frame);
   ASSERT_EQ(points.size(), 2u);
   std::vector<std::size_t> views;
-  for (const Eigen::Vector3d& truth : {a.centre_m, b.centre_m}) {
+  for (const Eigen::Vector3d& truth : {near, behind}) {
     int at = 0;
     for (const MatchedPoint& p : points) {
       if ((p.point.position_world - truth).norm() < 1e-6) {
@@ -237,15 +244,7 @@ TEST(Matching, AMergedBlobBelongsToNeitherPoint) {
   Eigen::Vector3d behind = near + 0.15 * along;
   const double px_per_m = (*first.project(behind + 1e-3 * across) - *first.project(behind)).norm() / 1e-3;
   behind += (2.0 / px_per_m) * across;
-  Trajectory a;
-  a.centre_m = near;
-  Trajectory b;
-  b.centre_m = behind;
-  SimulatedRigSettings s;
-  s.sigma_px = 0.0;
-  s.merge_distance_px = 3.0;
-  SimulatedRig sim(r, {a, b}, s);
-  const RigFrame frame = sim.next();
+  const RigFrame frame = two_markers_merging(r, near, behind);
   ASSERT_EQ(frame.cameras[0].detections.size(), 1u);
   for (std::size_t c = 1; c < 4; ++c) ASSERT_EQ(frame.cameras[c].detections.size(), 2u) << "camera " << c;
   const auto points = match_and_triangulate(r, frame);
