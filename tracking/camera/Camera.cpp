@@ -8,37 +8,9 @@
 
 namespace rhot {
 
-namespace {
-
-constexpr double kMinDepth_m = 1e-3;
-
-// Distortion of normalised coordinates and its 2x2 Jacobian. Inlined where it is called, so that
-// projection (matching's and refinement's innermost work) compiles without the branch and call.
-[[gnu::always_inline]] inline Eigen::Vector2d distort(const std::array<double, 5>& k, const Eigen::Vector2d& xy,
-                                                      Eigen::Matrix2d* jacobian) {
-  const double x = xy.x();
-  const double y = xy.y();
-  const double k1 = k[0], k2 = k[1], p1 = k[2], p2 = k[3], k3 = k[4];
-  const double r2 = x * x + y * y;
-  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-  const Eigen::Vector2d out(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
-                            y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
-  if (jacobian != nullptr) {
-    const double d = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r2)
-    (*jacobian) << radial + 2.0 * x * x * d + 2.0 * p1 * y + 6.0 * p2 * x, 2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y,
-        2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y, radial + 2.0 * y * y * d + 6.0 * p1 * y + 2.0 * p2 * x;
-  }
-  return out;
+Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy) {
+  return camera_detail::distort(k, xy, nullptr);
 }
-
-bool inside_sensor(const CameraIntrinsics& k, const Eigen::Vector2d& pixel) {
-  // Pixel centres are integers, so the sensor spans [-0.5, size - 0.5).
-  return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < k.width_px - 0.5 && pixel.y() < k.height_px - 0.5;
-}
-
-}  // namespace
-
-Eigen::Vector2d distort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& xy) { return distort(k, xy, nullptr); }
 
 std::optional<Eigen::Vector2d> undistort_normalised(const std::array<double, 5>& k, const Eigen::Vector2d& distorted) {
   if (!distorted.allFinite()) return std::nullopt;
@@ -82,39 +54,13 @@ std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& p_world, E
   return CameraProjection(*this).project(p_world, jacobian);
 }
 
-bool Camera::in_image(const Eigen::Vector2d& pixel) const { return inside_sensor(intrinsics, pixel); }
+bool Camera::in_image(const Eigen::Vector2d& pixel) const { return camera_detail::inside_sensor(intrinsics, pixel); }
 
 CameraProjection::CameraProjection(const Camera& camera)
     : intrinsics_(camera.intrinsics),
       rotation_(camera.cam_from_world.rotation.toRotationMatrix()),
       translation_(camera.cam_from_world.translation),
       centre_world_(-(rotation_.transpose() * translation_)) {}
-
-std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world) const {
-  const Eigen::Vector3d p = rotation_ * p_world + translation_;
-  if (!(p.z() > kMinDepth_m)) return std::nullopt;
-  const Eigen::Vector2d d = distort(intrinsics_.distortion, p.head<2>() / p.z(), nullptr);
-  return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
-}
-
-std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world, Eigen::Matrix<double, 2, 3>& jacobian) const {
-  const Eigen::Vector3d p = rotation_ * p_world + translation_;
-  if (!(p.z() > kMinDepth_m)) return std::nullopt;
-  const double inv_z = 1.0 / p.z();
-  const Eigen::Vector2d xy = p.head<2>() * inv_z;
-  Eigen::Matrix2d d_distort;
-  const Eigen::Vector2d d = distort(intrinsics_.distortion, xy, &d_distort);
-  // d(x/z, y/z)/d(p_world) = (R.row(i) - (x/z or y/z) R.row(2)) / z, then distortion and focal length.
-  Eigen::Matrix<double, 2, 3> d_normalised;
-  d_normalised.row(0) = (rotation_.row(0) - xy.x() * rotation_.row(2)) * inv_z;
-  d_normalised.row(1) = (rotation_.row(1) - xy.y() * rotation_.row(2)) * inv_z;
-  d_distort.row(0) *= intrinsics_.fx;
-  d_distort.row(1) *= intrinsics_.fy;
-  jacobian.noalias() = d_distort * d_normalised;
-  return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
-}
-
-bool CameraProjection::in_image(const Eigen::Vector2d& pixel) const { return inside_sensor(intrinsics_, pixel); }
 
 Eigen::Vector3d CameraProjection::ray_direction_world(const Eigen::Vector2d& normalised) const {
   return rotation_.transpose() * normalised.homogeneous();

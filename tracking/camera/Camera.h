@@ -76,6 +76,79 @@ class CameraProjection {
   Eigen::Vector3d centre_world_;
 };
 
+namespace camera_detail {
+
+// Nearer the camera than this (along its axis), a point does not project.
+inline constexpr double kMinDepth_m = 1e-3;
+
+// Distortion of normalised coordinates and its 2x2 Jacobian (OpenCV's model). Inlined where it is
+// called, so that projection (matching's and refinement's innermost work) compiles without the
+// branch and call.
+[[gnu::always_inline]] inline Eigen::Vector2d distort(const std::array<double, 5>& k, const Eigen::Vector2d& xy,
+                                                      Eigen::Matrix2d* jacobian) {
+  const double x = xy.x();
+  const double y = xy.y();
+  const double k1 = k[0], k2 = k[1], p1 = k[2], p2 = k[3], k3 = k[4];
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  const Eigen::Vector2d out(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+                            y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
+  if (jacobian != nullptr) {
+    const double d = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r2)
+    (*jacobian) << radial + 2.0 * x * x * d + 2.0 * p1 * y + 6.0 * p2 * x, 2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y,
+        2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y, radial + 2.0 * y * y * d + 6.0 * p1 * y + 2.0 * p2 * x;
+  }
+  return out;
+}
+
+inline bool inside_sensor(const CameraIntrinsics& k, const Eigen::Vector2d& pixel) {
+  // Pixel centres are integers, so the sensor spans [-0.5, size - 0.5).
+  return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < k.width_px - 0.5 && pixel.y() < k.height_px - 0.5;
+}
+
+}  // namespace camera_detail
+
+// Defined here, not in Camera.cpp, so that matching and refinement (their innermost work is
+// projecting into camera after camera) compile them into their own loops; written out in scalars
+// (Eigen's small fixed-size expressions cost about twice the instructions here).
+inline std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world) const {
+  const Eigen::Matrix3d& r = rotation_;
+  const double z = r(2, 0) * p_world.x() + r(2, 1) * p_world.y() + r(2, 2) * p_world.z() + translation_.z();
+  if (!(z > camera_detail::kMinDepth_m)) return std::nullopt;
+  const double inv_z = 1.0 / z;
+  const double x = (r(0, 0) * p_world.x() + r(0, 1) * p_world.y() + r(0, 2) * p_world.z() + translation_.x()) * inv_z;
+  const double y = (r(1, 0) * p_world.x() + r(1, 1) * p_world.y() + r(1, 2) * p_world.z() + translation_.y()) * inv_z;
+  const Eigen::Vector2d d = camera_detail::distort(intrinsics_.distortion, Eigen::Vector2d(x, y), nullptr);
+  return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
+}
+
+inline std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world,
+                                                                Eigen::Matrix<double, 2, 3>& jacobian) const {
+  const Eigen::Matrix3d& r = rotation_;
+  const double z = r(2, 0) * p_world.x() + r(2, 1) * p_world.y() + r(2, 2) * p_world.z() + translation_.z();
+  if (!(z > camera_detail::kMinDepth_m)) return std::nullopt;
+  const double inv_z = 1.0 / z;
+  const double x = (r(0, 0) * p_world.x() + r(0, 1) * p_world.y() + r(0, 2) * p_world.z() + translation_.x()) * inv_z;
+  const double y = (r(1, 0) * p_world.x() + r(1, 1) * p_world.y() + r(1, 2) * p_world.z() + translation_.y()) * inv_z;
+  Eigen::Matrix2d dd;  // d(distorted)/d(x, y): symmetric
+  const Eigen::Vector2d d = camera_detail::distort(intrinsics_.distortion, Eigen::Vector2d(x, y), &dd);
+  // d(pixel)/d(p_world) = diag(fx, fy) * dd * d(x, y)/d(p_world), where the column m of
+  // d(x, y)/d(p_world) is ((R(0, m) - x R(2, m)) / z, (R(1, m) - y R(2, m)) / z).
+  const double a = intrinsics_.fx * dd(0, 0);
+  const double b = intrinsics_.fx * dd(0, 1);
+  const double c = intrinsics_.fy * dd(1, 0);
+  const double e = intrinsics_.fy * dd(1, 1);
+  for (int m = 0; m < 3; ++m) {
+    const double nx = (r(0, m) - x * r(2, m)) * inv_z;
+    const double ny = (r(1, m) - y * r(2, m)) * inv_z;
+    jacobian(0, m) = a * nx + b * ny;
+    jacobian(1, m) = c * nx + e * ny;
+  }
+  return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
+}
+
+inline bool CameraProjection::in_image(const Eigen::Vector2d& pixel) const { return camera_detail::inside_sensor(intrinsics_, pixel); }
+
 // The box a rig is meant to track (axis-aligned in the world, metres): where evaluation puts its
 // simulated markers unless told otherwise.
 struct TrackingVolume {
