@@ -103,7 +103,7 @@ TEST(Triangulation, RefinementEndsAtTheOptimumWithTheResidualsItReports) {
     const auto obs = observe(rig, p, 0.5, rng);
     ASSERT_GE(obs.size(), 2u);
     // Starts from 0.05 to 3 mm off (the first step is then above or below the threshold).
-    const Eigen::Vector3d direction = Eigen::Vector3d(off(rng), off(rng), off(rng)).normalized();
+    const Eigen::Vector3d direction = Eigen::Vector3d{off(rng), off(rng), off(rng)}.normalized();
     const Eigen::Vector3d start = p + direction * (0.05e-3 + 2.95e-3 * (i % 10) / 9.0);
     const auto t = refine_point(cameras, obs, start, 10);
     ASSERT_TRUE(t.has_value());
