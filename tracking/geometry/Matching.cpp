@@ -413,20 +413,20 @@ class Matcher {
     }
     const auto plan_one = [&](std::size_t k) { plan_seeds(i, open_[k], j, e, indexed, plans_[k]); };
     if (ahead) {
-      for_each(open_.size(), plan_one);
-      // Each plan's seeds grown into its own run of one pool (made ready once for points seen by
-      // every camera), so that growing ahead allocates nothing once frames have filled it.
-      std::size_t total = 0;
-      for (std::size_t k = 0; k < open_.size(); ++k) {
-        plans_[k].first_grown = total;
-        total += plans_[k].candidates.size();
-      }
-      if (s_.ahead.size() < total) {
+      // Planned and grown in one dispatch, each plan's first kGrownAhead seeds into its own run of
+      // one pool (made ready once for points seen by every camera), so that growing ahead
+      // allocates nothing once frames have filled it; seeds after those grow on the spot below.
+      const std::size_t slots = open_.size() * kGrownAhead;
+      if (s_.ahead.size() < slots) {
         const std::size_t from = s_.ahead.size();
-        s_.ahead.resize(total + total / 2 + 16);
+        s_.ahead.resize(slots + slots / 2 + 16);
         for (std::size_t g = from; g < s_.ahead.size(); ++g) s_.ahead[g].cluster.reserve(n_);
       }
-      for_each(open_.size(), [&](std::size_t k) { grow_ahead(i, open_[k], j, plans_[k]); });
+      for_each(open_.size(), [&](std::size_t k) {
+        plan_one(k);
+        plans_[k].first_grown = k * kGrownAhead;
+        grow_ahead(i, open_[k], j, plans_[k]);
+      });
     } else {
       for (std::size_t k = 0; k < open_.size(); ++k) plan_one(k);  // too few to be worth a dispatch
     }
@@ -486,9 +486,9 @@ class Matcher {
   }
 
   // The plan's seeds grown in order, as the serial pass would with what is explained now, up to
-  // the first confirmed one.
+  // the first confirmed one or the kGrownAhead-th.
   void grow_ahead(std::size_t i, std::size_t a, std::size_t j, SeedPlan& plan) {
-    for (std::size_t c = 0; c < plan.candidates.size(); ++c) {
+    for (std::size_t c = 0; c < std::min(plan.candidates.size(), kGrownAhead); ++c) {
       const auto b = static_cast<std::size_t>(plan.candidates[c].b);
       if (cams_[j].explained[b] != 0 || explained_by_a_cluster(i, a, j, b)) continue;
       Grown& grown = s_.ahead[plan.first_grown + c];
@@ -869,6 +869,9 @@ class Matcher {
   // first camera (fewer: the dispatch costs more than it saves).
   static constexpr std::size_t kGrowAheadFrom = 16;
   static constexpr std::size_t kPlanRoom = 64;
+  // Seeds of a plan grown ahead at most (a detection's first or second candidate is confirmed,
+  // most often); the commit grows any after them on the spot.
+  static constexpr std::size_t kGrownAhead = 4;
   static constexpr char kUsed = 1;
   static constexpr char kContested = 2;
   EpipolarIndex& index_;
