@@ -122,7 +122,8 @@ struct CameraDetections {
     if (!(p.x() > -radius - 1.0 && p.y() > -radius - 1.0 && p.x() < cols * cell_px && p.y() < rows * cell_px)) return -1;
     // Truncation rather than std::floor (a call's worth of instructions without SSE4.1): they
     // differ only between -1 and 0, where the first cell is clamped to 0 either way and the last
-    // is at most one column or row more, whose detections the distance test below refuses.
+    // is at most one column or row more, whose detections lie further than `radius` (the distance
+    // test below refuses them but for a rounding tie at exactly `radius`).
     const int x0 = std::max(0, static_cast<int>((p.x() + 0.5 - radius) / cell_px));
     const int y0 = std::max(0, static_cast<int>((p.y() + 0.5 - radius) / cell_px));
     const int x1 = std::min(cols - 1, static_cast<int>((p.x() + 0.5 + radius) / cell_px));
@@ -379,11 +380,11 @@ class Matcher {
   // Seeds from every epipolar-consistent detection pair of cameras i < j, each grown into every
   // other camera. In order of i's detections: for each, its candidates nearest the line first,
   // skipping those already explained or already paired with it in a cluster, until one is
-  // confirmed. With a job pool, the detections' candidates are first grown in parallel as if
-  // nothing this pair confirms changed what is explained (growing reads only the detections);
-  // the plans are then committed in order, skipping what an earlier detection's cluster
-  // explained meanwhile and growing on the spot where a plan ran out: the clusters, and all that
-  // follows, are exactly the serial ones.
+  // confirmed. With a job pool, the detections' candidates are first planned and their first
+  // kGrownAhead grown in parallel, as if nothing this pair confirms changed what is explained
+  // (growing reads only the detections); the plans are then committed in order, skipping what an
+  // earlier detection's cluster explained meanwhile and growing on the spot where a plan ran out
+  // or was not grown that far: the clusters, and all that follows, are exactly the serial ones.
   void seed_pair(std::size_t i, std::size_t j) {
     if (cams_[i].pixel.empty() || cams_[j].pixel.empty()) return;
     // cam_j_from_cam_i = R t; essential matrix E = [t]x R maps x_i to the epipolar line in j.
@@ -601,15 +602,16 @@ class Matcher {
   // so that refinement from it takes one pass where it took two or three. `near` where the rays
   // do not fix a point.
   Eigen::Vector3d rays_meeting_point(const Cluster& cl, const Eigen::Vector3d& near) const {
-    // Sum over the rays of w (I - u u^T) (x - c) = 0 for x, in scalars: a (symmetric) x = b.
+    // Sum over the rays of w (I - u u^T) (x - c) = 0, solved for x - near (so that a rig far from
+    // the origin loses nothing to cancellation), in scalars: a (symmetric) dx = b.
     double a00 = 0.0, a01 = 0.0, a02 = 0.0, a11 = 0.0, a12 = 0.0, a22 = 0.0;
     double b0 = 0.0, b1 = 0.0, b2 = 0.0;
     for (std::size_t k = 0; k < n_; ++k) {
       if (cl.detection[k] < 0) continue;
       const Eigen::Vector3d d = poses_[k].ray_direction_world(cams_[k].normalised[static_cast<std::size_t>(cl.detection[k])]);
-      const Eigen::Vector3d& c = poses_[k].centre_world();
+      const Eigen::Vector3d c = poses_[k].centre_world() - near;
       const double f = 0.5 * (rig_.cameras[k].intrinsics.fx + rig_.cameras[k].intrinsics.fy);
-      const double w = f * f / std::max((near - c).squaredNorm(), 1e-6);
+      const double w = f * f / std::max(c.squaredNorm(), 1e-6);
       const double v = w / d.squaredNorm();  // w u u^T = v d d^T
       const double m00 = w - v * d.x() * d.x(), m01 = -v * d.x() * d.y(), m02 = -v * d.x() * d.z();
       const double m11 = w - v * d.y() * d.y(), m12 = -v * d.y() * d.z(), m22 = w - v * d.z() * d.z();
@@ -623,14 +625,17 @@ class Matcher {
       b1 += m01 * c.x() + m11 * c.y() + m12 * c.z();
       b2 += m02 * c.x() + m12 * c.y() + m22 * c.z();
     }
-    // Cramer's rule by cofactors (a is symmetric).
+    // Cramer's rule by cofactors. The matrix is positive semi-definite, so its determinant is at
+    // most the product of its diagonal: rays that (nearly) fix no point give a small fraction of it.
     const double c00 = a11 * a22 - a12 * a12, c01 = a02 * a12 - a01 * a22, c02 = a01 * a12 - a02 * a11;
     const double det = a00 * c00 + a01 * c01 + a02 * c02;
-    if (!(std::abs(det) > 1e-300)) return near;
+    if (!(det > 1e-12 * a00 * a11 * a22)) return near;
     const double c11 = a00 * a22 - a02 * a02, c12 = a01 * a02 - a00 * a12, c22 = a00 * a11 - a01 * a01;
-    const Eigen::Vector3d x((c00 * b0 + c01 * b1 + c02 * b2) / det, (c01 * b0 + c11 * b1 + c12 * b2) / det,
-                            (c02 * b0 + c12 * b1 + c22 * b2) / det);
-    return x.allFinite() ? x : near;
+    const Eigen::Vector3d dx((c00 * b0 + c01 * b1 + c02 * b2) / det, (c01 * b0 + c11 * b1 + c12 * b2) / det,
+                             (c02 * b0 + c12 * b1 + c22 * b2) / det);
+    // Views that agree meet within millimetres of the two-view seed; further off (a neighbour's
+    // detection among them), the seed is the better start.
+    return dx.allFinite() && dx.squaredNorm() < kRaysStartWithin_m * kRaysStartWithin_m ? Eigen::Vector3d(near + dx) : near;
   }
 
   // A grown seed kept as a cluster (a ghost, with no detections, is not); a confirmed one
@@ -872,6 +877,8 @@ class Matcher {
   // Seeds of a plan grown ahead at most (a detection's first or second candidate is confirmed,
   // most often); the commit grows any after them on the spot.
   static constexpr std::size_t kGrownAhead = 4;
+  // The rays' meeting point starts a seed's refinement when it lies within this of the seed.
+  static constexpr double kRaysStartWithin_m = 0.05;
   static constexpr char kUsed = 1;
   static constexpr char kContested = 2;
   EpipolarIndex& index_;

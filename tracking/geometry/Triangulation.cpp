@@ -67,14 +67,17 @@ std::optional<TriangulatedPoint> refine_point(std::span<const CameraProjection> 
 bool refine_point_into(std::span<const CameraProjection> cameras, std::span<const Observation> observations,
                        const Eigen::Vector3d& initial_world, int max_iterations, TriangulatedPoint& out) {
   if (observations.size() < 2) return false;
-  // A step this small is taken without projecting again: the residuals at the point it reaches are
-  // those of the last pass less the Jacobian times the step, correct to the step's square times
-  // the projection's curvature (at most 2e-4 px, measured: Triangulation.RefinementEndsAtTheOptimum-
-  // WithTheResidualsItReports), and the point lies within a micrometre of the optimum (Gauss-
-  // Newton's error after a step is of the step's square over the distance to the cameras). From a
-  // start within a millimetre (the matcher's start where three views or more meet) that is a
-  // refinement of one pass. The point's sigma is the one at the point before the step.
-  constexpr double kLinearisedStep_m = 1e-3;
+  // A step that moves every observation's projection by less than this (pixels) is taken without
+  // projecting again: the residuals at the point it reaches are those of the last pass less the
+  // Jacobian times the step, correct to about the square of this over the focal length (1e-4 px).
+  // The point is then short of the optimum by Gauss-Newton's error after the step: of the step's
+  // square over the distance to the cameras, plus the residuals over the focal length times the
+  // step (a micrometre or two for 0.5-1 px of noise; Triangulation.RefinementEndsAtTheOptimum-
+  // WithTheResidualsItReports measures both). From a start within a millimetre of the optimum (the
+  // matcher's, where three views or more meet) that is a refinement of one pass. The point's sigma
+  // is the one at the point before the step. Decided in pixels, not metres, so that it means the
+  // same for a rig of any scale.
+  constexpr double kLinearisedStep_px = 0.5;
   constexpr std::size_t kLinearisedUpTo = 64;  // observations whose pass is kept for it (on the stack)
   const bool linearise = observations.size() <= kLinearisedUpTo;
   std::array<Eigen::Matrix<double, 2, 3>, kLinearisedUpTo> jacobians;
@@ -101,8 +104,8 @@ bool refine_point_into(std::span<const CameraProjection> cameras, std::span<cons
     rms_px = std::sqrt(sum / static_cast<double>(observations.size()));
   };
   // Each pass evaluates the residuals at the current point; all but the last also take a step.
-  // A step below 1e-9 m is not taken; one below kLinearisedStep_m is, with its residuals predicted
-  // as above. Either way the residuals reported are those of the point returned.
+  // A step below 1e-9 m is not taken; one below kLinearisedStep_px is, with its residuals predicted
+  // as above (those reported are then the point's to about 1e-4 px; otherwise exactly).
   for (int it = 0;; ++it) {
     Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
     Eigen::Vector3d jtr = Eigen::Vector3d::Zero();
@@ -132,9 +135,13 @@ bool refine_point_into(std::span<const CameraProjection> cameras, std::span<cons
     const Eigen::Vector3d step = inverse * jtr;
     if (!step.allFinite() || step.norm() < 1e-9) break;
     position += step;
-    if (linearise && step.norm() < kLinearisedStep_m) {
-      summarise([&](std::size_t k) { return (residuals[k] - jacobians[k] * step).squaredNorm(); });
-      break;
+    if (linearise) {
+      double moved_px2 = 0.0;
+      for (std::size_t k = 0; k < observations.size(); ++k) moved_px2 = std::max(moved_px2, (jacobians[k] * step).squaredNorm());
+      if (moved_px2 < kLinearisedStep_px * kLinearisedStep_px) {
+        summarise([&](std::size_t k) { return (residuals[k] - jacobians[k] * step).squaredNorm(); });
+        break;
+      }
     }
   }
   if (!position.allFinite() || !std::isfinite(rms_px)) return false;

@@ -41,9 +41,10 @@ std::optional<Eigen::Vector3d> triangulate_linear_normalised(const CameraRig& ri
                                                              std::span<const Eigen::Vector2d> normalised);
 
 // Gauss-Newton on the pixel reprojection error from an initial estimate (at most
-// `max_iterations` steps; stops when a step is below 1e-9 m, or after a step below 1 mm, whose
-// residuals are then the last pass's moved by the Jacobian: within about a micrometre of the
-// optimum, the residuals reported within 1e-3 px of those there).
+// `max_iterations` steps; stops when a step is below 1e-9 m, or after a step that moves no
+// projection by 0.5 px or more, whose residuals are then the last pass's moved by the Jacobian:
+// measured, the point within a few micrometres of the optimum and the residuals reported within
+// about 1e-4 px of those there).
 std::optional<TriangulatedPoint> refine_point(const CameraRig& rig, std::span<const Observation> observations,
                                               const Eigen::Vector3d& initial_world, int max_iterations = 10);
 // The same with the rig's cameras prepared (camera_projections(rig)), for code that refines many points.
