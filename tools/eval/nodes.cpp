@@ -556,15 +556,22 @@ void run_master(const NodesRun& run, NodesTally& tally) {
   // Memory is first read once the run is past its start: the clock fits' 10 s windows filled, the
   // nodes each restarted once or so.
   const double memory_at_s = std::min(15.0, 0.25 * a.seconds);
+  // The heap in use, read every half second from then: what is in flight at one instant (frames
+  // queued behind a stall, a node's messages being decoded) moves it by a tenth under load, so its
+  // start and end are the medians of the first and the last few readings.
+  std::vector<long> heap_kb;
+  heap_kb.reserve(static_cast<std::size_t>(2.0 * a.seconds) + 8);  // made ready here, so as not to grow what it measures
+  double next_heap_s = memory_at_s;
   while (steady_now_ns() < end_ns || more) {
     const double t_now = static_cast<double>(steady_now_ns() - run.start_ns) / 1e9;
     if (run.chaos)
       run.chaos->step(t_now);
     else
       kill_or_restart_victim(run, t_now, tally);
-    if (tally.memory_start_kb == 0 && t_now >= memory_at_s) {
-      tally.memory_start_kb = resident_kb();
-      tally.heap_start_kb = heap_in_use_kb();
+    if (tally.memory_start_kb == 0 && t_now >= memory_at_s) tally.memory_start_kb = resident_kb();
+    if (t_now >= memory_at_s && t_now >= next_heap_s) {
+      heap_kb.push_back(heap_in_use_kb());
+      next_heap_s = t_now + 0.5;
     }
     if (t_now >= next_progress_s) {
       spdlog::info("{:.0f} of {:.0f} s", next_progress_s, a.seconds);
@@ -579,7 +586,14 @@ void run_master(const NodesRun& run, NodesTally& tally) {
     }
   }
   tally.memory_end_kb = resident_kb();
-  tally.heap_end_kb = heap_in_use_kb();
+  heap_kb.push_back(heap_in_use_kb());
+  const auto median_of = [](std::vector<long> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const std::size_t readings = std::min<std::size_t>(5, heap_kb.size());
+  tally.heap_start_kb = median_of({heap_kb.begin(), heap_kb.begin() + static_cast<std::ptrdiff_t>(readings)});
+  tally.heap_end_kb = median_of({heap_kb.end() - static_cast<std::ptrdiff_t>(readings), heap_kb.end()});
 }
 
 nlohmann::json per_node_report(const NodesArgs& a, const NodeSourceStats& stats) {

@@ -1,6 +1,7 @@
 #include "tracking/net/NodeSource.h"
 
 #include <algorithm>
+#include <limits>
 #include <array>
 #include <atomic>
 #include <charconv>
@@ -133,6 +134,9 @@ struct NodeSource::Impl {
     std::int64_t next_sync_ns = 0;
     std::int64_t next_status_ns = 0;
     std::int64_t first_sync_ns = 0;
+    // The fastest round trip of its time requests ever (kept when its clock is measured anew: the
+    // path to it is the same): what a round trip to it can be.
+    std::int64_t fastest_rtt_ns = std::numeric_limits<std::int64_t>::max();
     std::uint32_t sequence = 0;
     std::optional<std::uint64_t> last_counter{};  // of its last frame
     std::string node_name{};                      // its certificate's, with security
@@ -216,7 +220,7 @@ struct NodeSource::Impl {
       warn("node " + node.endpoint + " started again (its frame counter began anew): its clock is measured anew");
     }
     node.last_counter = m.counter;
-    if (!node.clock.synchronised()) {
+    if (!clock_placed(node)) {
       ++node.stats.unsynchronised;
       return;
     }
@@ -243,6 +247,19 @@ struct NodeSource::Impl {
     arrived.notify_all();
   }
 
+  // Whether a node's frames can be placed in time: its clock is measured, from a round trip fast
+  // enough that the fit is off by a fraction of the assembler's tolerance at most. A sample's error
+  // is up to half its round trip, and the fit keeps only the fastest (ClockSync), so one slow first
+  // reply (a busy machine, a node just started) would otherwise place its first frames a frame off
+  // in time, their markers where the scene was one exposure earlier or later. A round trip within
+  // 2 ms, or within half again the node's fastest (a slower network), is good enough.
+  static bool clock_placed(const Node& node) {
+    if (!node.clock.synchronised()) return false;
+    constexpr double kGoodRtt_us = 2000.0;
+    const double fastest_us = static_cast<double>(node.fastest_rtt_ns) / 1e3;
+    return node.clock.min_rtt_us() <= std::max(kGoodRtt_us, 1.5 * fastest_us);
+  }
+
   void on_reply(Node& node, const zmq::message_t& raw, std::int64_t arrival_ns) {
     const auto decoded = decode(std::span(static_cast<const std::uint8_t*>(raw.data()), raw.size()));
     std::lock_guard lock(mutex);
@@ -256,6 +273,7 @@ struct NodeSource::Impl {
       // A reply to a request of this run only (a restarted node may answer old ones).
       if (t->master_send_ns < opened_ns || t->master_send_ns > arrival_ns || arrival_ns - t->master_send_ns > 1'000'000'000) return;
       node.clock.add(t->master_send_ns, t->node_ns, arrival_ns);
+      node.fastest_rtt_ns = std::min(node.fastest_rtt_ns, arrival_ns - t->master_send_ns);
       node.stats.clock_offset_ms = node.clock.offset_ns_at(arrival_ns) / 1e6;
       node.stats.clock_drift_ppm = node.clock.drift_ppm();
       node.stats.clock_residual_us = node.clock.residual_us();
