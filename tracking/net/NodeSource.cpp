@@ -137,6 +137,8 @@ struct NodeSource::Impl {
     // The fastest round trip of its time requests ever (kept when its clock is measured anew: the
     // path to it is the same): what a round trip to it can be.
     std::int64_t fastest_rtt_ns = std::numeric_limits<std::int64_t>::max();
+    bool placing = false;              // its frames are placed in time (since its clock was last measured anew)
+    std::int64_t first_sample_ns = 0;  // the first clock sample since then (master clock)
     std::uint32_t sequence = 0;
     std::optional<std::uint64_t> last_counter{};  // of its last frame
     std::string node_name{};                      // its certificate's, with security
@@ -215,12 +217,13 @@ struct NodeSource::Impl {
     // this is the only sign of it.
     if (node.last_counter && m.counter < *node.last_counter) {
       node.clock.reset();
+      node.placing = false;
       node.first_sync_ns = arrival_ns;
       node.next_sync_ns = 0;
       warn("node " + node.endpoint + " started again (its frame counter began anew): its clock is measured anew");
     }
     node.last_counter = m.counter;
-    if (!clock_placed(node)) {
+    if (!clock_placed(node, arrival_ns)) {
       ++node.stats.unsynchronised;
       return;
     }
@@ -247,17 +250,22 @@ struct NodeSource::Impl {
     arrived.notify_all();
   }
 
-  // Whether a node's frames can be placed in time: its clock is measured, from a round trip fast
-  // enough that the fit is off by a fraction of the assembler's tolerance at most. A sample's error
-  // is up to half its round trip, and the fit keeps only the fastest (ClockSync), so one slow first
-  // reply (a busy machine, a node just started) would otherwise place its first frames a frame off
-  // in time, their markers where the scene was one exposure earlier or later. A round trip within
-  // 2 ms, or within half again the node's fastest (a slower network), is good enough.
-  static bool clock_placed(const Node& node) {
+  // Whether a node's frames can be placed in time (from the first that can, until its clock is
+  // measured anew): its clock is measured, from a round trip fast enough that the fit is off by a
+  // fraction of the assembler's tolerance at most. A sample's error is up to half its round trip,
+  // and the fit keeps only the fastest (ClockSync), so one slow first reply (a busy machine, a node
+  // just started) would otherwise place its first frames a frame off in time, their markers where
+  // the scene was one exposure earlier or later. A round trip within 2 ms, or within half again the
+  // node's fastest (a slower network), is good enough; after a second without one (a network
+  // slower than it was), the fit there is.
+  static bool clock_placed(Node& node, std::int64_t now_ns) {
     if (!node.clock.synchronised()) return false;
+    if (node.placing) return true;
     constexpr double kGoodRtt_us = 2000.0;
+    constexpr std::int64_t kWaitForGoodRtt_ns = 1'000'000'000;
     const double fastest_us = static_cast<double>(node.fastest_rtt_ns) / 1e3;
-    return node.clock.min_rtt_us() <= std::max(kGoodRtt_us, 1.5 * fastest_us);
+    node.placing = node.clock.min_rtt_us() <= std::max(kGoodRtt_us, 1.5 * fastest_us) || now_ns - node.first_sample_ns > kWaitForGoodRtt_ns;
+    return node.placing;
   }
 
   void on_reply(Node& node, const zmq::message_t& raw, std::int64_t arrival_ns) {
@@ -272,6 +280,7 @@ struct NodeSource::Impl {
     if (const auto* t = std::get_if<TimeReply>(&*decoded)) {
       // A reply to a request of this run only (a restarted node may answer old ones).
       if (t->master_send_ns < opened_ns || t->master_send_ns > arrival_ns || arrival_ns - t->master_send_ns > 1'000'000'000) return;
+      if (node.clock.samples() == 0) node.first_sample_ns = arrival_ns;
       node.clock.add(t->master_send_ns, t->node_ns, arrival_ns);
       node.fastest_rtt_ns = std::min(node.fastest_rtt_ns, arrival_ns - t->master_send_ns);
       node.stats.clock_offset_ms = node.clock.offset_ns_at(arrival_ns) / 1e6;
@@ -404,6 +413,7 @@ struct NodeSource::Impl {
         ++node.stats.lost;
         // Its clock may come back different (a restarted machine): measure it again.
         node.clock.reset();
+        node.placing = false;
         node.first_sync_ns = now;
         warn("node " + node.endpoint + " lost: no frame for " + std::to_string(settings.lost_after_s) + " s; tracking goes on without it");
       }
