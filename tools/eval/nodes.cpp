@@ -591,7 +591,7 @@ void run_master(const NodesRun& run, NodesTally& tally) {
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
     return v[v.size() / 2];
   };
-  const std::size_t readings = std::min<std::size_t>(5, heap_kb.size());
+  const std::size_t readings = std::max<std::size_t>(1, std::min<std::size_t>(5, heap_kb.size() / 2));  // the two never overlap
   tally.heap_start_kb = median_of({heap_kb.begin(), heap_kb.begin() + static_cast<std::ptrdiff_t>(readings)});
   tally.heap_end_kb = median_of({heap_kb.end() - static_cast<std::ptrdiff_t>(readings), heap_kb.end()});
 }

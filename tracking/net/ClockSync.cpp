@@ -73,6 +73,8 @@ void ClockSync::refit() {
     sq += e * e;
   }
   fit.residual_ns = std::sqrt(sq / n);
+  fit.max_rtt_ns = 0;
+  for (const Sample* s : chosen) fit.max_rtt_ns = std::max(fit.max_rtt_ns, s->rtt_ns);
   fit_ = fit;
 }
 

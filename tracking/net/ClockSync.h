@@ -39,6 +39,9 @@ class ClockSync {
   double drift_ppm() const { return fit_ ? fit_->drift * 1e6 : 0.0; }
   double residual_us() const { return fit_ ? fit_->residual_ns / 1e3 : 0.0; }
   double min_rtt_us() const;
+  // The slowest round trip among the samples the fit uses (0 before any): each of them is off by at
+  // most half its round trip, so the fit is off by at most half this.
+  double fit_rtt_us() const { return fit_ ? static_cast<double>(fit_->max_rtt_ns) / 1e3 : 0.0; }
   std::size_t samples() const { return samples_.size(); }
   void reset() {
     samples_.clear();
@@ -56,6 +59,7 @@ class ClockSync {
     double offset_ns;            // node - master at master_ref_ns
     double drift;                // d(node - master) / d(master)
     double residual_ns;
+    std::int64_t max_rtt_ns;  // the slowest round trip among the samples fitted
   };
   void refit();
 

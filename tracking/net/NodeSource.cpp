@@ -137,8 +137,9 @@ struct NodeSource::Impl {
     // The fastest round trip of its time requests ever (kept when its clock is measured anew: the
     // path to it is the same): what a round trip to it can be.
     std::int64_t fastest_rtt_ns = std::numeric_limits<std::int64_t>::max();
-    bool placing = false;              // its frames are placed in time (since its clock was last measured anew)
-    std::int64_t first_sample_ns = 0;  // the first clock sample since then (master clock)
+    bool placing = false;               // its frames are placed in time (since its clock was last measured anew)
+    std::int64_t first_sample_ns = 0;   // the first clock sample since then (master clock)
+    std::int64_t measured_from_ns = 0;  // replies to requests sent before this (an earlier clock) are not samples
     std::uint32_t sequence = 0;
     std::optional<std::uint64_t> last_counter{};  // of its last frame
     std::string node_name{};                      // its certificate's, with security
@@ -218,6 +219,7 @@ struct NodeSource::Impl {
     if (node.last_counter && m.counter < *node.last_counter) {
       node.clock.reset();
       node.placing = false;
+      node.measured_from_ns = arrival_ns;
       node.first_sync_ns = arrival_ns;
       node.next_sync_ns = 0;
       warn("node " + node.endpoint + " started again (its frame counter began anew): its clock is measured anew");
@@ -251,20 +253,27 @@ struct NodeSource::Impl {
   }
 
   // Whether a node's frames can be placed in time (from the first that can, until its clock is
-  // measured anew): its clock is measured, from a round trip fast enough that the fit is off by a
-  // fraction of the assembler's tolerance at most. A sample's error is up to half its round trip,
-  // and the fit keeps only the fastest (ClockSync), so one slow first reply (a busy machine, a node
-  // just started) would otherwise place its first frames a frame off in time, their markers where
-  // the scene was one exposure earlier or later. A round trip within 2 ms, or within half again the
-  // node's fastest (a slower network), is good enough; after a second without one (a network
-  // slower than it was), the fit there is.
-  static bool clock_placed(Node& node, std::int64_t now_ns) {
+  // measured anew): its clock is measured, and every sample its fit uses came back fast enough that
+  // the fit is off by a fraction of the assembler's tolerance at most (a sample is off by up to
+  // half its round trip). Otherwise one slow first reply (a busy machine, a node just started)
+  // places its first frames an exposure off in time, their markers where the scene was one
+  // exposure earlier or later. Round trips within 2 ms, or within half again the node's fastest ever
+  // (a slower network), are good enough; after a second without (a network slower than it was),
+  // the fit there is, with a warning.
+  bool clock_placed(Node& node, std::int64_t now_ns) {
     if (!node.clock.synchronised()) return false;
     if (node.placing) return true;
     constexpr double kGoodRtt_us = 2000.0;
     constexpr std::int64_t kWaitForGoodRtt_ns = 1'000'000'000;
-    const double fastest_us = static_cast<double>(node.fastest_rtt_ns) / 1e3;
-    node.placing = node.clock.min_rtt_us() <= std::max(kGoodRtt_us, 1.5 * fastest_us) || now_ns - node.first_sample_ns > kWaitForGoodRtt_ns;
+    const double good_us = std::max(kGoodRtt_us, 1.5 * static_cast<double>(node.fastest_rtt_ns) / 1e3);
+    if (node.clock.fit_rtt_us() <= good_us) {
+      node.placing = true;
+    } else if (now_ns - node.first_sample_ns > kWaitForGoodRtt_ns) {
+      node.placing = true;
+      warn("node " + node.endpoint + ": no clock round trip within " + std::to_string(static_cast<int>(good_us)) +
+           " us for a second; its frames are placed with round trips of up to " +
+           std::to_string(static_cast<int>(node.clock.fit_rtt_us())) + " us, each off by up to half of that");
+    }
     return node.placing;
   }
 
@@ -280,6 +289,7 @@ struct NodeSource::Impl {
     if (const auto* t = std::get_if<TimeReply>(&*decoded)) {
       // A reply to a request of this run only (a restarted node may answer old ones).
       if (t->master_send_ns < opened_ns || t->master_send_ns > arrival_ns || arrival_ns - t->master_send_ns > 1'000'000'000) return;
+      if (t->master_send_ns < node.measured_from_ns) return;  // asked of the clock before it was measured anew
       if (node.clock.samples() == 0) node.first_sample_ns = arrival_ns;
       node.clock.add(t->master_send_ns, t->node_ns, arrival_ns);
       node.fastest_rtt_ns = std::min(node.fastest_rtt_ns, arrival_ns - t->master_send_ns);
@@ -307,7 +317,7 @@ struct NodeSource::Impl {
     for (Node& node : nodes) {
       if (now >= node.next_sync_ns) {
         send(node.control, encode(TimeRequest{node.sequence++, steady_now_ns()}));
-        const bool early = now - node.first_sync_ns < 300'000'000 || !node.clock.synchronised();
+        const bool early = now - node.first_sync_ns < 300'000'000 || !node.clock.synchronised() || !node.placing;
         node.next_sync_ns = now + (early ? 10'000'000 : static_cast<std::int64_t>(settings.sync_interval_s * 1e9));
       }
       if (now >= node.next_status_ns) {
@@ -414,6 +424,7 @@ struct NodeSource::Impl {
         // Its clock may come back different (a restarted machine): measure it again.
         node.clock.reset();
         node.placing = false;
+        node.measured_from_ns = now;
         node.first_sync_ns = now;
         warn("node " + node.endpoint + " lost: no frame for " + std::to_string(settings.lost_after_s) + " s; tracking goes on without it");
       }

@@ -76,7 +76,7 @@ struct NodeStats {
   int node_id = -1;        // from its frames (-1: none yet)
   std::uint64_t frames = 0;
   std::uint64_t bytes = 0;
-  std::uint64_t unsynchronised = 0;  // frames dropped before its clock was measured (a round trip fast enough)
+  std::uint64_t unsynchronised = 0;  // frames dropped before its clock was measured well enough (NodeSource.cpp, clock_placed)
   std::uint64_t lost = 0;            // times it was lost
   std::uint64_t rejoined = 0;        // times it came back after being lost
   double clock_offset_ms = 0.0;      // node ahead of master
