@@ -70,6 +70,10 @@ class CameraProjection {
   Eigen::Vector3d ray_direction_world(const Eigen::Vector2d& normalised) const;
 
  private:
+  // The point's undistorted normalised coordinates and its inverse depth, or false where it is not
+  // in front of the camera (nearer than camera_detail::kMinDepth_m).
+  bool to_normalised(const Eigen::Vector3d& p_world, double& x, double& y, double& inv_z) const;
+
   CameraIntrinsics intrinsics_;
   Eigen::Matrix3d rotation_;  // cam_from_world
   Eigen::Vector3d translation_;
@@ -108,28 +112,31 @@ inline bool inside_sensor(const CameraIntrinsics& k, const Eigen::Vector2d& pixe
 
 }  // namespace camera_detail
 
+inline bool CameraProjection::to_normalised(const Eigen::Vector3d& p_world, double& x, double& y, double& inv_z) const {
+  const Eigen::Matrix3d& r = rotation_;
+  const double z = r(2, 0) * p_world.x() + r(2, 1) * p_world.y() + r(2, 2) * p_world.z() + translation_.z();
+  if (!(z > camera_detail::kMinDepth_m)) return false;
+  inv_z = 1.0 / z;
+  x = (r(0, 0) * p_world.x() + r(0, 1) * p_world.y() + r(0, 2) * p_world.z() + translation_.x()) * inv_z;
+  y = (r(1, 0) * p_world.x() + r(1, 1) * p_world.y() + r(1, 2) * p_world.z() + translation_.y()) * inv_z;
+  return true;
+}
+
 // Defined here, not in Camera.cpp, so that matching and refinement (their innermost work is
 // projecting into camera after camera) compile them into their own loops; written out in scalars
 // (Eigen's small fixed-size expressions cost about twice the instructions here).
 inline std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world) const {
-  const Eigen::Matrix3d& r = rotation_;
-  const double z = r(2, 0) * p_world.x() + r(2, 1) * p_world.y() + r(2, 2) * p_world.z() + translation_.z();
-  if (!(z > camera_detail::kMinDepth_m)) return std::nullopt;
-  const double inv_z = 1.0 / z;
-  const double x = (r(0, 0) * p_world.x() + r(0, 1) * p_world.y() + r(0, 2) * p_world.z() + translation_.x()) * inv_z;
-  const double y = (r(1, 0) * p_world.x() + r(1, 1) * p_world.y() + r(1, 2) * p_world.z() + translation_.y()) * inv_z;
+  double x = 0.0, y = 0.0, inv_z = 0.0;
+  if (!to_normalised(p_world, x, y, inv_z)) return std::nullopt;
   const Eigen::Vector2d d = camera_detail::distort(intrinsics_.distortion, Eigen::Vector2d(x, y), nullptr);
   return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
 }
 
 inline std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world,
                                                                 Eigen::Matrix<double, 2, 3>& jacobian) const {
+  double x = 0.0, y = 0.0, inv_z = 0.0;
+  if (!to_normalised(p_world, x, y, inv_z)) return std::nullopt;
   const Eigen::Matrix3d& r = rotation_;
-  const double z = r(2, 0) * p_world.x() + r(2, 1) * p_world.y() + r(2, 2) * p_world.z() + translation_.z();
-  if (!(z > camera_detail::kMinDepth_m)) return std::nullopt;
-  const double inv_z = 1.0 / z;
-  const double x = (r(0, 0) * p_world.x() + r(0, 1) * p_world.y() + r(0, 2) * p_world.z() + translation_.x()) * inv_z;
-  const double y = (r(1, 0) * p_world.x() + r(1, 1) * p_world.y() + r(1, 2) * p_world.z() + translation_.y()) * inv_z;
   Eigen::Matrix2d dd;  // d(distorted)/d(x, y): symmetric
   const Eigen::Vector2d d = camera_detail::distort(intrinsics_.distortion, Eigen::Vector2d(x, y), &dd);
   // d(pixel)/d(p_world) = diag(fx, fy) * dd * d(x, y)/d(p_world), where the column m of

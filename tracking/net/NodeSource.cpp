@@ -1,12 +1,12 @@
 #include "tracking/net/NodeSource.h"
 
 #include <algorithm>
-#include <limits>
 #include <array>
 #include <atomic>
 #include <charconv>
 #include <chrono>
 #include <condition_variable>
+#include <limits>
 #include <mutex>
 #include <cstdio>
 #include <thread>
