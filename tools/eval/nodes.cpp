@@ -427,7 +427,16 @@ struct NodesTally {
   long found = 0, truth_total = 0, found_down = 0, truth_down = 0;
   bool killed = false, restarted = false, rejoined = false;
   std::int64_t complete = 0;
-  long wrong_markers = 0;                       // detections far from every true marker's image
+  long wrong_markers = 0;  // detections far from every true marker's image
+  // The first camera frames with wrong markers: when, whose, and which exposure's markers they are
+  // (placed in time one exposure or more off) if any within kShiftsTried is.
+  struct WrongFrame {
+    double t_s;
+    int camera;
+    long wrong, detections;
+    std::optional<int> exposures_off;
+  };
+  std::vector<WrongFrame> wrong_frames;
   long memory_start_kb = 0, memory_end_kb = 0;  // the master's resident memory, after its start and at the end
   long heap_start_kb = 0, heap_end_kb = 0;      // and its heap in use
 };
@@ -436,23 +445,35 @@ struct NodesTally {
 // noise is a fraction of a pixel).
 constexpr double kWrongMarker_px = 5.0;
 
-// Detections of f not within kWrongMarker_px of any true marker's image at exposure time t.
-long wrong_markers_in(const NodesRun& run, const AssembledFrame& f, double t) {
-  long wrong = 0;
-  std::vector<Eigen::Vector3d> truth;
-  for (const Trajectory& m : run.markers) truth.push_back(m.at(t));
+constexpr std::size_t kWrongFramesKept = 16;
+constexpr int kShiftsTried = 3;  // exposures either side
+
+// Camera c's detections in `detections` not within kWrongMarker_px of any true marker's image at time t.
+long wrong_in(const NodesRun& run, std::size_t c, const std::vector<Detection>& detections, double t) {
+  std::vector<Eigen::Vector2d> images;
+  for (const Trajectory& m : run.markers)
+    if (const auto px = run.rig.cameras[c].project(m.at(t))) images.push_back(*px);
+  return static_cast<long>(std::count_if(detections.begin(), detections.end(), [&](const Detection& d) {
+    return std::none_of(images.begin(), images.end(), [&](const Eigen::Vector2d& i) { return (i - d.pixel).norm() < kWrongMarker_px; });
+  }));
+}
+
+// Counts the detections of f at exposure k (time t) that are no marker's image then; the first
+// camera frames with any are kept, with the exposure shift that explains them if one does.
+void count_wrong_markers(const NodesRun& run, const AssembledFrame& f, std::int64_t k, NodesTally& tally) {
+  const double t = static_cast<double>(k) / run.a.rate_hz;
   for (std::size_t c = 0; c < f.cameras.size() && c < run.rig.cameras.size(); ++c) {
     if (!f.cameras[c]) continue;
-    std::vector<Eigen::Vector2d> images;
-    for (const Eigen::Vector3d& p : truth)
-      if (const auto px = run.rig.cameras[c].project(p)) images.push_back(*px);
-    for (const Detection& d : f.cameras[c]->detections) {
-      const bool near =
-          std::any_of(images.begin(), images.end(), [&](const Eigen::Vector2d& i) { return (i - d.pixel).norm() < kWrongMarker_px; });
-      wrong += near ? 0 : 1;
-    }
+    const std::vector<Detection>& detections = f.cameras[c]->detections;
+    const long wrong = wrong_in(run, c, detections, t);
+    tally.wrong_markers += wrong;
+    if (wrong == 0 || tally.wrong_frames.size() >= kWrongFramesKept) continue;
+    NodesTally::WrongFrame w{t, static_cast<int>(c), wrong, static_cast<long>(detections.size()), std::nullopt};
+    for (int shift = 1; shift <= kShiftsTried && !w.exposures_off; ++shift)
+      for (const int s : {-shift, shift})
+        if (!w.exposures_off && wrong_in(run, c, detections, static_cast<double>(k + s) / run.a.rate_hz) == 0) w.exposures_off = s;
+    tally.wrong_frames.push_back(w);
   }
-  return wrong;
 }
 
 // Kills the victim node at --kill-node-at and starts it again at --restart-node-at, t_now seconds
@@ -533,7 +554,7 @@ void tally_frame(const NodesRun& run, const AssembledFrame& f, NodesTally& tally
     run.hands.local_hands.step(t, truth);
     return;
   }
-  tally.wrong_markers += wrong_markers_in(run, f, t);
+  count_wrong_markers(run, f, k, tally);
   const std::vector<MatchedPoint> points = run.matcher.match(frame, run.match);
   std::vector<Eigen::Vector3d> truth;
   for (const Trajectory& m : run.markers) truth.push_back(m.at(t));
@@ -695,6 +716,13 @@ nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSo
   j["frames_not_made"] = not_made;
   j["frames_lost_in_transport"] = run.frames_expected - static_cast<std::int64_t>(tally.assembled.size()) - not_made;
   j["wrong_markers_accepted"] = tally.wrong_markers;
+  nlohmann::json wrong_frames = nlohmann::json::array();
+  for (const NodesTally::WrongFrame& w : tally.wrong_frames) {
+    nlohmann::json e = {{"t_s", w.t_s}, {"camera", w.camera}, {"wrong", w.wrong}, {"detections", w.detections}};
+    e["markers_of_exposures_off"] = w.exposures_off ? nlohmann::json(*w.exposures_off) : nlohmann::json(nullptr);
+    wrong_frames.push_back(e);
+  }
+  j["wrong_marker_frames"] = wrong_frames;
   if (run.chaos) chaos_report(run, tally, j);
   j["frames_complete"] = tally.complete;
   j["assembly_p50_ms"] = percentile(tally.assembly_ms, 0.5);

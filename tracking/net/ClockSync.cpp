@@ -41,8 +41,13 @@ void ClockSync::refit() {
   std::vector<std::int64_t> present;
   for (const std::int64_t f : fastest)
     if (f != std::numeric_limits<std::int64_t>::max()) present.push_back(f);
-  std::nth_element(present.begin(), present.begin() + static_cast<std::ptrdiff_t>(present.size() / 2), present.end());
-  const std::int64_t typical = present[present.size() / 2];
+  // The typical stretch is the lower median: of two stretches, the faster. A stalled master reads
+  // one reply late (its round trip the stall's length, its midpoint the stall's middle, so its
+  // offset off by half the stall); alone in its stretch beside one other, the upper median would
+  // make it typical and pull the fit milliseconds off, frames an exposure off in time.
+  const auto middle = present.begin() + static_cast<std::ptrdiff_t>((present.size() - 1) / 2);
+  std::nth_element(present.begin(), middle, present.end());
+  const std::int64_t typical = *middle;
   std::vector<const Sample*> chosen;
   for (const Sample& s : samples_) {
     const std::int64_t f = fastest[static_cast<std::size_t>(stretch(s))];
