@@ -67,6 +67,8 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   long found = 0;
   long ghosts = 0;
   long mixed = 0;
+  long duplicates = 0;  // a second point of a marker in one frame (found counts each marker once)
+  std::vector<char> has_point;
   std::vector<double> ms;
   std::vector<double> errors_mm;  // every found marker's 3D error
   const rhot::RigMatcher matcher(*rig);
@@ -80,6 +82,7 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
       for (const rhot::Detection& d : cf.detections) ++seen_by[static_cast<std::size_t>(d.truth_marker)];
     }
     for (const int n : seen_by) findable += n >= 2 ? 1 : 0;
+    has_point.assign(frame.truth_position_m.size(), 0);
     for (const rhot::MatchedPoint& m : matched) {
       const int marker = rhot::truth_marker(frame, m);
       if (marker < 0) {
@@ -90,6 +93,11 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
         ++(nearest_m <= kGhostDistance_m ? mixed : ghosts);
         continue;
       }
+      if (has_point[static_cast<std::size_t>(marker)] != 0) {
+        ++duplicates;
+        continue;
+      }
+      has_point[static_cast<std::size_t>(marker)] = 1;
       ++found;
       const Eigen::Vector3d truth = frame.truth_position_m[static_cast<std::size_t>(marker)];
       const auto cov = rhot::crlb_covariance(*rig, truth, m.point.cameras, sigma);
@@ -126,6 +134,7 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   j["found_fraction"] = findable > 0 ? static_cast<double>(found) / static_cast<double>(findable) : 0.0;
   j["ghosts"] = ghosts;
   j["mixed"] = mixed;
+  j["duplicates"] = duplicates;
   j["median_ms"] = percentile(ms, 0.5);
   j["p99_ms"] = percentile(ms, 0.99);
   std::cout << j.dump(2) << "\n";

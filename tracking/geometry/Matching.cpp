@@ -780,21 +780,16 @@ class Matcher {
         // cluster of one marker shares nearly all of its detections, a ghost made of other
         // markers' detections most of them, and neither comes of this. (Refusing every cluster
         // that shares two found 37 of the 100 markers of MarkersThatLineUpInAFewOfThirtyCameras.)
-        // Wanted by such a point, or by one three or more cameras see sharing a single detection
-        // (two views that share a detection with a better point are as likely a ghost), the
-        // shared detection is contested: most likely the two markers' blobs merged into one,
-        // which lies off both (see drop_contested).
+        // Wanted by such a point (once it is refined without them), or by one three or more
+        // cameras see sharing a single detection (two views that share a detection with a better
+        // point are as likely a ghost), the shared detections are contested: most likely the two
+        // markers' blobs merged into one, which lies off both (see drop_contested).
         const int own = cl.support - conflicts;
-        const bool kept_without = own >= 3 && conflicts <= own;
-        if (kept_without || (conflicts == 1 && cl.support >= 3)) {
-          for (std::size_t c = 0; c < n_; ++c) {
-            if (cl.detection[c] >= 0 && (used[c][static_cast<std::size_t>(cl.detection[c])] & kUsed) != 0) {
-              used[c][static_cast<std::size_t>(cl.detection[c])] |= kContested;
-              s_.any_contested = true;
-            }
-          }
-        }
-        if (!kept_without || !refit_without_taken(cl)) continue;
+        if (conflicts == 1 && cl.support >= 3) mark_taken_contested(cl);
+        // Its own views, not its support, against the cameras that should see it and show nothing
+        // (the rule every cluster passed above), where it shares more than one.
+        const bool kept_without = own >= 3 && conflicts <= own && (conflicts == 1 || cl.missing <= own);
+        if (!kept_without || !refit_without_taken(cl, conflicts > 1)) continue;
       }
       if (s_.point_count == s_.points.size()) {
         // Room for more points at once, each made ready to be seen by every camera.
@@ -819,23 +814,35 @@ class Matcher {
     if (s_.any_contested) drop_contested();
   }
 
+  // The detections of a cluster that better points took (accept), marked contested.
+  void mark_taken_contested(const Cluster& cl) {
+    for (std::size_t c = 0; c < n_; ++c) {
+      if (cl.detection[c] < 0) continue;
+      char& flags = s_.used[c][static_cast<std::size_t>(cl.detection[c])];
+      if ((flags & kUsed) == 0) continue;
+      flags |= kContested;
+      s_.any_contested = true;
+    }
+  }
+
   // A cluster without the detections better points took (accept), refined from the rest: false
-  // where they do not agree. (Looking in those cameras again for a detection no point took found,
-  // among a thousand markers, a third marker's as often as the cluster's own: 2.8 times the mixed
-  // points on stage-32.)
-  bool refit_without_taken(Cluster& cl) {
-    std::erase_if(cl.observations, [&](const Observation& o) {
-      const auto c = static_cast<std::size_t>(o.camera);
-      return (s_.used[c][static_cast<std::size_t>(cl.detection[c])] & kUsed) != 0;
-    });
+  // where they do not agree. With `contest`, those detections are then contested. (Looking in those
+  // cameras again for a detection no point took found, among a thousand markers, a third marker's
+  // as often as the cluster's own: 2.8 times the mixed points on stage-32.)
+  bool refit_without_taken(Cluster& cl, bool contest) {
+    const auto taken = [&](std::size_t c) {
+      return cl.detection[c] >= 0 && (s_.used[c][static_cast<std::size_t>(cl.detection[c])] & kUsed) != 0;
+    };
+    std::erase_if(cl.observations, [&](const Observation& o) { return taken(static_cast<std::size_t>(o.camera)); });
     TriangulatedPoint& again = s_.again;
     if (again.cameras.capacity() < n_) again.cameras.reserve(n_);
     if (!refine_point_into(poses_, cl.observations, cl.point.position_world, 5, again) ||
         again.max_residual_px > settings_.max_residual_px || again.reprojection_rms_px > settings_.max_rms_px)
       return false;
     std::swap(cl.point, again);
+    if (contest) mark_taken_contested(cl);
     for (std::size_t c = 0; c < n_; ++c) {
-      if (cl.detection[c] >= 0 && (s_.used[c][static_cast<std::size_t>(cl.detection[c])] & kUsed) != 0) cl.detection[c] = -1;
+      if (taken(c)) cl.detection[c] = -1;
     }
     return true;
   }

@@ -215,7 +215,7 @@ TEST(Matching, MarkersProjectingToOnePixelAreBothFound) {
 // or two apart, and in one or two cameras two line up. The point of one then took the other's
 // detection there, and the other's cluster, sharing two detections with a better point, was
 // refused as if it were a second cluster of the same marker: 37 of the 100 markers were found
-// (and the crowd's hands were seen in 0.95 of its frames). Every one is found now, and nothing else.
+// (and the crowded stage's hands were correct in 0.89-0.92 of its frames). Every one is found now, and nothing else.
 TEST(Matching, MarkersThatLineUpInAFewOfThirtyCamerasAreEachFound) {
   const CameraRig r = rig("stage-32.yaml");
   const std::array<Eigen::Vector3d, 4> star_mm = {{{-8.3, 15.2, 10.1}, {2.0, -3.0, 0.5}, {-2.0, 9.0, -7.0}, {20.0, 30.0, 40.0}}};
