@@ -268,24 +268,39 @@ void Chaos::step(double t_s) {
       restart(d, *d.restarted_s);
     }
   }
+  for (Down& d : downs_) {
+    if (d.stall_s && t_s >= *d.stall_s) {
+      d.stall_s.reset();
+      stall(0.2, 0.3);
+    }
+  }
   if (t_s < next_event_s_ || t_s > seconds_ - 2.5) return;
   next_event_s_ = t_s + std::uniform_real_distribution<double>(1.0, 3.0)(rng_);
   const bool one_down = std::any_of(downs_.begin(), downs_.end(), [](const Down& d) { return !d.rejoined_s; });
   if (!one_down && rng_() % 5 < 3) {
     kill_one(t_s);
   } else {
-    const double stall = std::uniform_real_distribution<double>(0.05, 0.3)(rng_);
-    source_.stall_receiver(stall);
-    ++stalls_;
-    stalled_s_ += stall;
+    stall(0.05, 0.3);
   }
+}
+
+void Chaos::stall(double min_s, double max_s) {
+  const double seconds = std::uniform_real_distribution<double>(min_s, max_s)(rng_);
+  source_.stall_receiver(seconds);
+  ++stalls_;
+  stalled_s_ += seconds;
 }
 
 void Chaos::on_frame(const AssembledFrame& frame, double t_s) {
   for (Down& d : downs_) {
     if (!d.restarted_s || d.rejoined_s) continue;
     for (const int c : nodes_[static_cast<std::size_t>(d.node)].cameras)
-      if (static_cast<std::size_t>(c) < frame.cameras.size() && frame.cameras[static_cast<std::size_t>(c)]) d.rejoined_s = t_s;
+      if (static_cast<std::size_t>(c) < frame.cameras.size() && frame.cameras[static_cast<std::size_t>(c)] && !d.rejoined_s) {
+        d.rejoined_s = t_s;
+        // Its clock was measured anew a moment ago: a stall 0.1-0.2 s from now falls while its fit
+        // has two quarter seconds of samples or fewer.
+        d.stall_s = t_s + std::uniform_real_distribution<double>(0.1, 0.2)(rng_);
+      }
   }
 }
 

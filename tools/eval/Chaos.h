@@ -7,7 +7,9 @@
 //     against an insecure master) sending frames of false markers, junk and oversized messages;
 //   - all along, an attacker connecting to every node's control endpoint without a key, sending
 //     junk and oversized requests;
-//   - the master's receiving thread stalled for 50-300 ms.
+//   - the master's receiving thread stalled for 50-300 ms at random times, and for 200-300 ms
+//     0.1-0.2 s after every rejoin (while the node's clock is measured anew: a stall there once
+//     put its frames an exposure off).
 // The master's loop asks step() what to do now, tells on_frame() what it assembled, and asks
 // all_up() whether every node was serving at an exposure.
 
@@ -55,7 +57,9 @@ class Chaos {
     int node = 0;
     double killed_s = 0.0, restart_s = 0.0;
     std::optional<double> restarted_s, rejoined_s;
+    std::optional<double> stall_s;  // the stall due after its rejoin (done: reset)
   };
+  void stall(double min_s, double max_s);  // the master's receiving thread, for a time between the two
   void kill_one(double t_s);
   void restart(Down& d, double t_s);
   std::vector<std::string> new_clock_argv(const ChaosNode& node);
