@@ -492,11 +492,13 @@ TEST(EvalCli, ColourFingertipsAreNeverTakenForAHandStar) {
 // A small crowd (one person: two hands, a headset and a prop on the back, among loose markers) at
 // 120 Hz on stage-32, on two threads and again on one: the same results, every key of the report,
 // and the bodies and hands against the truth. Measured (release, seeds 1-3): bodies 1.0, hands
-// 0.90-1.0, found 0.93-0.96. And after the warm-up's half second the tracking (matching, stars,
-// hands) allocates nothing: counted over every thread (tools/eval/AllocationCount.h), 3,559 to
-// 4,323 allocations in the warm-up's frames (seeds 1-3), none after, also over 3 s.
+// 1.0, found 0.97-0.98 (also over 3 s); seed 2's hands were correct in 0.90 of its frames, found
+// 0.94, while matching refused a star marker that lined up with its neighbour in two cameras. And
+// after the warm-up's half second the tracking (matching, stars, hands) allocates nothing: counted
+// over every thread (tools/eval/AllocationCount.h), 3,559 to 4,323 allocations in the warm-up's
+// frames (seeds 1-3), none after, also over 3 s.
 TEST(EvalCli, ScaleRunsACrowdOnTwoThreadsWithTheResultsOfOne) {
-  const EvalRun r = run_eval("scale --seconds 1 --markers 150 --bodies 2 --hands 2 --threads 2 --seed 1 --json");
+  const EvalRun r = run_eval("scale --seconds 1 --markers 150 --bodies 2 --hands 2 --threads 2 --seed 2 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["threads"], 2);
@@ -511,8 +513,8 @@ TEST(EvalCli, ScaleRunsACrowdOnTwoThreadsWithTheResultsOfOne) {
   for (const char* key : {"frame_p99_ms", "missed_period_fraction", "speedup_vs_one_thread", "resident_mb_end", "hand_joint_error_mean_mm"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_GE(j["bodies_correct_fraction"].get<double>(), 0.95);
-  EXPECT_GE(j["hands_correct_fraction"].get<double>(), 0.8);
-  EXPECT_GE(j["found_fraction"].get<double>(), 0.9);
+  EXPECT_GE(j["hands_correct_fraction"].get<double>(), 0.99) << "issue 40's target";
+  EXPECT_GE(j["found_fraction"].get<double>(), 0.95);
   // The count counts: the first frames make the trackers' room.
   EXPECT_GT(j["warm_up_allocations"].get<long>(), 1000);
   EXPECT_EQ(j["allocating_frames"].get<long>(), 0);
