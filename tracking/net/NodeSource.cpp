@@ -217,11 +217,7 @@ struct NodeSource::Impl {
     // its frames are placed in time. Within lost_after_s of its last frame it was never lost, so
     // this is the only sign of it.
     if (node.last_counter && m.counter < *node.last_counter) {
-      node.clock.reset();
-      node.placing = false;
-      node.measured_from_ns = arrival_ns;
-      node.first_sync_ns = arrival_ns;
-      node.next_sync_ns = 0;
+      measure_clock_anew(node, arrival_ns);
       warn("node " + node.endpoint + " started again (its frame counter began anew): its clock is measured anew");
     }
     node.last_counter = m.counter;
@@ -250,6 +246,16 @@ struct NodeSource::Impl {
     cm.decode_ns = steady_now_ns() - arrival_ns;
     assembler.add(std::move(cm));
     arrived.notify_all();
+  }
+
+  // Forgets a node's clock (it started again, or was lost): its frames wait until it is measured
+  // well enough (clock_placed), from replies to requests asked from now on, the first at once.
+  static void measure_clock_anew(Node& node, std::int64_t now_ns) {
+    node.clock.reset();
+    node.placing = false;
+    node.measured_from_ns = now_ns;
+    node.first_sync_ns = now_ns;
+    node.next_sync_ns = 0;
   }
 
   // Whether a node's frames can be placed in time (from the first that can, until its clock is
@@ -422,10 +428,7 @@ struct NodeSource::Impl {
         node.stats.connected = false;
         ++node.stats.lost;
         // Its clock may come back different (a restarted machine): measure it again.
-        node.clock.reset();
-        node.placing = false;
-        node.measured_from_ns = now;
-        node.first_sync_ns = now;
+        measure_clock_anew(node, now);
         warn("node " + node.endpoint + " lost: no frame for " + std::to_string(settings.lost_after_s) + " s; tracking goes on without it");
       }
     }
