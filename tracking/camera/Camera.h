@@ -99,20 +99,24 @@ inline constexpr double kMinDepth_m = 1e-3;
                             y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
   if (jacobian != nullptr) {
     const double d = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r2)
-    (*jacobian) << radial + 2.0 * x * x * d + 2.0 * p1 * y + 6.0 * p2 * x, 2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y,
-        2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y, radial + 2.0 * y * y * d + 6.0 * p1 * y + 2.0 * p2 * x;
+    const double off_diagonal = 2.0 * x * y * d + 2.0 * p1 * x + 2.0 * p2 * y;
+    (*jacobian)(0, 0) = radial + 2.0 * x * x * d + 2.0 * p1 * y + 6.0 * p2 * x;
+    (*jacobian)(0, 1) = off_diagonal;
+    (*jacobian)(1, 0) = off_diagonal;
+    (*jacobian)(1, 1) = radial + 2.0 * y * y * d + 6.0 * p1 * y + 2.0 * p2 * x;
   }
   return out;
 }
 
-inline bool inside_sensor(const CameraIntrinsics& k, const Eigen::Vector2d& pixel) {
+[[gnu::always_inline]] inline bool inside_sensor(const CameraIntrinsics& k, const Eigen::Vector2d& pixel) {
   // Pixel centres are integers, so the sensor spans [-0.5, size - 0.5).
   return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < k.width_px - 0.5 && pixel.y() < k.height_px - 0.5;
 }
 
 }  // namespace camera_detail
 
-inline bool CameraProjection::to_normalised(const Eigen::Vector3d& p_world, double& x, double& y, double& inv_z) const {
+[[gnu::always_inline]] inline bool CameraProjection::to_normalised(const Eigen::Vector3d& p_world, double& x, double& y,
+                                                                   double& inv_z) const {
   const Eigen::Matrix3d& r = rotation_;
   const double z = r(2, 0) * p_world.x() + r(2, 1) * p_world.y() + r(2, 2) * p_world.z() + translation_.z();
   if (!(z > camera_detail::kMinDepth_m)) return false;
@@ -124,16 +128,21 @@ inline bool CameraProjection::to_normalised(const Eigen::Vector3d& p_world, doub
 
 // Defined here, not in Camera.cpp, so that matching and refinement (their innermost work is
 // projecting into camera after camera) compile them into their own loops; written out in scalars
-// (Eigen's small fixed-size expressions cost about twice the instructions here).
-inline std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world) const {
+// (Eigen's small fixed-size expressions cost about twice the instructions here). Always inlined:
+// an inline function a library leaves as a call is linked to whichever copy the linker meets
+// first, and in the sanitized build that is the test program's, compiled at -O0 (RhotOptions.cmake):
+// the planner's tests ran three to five times longer on it (docs/PERFORMANCE.md, "Build and test
+// time"). The distortion's Jacobian is written coefficient by coefficient for the same reason
+// (Eigen's comma initializer is a call of its own).
+[[gnu::always_inline]] inline std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world) const {
   double x = 0.0, y = 0.0, inv_z = 0.0;
   if (!to_normalised(p_world, x, y, inv_z)) return std::nullopt;
   const Eigen::Vector2d d = camera_detail::distort(intrinsics_.distortion, Eigen::Vector2d(x, y), nullptr);
   return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
 }
 
-inline std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world,
-                                                                Eigen::Matrix<double, 2, 3>& jacobian) const {
+[[gnu::always_inline]] inline std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vector3d& p_world,
+                                                                                       Eigen::Matrix<double, 2, 3>& jacobian) const {
   double x = 0.0, y = 0.0, inv_z = 0.0;
   if (!to_normalised(p_world, x, y, inv_z)) return std::nullopt;
   const Eigen::Matrix3d& r = rotation_;
@@ -154,7 +163,9 @@ inline std::optional<Eigen::Vector2d> CameraProjection::project(const Eigen::Vec
   return Eigen::Vector2d(intrinsics_.fx * d.x() + intrinsics_.cx, intrinsics_.fy * d.y() + intrinsics_.cy);
 }
 
-inline bool CameraProjection::in_image(const Eigen::Vector2d& pixel) const { return camera_detail::inside_sensor(intrinsics_, pixel); }
+[[gnu::always_inline]] inline bool CameraProjection::in_image(const Eigen::Vector2d& pixel) const {
+  return camera_detail::inside_sensor(intrinsics_, pixel);
+}
 
 // The box a rig is meant to track (axis-aligned in the world, metres): where evaluation puts its
 // simulated markers unless told otherwise.
