@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "tracking/hand/FingerFit.h"
+#include "tracking/rigid/RigidFit.h"
 
 namespace rhot {
 
@@ -41,6 +42,12 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   // only past it).
   candidates_.reserve(kPointsRoom);
   reach_.reserve(kPointsRoom);
+  marker_picks_.reserve(kPointsRoom);
+  shape_at_star_.assign(n, Eigen::Vector3d::Zero());
+  for (auto* list : {&frame_from_, &frame_to_}) list->reserve(n);
+  frame_weight_.reserve(n);
+  frame_marker_.reserve(n);
+  frame_point_.reserve(n);
   every_tip_marked_ = std::ranges::all_of(layout.fingertip_marker, [](int m) { return m >= 0; });
   // The model takes 63 markers at most (HiddenMarkerEstimator's sets of visible markers are bits).
   if (settings.fingertip_model && every_tip_marked_ && n - layout.hand_frame_markers <= 63) {
@@ -75,8 +82,11 @@ std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::predict_hi
     tip_estimator_->hand_lost();
     return out;
   }
-  // Only finite places are statistics: a NaN point handed to update() must not reach the model.
-  if (std::ranges::all_of(seen, [](const auto& at) { return at.has_value() && at->allFinite(); })) {
+  // Only finite places are statistics: a NaN point handed to update() must not reach the model. Nor
+  // a frame fitted to the finger markers themselves (frame_from_markers): in it they lie where the
+  // fit put them.
+  if (out_.frame_source == HandFrameSource::kStar &&
+      std::ranges::all_of(seen, [](const auto& at) { return at.has_value() && at->allFinite(); })) {
     Eigen::VectorXd& x = tip_sample_;
     x.resize(static_cast<Eigen::Index>(3 * seen.size()));
     for (std::size_t k = 0; k < seen.size(); ++k) x.segment<3>(static_cast<Eigen::Index>(3 * k)) = *seen[k];
@@ -142,11 +152,13 @@ void HandTracker::begin(double time_s, const TrackedStar& star) {
   // The fit of this frame: the hand solver weighs it itself (a filtered pose would lag the hand).
   begin(time_s, star.measured_now(), star.measured);
   if (!out_.hand_seen) return;
+  star_seen_s_ = time_s;
   for (std::size_t m = 0; m < layout_.hand_frame_markers && m < star.point.size(); ++m) out_.marker_point[m] = star.point[m];
 }
 
 void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand) {
   out_.hand_seen = seen;
+  out_.frame_source = seen ? HandFrameSource::kStar : HandFrameSource::kNone;
   out_.fingertip_point.fill(-1);
   std::ranges::fill(out_.marker_point, -1);
   if (!out_.hand_seen) return;
@@ -162,6 +174,86 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
     gate_m_[m] = marker_found_s_[m] ? std::min(kFingertipGateMax_m, tight_gate_m_[m] + kGateGrowth_mps * (time_s - *marker_found_s_[m]))
                                     : unfound_gate_m;
   }
+}
+
+bool HandTracker::frame_from_markers(double time_s, std::span<const Eigen::Vector3d> points, const std::vector<bool>& taken,
+                                     std::span<const int> colour) {
+  if (!settings_.frame_from_markers || out_.hand_seen || labelled_ || !star_seen_s_) return false;
+  if (!(time_s > *star_seen_s_) || time_s - *star_seen_s_ > kMarkerFrameHold_s) return false;
+  // Each marker where the fingers were in the star's last frame (hand frame): the frame is fitted
+  // to that one shape for as long as the star is hidden. Fitted to the fingers' latest solve
+  // instead, which followed the last fitted frame, frame and fingers drifted together (a turning
+  // hand's frame 40 degrees off within a second, its fingertips still on their markers).
+  if (!shape_at_star_s_ || *shape_at_star_s_ != *star_seen_s_) {
+    const HandPose& pose = solver_.state().pose;
+    const auto frames = marker_frames(pose, solver_.chains());
+    for (std::size_t m = 0; m < layout_.markers.size(); ++m) shape_at_star_[m] = layout_marker_in_hand(layout_.markers[m], pose, frames);
+    shape_at_star_s_ = star_seen_s_;
+  }
+  // Where the last frame (the star's, or this rule's) puts each marker.
+  const Rigid3d last = out_.world_from_hand;
+  std::vector<MarkerPick>& picks = marker_picks_;
+  picks.clear();
+  for (std::size_t m = 0; m < layout_.markers.size(); ++m) {
+    const Eigen::Vector3d at = last * shape_at_star_[m];
+    const int want = layout_.markers[m].colour;
+    for (std::size_t q = 0; q < points.size(); ++q) {
+      if (q < taken.size() && taken[q]) continue;
+      if (want >= 0 && q < colour.size() && colour[q] != want) continue;
+      const double d = (points[q] - at).norm();
+      if (d < kMarkerFrameGate_m) picks.push_back({d, static_cast<int>(m), static_cast<int>(q)});  // NaN never passes
+    }
+  }
+  std::sort(picks.begin(), picks.end(), [](const MarkerPick& a, const MarkerPick& b) {
+    return std::tie(a.distance_m, a.marker, a.point) < std::tie(b.distance_m, b.marker, b.point);
+  });
+  frame_from_.clear();
+  frame_to_.clear();
+  frame_weight_.clear();
+  frame_marker_.clear();
+  frame_point_.clear();
+  for (const MarkerPick& p : picks) {
+    if (std::ranges::find(frame_marker_, p.marker) != frame_marker_.end()) continue;
+    if (std::ranges::find(frame_point_, p.point) != frame_point_.end()) continue;
+    const auto m = static_cast<std::size_t>(p.marker);
+    frame_marker_.push_back(p.marker);
+    frame_point_.push_back(p.point);
+    frame_from_.push_back(shape_at_star_[m]);
+    frame_to_.push_back(points[static_cast<std::size_t>(p.point)]);
+    frame_weight_.push_back(m < layout_.hand_frame_markers ? 1.0 : kMarkerFrameFingerWeight);
+  }
+  // Fitted, the worst-fitting marker dropped while any misses by more than kMarkerFrameMiss_m.
+  while (static_cast<int>(frame_marker_.size()) >= kMarkerFrameMarkers) {
+    const auto fit = fit_rigid(frame_from_, frame_to_, frame_weight_);
+    if (!fit) return false;  // in a line: no frame
+    std::size_t worst = 0;
+    double worst_m = -1.0;
+    for (std::size_t k = 0; k < frame_from_.size(); ++k) {
+      const double miss_m = (fit->to_from_from * frame_from_[k] - frame_to_[k]).norm();
+      if (miss_m > worst_m) {
+        worst_m = miss_m;
+        worst = k;
+      }
+    }
+    if (worst_m <= kMarkerFrameMiss_m) {
+      if ((fit->to_from_from.translation - last.translation).norm() > kMarkerFrameGate_m) return false;
+      begin(time_s, true, fit->to_from_from);
+      out_.frame_source = HandFrameSource::kMarkers;
+      // The back of the hand's markers used are this hand's (track_hands takes them); its finger
+      // markers' points are shared out as on any frame.
+      for (std::size_t k = 0; k < frame_marker_.size(); ++k) {
+        if (static_cast<std::size_t>(frame_marker_[k]) < layout_.hand_frame_markers)
+          out_.marker_point[static_cast<std::size_t>(frame_marker_[k])] = frame_point_[k];
+      }
+      return true;
+    }
+    const auto at = static_cast<std::ptrdiff_t>(worst);
+    for (auto* list : {&frame_from_, &frame_to_}) list->erase(list->begin() + at);
+    frame_weight_.erase(frame_weight_.begin() + at);
+    frame_marker_.erase(frame_marker_.begin() + at);
+    frame_point_.erase(frame_point_.begin() + at);
+  }
+  return false;
 }
 
 const std::vector<HandTracker::FingertipCandidate>& HandTracker::fingertip_candidates(std::span<const Eigen::Vector3d> points,
@@ -390,6 +482,17 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
     }
   }
   out_.state = solver_.update(time_s, evidence);
+  if (out_.frame_source == HandFrameSource::kMarkers) {
+    // The joints the hand frame fixes are fitted to seen markers, not measured by the star: 0.9
+    // (docs/tracking.md, "A hand whose star is hidden"). A seen fingertip stays measured.
+    for (std::size_t j = 0; j < kHandJointCount; ++j) {
+      if (out_.state.confidence[j] < 1.0) continue;
+      bool seen_tip = false;
+      for (std::size_t f = 0; f < kFingerCount; ++f)
+        seen_tip = seen_tip || (out_.state.tip_seen[f] && static_cast<std::size_t>(chain_joints(static_cast<Finger>(f))[3]) == j);
+      if (!seen_tip) out_.state.confidence[j] = kMarkerFrameConfidence;
+    }
+  }
   last_time_s_ = time_s;
   last_ik_us_ = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   for (std::size_t j = 0; j < kHandJointCount; ++j) out_.joints_world[j] = out_.world_from_hand * out_.state.pose.position_m[j];
@@ -476,8 +579,18 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
     } else {
       hands[h]->begin(time_s, stars[static_cast<std::size_t>(hand_star[h])]);
     }
-    hands[h]->fingertip_candidates(points, taken, colour);
+    hands[h]->frame_from_markers(time_s, points, taken, colour);
   });
+  // The back of the hand's markers a frame was found by are taken, in hand order (a point two hands
+  // found their frames by goes to neither's fingers).
+  for (std::size_t h = 0; h < hands.size(); ++h) {
+    const TrackedHand& out = hands[h]->out_;
+    if (out.frame_source != HandFrameSource::kMarkers) continue;
+    for (std::size_t m = 0; m < hands[h]->layout().hand_frame_markers && m < out.marker_point.size(); ++m) {
+      if (out.marker_point[m] >= 0) taken[static_cast<std::size_t>(out.marker_point[m])] = true;
+    }
+  }
+  per_hand([&](std::size_t h) { hands[h]->fingertip_candidates(points, taken, colour); });
   thread_local std::vector<Pick> picks;
   picks.clear();
   for (std::size_t h = 0; h < hands.size(); ++h) {

@@ -30,8 +30,17 @@ namespace rhot {
 
 class JobPool;
 
+// How this frame's hand frame was found.
+enum class HandFrameSource {
+  kNone,     // not this frame: world_from_hand is the last known
+  kStar,     // the hand star (or, labelled, the back of the hand's markers)
+  kMarkers,  // the star hidden: the hand's markers found near where the last frame put them
+             // (HandTracker::frame_from_markers), a fit no better than the fingers' last pose
+};
+
 struct TrackedHand {
-  bool hand_seen = false;   // the hand star was seen this frame
+  bool hand_seen = false;  // the hand frame was found this frame (frame_source: how)
+  HandFrameSource frame_source = HandFrameSource::kNone;
   Rigid3d world_from_hand;  // last known
   HandState state;          // hand frame
   std::array<Eigen::Vector3d, kHandJointCount> joints_world{};
@@ -63,6 +72,9 @@ struct HandTrackerSettings {
   // at most 63 finger markers) only. Off
   // by default until the demo's soak passes with it (docs/tracking.md, "Inside the tracker").
   bool fingertip_model = false;
+  // The hand frame from the hand's markers while its star is hidden (frame_from_markers below):
+  // a hand turned palm up to the cameras, whose fingertip markers are still seen, stays tracked.
+  bool frame_from_markers = true;
 };
 
 class HandTracker {
@@ -92,6 +104,25 @@ class HandTracker {
   //   finish     the fingers solved with the points given to each marker (-1: none)
   void begin(double time_s, const TrackedStar& hand_star);
   void begin(double time_s, bool seen, const Rigid3d& world_from_hand);
+  // After begin() found no hand frame: the frame from the hand's markers that are found (free
+  // points near where the last frame puts them), while the star has been hidden for at most
+  // kMarkerFrameHold_s. Its own markers take any free point within kMarkerFrameGate_m of where the
+  // last frame puts them (a coloured marker only points of its colour), nearest first; the finger
+  // markers where the fingers' last pose puts them, weighing kMarkerFrameFingerWeight against a
+  // star marker. At least kMarkerFrameMarkers markers not in a line, each within
+  // kMarkerFrameMiss_m of the fit (the worst dropped until they are), and the frame within
+  // kMarkerFrameGate_m of the last: else the hand stays unseen. Returns whether it was found.
+  // Reads `taken`, takes nothing: the fingers' points are shared out after, as on any frame.
+  bool frame_from_markers(double time_s, std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken,
+                          std::span<const int> colour = {});
+  static constexpr double kMarkerFrameHold_s = 1.0;
+  static constexpr double kMarkerFrameGate_m = 0.03;
+  static constexpr double kMarkerFrameMiss_m = 0.01;
+  static constexpr double kMarkerFrameFingerWeight = 0.25;
+  static constexpr int kMarkerFrameMarkers = 4;
+  // The confidence of the joints the hand frame fixes (palm, wrist, knuckles) in a frame from the
+  // markers: fitted to seen markers (HandSolver.h's 0.9), not measured.
+  static constexpr double kMarkerFrameConfidence = 0.9;
   // A fingertip the layout gives a colour takes only points of that colour (when `colour` is given),
   // within kColourGate_m of its predicted marker and without the reappearance rule: the colour
   // names the marker, so a finger lost for a while is found again at once.
@@ -200,6 +231,18 @@ class HandTracker {
   std::optional<double> last_time_s_;                  // the last update's
   std::vector<std::optional<double>> marker_found_s_;  // when each marker last had a point
   std::optional<double> hand_first_seen_s_;
+  std::optional<double> star_seen_s_;  // when the hand frame last came from the star
+  // frame_from_markers' working storage (kept: nothing allocated per frame).
+  struct MarkerPick {
+    double distance_m;
+    int marker, point;
+  };
+  std::vector<MarkerPick> marker_picks_;
+  std::vector<Eigen::Vector3d> shape_at_star_;  // each marker in the hand frame as the star last saw the hand
+  std::optional<double> shape_at_star_s_;       // the star frame it is from
+  std::vector<Eigen::Vector3d> frame_from_, frame_to_;
+  std::vector<double> frame_weight_;
+  std::vector<int> frame_marker_, frame_point_;
   // Per marker, the free points outside its tight gate but inside its widened one, last frame and
   // this frame (hand frame): where a lost marker may be reappearing.
   std::vector<std::vector<Eigen::Vector3d>> reappearing_, reappearing_now_;

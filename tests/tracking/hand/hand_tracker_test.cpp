@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <random>
 #include <set>
 
@@ -356,7 +357,11 @@ int confusion_frames(const std::array<HandLayout, 2>& layouts, bool shared, unsi
     skeleton[h] = reference_open_hand(layouts[h].side);
     chains[h] = hand_chains(skeleton[h], layouts[h].side);
     relaxed[h] = HandSolver(layouts[h].side, skeleton[h]).state().angles;
-    own.emplace_back(layouts[h], skeleton[h]);
+    // Trackers alone cannot tell whose markers a point near a hidden star's hand is: the frame from
+    // the markers (HandTrackerSettings::frame_from_markers) is for hands tracked together.
+    HandTrackerSettings settings;
+    settings.frame_from_markers = shared;
+    own.emplace_back(layouts[h], skeleton[h], settings);
   }
   StarSet both;
   for (const HandLayout& l : layouts) both.stars.push_back(l.hand_star_set().stars[0]);
@@ -925,6 +930,98 @@ TEST(HandTracker, AColouredFingertipIsKnownByItsColourAlone) {
     moved[kIndex] += Eigen::Vector3d(0.03, 0.0, 0.0);
     const int back = update(31 / 90.0, moved, colours).fingertip_point[1];
     EXPECT_EQ(back, coloured ? static_cast<int>(kIndex) : -1) << (coloured ? "coloured" : "uncoloured");
+  }
+}
+
+// A hand turning its back away from the cameras (about its long axis, 60 degrees a second) while
+// it moves: after 1 s seen whole, its star is hidden (all four markers, or all but one) for 1.5 s,
+// its fingertip markers seen throughout. Its fingers hold their pose from then (a hand turning
+// what it holds) or go on pinching. The worst of the frames in which it is seen while its star is
+// hidden.
+struct TurnedAwayRun {
+  int seen_frames = 0, seen_after_hold = 0, from_markers = 0, palm_fitted = 0, tips_measured = 0;
+  double worst_frame_mm = 0.0, worst_angle_deg = 0.0, worst_tip_mm = 0.0;
+};
+TurnedAwayRun turn_the_back_away(const std::string& layout_name, bool from_markers, int star_markers_left, bool fingers_move) {
+  const HandLayout layout = shipped_layout(layout_name);
+  const HandPose skeleton = reference_open_hand(HandSide::kRight);
+  const auto chains = hand_chains(skeleton, HandSide::kRight);
+  const auto relaxed = HandSolver(HandSide::kRight, skeleton).state().angles;
+  HandTrackerSettings settings;
+  settings.frame_from_markers = from_markers;
+  HandTracker tracker(layout, skeleton, settings);
+  const std::vector<int> colours = layout_marker_colours(layout);
+  const bool coloured = layout.markers.back().colour >= 0;
+  const auto star_end = static_cast<std::ptrdiff_t>(layout.hand_frame_markers);
+  TurnedAwayRun run;
+  for (int f = 0; f < 225; ++f) {
+    const double t = f / 90.0;
+    const bool hidden = f >= 90;
+    const HandMotionFrame truth = *hand_motion("pinch", t, chains, relaxed, {0.0, 1.1, -0.45});
+    const HandMotionFrame fingers = fingers_move || !hidden ? truth : *hand_motion("pinch", 1.0, chains, relaxed, {0.0, 1.1, -0.45});
+    const HandPose pose = hand_pose_from_angles(skeleton, chains, fingers.angles);
+    Rigid3d world_from_hand = truth.world_from_hand;
+    const double turn_rad = std::min(t, 1.5) * 60.0 * std::numbers::pi / 180.0;
+    world_from_hand.rotation = (world_from_hand.rotation * Eigen::AngleAxisd(turn_rad, Eigen::Vector3d::UnitZ())).normalized();
+    world_from_hand.translation += Eigen::Vector3d(0.1 * t, 0.0, 0.0);
+    std::vector<Eigen::Vector3d> points = markers(layout, world_from_hand, pose);
+    std::vector<int> point_colours = colours;
+    if (hidden) {
+      points.erase(points.begin() + star_markers_left, points.begin() + star_end);
+      point_colours.erase(point_colours.begin() + star_markers_left, point_colours.begin() + star_end);
+    }
+    points.push_back({0.3, 1.0, -0.2});  // a stray marker
+    point_colours.push_back(colours.back());
+    const TrackedHand& hand = coloured ? tracker.update(t, points, {}, point_colours) : tracker.update(t, points);
+    if (!hidden) {
+      EXPECT_TRUE(hand.hand_seen) << f;
+      EXPECT_EQ(hand.frame_source, HandFrameSource::kStar) << f;
+      continue;
+    }
+    if (!hand.hand_seen) continue;
+    if (t - 1.0 > HandTracker::kMarkerFrameHold_s + 1e-9) ++run.seen_after_hold;
+    ++run.seen_frames;
+    run.from_markers += hand.frame_source == HandFrameSource::kMarkers ? 1 : 0;
+    // The palm fitted to the markers, not measured by the star; the seen tips still measured.
+    run.palm_fitted += hand.state.confidence[static_cast<std::size_t>(HandJoint::kPalm)] == HandTracker::kMarkerFrameConfidence ? 1 : 0;
+    run.tips_measured += hand.state.confidence[static_cast<std::size_t>(HandJoint::kIndexTip)] == 1.0 ? 1 : 0;
+    run.worst_frame_mm = std::max(run.worst_frame_mm, 1000.0 * (hand.world_from_hand.translation - world_from_hand.translation).norm());
+    run.worst_angle_deg =
+        std::max(run.worst_angle_deg, hand.world_from_hand.rotation.angularDistance(world_from_hand.rotation) * 180.0 / std::numbers::pi);
+    for (int k = 0; k < kFingerCount; ++k) {
+      const auto tip = static_cast<std::size_t>(chain_joints(static_cast<Finger>(k))[3]);
+      run.worst_tip_mm = std::max(run.worst_tip_mm, 1000.0 * (hand.joints_world[tip] - world_from_hand * pose.position_m[tip]).norm());
+    }
+  }
+  return run;
+}
+
+TEST(HandTracker, AHandTurningItsBackAwayStaysSeenByItsFingertipsForASecondThenIsLost) {
+  for (const std::string layout : {"low-cost-right", "colour-right"}) {
+    for (const int left : {0, 1}) {
+      SCOPED_TRACE(layout + ", star markers left " + std::to_string(left));
+      EXPECT_EQ(turn_the_back_away(layout, false, left, false).seen_frames, 0)
+          << "without the frame from the markers, the hand is lost with its star";
+      // Fingers held: seen for the hold (90 frames at 90 Hz) by its markers, not after, on the truth.
+      const TurnedAwayRun held = turn_the_back_away(layout, true, left, false);
+      EXPECT_EQ(held.seen_frames, 90);
+      EXPECT_EQ(held.from_markers, held.seen_frames);
+      EXPECT_EQ(held.palm_fitted, held.seen_frames);
+      EXPECT_EQ(held.tips_measured, held.seen_frames);
+      EXPECT_EQ(held.seen_after_hold, 0);
+      EXPECT_LT(held.worst_frame_mm, 1.0);
+      EXPECT_LT(held.worst_angle_deg, 0.5);
+      EXPECT_LT(held.worst_tip_mm, 1.0);
+      // Fingers pinching: the frame is fitted to the shape they had, so it is off by about as much as
+      // they moved, and a star marker left refuses the fit once they moved 10 mm
+      // (kMarkerFrameMiss_m). Seen for a third of a second at least, never as far off as a finger.
+      const TurnedAwayRun moving = turn_the_back_away(layout, true, left, true);
+      EXPECT_GE(moving.seen_frames, 30);
+      EXPECT_EQ(moving.seen_after_hold, 0);
+      EXPECT_LT(moving.worst_frame_mm, 25.0);
+      EXPECT_LT(moving.worst_angle_deg, 10.0);
+      EXPECT_LT(moving.worst_tip_mm, 5.0);
+    }
   }
 }
 
