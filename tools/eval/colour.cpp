@@ -13,7 +13,8 @@
 //   fingertip_mean_mm         tracked fingertip joints to the true ones, frames with the hand seen
 //   detect_median_ms          one image through the detector as the demo runs it (tracked), and
 //                             detect_full_median_ms for a whole-image search of the same images
-//   hand_seen_fraction        hands seen (their star found) per hand and frame
+//   hand_seen_fraction        hands seen (their frame found: by their star, or by the markers left
+//                             while it is hidden) per hand and frame
 //   hand_in_view_fraction     hands whose wrist and true fingertips lie inside every image, likewise
 //   misplaced_hand_frames     hands seen with their frame 5 cm or more from the true one (a count
 //                             per hand and frame)

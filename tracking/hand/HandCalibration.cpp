@@ -299,7 +299,9 @@ std::optional<HandPose> calibrate_flat_hand(const HandPose& reference, HandSide 
 FingertipSample flat_hand_sample(const HandLayout& layout, const HandPose& reference, const TrackedHand& hand,
                                  std::span<const Eigen::Vector3d> points_world) {
   FingertipSample sample;
-  if (!hand.hand_seen) return sample;
+  // Only a frame the star measured: one fitted to the fingertips themselves (frame_from_markers)
+  // would put them where the fit did.
+  if (!hand.hand_seen || hand.frame_source != HandFrameSource::kStar) return sample;
   const auto chains = hand_chains(reference, layout.side);
   const Rigid3d hand_from_world = hand.world_from_hand.inverse();
   for (std::size_t f = 0; f < kFingerCount; ++f) {

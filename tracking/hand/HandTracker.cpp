@@ -42,7 +42,7 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   // only past it).
   candidates_.reserve(kPointsRoom);
   reach_.reserve(kPointsRoom);
-  marker_picks_.reserve(kPointsRoom);
+  marker_picks_.reserve(n * kNearPointsKept);
   shape_at_star_.assign(n, Eigen::Vector3d::Zero());
   for (auto* list : {&frame_from_, &frame_to_}) list->reserve(n);
   frame_weight_.reserve(n);
@@ -153,6 +153,7 @@ void HandTracker::begin(double time_s, const TrackedStar& star) {
   begin(time_s, star.measured_now(), star.measured);
   if (!out_.hand_seen) return;
   star_seen_s_ = time_s;
+  shape_stale_ = true;
   for (std::size_t m = 0; m < layout_.hand_frame_markers && m < star.point.size(); ++m) out_.marker_point[m] = star.point[m];
 }
 
@@ -179,17 +180,19 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
 bool HandTracker::frame_from_markers(double time_s, std::span<const Eigen::Vector3d> points, const std::vector<bool>& taken,
                                      std::span<const int> colour) {
   if (!settings_.frame_from_markers || out_.hand_seen || labelled_ || !star_seen_s_) return false;
-  if (!(time_s > *star_seen_s_) || time_s - *star_seen_s_ > kMarkerFrameHold_s) return false;
-  // Each marker where the fingers were in the star's last frame (hand frame): the frame is fitted
-  // to that one shape for as long as the star is hidden. Fitted to the fingers' latest solve
-  // instead, which followed the last fitted frame, frame and fingers drifted together (a turning
-  // hand's frame 40 degrees off within a second, its fingertips still on their markers).
-  if (!shape_at_star_s_ || *shape_at_star_s_ != *star_seen_s_) {
+  // Each marker where the fingers were in the star's last frame (hand frame; the solver's state is
+  // that frame's solve until a frame without the star is finished): the frame is fitted to that one
+  // shape for as long as the star is hidden. Fitted to the fingers' latest solve instead, which
+  // followed the last fitted frame, frame and fingers drifted together (a turning hand's frame 40
+  // degrees off within a second, its fingertips still on their markers).
+  if (shape_stale_) {
     const HandPose& pose = solver_.state().pose;
     const auto frames = marker_frames(pose, solver_.chains());
     for (std::size_t m = 0; m < layout_.markers.size(); ++m) shape_at_star_[m] = layout_marker_in_hand(layout_.markers[m], pose, frames);
-    shape_at_star_s_ = star_seen_s_;
+    shape_stale_ = false;
   }
+  // A small allowance: the hold is whole frames of time, and 179/90 - 89/90 is not exactly 1.
+  if (!(time_s > *star_seen_s_) || time_s - *star_seen_s_ > kMarkerFrameHold_s + 1e-9) return false;
   // Where the last frame (the star's, or this rule's) puts each marker.
   const Rigid3d last = out_.world_from_hand;
   std::vector<MarkerPick>& picks = marker_picks_;
@@ -222,21 +225,27 @@ bool HandTracker::frame_from_markers(double time_s, std::span<const Eigen::Vecto
     frame_to_.push_back(points[static_cast<std::size_t>(p.point)]);
     frame_weight_.push_back(m < layout_.hand_frame_markers ? 1.0 : kMarkerFrameFingerWeight);
   }
-  // Fitted, the worst-fitting marker dropped while any misses by more than kMarkerFrameMiss_m.
+  // Fitted, while any marker misses by more than kMarkerFrameMiss_m the one that weighs most in the
+  // fit's misses (its weighted square miss: a wrong star marker pulls the fit toward itself, so
+  // that the right finger markers miss more) dropped and the rest fitted again.
   while (static_cast<int>(frame_marker_.size()) >= kMarkerFrameMarkers) {
     const auto fit = fit_rigid(frame_from_, frame_to_, frame_weight_);
     if (!fit) return false;  // in a line: no frame
     std::size_t worst = 0;
-    double worst_m = -1.0;
+    double worst_m = 0.0, worst_weighted = -1.0;
     for (std::size_t k = 0; k < frame_from_.size(); ++k) {
       const double miss_m = (fit->to_from_from * frame_from_[k] - frame_to_[k]).norm();
-      if (miss_m > worst_m) {
-        worst_m = miss_m;
+      worst_m = std::max(worst_m, miss_m);
+      if (frame_weight_[k] * miss_m * miss_m > worst_weighted) {
+        worst_weighted = frame_weight_[k] * miss_m * miss_m;
         worst = k;
       }
     }
     if (worst_m <= kMarkerFrameMiss_m) {
-      if ((fit->to_from_from.translation - last.translation).norm() > kMarkerFrameGate_m) return false;
+      // The frame near the last: within the gate, and turned by at most kMarkerFrameTurn_rad.
+      if ((fit->to_from_from.translation - last.translation).norm() > kMarkerFrameGate_m ||
+          fit->to_from_from.rotation.angularDistance(last.rotation) > kMarkerFrameTurn_rad)
+        return false;
       begin(time_s, true, fit->to_from_from);
       out_.frame_source = HandFrameSource::kMarkers;
       // The back of the hand's markers used are this hand's (track_hands takes them); its finger
@@ -254,6 +263,21 @@ bool HandTracker::frame_from_markers(double time_s, std::span<const Eigen::Vecto
     frame_point_.erase(frame_point_.begin() + at);
   }
   return false;
+}
+
+void HandTracker::confirm_frame_from_markers(double time_s) {
+  if (out_.frame_source != HandFrameSource::kMarkers) return;
+  // The markers the frame was fitted to that are still this hand's: its star's that no hand took
+  // before it, and its fingers' whose points the share-out gave it.
+  int kept = 0;
+  for (std::size_t k = 0; k < frame_marker_.size(); ++k) {
+    const auto m = static_cast<std::size_t>(frame_marker_[k]);
+    const int p = m < layout_.hand_frame_markers ? out_.marker_point[m] : tip_points_[m];
+    kept += p == frame_point_[k] ? 1 : 0;
+  }
+  if (kept >= kMarkerFrameMarkers) return;
+  begin(time_s, false, {});
+  std::ranges::fill(tip_points_, -1);
 }
 
 const std::vector<HandTracker::FingertipCandidate>& HandTracker::fingertip_candidates(std::span<const Eigen::Vector3d> points,
@@ -483,14 +507,21 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
   }
   out_.state = solver_.update(time_s, evidence);
   if (out_.frame_source == HandFrameSource::kMarkers) {
-    // The joints the hand frame fixes are fitted to seen markers, not measured by the star: 0.9
-    // (docs/tracking.md, "A hand whose star is hidden"). A seen fingertip stays measured.
-    for (std::size_t j = 0; j < kHandJointCount; ++j) {
-      if (out_.state.confidence[j] < 1.0) continue;
-      bool seen_tip = false;
-      for (std::size_t f = 0; f < kFingerCount; ++f)
-        seen_tip = seen_tip || (out_.state.tip_seen[f] && static_cast<std::size_t>(chain_joints(static_cast<Finger>(f))[3]) == j);
-      if (!seen_tip) out_.state.confidence[j] = kMarkerFrameConfidence;
+    // The joints the hand frame fixes (wrist, palm, the fingers' metacarpal joints and knuckles)
+    // are fitted to seen markers, not measured by the star: kMarkerFrameConfidence
+    // (docs/tracking.md, "A hand whose star is hidden"). Seen fingertips and bones measured by their
+    // own stars keep theirs.
+    const auto fitted = [&](HandJoint j) {
+      double& c = out_.state.confidence[static_cast<std::size_t>(j)];
+      c = std::min(c, kMarkerFrameConfidence);
+    };
+    fitted(HandJoint::kWrist);
+    fitted(HandJoint::kPalm);
+    for (int f = 1; f < kFingerCount; ++f) {
+      const HandJoint knuckle = chain_joints(static_cast<Finger>(f))[0];
+      if (evidence[static_cast<std::size_t>(f)].kind == FingerEvidence::Kind::kMeasured) continue;
+      fitted(knuckle);
+      fitted(static_cast<HandJoint>(static_cast<int>(knuckle) - 1));  // its metacarpal joint
     }
   }
   last_time_s_ = time_s;
@@ -581,13 +612,19 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
     }
     hands[h]->frame_from_markers(time_s, points, taken, colour);
   });
-  // The back of the hand's markers a frame was found by are taken, in hand order (a point two hands
-  // found their frames by goes to neither's fingers).
+  // The back of the hand's markers a frame was found by are taken, in hand order: a point two hands
+  // found their frames by is the first's (the second is judged without it, below).
   for (std::size_t h = 0; h < hands.size(); ++h) {
-    const TrackedHand& out = hands[h]->out_;
+    TrackedHand& out = hands[h]->out_;
     if (out.frame_source != HandFrameSource::kMarkers) continue;
     for (std::size_t m = 0; m < hands[h]->layout().hand_frame_markers && m < out.marker_point.size(); ++m) {
-      if (out.marker_point[m] >= 0) taken[static_cast<std::size_t>(out.marker_point[m])] = true;
+      int& p = out.marker_point[m];
+      if (p < 0) continue;
+      if (taken[static_cast<std::size_t>(p)]) {
+        p = -1;
+      } else {
+        taken[static_cast<std::size_t>(p)] = true;
+      }
     }
   }
   per_hand([&](std::size_t h) { hands[h]->fingertip_candidates(points, taken, colour); });
@@ -609,6 +646,7 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
   // both hands goes to the first).
   for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->reacquire_by_reach(points, taken, hands[h]->tip_points_);
   per_hand([&](std::size_t h) {
+    hands[h]->confirm_frame_from_markers(time_s);
     hands[h]->untangle_neighbours(points, hands[h]->tip_points_);
     hands[h]->finish(time_s, points, sigma_m, hands[h]->tip_points_);
   });

@@ -106,20 +106,27 @@ class HandTracker {
   void begin(double time_s, bool seen, const Rigid3d& world_from_hand);
   // After begin() found no hand frame: the frame from the hand's markers that are found (free
   // points near where the last frame puts them), while the star has been hidden for at most
-  // kMarkerFrameHold_s. Its own markers take any free point within kMarkerFrameGate_m of where the
-  // last frame puts them (a coloured marker only points of its colour), nearest first; the finger
-  // markers where the fingers' last pose puts them, weighing kMarkerFrameFingerWeight against a
-  // star marker. At least kMarkerFrameMarkers markers not in a line, each within
+  // kMarkerFrameHold_s. Each marker of the layout is where it was on the hand in the star's last
+  // frame (the finger markers where that frame's solve put them): that shape is fitted, weighing a
+  // finger marker kMarkerFrameFingerWeight against a star marker, to free points within
+  // kMarkerFrameGate_m of where the last frame puts each marker (a coloured marker only points of
+  // its colour), nearest first. At least kMarkerFrameMarkers markers not in a line, each within
   // kMarkerFrameMiss_m of the fit (the worst dropped until they are), and the frame within
-  // kMarkerFrameGate_m of the last: else the hand stays unseen. Returns whether it was found.
-  // Reads `taken`, takes nothing: the fingers' points are shared out after, as on any frame.
+  // kMarkerFrameGate_m and kMarkerFrameTurn_rad of the last: else the hand stays unseen. Returns
+  // whether it was found. Reads `taken`, takes nothing (track_hands takes the star's markers
+  // used, and refuses the frame where the fingers' share-out leaves it too few of its markers).
   bool frame_from_markers(double time_s, std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken,
                           std::span<const int> colour = {});
+  // After the points are shared out (track_hands): a frame from markers that kept fewer than
+  // kMarkerFrameMarkers of the markers it was fitted to (another hand's fingers took them) is
+  // refused, and the hand is unseen this frame.
+  void confirm_frame_from_markers(double time_s);
   static constexpr double kMarkerFrameHold_s = 1.0;
   static constexpr double kMarkerFrameGate_m = 0.03;
-  static constexpr double kMarkerFrameMiss_m = 0.01;
-  static constexpr double kMarkerFrameFingerWeight = 0.25;
+  static constexpr double kMarkerFrameMiss_m = 0.006;
+  static constexpr double kMarkerFrameFingerWeight = 0.5;
   static constexpr int kMarkerFrameMarkers = 4;
+  static constexpr double kMarkerFrameTurn_rad = 0.5;
   // The confidence of the joints the hand frame fixes (palm, wrist, knuckles) in a frame from the
   // markers: fitted to seen markers (HandSolver.h's 0.9), not measured.
   static constexpr double kMarkerFrameConfidence = 0.9;
@@ -239,7 +246,7 @@ class HandTracker {
   };
   std::vector<MarkerPick> marker_picks_;
   std::vector<Eigen::Vector3d> shape_at_star_;  // each marker in the hand frame as the star last saw the hand
-  std::optional<double> shape_at_star_s_;       // the star frame it is from
+  bool shape_stale_ = false;                    // the star was seen since shape_at_star_ was taken
   std::vector<Eigen::Vector3d> frame_from_, frame_to_;
   std::vector<double> frame_weight_;
   std::vector<int> frame_marker_, frame_point_;
