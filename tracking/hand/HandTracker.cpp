@@ -49,6 +49,11 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   frame_marker_.reserve(n);
   frame_point_.reserve(n);
   every_tip_marked_ = std::ranges::all_of(layout.fingertip_marker, [](int m) { return m >= 0; });
+  const bool tips_coloured = every_tip_marked_ && std::ranges::all_of(layout.fingertip_marker, [&](int m) {
+                               return layout.markers[static_cast<std::size_t>(m)].colour >= 0;
+                             });
+  frame_from_markers_ = settings.frame_from_markers == HandTrackerSettings::MarkerFrame::kOn ||
+                        (settings.frame_from_markers == HandTrackerSettings::MarkerFrame::kWhereColoured && tips_coloured);
   // The model takes 63 markers at most (HiddenMarkerEstimator's sets of visible markers are bits).
   if (settings.fingertip_model && every_tip_marked_ && n - layout.hand_frame_markers <= 63) {
     // The fingertips first (predict_hidden_tips reads them there), then the other finger markers.
@@ -179,7 +184,7 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
 
 bool HandTracker::frame_from_markers(double time_s, std::span<const Eigen::Vector3d> points, const std::vector<bool>& taken,
                                      std::span<const int> colour) {
-  if (!settings_.frame_from_markers || out_.hand_seen || labelled_ || !star_seen_s_) return false;
+  if (!frame_from_markers_ || out_.hand_seen || labelled_ || !star_seen_s_) return false;
   // Each marker where the fingers were in the star's last frame (hand frame; the solver's state is
   // that frame's solve until a frame without the star is finished): the frame is fitted to that one
   // shape for as long as the star is hidden. Fitted to the fingers' latest solve instead, which

@@ -360,7 +360,7 @@ int confusion_frames(const std::array<HandLayout, 2>& layouts, bool shared, unsi
     // Trackers alone cannot tell whose markers a point near a hidden star's hand is: the frame from
     // the markers (HandTrackerSettings::frame_from_markers) is for hands tracked together.
     HandTrackerSettings settings;
-    settings.frame_from_markers = shared;
+    settings.frame_from_markers = shared ? HandTrackerSettings::MarkerFrame::kOn : HandTrackerSettings::MarkerFrame::kOff;
     own.emplace_back(layouts[h], skeleton[h], settings);
   }
   StarSet both;
@@ -943,13 +943,14 @@ struct TurnedAwayRun {
   int seen_frames = 0, seen_after_hold = 0, from_markers = 0, palm_fitted = 0, tips_measured = 0;
   double worst_frame_mm = 0.0, worst_angle_deg = 0.0, worst_tip_mm = 0.0;
 };
-TurnedAwayRun turn_the_back_away(const std::string& layout_name, bool from_markers, int star_markers_left, bool fingers_move) {
+TurnedAwayRun turn_the_back_away(const std::string& layout_name, HandTrackerSettings::MarkerFrame mode, int star_markers_left,
+                                 bool fingers_move) {
   const HandLayout layout = shipped_layout(layout_name);
   const HandPose skeleton = reference_open_hand(HandSide::kRight);
   const auto chains = hand_chains(skeleton, HandSide::kRight);
   const auto relaxed = HandSolver(HandSide::kRight, skeleton).state().angles;
   HandTrackerSettings settings;
-  settings.frame_from_markers = from_markers;
+  settings.frame_from_markers = mode;
   HandTracker tracker(layout, skeleton, settings);
   const std::vector<int> colours = layout_marker_colours(layout);
   const bool coloured = layout.markers.back().colour >= 0;
@@ -1005,10 +1006,11 @@ TEST(HandTracker, AHandTurningItsBackAwayStaysSeenByItsFingertipsForASecondThenI
   for (const std::string layout : {"low-cost-right", "colour-right"}) {
     for (const int left : {0, 1}) {
       SCOPED_TRACE(layout + ", star markers left " + std::to_string(left));
-      EXPECT_EQ(turn_the_back_away(layout, false, left, false).seen_frames, 0)
+      using enum HandTrackerSettings::MarkerFrame;
+      EXPECT_EQ(turn_the_back_away(layout, kOff, left, false).seen_frames, 0)
           << "without the frame from the markers, the hand is lost with its star";
       // Fingers held: seen for the hold (90 frames at 90 Hz) by its markers, not after, on the truth.
-      const TurnedAwayRun held = turn_the_back_away(layout, true, left, false);
+      const TurnedAwayRun held = turn_the_back_away(layout, kOn, left, false);
       EXPECT_EQ(held.seen_frames, 90);
       EXPECT_EQ(held.from_markers, held.seen_frames);
       EXPECT_EQ(held.palm_fitted, held.seen_frames);
@@ -1020,7 +1022,7 @@ TEST(HandTracker, AHandTurningItsBackAwayStaysSeenByItsFingertipsForASecondThenI
       // Fingers pinching: the frame is fitted to the shape they had, so it is off by about as much as
       // they moved, and refused once a marker misses it by 6 mm (kMarkerFrameMiss_m). Seen for a
       // fifth of a second at least, never as far off as a finger.
-      const TurnedAwayRun moving = turn_the_back_away(layout, true, left, true);
+      const TurnedAwayRun moving = turn_the_back_away(layout, kOn, left, true);
       EXPECT_GE(moving.seen_frames, 18);
       EXPECT_EQ(moving.seen_after_hold, 0);
       EXPECT_LT(moving.worst_frame_mm, 25.0);
@@ -1028,6 +1030,13 @@ TEST(HandTracker, AHandTurningItsBackAwayStaysSeenByItsFingertipsForASecondThenI
       EXPECT_LT(moving.worst_tip_mm, 5.0);
     }
   }
+}
+
+TEST(HandTracker, TheFrameFromMarkersIsOnByDefaultWhereTheFingertipsAreKnownByTheirColour) {
+  using enum HandTrackerSettings::MarkerFrame;
+  EXPECT_EQ(turn_the_back_away("colour-right", kWhereColoured, 0, false).seen_frames, 90);
+  EXPECT_EQ(turn_the_back_away("low-cost-right", kWhereColoured, 0, false).seen_frames, 0);
+  EXPECT_EQ(HandTrackerSettings{}.frame_from_markers, kWhereColoured);
 }
 
 }  // namespace
