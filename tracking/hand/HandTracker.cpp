@@ -205,11 +205,15 @@ bool HandTracker::frame_from_markers(double time_s, std::span<const Eigen::Vecto
   for (std::size_t m = 0; m < layout_.markers.size(); ++m) {
     const Eigen::Vector3d at = last * shape_at_star_[m];
     const int want = layout_.markers[m].colour;
-    for (std::size_t q = 0; q < points.size(); ++q) {
+    // At most kNearPointsKept points a marker (the room made for them once: nothing allocated).
+    std::size_t near = 0;
+    for (std::size_t q = 0; q < points.size() && near < kNearPointsKept; ++q) {
       if (q < taken.size() && taken[q]) continue;
       if (want >= 0 && q < colour.size() && colour[q] != want) continue;
       const double d = (points[q] - at).norm();
-      if (d < kMarkerFrameGate_m) picks.push_back({d, static_cast<int>(m), static_cast<int>(q)});  // NaN never passes
+      if (!(d < kMarkerFrameGate_m)) continue;  // NaN never passes
+      picks.push_back({d, static_cast<int>(m), static_cast<int>(q)});
+      ++near;
     }
   }
   std::sort(picks.begin(), picks.end(), [](const MarkerPick& a, const MarkerPick& b) {
@@ -251,6 +255,8 @@ bool HandTracker::frame_from_markers(double time_s, std::span<const Eigen::Vecto
       if ((fit->to_from_from.translation - last.translation).norm() > kMarkerFrameGate_m ||
           fit->to_from_from.rotation.angularDistance(last.rotation) > kMarkerFrameTurn_rad)
         return false;
+      frame_before_markers_ = last;
+      filter_before_markers_ = hand_filter_;
       begin(time_s, true, fit->to_from_from);
       out_.frame_source = HandFrameSource::kMarkers;
       // The back of the hand's markers used are this hand's (track_hands takes them); its finger
@@ -275,13 +281,17 @@ void HandTracker::confirm_frame_from_markers(double time_s) {
   // The markers the frame was fitted to that are still this hand's: its star's that no hand took
   // before it, and its fingers' whose points the share-out gave it.
   int kept = 0;
+  if (tip_points_.size() != layout_.markers.size()) tip_points_.assign(layout_.markers.size(), -1);
   for (std::size_t k = 0; k < frame_marker_.size(); ++k) {
     const auto m = static_cast<std::size_t>(frame_marker_[k]);
     const int p = m < layout_.hand_frame_markers ? out_.marker_point[m] : tip_points_[m];
     kept += p == frame_point_[k] ? 1 : 0;
   }
   if (kept >= kMarkerFrameMarkers) return;
+  // Refused: unseen, the last known frame (and its filter) as they were before the fit.
   begin(time_s, false, {});
+  out_.world_from_hand = frame_before_markers_;
+  hand_filter_ = filter_before_markers_;
   std::ranges::fill(tip_points_, -1);
 }
 
@@ -514,8 +524,7 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
   if (out_.frame_source == HandFrameSource::kMarkers) {
     // The joints the hand frame fixes (wrist, palm, the fingers' metacarpal joints and knuckles)
     // are fitted to seen markers, not measured by the star: kMarkerFrameConfidence
-    // (docs/tracking.md, "A hand whose star is hidden"). Seen fingertips and bones measured by their
-    // own stars keep theirs.
+    // (docs/tracking.md, "A hand whose star is hidden"). Seen fingertips keep theirs.
     const auto fitted = [&](HandJoint j) {
       double& c = out_.state.confidence[static_cast<std::size_t>(j)];
       c = std::min(c, kMarkerFrameConfidence);
@@ -524,7 +533,6 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
     fitted(HandJoint::kPalm);
     for (int f = 1; f < kFingerCount; ++f) {
       const HandJoint knuckle = chain_joints(static_cast<Finger>(f))[0];
-      if (evidence[static_cast<std::size_t>(f)].kind == FingerEvidence::Kind::kMeasured) continue;
       fitted(knuckle);
       fitted(static_cast<HandJoint>(static_cast<int>(knuckle) - 1));  // its metacarpal joint
     }

@@ -108,25 +108,10 @@ class HandTracker {
   //   begin      the hand frame from this frame's star
   //   fingertip_candidates  the free points near each finger marker's predicted place
   //   finish     the fingers solved with the points given to each marker (-1: none)
+  // (track_hands also finds the frame of a hand whose star is hidden from its other markers:
+  // frame_from_markers and confirm_frame_from_markers below, private to it.)
   void begin(double time_s, const TrackedStar& hand_star);
   void begin(double time_s, bool seen, const Rigid3d& world_from_hand);
-  // After begin() found no hand frame: the frame from the hand's markers that are found (free
-  // points near where the last frame puts them), while the star has been hidden for at most
-  // kMarkerFrameHold_s. Each marker of the layout is where it was on the hand in the star's last
-  // frame (the finger markers where that frame's solve put them): that shape is fitted, weighing a
-  // finger marker kMarkerFrameFingerWeight against a star marker, to free points within
-  // kMarkerFrameGate_m of where the last frame puts each marker (a coloured marker only points of
-  // its colour), nearest first. At least kMarkerFrameMarkers markers not in a line, each within
-  // kMarkerFrameMiss_m of the fit (the worst dropped until they are), and the frame within
-  // kMarkerFrameGate_m and kMarkerFrameTurn_rad of the last: else the hand stays unseen. Returns
-  // whether it was found. Reads `taken`, takes nothing (track_hands takes the star's markers
-  // used, and refuses the frame where the fingers' share-out leaves it too few of its markers).
-  bool frame_from_markers(double time_s, std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken,
-                          std::span<const int> colour = {});
-  // After the points are shared out (track_hands): a frame from markers that kept fewer than
-  // kMarkerFrameMarkers of the markers it was fitted to (another hand's fingers took them) is
-  // refused, and the hand is unseen this frame.
-  void confirm_frame_from_markers(double time_s);
   static constexpr double kMarkerFrameHold_s = 1.0;
   static constexpr double kMarkerFrameGate_m = 0.03;
   static constexpr double kMarkerFrameMiss_m = 0.006;
@@ -228,6 +213,23 @@ class HandTracker {
   int fingertip_model_frames() const { return tip_estimator_ ? tip_estimator_->model().training_frames : 0; }
 
  private:
+  // track_hands' step after begin() found no hand frame: the frame from the hand's markers that are found (free
+  // points near where the last frame puts them), while the star has been hidden for at most
+  // kMarkerFrameHold_s. Each marker of the layout is where it was on the hand in the star's last
+  // frame (the finger markers where that frame's solve put them): that shape is fitted, weighing a
+  // finger marker kMarkerFrameFingerWeight against a star marker, to free points within
+  // kMarkerFrameGate_m of where the last frame puts each marker (a coloured marker only points of
+  // its colour), nearest first. At least kMarkerFrameMarkers markers not in a line, each within
+  // kMarkerFrameMiss_m of the fit (the worst dropped until they are), and the frame within
+  // kMarkerFrameGate_m and kMarkerFrameTurn_rad of the last: else the hand stays unseen. Returns
+  // whether it was found. Reads `taken`, takes nothing (track_hands takes the star's markers
+  // used, and refuses the frame where the fingers' share-out leaves it too few of its markers).
+  bool frame_from_markers(double time_s, std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken,
+                          std::span<const int> colour = {});
+  // After the points are shared out (track_hands): a frame from markers that kept fewer than
+  // kMarkerFrameMarkers of the markers it was fitted to (another hand's fingers took them) is
+  // refused, and the hand is unseen this frame.
+  void confirm_frame_from_markers(double time_s);
   HandLayout layout_;
   HandTrackerSettings settings_;
   std::unique_ptr<StarTracker> star_;        // for update(): the hand star alone (layouts with one)
@@ -290,7 +292,11 @@ class HandTracker {
                                                                                const std::vector<std::optional<Eigen::Vector3d>>& seen);
   bool every_tip_marked_ = false;
   bool frame_from_markers_ = false;  // settings_.frame_from_markers, for this layout
-  bool labelled_ = false;            // in update_labelled: the points are the layout's markers, no segment stars among them
+  // The hand frame and its filter before this frame's frame_from_markers: put back if
+  // confirm_frame_from_markers refuses it.
+  Rigid3d frame_before_markers_;
+  PoseFilter filter_before_markers_;
+  bool labelled_ = false;  // in update_labelled: the points are the layout's markers, no segment stars among them
   std::optional<MarkerStatistics> tip_statistics_;
   std::optional<HiddenMarkerEstimator> tip_estimator_;
   HandSolver solver_;

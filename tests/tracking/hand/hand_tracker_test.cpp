@@ -985,7 +985,7 @@ TurnedAwayRun turn_the_back_away(const std::string& layout_name, HandTrackerSett
       continue;
     }
     if (!hand.hand_seen) continue;
-    if (t - 1.0 > HandTracker::kMarkerFrameHold_s + 1e-9) ++run.seen_after_hold;
+    if (t - 89.0 / 90.0 > HandTracker::kMarkerFrameHold_s + 1e-9) ++run.seen_after_hold;  // the star last seen in frame 89
     ++run.seen_frames;
     run.from_markers += hand.frame_source == HandFrameSource::kMarkers ? 1 : 0;
     // The palm fitted to the markers, not measured by the star; the seen tips still measured.
