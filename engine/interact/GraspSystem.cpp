@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "engine/core/World.h"
+#include "engine/interact/FingerContact.h"
 #include "engine/physics/BulletMath.h"
 #include "engine/scene/Components.h"
 #include "tracking/hand/HandSolver.h"
@@ -239,6 +240,16 @@ double GraspSystem::grip_confidence(int hand, const GripPoint& g) const {
   return hands_[static_cast<std::size_t>(hand)]->input().confidence[static_cast<std::size_t>(judge)];
 }
 
+std::optional<double> GraspSystem::tip_distance_m(int hand, int digit, const btCollisionObject& object) const {
+  const HandInput& in = hands_[static_cast<std::size_t>(hand)]->input();
+  const auto joints = chain_joints(static_cast<Finger>(digit));
+  const auto tip = static_cast<std::size_t>(joints[3]);
+  if (in.confidence[tip] < settings_.confident) return std::nullopt;
+  const double d = capsule_distance_m(object, in.joints_world[static_cast<std::size_t>(joints[2])], in.joints_world[tip], 0.001);
+  if (!std::isfinite(d)) return std::nullopt;
+  return d;
+}
+
 void GraspSystem::pre_step(World& world) {
   const btScalar dt = static_cast<btScalar>(physics_.step_s());
   for (auto& [object, held] : held_) {
@@ -315,6 +326,11 @@ void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::
   }
   grip.centre = world_from_hand.inverse() * (centre / static_cast<btScalar>(std::max<std::size_t>(1, grip.grip.size())));
   grip.scale = physics_.scale(object);
+  for (const GripPoint& g : grip.grip) {
+    if (g.group == kPalmGroup) continue;
+    grip.tip_nearest_m[static_cast<std::size_t>(g.group)] = tip_distance_m(hand, g.group, *body).value_or(kFar);
+    grip.curl_at_nearest_rad[static_cast<std::size_t>(g.group)] = curl_rad(hand, g.group);
+  }
   if (!joining) {
     Held held;
     held.options = options;
@@ -525,6 +541,21 @@ void GraspSystem::release_opened() {
       std::string anchor_reason, finger_names;
       double finger_out_m = 0.0;
       const btScalar grown = static_cast<btScalar>(physics_.scale(object) / grip->scale);  // the object's scale since the grip points
+      // A finger whose measured tip went release_distance_m farther from the object than it came,
+      // straightening, has opened, wherever its grip points are: a hand holding a bar by its
+      // fingers' middle bones, thumb hidden, straightens them by 1.5 rad while those points move
+      // only 6-12 mm out of its surface.
+      std::array<double, 5> tip_left_m{};
+      for (const GripPoint& g : grip->grip) {
+        const auto f = static_cast<std::size_t>(g.group);
+        if (g.group == 0 || g.group == kPalmGroup || tip_left_m[f] != 0.0) continue;
+        const auto d = tip_distance_m(hand, g.group, *body);
+        if (!d) continue;
+        const double curl = curl_rad(hand, g.group);
+        if (*d < grip->tip_nearest_m[f]) grip->tip_nearest_m[f] = *d, grip->curl_at_nearest_rad[f] = curl;
+        const bool straightened = grip->curl_at_nearest_rad[f] - curl > kOpenedCurl_rad;
+        tip_left_m[f] = straightened ? std::max(1e-9, *d - grip->tip_nearest_m[f]) : -1.0;
+      }
       for (GripPoint& g : grip->grip) {
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
         if (trusted && !g.measured) {
@@ -532,7 +563,8 @@ void GraspSystem::release_opened() {
           g.on_object = target.inverse() * (h->tracked_bone(g.bone) * g.on_bone) / grown;
           g.measured = true;
         }
-        const double out_m = out_of_surface_m(hand, g, target, grown);
+        const double tip_m = g.group == kPalmGroup ? 0.0 : std::max(0.0, tip_left_m[static_cast<std::size_t>(g.group)]);
+        const double out_m = std::max(out_of_surface_m(hand, g, target, grown), tip_m);
         const bool open = trusted && out_m > settings_.release_distance_m;
         if (g.group == 0 || g.group == kPalmGroup) {
           any_anchor = true;

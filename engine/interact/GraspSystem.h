@@ -11,7 +11,8 @@
 // with everything else.
 //
 // The grasp ends when the fingers open: a grasping finger counts as open when its tracked bone
-// has moved more than `release_distance_m` out of the object's surface from where it touched;
+// has moved more than `release_distance_m` out of the object's surface from where it touched, or
+// its measured last bone has gone that much farther from the object than it came, straightening;
 // the grasp ends when the thumb (or palm) or every opposing finger is open. A finger whose joints
 // are not measured this frame (confidence below `confident`: a hidden fingertip marker, say)
 // never counts as open, so a hand whose curled fingers hide their own markers keeps holding; and a
@@ -33,6 +34,7 @@
 
 #include <array>
 #include <deque>
+#include <limits>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -136,7 +138,17 @@ class GraspSystem {
     btVector3 centre;              // hand frame: the middle of its grip points
     btQuaternion rotation_paired;  // the hand's rotation (world) when the other hand joined
     double scale = 1.0;            // the object's scale (PhysicsWorld::scale) when the grip points were taken
+    // Per digit: the nearest its last bone came to the object while its tip was measured, since
+    // the grip began (+infinity: not measured since), and its curl then. A finger whose measured
+    // tip has since gone `release_distance_m` farther, straightening by kOpenedCurl_rad, has
+    // opened, wherever its grip points are.
+    std::array<double, 5> tip_nearest_m{kFar, kFar, kFar, kFar, kFar};
+    std::array<double, 5> curl_at_nearest_rad{};
   };
+  static constexpr double kFar = std::numeric_limits<double>::infinity();
+  // A finger whose tip left the object also straightened by this much: a finger curling on past a
+  // thin handle takes its last bone away from it too, but closing.
+  static constexpr double kOpenedCurl_rad = 0.3;
   struct Held {
     std::array<std::optional<HandGrip>, 2> by;  // per hand (left, right)
     Grabbable options;
@@ -184,6 +196,9 @@ class GraspSystem {
   double out_of_surface_m(int hand, const GripPoint& g, const btTransform& target, btScalar grown) const;
   // The confidence of the joint that tells whether a grip point's finger is measured.
   double grip_confidence(int hand, const GripPoint& g) const;
+  // How far a digit's last bone (its centre line) is from the object at its pose now (metres), or
+  // nothing while its tip is not measured or the object's shape is not convex.
+  std::optional<double> tip_distance_m(int hand, int digit, const btCollisionObject& object) const;
 
   PhysicsWorld& physics_;
   std::array<HandColliders*, 2> hands_;

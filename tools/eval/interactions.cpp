@@ -118,6 +118,7 @@ std::expected<ShowcaseRun, std::string> run_showcase(const SceneDesc& scene, con
       if (subject) ev["subject"] = subject->value;
       if (e.hand) ev["hand"] = *e.hand == HandSide::kLeft ? "left" : "right";
       if (!e.interaction.empty()) ev["interaction"] = e.interaction;
+      if (!e.reason.empty()) ev["reason"] = e.reason;
       run.fired.push_back(ev);
       for (const Watched& w : watched) {
         if ((object && w.entities.contains(object->value)) || (subject && w.entities.contains(subject->value))) {
