@@ -169,10 +169,12 @@ bool GraspSystem::grip_seen_closed(Entity object) const {
     const auto& grip = held.by[static_cast<std::size_t>(hand)];
     if (!grip || !hands_[static_cast<std::size_t>(hand)]->active()) continue;
     const btScalar grown = static_cast<btScalar>(physics_.scale(object) / grip->scale);
+    const btRigidBody* body = physics_.body(object);
     bool anchor = false, finger = false;
     for (const GripPoint& g : grip->grip) {
       if (!g.measured || grip_confidence(hand, g) < settings_.confident) continue;
       if (out_of_surface_m(hand, g, target, grown) > settings_.release_distance_m) continue;
+      if (body && finger_left_m(hand, *grip, g.group, *body, target) > settings_.release_distance_m) continue;
       (g.group == 0 || g.group == kPalmGroup ? anchor : finger) = true;
     }
     if (anchor && finger) return true;
@@ -240,14 +242,43 @@ double GraspSystem::grip_confidence(int hand, const GripPoint& g) const {
   return hands_[static_cast<std::size_t>(hand)]->input().confidence[static_cast<std::size_t>(judge)];
 }
 
-std::optional<double> GraspSystem::tip_distance_m(int hand, int digit, const btCollisionObject& object) const {
+std::optional<double> GraspSystem::last_bone_distance_m(int hand, int finger, const btRigidBody& body, const btTransform& target) const {
   const HandInput& in = hands_[static_cast<std::size_t>(hand)]->input();
-  const auto joints = chain_joints(static_cast<Finger>(digit));
+  const auto joints = chain_joints(static_cast<Finger>(finger));
   const auto tip = static_cast<std::size_t>(joints[3]);
   if (in.confidence[tip] < settings_.confident) return std::nullopt;
-  const double d = capsule_distance_m(object, in.joints_world[static_cast<std::size_t>(joints[2])], in.joints_world[tip], 0.001);
+  // Measured against the object where the grip has it, as the grip points are: a held object lags
+  // its target by millimetres (and by up to max_hold_error_m against an obstacle).
+  const btTransform to_body = body.getWorldTransform() * target.inverse();
+  const auto at = [&](std::size_t j) { return to_eigen(to_body * to_bt(in.joints_world[j])); };
+  const double d = capsule_distance_m(body, at(static_cast<std::size_t>(joints[2])), at(tip), 0.001);
   if (!std::isfinite(d)) return std::nullopt;
   return d;
+}
+
+void GraspSystem::remember_last_bones(int hand, HandGrip& grip, const btRigidBody& body, const btTransform& target) const {
+  std::array<bool, 5> done{};
+  for (const GripPoint& g : grip.grip) {
+    const auto f = static_cast<std::size_t>(g.group);
+    if (g.group == 0 || g.group == kPalmGroup || done[f]) continue;
+    done[f] = true;
+    const auto d = last_bone_distance_m(hand, g.group, body, target);
+    if (!d) continue;
+    const double curl = curl_rad(hand, g.group);
+    if (grip.curl_at_start_rad[f] == -kFar) grip.curl_at_start_rad[f] = curl;
+    if (*d < grip.last_bone_nearest_m[f]) grip.last_bone_nearest_m[f] = *d, grip.curl_at_nearest_rad[f] = curl;
+  }
+}
+
+double GraspSystem::finger_left_m(int hand, const HandGrip& grip, int finger, const btRigidBody& body, const btTransform& target) const {
+  if (finger < 1 || finger > 4) return 0.0;
+  const auto f = static_cast<std::size_t>(finger);
+  if (grip.last_bone_nearest_m[f] == kFar) return 0.0;
+  const auto d = last_bone_distance_m(hand, finger, body, target);
+  if (!d) return 0.0;
+  const double curl = curl_rad(hand, finger);
+  if (!(grip.curl_at_nearest_rad[f] - curl > kOpenedCurl_rad && grip.curl_at_start_rad[f] - curl > kOpenedCurl_rad)) return 0.0;
+  return std::max(0.0, *d - grip.last_bone_nearest_m[f]);
 }
 
 void GraspSystem::pre_step(World& world) {
@@ -326,11 +357,7 @@ void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::
   }
   grip.centre = world_from_hand.inverse() * (centre / static_cast<btScalar>(std::max<std::size_t>(1, grip.grip.size())));
   grip.scale = physics_.scale(object);
-  for (const GripPoint& g : grip.grip) {
-    if (g.group == kPalmGroup) continue;
-    grip.tip_nearest_m[static_cast<std::size_t>(g.group)] = tip_distance_m(hand, g.group, *body).value_or(kFar);
-    grip.curl_at_nearest_rad[static_cast<std::size_t>(g.group)] = curl_rad(hand, g.group);
-  }
+  remember_last_bones(hand, grip, *body, world_from_object);
   if (!joining) {
     Held held;
     held.options = options;
@@ -541,21 +568,10 @@ void GraspSystem::release_opened() {
       std::string anchor_reason, finger_names;
       double finger_out_m = 0.0;
       const btScalar grown = static_cast<btScalar>(physics_.scale(object) / grip->scale);  // the object's scale since the grip points
-      // A finger whose measured tip went release_distance_m farther from the object than it came,
-      // straightening, has opened, wherever its grip points are: a hand holding a bar by its
-      // fingers' middle bones, thumb hidden, straightens them by 1.5 rad while those points move
-      // only 6-12 mm out of its surface.
-      std::array<double, 5> tip_left_m{};
-      for (const GripPoint& g : grip->grip) {
-        const auto f = static_cast<std::size_t>(g.group);
-        if (g.group == 0 || g.group == kPalmGroup || tip_left_m[f] != 0.0) continue;
-        const auto d = tip_distance_m(hand, g.group, *body);
-        if (!d) continue;
-        const double curl = curl_rad(hand, g.group);
-        if (*d < grip->tip_nearest_m[f]) grip->tip_nearest_m[f] = *d, grip->curl_at_nearest_rad[f] = curl;
-        const bool straightened = grip->curl_at_nearest_rad[f] - curl > kOpenedCurl_rad;
-        tip_left_m[f] = straightened ? std::max(1e-9, *d - grip->tip_nearest_m[f]) : -1.0;
-      }
+      remember_last_bones(hand, *grip, *body, target);
+      std::array<double, 5> left_m{};  // per finger: finger_left_m
+      for (int f = 1; f <= 4; ++f) left_m[static_cast<std::size_t>(f)] = finger_left_m(hand, *grip, f, *body, target);
+      bool by_last_bone = false;
       for (GripPoint& g : grip->grip) {
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
         if (trusted && !g.measured) {
@@ -563,8 +579,8 @@ void GraspSystem::release_opened() {
           g.on_object = target.inverse() * (h->tracked_bone(g.bone) * g.on_bone) / grown;
           g.measured = true;
         }
-        const double tip_m = g.group == kPalmGroup ? 0.0 : std::max(0.0, tip_left_m[static_cast<std::size_t>(g.group)]);
-        const double out_m = std::max(out_of_surface_m(hand, g, target, grown), tip_m);
+        const double left = g.group == kPalmGroup ? 0.0 : left_m[static_cast<std::size_t>(g.group)];
+        const double out_m = std::max(out_of_surface_m(hand, g, target, grown), left);
         const bool open = trusted && out_m > settings_.release_distance_m;
         if (g.group == 0 || g.group == kPalmGroup) {
           any_anchor = true;
@@ -576,13 +592,16 @@ void GraspSystem::release_opened() {
           if (finger_names.find(digit_name(g.group)) == std::string::npos)
             finger_names += std::string(finger_names.empty() ? "" : ", ") + digit_name(g.group);
           finger_out_m = std::max(finger_out_m, out_m);
+          by_last_bone = by_last_bone || (open && left >= out_m);
         }
       }
       // The anchor opens when any of its grip points left; fingers when all of theirs did.
       if (any_anchor && anchor_open) {
         to_release.push_back({object, hand, anchor_reason});
       } else if (any_finger && fingers_open) {
-        to_release.push_back({object, hand, finger_names + " opened " + millimetres(finger_out_m) + " (measured)"});
+        to_release.push_back(
+            {object, hand,
+             finger_names + " opened " + millimetres(finger_out_m) + (by_last_bone ? " (measured, last bone)" : " (measured)")});
       }
     }
   }

@@ -12,8 +12,8 @@
 //
 // The grasp ends when the fingers open: a grasping finger counts as open when its tracked bone
 // has moved more than `release_distance_m` out of the object's surface from where it touched, or
-// its measured last bone has gone that much farther from the object than it came, straightening;
-// the grasp ends when the thumb (or palm) or every opposing finger is open. A finger whose joints
+// (a finger other than the thumb) its measured last bone has gone that much farther from the
+// object than it came, straightening; the grasp ends when the thumb (or palm) or every opposing finger is open. A finger whose joints
 // are not measured this frame (confidence below `confident`: a hidden fingertip marker, say)
 // never counts as open, so a hand whose curled fingers hide their own markers keeps holding; and a
 // finger that was not measured when the grasp began is re-anchored where it is the first time it
@@ -138,16 +138,18 @@ class GraspSystem {
     btVector3 centre;              // hand frame: the middle of its grip points
     btQuaternion rotation_paired;  // the hand's rotation (world) when the other hand joined
     double scale = 1.0;            // the object's scale (PhysicsWorld::scale) when the grip points were taken
-    // Per digit: the nearest its last bone came to the object while its tip was measured, since
-    // the grip began (+infinity: not measured since), and its curl then. A finger whose measured
-    // tip has since gone `release_distance_m` farther, straightening by kOpenedCurl_rad, has
-    // opened, wherever its grip points are.
-    std::array<double, 5> tip_nearest_m{kFar, kFar, kFar, kFar, kFar};
+    // Per finger (index 1-4; the thumb and palm open by their grip points alone): the nearest its
+    // last bone came to the object while its tip was measured, since the grip began (+infinity:
+    // not measured since), its curl then, and its curl when first measured in the grip (-infinity:
+    // not yet). See finger_left_m.
+    std::array<double, 5> last_bone_nearest_m{kFar, kFar, kFar, kFar, kFar};
     std::array<double, 5> curl_at_nearest_rad{};
+    std::array<double, 5> curl_at_start_rad{-kFar, -kFar, -kFar, -kFar, -kFar};
   };
   static constexpr double kFar = std::numeric_limits<double>::infinity();
-  // A finger whose tip left the object also straightened by this much: a finger curling on past a
-  // thin handle takes its last bone away from it too, but closing.
+  // A finger whose last bone left the object has also straightened by this much, since it came
+  // nearest and since the grip began: a finger curling on past a thin handle takes its last bone
+  // away from it too, but closing; one that squeezed and relaxed is back where it grasped.
   static constexpr double kOpenedCurl_rad = 0.3;
   struct Held {
     std::array<std::optional<HandGrip>, 2> by;  // per hand (left, right)
@@ -196,9 +198,17 @@ class GraspSystem {
   double out_of_surface_m(int hand, const GripPoint& g, const btTransform& target, btScalar grown) const;
   // The confidence of the joint that tells whether a grip point's finger is measured.
   double grip_confidence(int hand, const GripPoint& g) const;
-  // How far a digit's last bone (its centre line) is from the object at its pose now (metres), or
-  // nothing while its tip is not measured or the object's shape is not convex.
-  std::optional<double> tip_distance_m(int hand, int digit, const btCollisionObject& object) const;
+  // How far a finger's last bone (its centre line) is from the object where the grip has it
+  // (`target`; metres), or nothing while its tip is not measured or the object's shape is not
+  // convex.
+  std::optional<double> last_bone_distance_m(int hand, int finger, const btRigidBody& body, const btTransform& target) const;
+  // Remembers how near each measured grasping finger's last bone came to the object, and its curls.
+  void remember_last_bones(int hand, HandGrip& grip, const btRigidBody& body, const btTransform& target) const;
+  // How far a grasping finger's measured last bone has gone from the object since it came nearest,
+  // where the finger has also straightened by kOpenedCurl_rad since then and since the grip began;
+  // 0 otherwise. A hand holding the workbench's bar by its fingers' middle bones, thumb hidden,
+  // straightens them by 1.5 rad as it lets go while those grip points move only 6-12 mm.
+  double finger_left_m(int hand, const HandGrip& grip, int finger, const btRigidBody& body, const btTransform& target) const;
 
   PhysicsWorld& physics_;
   std::array<HandColliders*, 2> hands_;

@@ -157,6 +157,7 @@ TEST(EvalCli, GraspPrintsTheScenarioJson) {
   EXPECT_EQ(g["tracked_grasps"].get<int>(), 1);
   EXPECT_EQ(g["missed_grasp_count"].get<int>(), 0);
   EXPECT_EQ(g["unintended_release_count"].get<int>(), 0);
+  EXPECT_EQ(g["late_release_count"].get<int>(), 0);
   EXPECT_EQ(g["unintended_grasp_count"].get<int>(), 0);
   const EvalRun t = run_eval("grasp --scenario throw --json");
   ASSERT_EQ(t.exit_code, 0) << t.output;

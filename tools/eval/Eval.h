@@ -64,17 +64,19 @@ std::vector<GraspSpan> grasp_spans(const std::vector<rhot::InteractionEvent>& ev
 
 // How a run's grasps through tracked hands compare with the perfect hands' of the same script:
 // grasps the perfect hands made that the tracked ones never made (missed), releases the tracked
-// hands made while the perfect ones held on (unintended releases), grasps the perfect hands did
-// not make (unintended grasps). A grasp or release within kSameMoment_s of the perfect hands' is
-// theirs.
+// hands made while the perfect ones held on (unintended releases), releases of the perfect hands
+// that the tracked hands made late or never (late releases: an object carried on after the hand
+// opened), grasps the perfect hands did not make (unintended grasps). A grasp or release within
+// kSameMoment_s of the perfect hands' is theirs.
 struct GraspComparison {
   int cycles = 0;  // the perfect hands' grasps: the cycles the script asks for
   int tracked_grasps = 0;
   int missed = 0;
   int unintended_releases = 0;
+  int late_releases = 0;
   int unintended_grasps = 0;
   void add(const GraspComparison& o);
-  void put(nlohmann::json& j) const;  // grasp_cycles, missed_grasp_count, unintended_release_count, ...
+  void put(nlohmann::json& j) const;  // grasp_cycles, missed_grasp_count, unintended_release_count, late_release_count, ...
 };
 inline constexpr double kSameMoment_s = 0.25;
 GraspComparison compare_grasps(const std::vector<GraspSpan>& tracked, const std::vector<GraspSpan>& perfect);

@@ -115,6 +115,14 @@ GraspComparison compare_grasps(const std::vector<GraspSpan>& tracked, const std:
       return same(g, p) && g.begin_s <= p.end_s && g.end_s >= p.begin_s - kSameMoment_s;
     });
     c.missed += made ? 0 : 1;
+    // Let go late: the tracked hand that held it then still held it kSameMoment_s after the
+    // perfect hand opened (a run's end counts as holding on).
+    if (!made || !p.released) continue;
+    double held_until = p.begin_s;
+    for (const GraspSpan& g : tracked) {
+      if (same(g, p) && g.begin_s <= p.end_s && g.end_s >= p.begin_s - kSameMoment_s) held_until = std::max(held_until, g.end_s);
+    }
+    c.late_releases += held_until > p.end_s + kSameMoment_s ? 1 : 0;
   }
   for (const GraspSpan& g : tracked) {
     // Meant: the perfect hands held the same object with the same hand at some time during it (a
@@ -137,6 +145,7 @@ void GraspComparison::add(const GraspComparison& o) {
   tracked_grasps += o.tracked_grasps;
   missed += o.missed;
   unintended_releases += o.unintended_releases;
+  late_releases += o.late_releases;
   unintended_grasps += o.unintended_grasps;
 }
 
@@ -145,6 +154,7 @@ void GraspComparison::put(nlohmann::json& j) const {
   j["tracked_grasps"] = tracked_grasps;
   j["missed_grasp_count"] = missed;
   j["unintended_release_count"] = unintended_releases;
+  j["late_release_count"] = late_releases;
   j["unintended_grasp_count"] = unintended_grasps;
 }
 

@@ -15,8 +15,8 @@ namespace rhot {
 namespace {
 
 // A 5 cm cube on a pedestal (top at 0.8 m), and the right hand's grasp of it.
-std::string bench_scene(bool grabbable) {
-  return std::string(R"({"entities": [)") + test::kFloor +
+std::string bench_scene(bool grabbable, const std::string& settings = "") {
+  return std::string(R"({)") + settings + R"("entities": [)" + test::kFloor +
          R"(, {"name": "pedestal", "transform": {"position": [0, 0.4, 0]}, "mesh": {"shape": "box", "size_m": [0.12, 0.8, 0.12]},
                "body": {"type": "static", "friction": 0.8}},
              {"name": "cube", "transform": {"position": [0, 0.825, 0]}, "mesh": {"shape": "box", "size_m": [0.05, 0.05, 0.05]},
@@ -32,8 +32,8 @@ struct Bench {
   std::vector<InteractionEvent> events;  // every step's, in order
   double t = 0.0;
 
-  explicit Bench(bool grabbable = true) {
-    physics = test::physics_for(world, test::parse(bench_scene(grabbable)));
+  explicit Bench(bool grabbable = true, const std::string& settings = "") {
+    physics = test::physics_for(world, test::parse(bench_scene(grabbable, settings)));
     cube = find_named(world, "cube");
   }
   // One step with the right hand at `closure` (0 open .. 1 closed), `lift_m` above the cube's
@@ -43,6 +43,24 @@ struct Bench {
     hands[1] = hand_input(grasp.place(Eigen::Vector3d(0.0, 0.825 + lift_m, 0.0), Eigen::Vector3d::UnitX()), grasp.pose(closure));
     hands[1].seen = seen;
     hands[1].confidence.fill(confidence);
+    physics->step(world, hands);
+    for (const InteractionEvent& e : physics->events()) events.push_back(e);
+    t += physics->physics().step_s();
+  }
+  // One step with the right hand closed but its index at `index_closure` and its thumb's joints
+  // at `thumb_confidence` (below `confident`: hidden).
+  void step_index(double index_closure, double thumb_confidence) {
+    HandPose pose = grasp.pose(1.0);
+    const HandPose index = grasp.pose(index_closure);
+    for (const HandJoint j : {HandJoint::kIndexIntermediate, HandJoint::kIndexDistal, HandJoint::kIndexTip}) {
+      pose.position_m[static_cast<std::size_t>(j)] = index.position_m[static_cast<std::size_t>(j)];
+    }
+    std::array<HandInput, 2> hands;
+    hands[1] = hand_input(grasp.place(Eigen::Vector3d(0.0, 0.825, 0.0), Eigen::Vector3d::UnitX()), pose);
+    hands[1].seen = true;
+    for (const HandJoint j : {HandJoint::kThumbMetacarpal, HandJoint::kThumbProximal, HandJoint::kThumbDistal, HandJoint::kThumbTip}) {
+      hands[1].confidence[static_cast<std::size_t>(j)] = thumb_confidence;
+    }
     physics->step(world, hands);
     for (const InteractionEvent& e : physics->events()) events.push_back(e);
     t += physics->physics().step_s();
@@ -105,7 +123,8 @@ TEST(GraspSystem, OpeningReleasesAndTheHandCannotGraspAgainAtOnce) {
   ASSERT_EQ(b.count(InteractionEventType::kRelease), 1);
   const InteractionEvent& release = b.events[b.first(InteractionEventType::kRelease)];
   EXPECT_FALSE(release.handed_over);
-  EXPECT_TRUE(std::regex_match(release.reason, std::regex(R"((thumb|index|index, middle) opened 1\d mm \(measured\))"))) << release.reason;
+  EXPECT_TRUE(std::regex_match(release.reason, std::regex(R"((thumb|index|index, middle) opened 1\d mm \(measured(, last bone)?\))")))
+      << release.reason;
   EXPECT_LT(release.velocity_mps.norm(), 0.05);
   EXPECT_FALSE(b.physics->grasp().holding(HandSide::kRight).has_value());
   // Closed again at once (within regrasp_delay_s, 0.2 s): no grasp; held closed past it: grasped.
@@ -120,6 +139,36 @@ TEST(GraspSystem, OpeningReleasesAndTheHandCannotGraspAgainAtOnce) {
                                                      [](const InteractionEvent& e) { return e.type == InteractionEventType::kGrasp; }) -
                                         b.events.rbegin())];
   EXPECT_GE(again.time_s - released_at, b.physics->grasp().settings().regrasp_delay_s - 1e-9);
+}
+
+// The thumb hidden, the grasping index (which touches the cube with its middle bone) opens: its
+// last bone leaves the cube as it straightens, and the hand lets go by it, while the contact point
+// on its middle bone is still within the release distance. Squeezing tighter and relaxing back, or
+// only twitching, is no opening.
+TEST(GraspSystem, AFingerWhoseLastBoneLeavesTheObjectAsItStraightensHasOpened) {
+  // The workbench's release distance: 20 mm.
+  Bench b(true, R"("settings": {"grasp": {"release_distance_m": 0.02}}, )");
+  b.reach_and_close();
+  ASSERT_EQ(b.count(InteractionEventType::kGrasp), 1);
+  ASSERT_EQ(b.events[b.first(InteractionEventType::kGrasp)].reason, "thumb against index");
+  for (int i = 0; i < 20; ++i) b.step_index(1.0, 0.5);  // the thumb hidden
+  // Tighter by a tenth and back, then a 2 % twitch for a second: held.
+  for (int i = 0; i <= 10; ++i) b.step_index(1.0 + 0.01 * i, 0.5);
+  for (int i = 0; i <= 10; ++i) b.step_index(1.1 - 0.01 * i, 0.5);
+  for (int i = 0; i < 90; ++i) b.step_index(1.0 - 0.02 * (i % 2), 0.5);
+  EXPECT_EQ(b.count(InteractionEventType::kRelease), 0);
+  ASSERT_TRUE(b.physics->grasp().holding(HandSide::kRight).has_value());
+  // The index opens over half a second: released by its last bone.
+  double released_at = -1.0;
+  for (int i = 1; i <= 45 && released_at < 0.0; ++i) {
+    b.step_index(1.0 - i / 45.0, 0.5);
+    if (b.count(InteractionEventType::kRelease) == 1) released_at = 1.0 - i / 45.0;
+  }
+  ASSERT_EQ(b.count(InteractionEventType::kRelease), 1);
+  const InteractionEvent& release = b.events[b.first(InteractionEventType::kRelease)];
+  EXPECT_TRUE(std::regex_match(release.reason, std::regex(R"(index opened 2\d mm \(measured, last bone\))"))) << release.reason;
+  EXPECT_GT(released_at, 0.4) << "released as it opened, not at the end";
+  EXPECT_FALSE(b.physics->grasp().holding(HandSide::kRight).has_value());
 }
 
 // Fingers only estimated when the grasp began (their markers hidden) and then measured somewhere
