@@ -13,9 +13,10 @@
 // The grasp ends when the fingers open: a grasping finger counts as open when its tracked bone
 // has moved more than `release_distance_m` out of the object's surface from where it touched, or
 // (a finger other than the thumb) its measured last bone has gone that much farther from the
-// object than it came, straightening; the grasp ends when the thumb (or palm) or every opposing finger is open. A finger whose joints
-// are not measured this frame (confidence below `confident`: a hidden fingertip marker, say)
-// never counts as open, so a hand whose curled fingers hide their own markers keeps holding; and a
+// object than it came, straightening; the grasp ends when the thumb (or palm) or every opposing
+// finger is open. A finger whose joints are not measured this frame (confidence below
+// `confident`: a hidden fingertip marker, say) never counts as open, so a hand whose curled
+// fingers hide their own markers keeps holding; and a
 // finger that was not measured when the grasp began is re-anchored where it is the first time it
 // is (its estimate may have been centimetres off: the jump to its marker is no opening). On
 // release the object takes the hand's velocity, fitted by least squares over a window that ends
@@ -148,7 +149,7 @@ class GraspSystem {
   };
   static constexpr double kFar = std::numeric_limits<double>::infinity();
   // A finger whose last bone left the object has also straightened by this much, since it came
-  // nearest and since the grip began: a finger curling on past a thin handle takes its last bone
+  // nearest and since it was first measured in the grip: a finger curling on past a thin handle takes its last bone
   // away from it too, but closing; one that squeezed and relaxed is back where it grasped.
   static constexpr double kOpenedCurl_rad = 0.3;
   struct Held {
@@ -205,7 +206,7 @@ class GraspSystem {
   // Remembers how near each measured grasping finger's last bone came to the object, and its curls.
   void remember_last_bones(int hand, HandGrip& grip, const btRigidBody& body, const btTransform& target) const;
   // How far a grasping finger's measured last bone has gone from the object since it came nearest,
-  // where the finger has also straightened by kOpenedCurl_rad since then and since the grip began;
+  // where the finger has also straightened by kOpenedCurl_rad since then and since first measured;
   // 0 otherwise. A hand holding the workbench's bar by its fingers' middle bones, thumb hidden,
   // straightens them by 1.5 rad as it lets go while those grip points move only 6-12 mm.
   double finger_left_m(int hand, const HandGrip& grip, int finger, const btRigidBody& body, const btTransform& target) const;
