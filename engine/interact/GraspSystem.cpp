@@ -30,6 +30,26 @@ double box_distance(const btVector3& p, const btVector3& lo, const btVector3& hi
   return static_cast<double>(d.length());
 }
 
+// The object's normal at a contact point (world) as a finger pad of radius `pad_m` feels it. A pad
+// is not a point: within its radius of a box's edge it presses on both faces, so the normal is that
+// of the box rounded by the pad, from the nearest point of the box shrunk by `pad_m` to the
+// contact, and turns smoothly across the edge where the contact's own normal jumps by 90 degrees.
+// Other shapes (spheres and capsules are round; hulls) keep the contact's normal.
+btVector3 pad_normal(const btRigidBody& body, const btVector3& point, const btVector3& normal, double pad_m) {
+  const btCollisionShape* shape = body.getCollisionShape();
+  if (!(pad_m > 0.0) || shape->getShapeType() != BOX_SHAPE_PROXYTYPE) return normal;
+  const btTransform& world_from_body = body.getWorldTransform();
+  const btVector3 q = world_from_body.invXform(point);
+  const btVector3 half = static_cast<const btBoxShape*>(shape)->getHalfExtentsWithMargin();
+  btVector3 core;
+  for (int i = 0; i < 3; ++i) {
+    const btScalar e = std::max(btScalar(0), half[i] - static_cast<btScalar>(pad_m));
+    core[i] = std::clamp(q[i], -e, e);
+  }
+  const btVector3 out = q - core;
+  return out.length2() > btScalar(1e-12) ? world_from_body.getBasis() * out.normalized() : normal;
+}
+
 }  // namespace
 
 const char* event_name(InteractionEventType type) {
@@ -625,13 +645,24 @@ void GraspSystem::begin_new_grasps(World& world, const HandContacts& contacts) {
       if (!body || body->isStaticOrKinematicObject() || !world.alive(object) || !world.has<Grabbable>(object)) continue;
       if (const auto it = held_.find(object); it != held_.end() && it->second.by[static_cast<std::size_t>(hand)]) continue;
       // Contacts by group; an anchor and a finger oppose when any pair of their contacts does
-      // (the thumb's tip may be on the far side while its base touches the near face).
-      std::array<std::vector<const Contact*>, 6> by_group;
-      for (const Contact& c : list) by_group[static_cast<std::size_t>(hand_bones()[static_cast<std::size_t>(c.bone)].group)].push_back(&c);
+      // (the thumb's tip may be on the far side while its base touches the near face), with the
+      // contacts' own normals or with those their finger pads feel. Either, because a pad near an
+      // edge presses on both faces: 3 mm beside a peg's edge it pushes with the rounded normal,
+      // and just below a cube's top edge, pinching, it still pushes with its face's.
+      struct Normals {
+        btVector3 own, pad;
+      };
+      std::array<std::vector<Normals>, 6> by_group;
+      for (const Contact& c : list) {
+        by_group[static_cast<std::size_t>(hand_bones()[static_cast<std::size_t>(c.bone)].group)].push_back(
+            {c.normal, pad_normal(*body, c.point, c.normal, settings_.pad_radius_m)});
+      }
       const auto oppose = [&](int a, int b) {
-        for (const Contact* x : by_group[static_cast<std::size_t>(a)]) {
-          for (const Contact* y : by_group[static_cast<std::size_t>(b)]) {
-            if (static_cast<double>(x->normal.dot(y->normal)) < settings_.opposing_cos) return true;
+        for (const Normals& x : by_group[static_cast<std::size_t>(a)]) {
+          for (const Normals& y : by_group[static_cast<std::size_t>(b)]) {
+            if (static_cast<double>(x.own.dot(y.own)) < settings_.opposing_cos ||
+                static_cast<double>(x.pad.dot(y.pad)) < settings_.opposing_cos)
+              return true;
           }
         }
         return false;

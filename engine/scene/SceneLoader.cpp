@@ -203,15 +203,16 @@ HeadsetSettings read_headset(const Node& n) {
 }
 
 GraspSettings read_grasp(const Node& n) {
-  n.expect_object({"contact_distance_m", "opposing_cos", "min_curl_rad", "release_distance_m", "confident", "regrasp_delay_s",
-                   "throw_window_s", "throw_window_end_s", "max_hold_error_m", "max_object_speed_mps", "hover_distance_m",
-                   "hidden_finger_curl_rad"});
+  n.expect_object({"contact_distance_m", "opposing_cos", "pad_radius_m", "min_curl_rad", "release_distance_m", "confident",
+                   "regrasp_delay_s", "throw_window_s", "throw_window_end_s", "max_hold_error_m", "max_object_speed_mps",
+                   "hover_distance_m", "hidden_finger_curl_rad"});
   GraspSettings g;
   const auto set = [&](const char* key, double& value, double lo, double hi, const char* what) {
     if (auto v = n.optional(key)) value = v->number_in(lo, hi, what);
   };
   set("contact_distance_m", g.contact_distance_m, 0.0, 0.05, "a distance from 0 to 0.05 m");
   set("opposing_cos", g.opposing_cos, -1.0, 1.0, "a cosine from -1 to 1");
+  set("pad_radius_m", g.pad_radius_m, 0.0, 0.05, "a distance from 0 to 0.05 m");
   set("min_curl_rad", g.min_curl_rad, 0.0, 3.2, "an angle from 0 to 3.2 rad");
   set("release_distance_m", g.release_distance_m, 0.001, 0.2, "a distance from 0.001 to 0.2 m");
   set("confident", g.confident, 0.0, 1.0, "a confidence from 0 to 1");
