@@ -41,9 +41,10 @@ struct HeadsetSettings {
 struct GraspSettings {
   double contact_distance_m = 0.003;  // a bone within this of an object touches it
   double opposing_cos = -0.3;         // anchor and finger normals: cosine below this (over ~107 degrees apart)
-  // ... or, when above 0, as a finger pad of this radius feels them: within it of a box's edge,
-  // turned toward the edge (the showcase scenes: 0.01). 0 by default until a bar held in two hands
-  // follows its grip's rotation (docs/grasping.md, "finger pad").
+  // Above 0: anchor and finger normals also oppose as finger pads of this radius feel them (on a
+  // box, its normals rounded by the radius: within it of an edge, turned toward the edge; the
+  // showcase scenes: 0.01). 0 by default until a bar held in two hands follows its grip's rotation
+  // (docs/grasping.md, "finger pad").
   double pad_radius_m = 0.0;
   double min_curl_rad = 0.15;         // an opposing finger is curled at least this much (root to tip)
   double release_distance_m = 0.012;  // a grasping finger this far out of the surface is open

@@ -145,17 +145,13 @@ TEST(GraspSystem, OpeningReleasesAndTheHandCannotGraspAgainAtOnce) {
   EXPECT_GE(again.time_s - released_at, b.physics->grasp().settings().regrasp_delay_s - 1e-9);
 }
 
-// The thumb hidden, the grasping index (which touches the cube with its middle bone) opens: its
-// last bone leaves the cube as it straightens, and the hand lets go by it, while the contact point
-// on its middle bone is still within the release distance. Relaxing back to where it grasped and
-// closing again, or twitching, is no opening.
-// The workbench peg's missed grasps (seeds 222, 239): the tracked thumb a few millimetres off,
-// on the side face beside the vertical edge it really held, its contact normal square to the
-// fingers' on the far face. Here the grip axis turns 36 degrees and moves off the cube's centre,
-// so the thumb's first bone touches the near face 3-6 mm from the edge while the index presses the
-// far one: with the contacts' own normals (pad_radius_m 0, the default) no placement grasps; with
-// the finger pad's (0.01, as the showcase scenes have it), every one does, and the cube comes
-// along when the hand lifts.
+// The workbench peg's missed grasps (seed 222): the tracked thumb a few millimetres off, on the
+// side face beside the vertical edge it really held, its contact normal square to the fingers' on
+// the far face. Here the grip axis turns 36 degrees and moves off the cube's centre, so the
+// thumb's first bone touches the near face 3-6 mm from the edge (asserted: 1.5-10) while the index
+// presses the far one: with the contacts' own normals (pad_radius_m 0, the default) no placement
+// grasps; with the finger pad's (0.01, as the showcase scenes have it), every one does, and the
+// cube comes along when the hand lifts.
 TEST(GraspSystem, AThumbBesideABoxsEdgeOpposesTheFingersAsItsPadWrapsTheEdge) {
   const double yaw = 36.0 * std::numbers::pi / 180.0;
   for (const double dz_m : {-0.01, -0.0125, -0.015, -0.0175, -0.02}) {
@@ -193,6 +189,10 @@ TEST(GraspSystem, AThumbBesideABoxsEdgeOpposesTheFingersAsItsPadWrapsTheEdge) {
   }
 }
 
+// The thumb hidden, the grasping index (which touches the cube with its middle bone) opens: its
+// last bone leaves the cube as it straightens, and the hand lets go by it, while the contact point
+// on its middle bone is still within the release distance. Relaxing back to where it grasped and
+// closing again, or twitching, is no opening.
 TEST(GraspSystem, AFingerWhoseLastBoneLeavesTheObjectAsItStraightensHasOpened) {
   // The workbench's release distance: 20 mm.
   Bench b(true, R"("settings": {"grasp": {"release_distance_m": 0.02}}, )");
