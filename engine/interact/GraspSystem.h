@@ -3,7 +3,8 @@
 //
 // A grasp begins when the thumb (or the palm) and at least one other finger of one hand touch the
 // same grabbable dynamic object, the finger curled and some pair of their contacts' normals
-// roughly opposed (the normals a finger pad feels: on a box, rounded by `pad_radius_m`).
+// roughly opposed (or, where the scene sets `pad_radius_m`, the normals a finger pad of that radius
+// feels: on a box, rounded by it).
 // The held object then follows the hand: every step its velocity is set to bring it to where the
 // grasp found it relative to the hand frame (a velocity-level constraint that keeps the grip
 // offset, like the hand bones themselves), without gravity and without colliding with that
