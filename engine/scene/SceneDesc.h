@@ -42,10 +42,9 @@ struct GraspSettings {
   double contact_distance_m = 0.003;  // a bone within this of an object touches it
   double opposing_cos = -0.3;         // anchor and finger normals: cosine below this (over ~107 degrees apart)
   // Above 0: anchor and finger normals also oppose as finger pads of this radius feel them (on a
-  // box, its normals rounded by the radius: within it of an edge, turned toward the edge; the
-  // showcase scenes: 0.01). 0 by default until a bar held in two hands follows its grip's rotation
-  // (docs/grasping.md, "finger pad").
-  double pad_radius_m = 0.0;
+  // box, its normals rounded by the radius: within it of an edge, turned toward the edge; 10 mm is
+  // about half a fingertip's width). 0: the contacts' own normals only (docs/grasping.md, "finger pad").
+  double pad_radius_m = 0.01;
   double min_curl_rad = 0.15;         // an opposing finger is curled at least this much (root to tip)
   double release_distance_m = 0.012;  // a grasping finger this far out of the surface is open
   double confident = 0.95;            // joint confidence below this: not measured, never "open"

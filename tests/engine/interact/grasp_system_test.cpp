@@ -149,14 +149,14 @@ TEST(GraspSystem, OpeningReleasesAndTheHandCannotGraspAgainAtOnce) {
 // side face beside the vertical edge it really held, its contact normal square to the fingers' on
 // the far face. Here the grip axis turns 36 degrees and moves off the cube's centre, so the
 // thumb's first bone touches the near face 3-6 mm from the edge (asserted: 1.5-10) while the index
-// presses the far one: with the contacts' own normals (pad_radius_m 0, the default) no placement
-// grasps; with the finger pad's (0.01, as the showcase scenes have it), every one does, and the
+// presses the far one: with the contacts' own normals (pad_radius_m 0) no placement
+// grasps; with the finger pad's (0.01, the default), every one does, and the
 // cube comes along when the hand lifts.
 TEST(GraspSystem, AThumbBesideABoxsEdgeOpposesTheFingersAsItsPadWrapsTheEdge) {
   const double yaw = 36.0 * std::numbers::pi / 180.0;
   for (const double dz_m : {-0.01, -0.0125, -0.015, -0.0175, -0.02}) {
     for (const bool pad : {false, true}) {
-      Bench b(true, pad ? R"("settings": {"grasp": {"pad_radius_m": 0.01}}, )" : "");
+      Bench b(true, pad ? "" : R"("settings": {"grasp": {"pad_radius_m": 0}}, )");
       b.axis = Eigen::Vector3d(std::cos(yaw), 0.0, std::sin(yaw));
       b.centre += Eigen::Vector3d(0.005, 0.0, dz_m);
       // Reach and close (Bench::reach_and_close), keeping the contacts of the grasp's step.
