@@ -379,12 +379,17 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
   follow(s, t_s, hand);
   if (hand.seen) follow_carry(world, s, t_s, hand);
   if (!hand.seen || settings_.max_curl_rad <= 0.0) return result;
-  // Which hidden digits are closing: they were when last seen, or a measured digit is now.
-  bool measured_closing = false, any_hidden = false;
+  // Which hidden digits are closing: they were when last seen, or the hand is closing: a measured
+  // digit is now, or one hidden only a moment ago (kReaching_s) was when last seen. The thumb
+  // closes by turning toward the fingers, barely curling: hidden before the fingers close (a
+  // tool's takeover from the other hand, the fingers hiding too as they close), its own rate
+  // says nothing.
+  bool hand_closing = false, any_hidden = false;
   std::array<bool, 5> closing{};
   for (std::size_t digit = 0; digit < 5; ++digit) {
     const DigitMotion& m = motion_[s][digit];
-    if (!m.hidden) measured_closing = measured_closing || m.rate_rad_s > settings_.closing_rad_s;
+    const bool was_closing = m.rate_rad_s > settings_.closing_rad_s;
+    hand_closing = hand_closing || (was_closing && (!m.hidden || (m.t_s >= 0.0 && t_s - m.t_s <= kReaching_s)));
     any_hidden = any_hidden || m.hidden;
   }
   if (!any_hidden) return result;
@@ -393,7 +398,7 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
   std::array<bool, 5> reaching{};
   for (std::size_t digit = 0; digit < 5; ++digit) {
     const DigitMotion& m = motion_[s][digit];
-    closing[digit] = m.hidden && (measured_closing || m.rate_rad_s > settings_.closing_rad_s);
+    closing[digit] = m.hidden && (hand_closing || m.rate_rad_s > settings_.closing_rad_s);
     reaching[digit] = closing[digit] && m.t_s >= 0.0 && t_s - m.t_s <= kReaching_s;
   }
   result.object = object_for(world, side, hand, closing, reaching);

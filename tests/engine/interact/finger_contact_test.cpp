@@ -161,6 +161,25 @@ TEST(FingerContact, HiddenDigitsCloseOnWhatTheyReachWhereThePalmIsNotNearIt) {
   EXPECT_TRUE(b.physics->placements()[1].placed[0] && b.physics->placements()[1].placed[1]);
 }
 
+// The workshop's tool taken from the other hand: the thumb hidden before the hand closed (so it was
+// never seen curling; a thumb closes by turning toward the fingers, barely curling), the index and
+// middle hiding as they closed, ring and little still. Nothing measured was closing, so the thumb
+// stayed 14 mm off the handle and the takeover missed. A finger hidden a moment ago while closing
+// says the hand closes: the thumb is placed on the cube too, and the hand grasps.
+TEST(FingerContact, AThumbHiddenBeforeTheHandClosedClosesWithTheFingersThatHid) {
+  CurlBench b;
+  b.hidden = {0};
+  for (int i = 0; i < 45; ++i) b.step(0.0, 0.15 * (1.0 - i / 44.0));
+  for (int i = 0; i < 5; ++i) b.step(i / 44.0);
+  b.hidden = {0, 1, 2};
+  b.hidden_closure = 4.0 / 44.0;
+  for (int i = 5; i < 45; ++i) b.step(i / 44.0);
+  ASSERT_EQ(b.grasps(), 1);
+  EXPECT_EQ(b.physics->grasp().holding(HandSide::kRight), b.cube);
+  EXPECT_TRUE(b.physics->placements()[1].placed[0]);
+  EXPECT_LT(b.digit_gap_m(0), 0.001) << "the thumb on the cube";
+}
+
 TEST(FingerContact, AHiddenFingerRestsOnWhatItsHandHoldsNeitherInsideNorAway) {
   for (const double estimate : {0.0, 1.6}) {  // relaxed open by the tracker, or curled into the cube
     CurlBench b;
