@@ -47,8 +47,10 @@ DigitChain digit_chain(int digit) {
   return {{base, base + 1, base + 2, base + 3}, {1.0, 1.0, 0.7}, 4};
 }
 
-constexpr double kFlicker_s = 0.3;   // a digit hidden no longer than this was only flickering
-constexpr double kReaching_s = 0.5;  // a closing digit hidden no longer than this reaches for what is within its length
+constexpr double kFlicker_s = 0.3;  // a digit hidden no longer than this was only flickering
+// A closing digit hidden no longer than this reaches for what is within its length, and says its
+// hand closes.
+constexpr double kReaching_s = 0.5;
 
 // A world transform without its scale.
 Rigid3d rigid_from(const glm::mat4& world_from_local) {
@@ -389,7 +391,7 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
   for (std::size_t digit = 0; digit < 5; ++digit) {
     const DigitMotion& m = motion_[s][digit];
     const bool was_closing = m.rate_rad_s > settings_.closing_rad_s;
-    hand_closing = hand_closing || (was_closing && (!m.hidden || (m.t_s >= 0.0 && t_s - m.t_s <= kReaching_s)));
+    hand_closing = hand_closing || (was_closing && m.t_s >= 0.0 && t_s - m.t_s <= kReaching_s);  // a measured digit's t_s is now
     any_hidden = any_hidden || m.hidden;
   }
   if (!any_hidden) return result;

@@ -3,13 +3,13 @@
 //
 // A grasp begins when the thumb (or the palm) and at least one other finger of one hand touch the
 // same grabbable dynamic object, the finger curled and some pair of their contacts' normals
-// roughly opposed (or, where the scene sets `pad_radius_m`, the normals a finger pad of that radius
-// feels: on a box, rounded by it).
+// roughly opposed (or the normals a finger pad of `pad_radius_m`, 10 mm by default, feels: on a
+// box, rounded by it).
 // The held object then follows the hand: every step its velocity is set to bring it to where the
 // grasp found it relative to the hand frame (a velocity-level constraint that keeps the grip
 // offset, like the hand bones themselves), without gravity and without colliding with that
-// hand's bones (fingers squeezing into it would otherwise push it around); it still collides
-// with everything else.
+// hand's bones (fingers squeezing into it would otherwise push it around; the contacts they had
+// are cleared as the grasp begins); it still collides with everything else.
 //
 // The grasp ends when the fingers open: a grasping finger counts as open when its tracked bone
 // has moved more than `release_distance_m` out of the object's surface from where it touched, or

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <gtest/gtest.h>
 
@@ -43,8 +44,9 @@ struct CurlBench {
   std::unique_ptr<HandPhysics> physics;
   Entity cube;
   GraspPose grasp = make_grasp(HandSide::kRight, 0.05, 0.006, 2);
-  std::vector<int> hidden;      // digits whose tips the cameras do not see
-  double hidden_closure = 0.0;  // where the tracker's estimate keeps them (0: open)
+  std::vector<int> hidden;              // digits whose tips the cameras do not see
+  double hidden_closure = 0.0;          // where the tracker's estimate keeps them (0: open)
+  std::optional<double> thumb_closure;  // ... the thumb's, where it differs
   std::vector<InteractionEvent> events;
 
   explicit CurlBench(double curl_rad = GraspSettings{}.hidden_finger_curl_rad, double hover_m = GraspSettings{}.hover_distance_m) {
@@ -58,10 +60,11 @@ struct CurlBench {
     std::array<HandInput, 2> hands;
     hands[1] = hand_input(frame, grasp.pose(closure));
     const HandInput estimate = hand_input(frame, grasp.pose(hidden_closure));
+    const HandInput thumb_estimate = hand_input(frame, grasp.pose(thumb_closure.value_or(hidden_closure)));
     for (const int digit : hidden) {
       for (const HandJoint j : inferred_joints(digit)) {
         const auto i = static_cast<std::size_t>(j);
-        hands[1].joints_world[i] = estimate.joints_world[i];
+        hands[1].joints_world[i] = (digit == 0 ? thumb_estimate : estimate).joints_world[i];
         hands[1].confidence[i] = 0.6;
       }
     }
@@ -162,22 +165,41 @@ TEST(FingerContact, HiddenDigitsCloseOnWhatTheyReachWhereThePalmIsNotNearIt) {
 }
 
 // The workshop's tool taken from the other hand: the thumb hidden before the hand closed (so it was
-// never seen curling; a thumb closes by turning toward the fingers, barely curling), the index and
-// middle hiding as they closed, ring and little still. Nothing measured was closing, so the thumb
-// stayed 14 mm off the handle and the takeover missed. A finger hidden a moment ago while closing
-// says the hand closes: the thumb is placed on the cube too, and the hand grasps.
+// never seen curling; a thumb closes by turning toward the fingers, barely curling), its estimate
+// short of the handle, the index and middle hiding as they closed, ring and little still. Nothing
+// measured was closing, so the thumb stayed 14 mm off the handle and the takeover missed. A finger
+// hidden a moment ago (0.5 s) while closing says the hand closes: the thumb is placed on the cube
+// too, and the hand grasps. Fingers that hid as they closed 0.7 s before the hand came down onto
+// the cube still reach for it themselves, but no longer say the hand closes.
 TEST(FingerContact, AThumbHiddenBeforeTheHandClosedClosesWithTheFingersThatHid) {
-  CurlBench b;
-  b.hidden = {0};
-  for (int i = 0; i < 45; ++i) b.step(0.0, 0.15 * (1.0 - i / 44.0));
-  for (int i = 0; i < 5; ++i) b.step(i / 44.0);
-  b.hidden = {0, 1, 2};
-  b.hidden_closure = 4.0 / 44.0;
-  for (int i = 5; i < 45; ++i) b.step(i / 44.0);
-  ASSERT_EQ(b.grasps(), 1);
-  EXPECT_EQ(b.physics->grasp().holding(HandSide::kRight), b.cube);
-  EXPECT_TRUE(b.physics->placements()[1].placed[0]);
-  EXPECT_LT(b.digit_gap_m(0), 0.001) << "the thumb on the cube";
+  for (const bool late : {false, true}) {
+    CurlBench b;
+    b.hidden = {0};
+    b.thumb_closure = 0.5;
+    const double above_m = late ? 0.15 : 0.0;
+    for (int i = 0; i < 45; ++i) b.step(0.0, 0.15 * (1.0 - i / 44.0) + above_m * i / 44.0);
+    EXPECT_GT(b.digit_gap_m(0), 0.008) << "the thumb's estimate is short of the cube (late " << late << ")";
+    for (int i = 0; i < 5; ++i) b.step(i / 44.0, above_m);
+    b.hidden = {0, 1, 2};
+    b.hidden_closure = 4.0 / 44.0;
+    if (late) {
+      for (int i = 0; i < 63; ++i) b.step(4.0 / 44.0, above_m);
+      for (int i = 0; i < 45; ++i) b.step(4.0 / 44.0, above_m * (1.0 - i / 44.0));
+    }
+    for (int i = 0; i < 40; ++i) b.step(4.0 / 44.0);
+    const FingerPlacement& placed = b.physics->placements()[1];
+    EXPECT_TRUE(placed.placed[1]) << "the index, hidden as it closed, reaches the cube (late " << late << ")";
+    if (late) {
+      EXPECT_EQ(b.grasps(), 0);
+      EXPECT_FALSE(placed.placed[0]);
+      EXPECT_GT(b.digit_gap_m(0), 0.008) << "the thumb where the tracker has it";
+      continue;
+    }
+    ASSERT_EQ(b.grasps(), 1);
+    EXPECT_EQ(b.physics->grasp().holding(HandSide::kRight), b.cube);
+    EXPECT_TRUE(placed.placed[0]);
+    EXPECT_LT(b.digit_gap_m(0), 0.001) << "the thumb on the cube";
+  }
 }
 
 TEST(FingerContact, AHiddenFingerRestsOnWhatItsHandHoldsNeitherInsideNorAway) {

@@ -99,6 +99,7 @@ TEST(TwoHandGrab, ABarHeldAtBothEndsMovesAndTurnsWithBothHandsAndHandsOverWithou
   for (int i = 0; i < 110; ++i) {
     const Eigen::Vector3d move = i < 90 ? Eigen::Vector3d(lift / 90.0) : Eigen::Vector3d::Zero();
     t.go(1, {move, move}, {1.0, 1.0});
+    ASSERT_TRUE(g.held_by_both(t.bar)) << "step " << i;
     off_grip_deg = std::max(off_grip_deg, t.off_grip_deg());
   }
   EXPECT_LT(off_grip_deg, 0.5);
