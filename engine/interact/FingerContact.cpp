@@ -183,8 +183,12 @@ std::optional<double> rest_digit(HandInput& hand, const DigitChain& chain, int f
 }  // namespace
 
 double capsule_distance_m(const btCollisionObject& object, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius_m) {
+  return capsule_gap(object, a, b, radius_m).distance_m;
+}
+
+CapsuleGap capsule_gap(const btCollisionObject& object, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius_m) {
   const btCollisionShape* shape = object.getCollisionShape();
-  if (!shape || !shape->isConvex()) return std::numeric_limits<double>::infinity();
+  if (!shape || !shape->isConvex()) return {};
   const Eigen::Vector3d axis = b - a;
   const double length = axis.norm();
   btCapsuleShape capsule(static_cast<btScalar>(radius_m), static_cast<btScalar>(length));
@@ -199,7 +203,8 @@ double capsule_distance_m(const btCollisionObject& object, const Eigen::Vector3d
   in.m_transformB = object.getWorldTransform();
   btPointCollector out;
   gjk.getClosestPoints(in, out, nullptr);
-  return out.m_hasResult ? static_cast<double>(out.m_distance) : std::numeric_limits<double>::infinity();
+  if (!out.m_hasResult) return {};
+  return {static_cast<double>(out.m_distance), to_eigen(out.m_pointInWorld)};
 }
 
 double digit_curl_rad(const HandInput& hand, int digit) {
@@ -435,10 +440,14 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
     // Fingers bend about the hand's lateral axis (in their own plane); the thumb turns below.
     Eigen::Vector3d axis = -hand_rotation.col(0);
     if (digit == 0) {
-      // The thumb turns about its first knuckle toward the object (or, with the object straight
-      // ahead of it, toward the palm).
+      // The thumb turns about its first knuckle toward the object's surface nearest its last bone
+      // (toward the centre of a long handle, 6 cm along it, it swept along the handle and never met
+      // it), or, with that straight ahead of it, toward the palm.
       const Eigen::Vector3d along = hand.joints_world[at(chain.count - 1)] - hand.joints_world[at(first)];
-      Eigen::Vector3d across = along.cross(centre - hand.joints_world[at(first)]);
+      const CapsuleGap gap = capsule_gap(*body, hand.joints_world[at(chain.count - 2)], hand.joints_world[at(chain.count - 1)],
+                                         bone_radius_m(hand, at(chain.count - 2), at(chain.count - 1)));
+      const Eigen::Vector3d toward = std::isfinite(gap.distance_m) ? gap.on_object : centre;
+      Eigen::Vector3d across = along.cross(toward - hand.joints_world[at(first)]);
       if (across.norm() < 1e-6 * along.norm()) across = along.cross(palm_normal);
       if (across.norm() > 1e-9) axis = across.normalized();
     }

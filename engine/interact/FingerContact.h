@@ -21,6 +21,7 @@
 // drawn hand and the grasps, follow the placed fingers. A placed joint keeps its low confidence.
 
 #include <array>
+#include <limits>
 #include <optional>
 
 #include "engine/core/Entity.h"
@@ -112,5 +113,12 @@ double digit_curl_rad(const HandInput& hand, int digit);
 // The signed distance (metres, negative: overlapping) between a capsule from a to b of radius r
 // and a convex collision object at its current pose; +infinity for a non-convex one.
 double capsule_distance_m(const btCollisionObject& object, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius_m);
+
+// The same, with the object's point nearest the capsule (world).
+struct CapsuleGap {
+  double distance_m = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d on_object = Eigen::Vector3d::Zero();
+};
+CapsuleGap capsule_gap(const btCollisionObject& object, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius_m);
 
 }  // namespace rhot
