@@ -10,10 +10,10 @@
 // carries (one that moves with the hand: FingerContactSettings::carry_moved_m). A hand closes on an object when a measured digit of it
 // touched the object in the last step, or when the hidden finger was closing when it was last seen (or a measured finger of the hand is
 // closing now, or one hidden less than 0.5 s ago was closing when last seen) and the object is within reach: the palm within
-// `hover_distance_m` of its bounding box, or, for a grabbable object, the box within the length of a closing digit hidden in the last 0.5 s
-// from its first knuckle. A finger bends in its own plane (about the hand's lateral axis); the thumb turns toward the object. A hidden
-// finger whose curl does not meet the object within `max_curl_rad` is left where the tracker put it (it points elsewhere); one already
-// inside is uncurled to the surface.
+// `hover_distance_m` of its bounding box, or, for a grabbable object, the box within the length of a closing digit hidden in the last
+// 0.5 s from its first knuckle. A finger bends in its own plane (about the hand's lateral axis); the thumb turns toward the object's
+// nearest surface. A hidden finger whose curl does not meet the object within `max_curl_rad` is left where the tracker put it (it
+// points elsewhere); one already inside is uncurled to the surface.
 //
 // This lives in the engine, not in the tracker, because it needs the physics world's shapes:
 // tracking stays free of engine types (docs/tracking.md, "Hidden fingers and objects"). The
