@@ -188,15 +188,16 @@ struct DemoScript::Showcase {
     }
   }
 
-  // press on a button: a pointing index finger from 5 cm above the cap down 70 % of its travel
-  // past the top, and back up.
+  // press on a button: a pointing index finger from 5 cm above the cap down to the button's stop
+  // (its whole travel past the top), and back up, as a user presses a switch until it stops: a
+  // press that stopped just past press_at would fail on a fingertip tracked a millimetre high.
   void poke_task(const EntityDesc& e) {
     const Rigid3d pose = world_pose(scene, e);
     const Eigen::Vector3d push = (pose.rotation * to_eigen(e.button->axis)).normalized();
     const Eigen::Vector3d half = half_of(e), local = to_eigen(e.button->axis).normalized();
     const double depth = std::abs(local.x()) * half.x() + std::abs(local.y()) * half.y() + std::abs(local.z()) * half.z();
     const Eigen::Vector3d top = pose.translation - depth * push;
-    const Eigen::Vector3d above = top - 0.05 * push, pressed = top + 0.7 * e.button->travel_m * push;
+    const Eigen::Vector3d above = top - 0.05 * push, pressed = top + e.button->travel_m * push;
     const int h = hand_for(top);
     const Grip g{top, Eigen::Vector3d::UnitX(), 0.05};
     const double begin_s = t;

@@ -199,8 +199,11 @@ class HandTracker {
   static constexpr double kUntangleMiss_m = 0.004;
   static constexpr double kUntangleMargin_m = 0.002;
   // reacquire_by_reach: the most a finger fitted to a free point may miss it by, and how far (hand
-  // frame) the point may have moved since the frame before.
-  static constexpr double kReachMiss_m = 0.004;
+  // frame) the point may have moved since the frame before. A straight finger's marker lies at the
+  // edge of its reach, where a finger a few millimetres longer than the model (or a hand frame a
+  // degree off) puts it out of reach: at 4 mm a pointing finger's marker, missed by 5-6 mm, was
+  // never found again.
+  static constexpr double kReachMiss_m = 0.008;
   static constexpr double kReachPersist_m = 0.015;
   // The fingertip model: frames with all five tips seen before it is used, how often it is refitted
   // (frames), how long a hidden tip's last offset from the prediction is kept (HiddenMarkerModel::
