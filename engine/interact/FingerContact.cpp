@@ -429,6 +429,9 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
     Eigen::Vector3d axis = Eigen::Vector3d::UnitX();
   };
   std::array<Bend, 5> bends;
+  // Closing on a grabbable object not yet held (a held one ignores its hand's bones): just short of it.
+  const bool loose = grasp_.holding(side) != result.object && world.alive(*result.object) && world.has<Grabbable>(*result.object);
+  const double rest_m = loose ? settings_.rest_gap_m : 0.0;
   for (int digit = 0; digit < 5; ++digit) {
     const DigitChain chain = digit_chain(digit);
     const auto at = [&](int k) { return static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)]); };
@@ -452,7 +455,7 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
       if (across.norm() > 1e-9) axis = across.normalized();
     }
     bends[static_cast<std::size_t>(digit)] = {first, axis};
-    const auto theta = rest_digit(hand, chain, first, axis, *body, 0.0, settings_.max_curl_rad, settings_.max_uncurl_rad);
+    const auto theta = rest_digit(hand, chain, first, axis, *body, rest_m, settings_.max_curl_rad, settings_.max_uncurl_rad);
     if (!theta) continue;  // it never meets (or leaves) the object within reach
     result.placed[static_cast<std::size_t>(digit)] = true;
     result.curl_rad[static_cast<std::size_t>(digit)] = *theta;

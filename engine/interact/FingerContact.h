@@ -11,9 +11,10 @@
 // touched the object in the last step, or when the hidden finger was closing when it was last seen (or a measured finger of the hand is
 // closing now, or one hidden less than 0.5 s ago was closing when last seen) and the object is within reach: the palm within
 // `hover_distance_m` of its bounding box, or, for a grabbable object, the box within the length of a closing digit hidden in the last
-// 0.5 s from its first knuckle. A finger bends in its own plane (about the hand's lateral axis); the thumb turns toward the object's
-// nearest surface. A hidden finger whose curl does not meet the object within `max_curl_rad` is left where the tracker put it (it
-// points elsewhere); one already inside is uncurled to the surface.
+// 0.5 s from its first knuckle. Closing on a grabbable object not yet held, from one side only, they rest `rest_gap_m` off it. A finger
+// bends in its own plane (about the hand's lateral axis); the thumb turns toward the object's nearest surface. A hidden finger whose curl
+// does not meet the object within `max_curl_rad` is left where the tracker put it (it points elsewhere); one already inside is uncurled to
+// the surface.
 //
 // This lives in the engine, not in the tracker, because it needs the physics world's shapes:
 // tracking stays free of engine types (docs/tracking.md, "Hidden fingers and objects"). The
@@ -42,6 +43,12 @@ struct FingerContactSettings {
   // Placed fingers rest on the surface; held between both sides (the thumb or palm, and a
   // finger) they squeeze this far into it, so their bones press as a grasping hand's do.
   double squeeze_m = 0.001;
+  // Closing on a grabbable object not yet held, placed fingers on one side only (nothing squeezing
+  // from the other yet) stop this short of its surface: an estimate is no evidence of force, and fingers resting on a light peg as
+  // the hand closed pushed it 8 cm toward the thumb still on its way and toppled it. Within
+  // GraspSettings::contact_distance_m (3 mm) they still touch it for the grasp rule. A button
+  // (not grabbable) is there to be pushed: fingers rest on it.
+  double rest_gap_m = 0.0015;
   double hover_distance_m = 0.05;  // the palm this close to an object's bounding box: within reach
   double closing_rad_s = 0.3;      // a finger curling faster than this is closing
   // A tracked object (kinematic, following its own marker star: the grasp system never holds it)

@@ -219,6 +219,33 @@ TEST(FingerContact, AHiddenFingerRestsOnWhatItsHandHoldsNeitherInsideNorAway) {
   }
 }
 
+// The workbench's peg (seed 306): index and middle hid as they closed on it, before the thumb
+// reached its other side, and the tracker's estimate curled them on into it. Placed resting on its
+// far face, they pushed the light peg 8 cm toward the thumb and toppled it, and it was never
+// grasped. On one side only they now stop just short of the surface (rest_gap_m), near enough to
+// count as touching: the cube stays where it is until the thumb closes, and then the hand grasps it.
+TEST(FingerContact, HiddenFingersClosingBeforeTheThumbArrivesPushNothing) {
+  CurlBench b;
+  const auto cube_at = [&] { return to_eigen(b.physics->physics().body(b.cube)->getWorldTransform().getOrigin()); };
+  for (int i = 0; i < 45; ++i) b.step(0.0, 0.15 * (1.0 - i / 44.0));
+  for (int i = 0; i < 10; ++i) b.step(0.4 * i / 9.0);  // closing, seen
+  const Eigen::Vector3d start = cube_at();
+  b.hidden = {1, 2};
+  bool placed = false;
+  for (int i = 0; i < 90; ++i) {
+    b.hidden_closure = 0.4 + 1.2 * i / 89.0;  // the estimate curls on, into the cube
+    b.step(0.4);                              // the thumb, seen, not yet on the cube
+    placed = placed || b.physics->placements()[1].placed[1];
+    EXPECT_GT(b.digit_gap_m(1), -0.0005) << "step " << i;
+  }
+  EXPECT_TRUE(placed) << "the hidden index was placed against the cube";
+  EXPECT_EQ(b.grasps(), 0);
+  EXPECT_LT((cube_at() - start).norm(), 0.001) << "the hidden fingers pushed the cube";
+  for (int i = 0; i < 45; ++i) b.step(0.4 + 0.6 * i / 44.0);
+  ASSERT_EQ(b.grasps(), 1);
+  EXPECT_EQ(b.physics->grasp().holding(HandSide::kRight), b.cube);
+}
+
 TEST(FingerContact, AnOpenHandOverTheCubeLeavesItsHiddenFingersAlone) {
   // Hovering open over the cube, nothing closing: the hidden index stays where the tracker put it
   // and nothing is grasped.
