@@ -391,7 +391,7 @@ void HandTracker::reacquire_by_reach(std::span<const Eigen::Vector3d> points, st
     return false;
   };
   // How far to the side of marker m's finger's own plane (through its knuckle, along its rest
-  // direction) a point p lies, where the finger reaches p (hand frame) within its miss and its
+  // direction) a point p lies, where the finger reaches p (hand frame) within kReachMiss_m and its
   // joint limits; none where it cannot.
   const auto reach_side = [&](std::size_t m, const Eigen::Vector3d& p) -> std::optional<double> {
     const auto f = static_cast<std::size_t>(layout_.finger_of_marker(m));
@@ -401,14 +401,13 @@ void HandTracker::reacquire_by_reach(std::span<const Eigen::Vector3d> points, st
     // the side of its plane than its widest sideways turn takes it: out of reach, without a fit.
     const Eigen::Vector3d v = p - chain.root_m;
     const double side_m = std::abs(v.dot(chain.rest_direction.cross(chain.up)));
-    const double miss_m = f == static_cast<std::size_t>(Finger::kThumb) ? kThumbReachMiss_m : kReachMiss_m;
-    const double slack_m = marker.offset_m.norm() + miss_m;
+    const double slack_m = marker.offset_m.norm() + kReachMiss_m;
     if (v.norm() > chain.length_m[0] + chain.length_m[1] + chain.length_m[2] + slack_m) return std::nullopt;
     if (side_m > std::sin(chain.limits.abduction_max_rad) * v.norm() + slack_m) return std::nullopt;
     const FingerPoint point = finger_point(marker, p, 1.0);
     const FingerFit fit =
         fit_finger(chain, std::span<const FingerPoint>(&point, 1), solver_.state().angles[f], finger_fit_settings(static_cast<Finger>(f)));
-    if ((finger_point_at(chain, fit.angles, point) - p).norm() > miss_m) return std::nullopt;
+    if ((finger_point_at(chain, fit.angles, point) - p).norm() > kReachMiss_m) return std::nullopt;
     return side_m;
   };
   std::vector<Reach>& reach = reach_;

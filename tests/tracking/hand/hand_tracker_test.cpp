@@ -286,53 +286,6 @@ TEST(HandTracker, AStrayTheHiddenThumbReachesIsNotTrustedForTheFrameItIsTaken) {
   EXPECT_EQ(taken_at, 101) << "the stray is taken by reach, there two frames running";
 }
 
-// A pointing index finger a few millimetres longer than the tracker's model (a user not yet
-// calibrated, or a hand frame a degree off): straight, its marker lies beyond the finger's reach,
-// and while it is hidden the other fingers curl into the pointing pose, so the rule curls its
-// estimate with them, outside every gate. Its finger fitted to the point, straight, misses by 6 mm:
-// allowed only 4 mm, it was never found again (the workbench's lamp was not switched on in two of
-// 30 seeds: the pointing finger, curled under, never touched the button).
-TEST(HandTracker, APointingFingerLongerThanTheModelFindsItsMarkerAgainPastItsReach) {
-  const HandLayout layout = low_cost();
-  const HandPose skeleton = reference_open_hand(HandSide::kRight);
-  const auto chains = hand_chains(skeleton, HandSide::kRight);
-  const auto relaxed = HandSolver(HandSide::kRight, skeleton).state().angles;
-  const Rigid3d world_from_hand{Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 1.1, -0.45)};
-  HandTracker tracker(layout, skeleton);
-  auto pointing = relaxed;
-  pointing[1] = FingerAngles{};
-  const auto index_tip = static_cast<std::size_t>(chain_joints(Finger::kIndex)[3]);
-  double astray_mm = 0.0;
-  int found_at = -1;
-  for (int f = 0; f < 180; ++f) {
-    const double t = f / 90.0;
-    // Frames 0-59 open and seen; 60-89 the other fingers curling, the index hidden; from 90 seen.
-    const double s = std::clamp((f - 60) / 30.0, 0.0, 1.0);
-    auto angles = pointing;
-    for (const std::size_t k : {2u, 3u, 4u}) {
-      for (std::size_t j = 0; j < 3; ++j) angles[k].flexion_rad[j] = relaxed[k].flexion_rad[j] + s * (1.2 - relaxed[k].flexion_rad[j]);
-    }
-    const HandPose pose = hand_pose_from_angles(skeleton, chains, angles);
-    std::vector<Eigen::Vector3d> points = markers(layout, world_from_hand, pose);
-    const Eigen::Vector3d root = world_from_hand * chains[1].root_m;
-    points[5] += 0.006 * (points[5] - root).normalized();  // 6 mm farther out than the model's finger reaches
-    if (f >= 60 && f < 90) points.erase(points.begin() + 5);
-    const TrackedHand& hand = tracker.update(t, points);
-    ASSERT_TRUE(hand.hand_seen) << "frame " << f;
-    const double e = 1000.0 * (hand.joints_world[index_tip] - world_from_hand * pose.position_m[index_tip]).norm();
-    if (f == 89) astray_mm = e;
-    if (f >= 90 && found_at < 0 && hand.state.tip_seen[1]) found_at = f;
-    if (found_at >= 0 && f >= found_at) {
-      EXPECT_TRUE(hand.state.tip_seen[1]) << "frame " << f;
-      EXPECT_LT(e, 8.0) << "frame " << f << ": the finger straight toward its marker";
-      EXPECT_DOUBLE_EQ(hand.state.confidence[index_tip], f == found_at ? HandTracker::kReacquiredConfidence : 1.0) << "frame " << f;
-    }
-  }
-  EXPECT_GT(astray_mm, 1000.0 * HandTracker::kFingertipGateMax_m) << "the estimate went outside every gate";
-  EXPECT_GE(found_at, 90);
-  EXPECT_LE(found_at, 91) << "found again once the point was there two frames running";
-}
-
 // An open hand held still, its markers seen with noise of noise_m per axis, frames 0-179; at
 // frame 120 the index tip's marker is hidden and a ghost of the matching stands ghost_m from it
 // (above the back of the finger, nearer no other marker). Per frame: whether the index finger had
