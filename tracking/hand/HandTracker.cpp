@@ -33,6 +33,7 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   miss2_m2_.assign(n, std::pow(kFingertipGate_m / kGateSigmas, 2));
   marker_found_s_.assign(n, std::nullopt);
   by_reach_.assign(n, 0);
+  untrusted_frames_.assign(n, 0);
   // Room for the points near each marker made once: the lists never grow while the hand is tracked.
   for (auto* lists : {&reappearing_, &reappearing_now_, &reachable_, &reachable_now_}) {
     lists->assign(n, {});
@@ -539,10 +540,15 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
       fitted(static_cast<HandJoint>(static_cast<int>(knuckle) - 1));  // its metacarpal joint
     }
   }
-  // A tip marker found again by reach, not followed from the frame before: not yet trusted.
+  // A tip marker found again by reach: not trusted until followed for kReacquiredFrames.
   for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
     const int tip = layout_.fingertip_marker[fi];
-    if (tip < 0 || !by_reach_[static_cast<std::size_t>(tip)]) continue;
+    if (tip < 0) continue;
+    const auto m = static_cast<std::size_t>(tip);
+    if (by_reach_[m]) untrusted_frames_[m] = kReacquiredFrames;
+    if (!found[m].allFinite()) untrusted_frames_[m] = 0;
+    if (untrusted_frames_[m] <= 0) continue;
+    --untrusted_frames_[m];
     const auto joints = chain_joints(static_cast<Finger>(fi));
     for (std::size_t k = 1; k < joints.size(); ++k) {
       double& c = out_.state.confidence[static_cast<std::size_t>(joints[k])];

@@ -121,13 +121,13 @@ class HandTracker {
   // The confidence of the joints the hand frame fixes (palm, wrist, knuckles) in a frame from the
   // markers: fitted to seen markers (HandSolver.h's 0.9), not measured.
   static constexpr double kMarkerFrameConfidence = 0.9;
-  // A finger whose tip marker reacquire_by_reach found again this frame, after a frame or more
-  // without it, is fitted to that point at this confidence (below a grasp's trust): a point taken by
-  // reach lies anywhere the finger reaches, far from its estimate, and can be a stray there two
-  // frames (a hidden thumb took one 45 mm from its estimate for one frame, and the door it held was
-  // let go as "thumb opened 41 mm"). Followed into the next frame (found near where it was
-  // predicted), it is measured again.
+  // A finger whose tip marker reacquire_by_reach found again is fitted to it at this confidence
+  // (below a grasp's trust) for the frame it is found and the next kReacquiredFrames - 1 it is
+  // followed: a point taken by reach lies anywhere the finger reaches, far from its estimate, and
+  // can be a stray there for a few frames (on the workbench a hidden thumb took one 45 mm from its
+  // estimate, followed it for a few frames, and the door it held was let go as "thumb opened 41 mm").
   static constexpr double kReacquiredConfidence = 0.9;
+  static constexpr int kReacquiredFrames = 6;
   // A fingertip the layout gives a colour takes only points of that colour (when `colour` is given),
   // within kColourGate_m of its predicted marker and without the reappearance rule: the colour
   // names the marker, so a finger lost for a while is found again at once.
@@ -273,8 +273,10 @@ class HandTracker {
   std::vector<std::vector<Eigen::Vector3d>> reappearing_, reappearing_now_;
   // Per marker, the free points its finger reached (reacquire_by_reach), last frame and this one.
   std::vector<std::vector<Eigen::Vector3d>> reachable_, reachable_now_;
-  // Per marker: given its point by reacquire_by_reach this frame (cleared by finish).
+  // Per marker: given its point by reacquire_by_reach this frame (cleared by finish), and the frames
+  // it is still to be followed before it is trusted.
   std::vector<char> by_reach_;
+  std::vector<int> untrusted_frames_;
   // The most points kept in each of those lists (made room for once: nothing allocated per frame).
   static constexpr std::size_t kNearPointsKept = 16;
   // Per-frame working storage, kept from frame to frame (nothing allocated once frames have shown

@@ -244,8 +244,10 @@ TEST(HandTracker, AFingerWhoseEstimateWentAstrayFindsItsMarkerAgainByReach) {
     if (found_at >= 0 && f >= found_at) {
       EXPECT_TRUE(hand.state.tip_seen[1]) << "frame " << f;
       EXPECT_LT(e, 3.0) << "frame " << f;
-      // Not trusted on the frame reach found it; measured once followed into the next.
-      EXPECT_DOUBLE_EQ(hand.state.confidence[index_tip], f == found_at ? HandTracker::kReacquiredConfidence : 1.0) << "frame " << f;
+      // Not trusted while reach has just found it; measured once it has been followed a while.
+      EXPECT_DOUBLE_EQ(hand.state.confidence[index_tip],
+                       f < found_at + HandTracker::kReacquiredFrames ? HandTracker::kReacquiredConfidence : 1.0)
+          << "frame " << f;
     }
   }
   EXPECT_GT(astray_mm, 1000.0 * HandTracker::kFingertipGateMax_m) << "the estimate went outside every gate";
@@ -254,11 +256,11 @@ TEST(HandTracker, AFingerWhoseEstimateWentAstrayFindsItsMarkerAgainByReach) {
 }
 
 // The workbench's door (seed 228): the left thumb hidden, a stray within its reach 45 mm from its
-// estimate two frames running was taken for its marker by reach, and the next frame it was gone. The
-// thumb, measured for that one frame 41 mm out of the handle, let the door go. A point found by
-// reach is now not trusted (kReacquiredConfidence, below a grasp's 0.95) until it is followed into
-// the next frame.
-TEST(HandTracker, AStrayTheHiddenThumbReachesIsNotTrustedForTheFrameItIsTaken) {
+// estimate was taken for its marker by reach and followed for a few frames. The thumb, measured 41 mm
+// out of the handle, let the door go. A point found by reach is now not trusted (kReacquiredConfidence,
+// below a grasp's 0.95) until it has been followed for kReacquiredFrames: here a stray there for
+// five frames.
+TEST(HandTracker, AStrayTheHiddenThumbReachesForAFewFramesIsNeverTrusted) {
   const HandLayout layout = low_cost();
   const HandPose skeleton = reference_open_hand(HandSide::kRight);
   const auto chains = hand_chains(skeleton, HandSide::kRight);
@@ -276,7 +278,7 @@ TEST(HandTracker, AStrayTheHiddenThumbReachesIsNotTrustedForTheFrameItIsTaken) {
   for (int f = 0; f < 130; ++f) {
     std::vector<Eigen::Vector3d> points = markers(layout, world_from_hand, pose);
     if (f >= 60) points.erase(points.begin() + 4);  // the thumb's marker hidden
-    if (f == 100 || f == 101) points.push_back(stray);
+    if (f >= 100 && f < 105) points.push_back(stray);
     const TrackedHand& hand = tracker.update(f / 90.0, points);
     ASSERT_TRUE(hand.hand_seen) << "frame " << f;
     if (f < 60) continue;
