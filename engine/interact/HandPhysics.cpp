@@ -1,5 +1,7 @@
 #include "engine/interact/HandPhysics.h"
 
+#include <algorithm>
+
 #include "engine/core/World.h"
 #include "engine/hand/HandComponents.h"
 
@@ -31,6 +33,8 @@ std::expected<std::unique_ptr<HandPhysics>, std::string> HandPhysics::create(Wor
   contact.confident = scene.settings.grasp.confident;
   contact.max_curl_rad = scene.settings.grasp.hidden_finger_curl_rad;
   contact.hover_distance_m = scene.settings.grasp.hover_distance_m;
+  // Resting short of an object still touches it for the grasp rule: within half its contact distance.
+  contact.rest_gap_m = std::min(contact.rest_gap_m, 0.5 * scene.settings.grasp.contact_distance_m);
   p->finger_contact_ = std::make_unique<FingerContact>(*p->physics_, *p->grasp_, contact);
   return p;
 }

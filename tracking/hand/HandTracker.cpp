@@ -32,7 +32,7 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
   tight_gate_m_.assign(n, kFingertipGate_m);
   miss2_m2_.assign(n, std::pow(kFingertipGate_m / kGateSigmas, 2));
   marker_found_s_.assign(n, std::nullopt);
-  by_reach_.assign(n, 0);
+  reach_points_.reserve(n);
   untrusted_frames_.assign(n, 0);
   // Room for the points near each marker made once: the lists never grow while the hand is tracked.
   for (auto* lists : {&reappearing_, &reappearing_now_, &reachable_, &reachable_now_}) {
@@ -436,7 +436,7 @@ void HandTracker::reacquire_by_reach(std::span<const Eigen::Vector3d> points, st
     if (slot >= 0 || taken[static_cast<std::size_t>(r.point)]) continue;
     slot = r.point;
     taken[static_cast<std::size_t>(r.point)] = true;
-    by_reach_[static_cast<std::size_t>(r.marker)] = 1;
+    reach_points_.push_back(r.point);  // at most one a marker: room made for them all
   }
 }
 
@@ -540,22 +540,23 @@ const TrackedHand& HandTracker::finish(double time_s, std::span<const Eigen::Vec
       fitted(static_cast<HandJoint>(static_cast<int>(knuckle) - 1));  // its metacarpal joint
     }
   }
-  // A tip marker found again by reach: not trusted until followed for kReacquiredFrames.
+  // A tip marker whose point reach found: not trusted until found in kReacquiredFrames frames.
   for (std::size_t fi = 0; fi < kFingerCount; ++fi) {
     const int tip = layout_.fingertip_marker[fi];
     if (tip < 0) continue;
     const auto m = static_cast<std::size_t>(tip);
-    if (by_reach_[m]) untrusted_frames_[m] = kReacquiredFrames;
-    if (!found[m].allFinite()) untrusted_frames_[m] = 0;
-    if (untrusted_frames_[m] <= 0) continue;
+    const int p = m < marker_point.size() ? marker_point[m] : -1;
+    if (p >= 0 && std::find(reach_points_.begin(), reach_points_.end(), p) != reach_points_.end()) untrusted_frames_[m] = kReacquiredFrames;
+    if (!found[m].allFinite() || untrusted_frames_[m] <= 0) continue;
     --untrusted_frames_[m];
+    if (evidence[fi].kind == FingerEvidence::Kind::kMeasured) continue;  // its segment stars measure it
     const auto joints = chain_joints(static_cast<Finger>(fi));
     for (std::size_t k = 1; k < joints.size(); ++k) {
       double& c = out_.state.confidence[static_cast<std::size_t>(joints[k])];
       c = std::min(c, kReacquiredConfidence);
     }
   }
-  std::fill(by_reach_.begin(), by_reach_.end(), 0);
+  reach_points_.clear();
   last_time_s_ = time_s;
   last_ik_us_ = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   for (std::size_t j = 0; j < kHandJointCount; ++j) out_.joints_world[j] = out_.world_from_hand * out_.state.pose.position_m[j];

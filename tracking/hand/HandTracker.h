@@ -121,11 +121,14 @@ class HandTracker {
   // The confidence of the joints the hand frame fixes (palm, wrist, knuckles) in a frame from the
   // markers: fitted to seen markers (HandSolver.h's 0.9), not measured.
   static constexpr double kMarkerFrameConfidence = 0.9;
-  // A finger whose tip marker reacquire_by_reach found again is fitted to it at this confidence
-  // (below a grasp's trust) for the frame it is found and the next kReacquiredFrames - 1 it is
-  // followed: a point taken by reach lies anywhere the finger reaches, far from its estimate, and
-  // can be a stray there for a few frames (on the workbench a hidden thumb took one 45 mm from its
-  // estimate, followed it for a few frames, and the door it held was let go as "thumb opened 41 mm").
+  // A finger whose tip marker's point reacquire_by_reach found has the confidence of its joints past
+  // the knuckle capped at this (below a grasp's `confident`, 0.95, by default) in that frame and the
+  // next kReacquiredFrames - 1 frames in which its marker is found (a frame without it does not
+  // count, so a stray flickering out for a frame is not trusted when it comes back): a point taken by
+  // reach lies anywhere the finger reaches, far from its estimate, and can be a stray there for a few
+  // frames (on the workbench a hidden thumb took one 45 mm from its estimate, followed it for a few
+  // frames, and the door it held was let go as "thumb opened 41 mm"). A finger its segment stars
+  // measure is left as they measure it.
   static constexpr double kReacquiredConfidence = 0.9;
   static constexpr int kReacquiredFrames = 6;
   // A fingertip the layout gives a colour takes only points of that colour (when `colour` is given),
@@ -273,9 +276,10 @@ class HandTracker {
   std::vector<std::vector<Eigen::Vector3d>> reappearing_, reappearing_now_;
   // Per marker, the free points its finger reached (reacquire_by_reach), last frame and this one.
   std::vector<std::vector<Eigen::Vector3d>> reachable_, reachable_now_;
-  // Per marker: given its point by reacquire_by_reach this frame (cleared by finish), and the frames
-  // it is still to be followed before it is trusted.
-  std::vector<char> by_reach_;
+  // The points reacquire_by_reach gave this frame (cleared by finish; untangle_neighbours may move
+  // one to a neighbour, which then holds it), and per marker the frames it is still to be found in
+  // before it is trusted.
+  std::vector<int> reach_points_;
   std::vector<int> untrusted_frames_;
   // The most points kept in each of those lists (made room for once: nothing allocated per frame).
   static constexpr std::size_t kNearPointsKept = 16;
