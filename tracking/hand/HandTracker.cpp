@@ -315,18 +315,19 @@ const std::vector<HandTracker::FingertipCandidate>& HandTracker::fingertip_candi
       if (want >= 0 && q < colour.size()) {
         // A coloured marker is known by its colour: any point of it near the finger.
         if (colour[q] != want || d >= kColourGate_m) continue;
-        out.push_back({d, static_cast<int>(m), static_cast<int>(q)});
+        out.push_back({d, static_cast<int>(m), static_cast<int>(q), false, true});
         continue;
       }
       if (d >= gate_m_[m]) continue;
+      bool persists = true;
       if (d >= tight_gate_m_[m]) {
-        // Outside the tight gate: a marker found again only if it was there the frame before.
+        // Outside the tight gate: a marker found again only if it was there the frame before (listed
+        // without, for track_hands's contest between hands).
         if (reappearing_now_[m].size() < kNearPointsKept) reappearing_now_[m].push_back(p);
-        const bool persists = std::any_of(reappearing_[m].begin(), reappearing_[m].end(),
-                                          [&](const Eigen::Vector3d& before) { return (p - before).norm() < tight_gate_m_[m]; });
-        if (!persists) continue;
+        persists = std::any_of(reappearing_[m].begin(), reappearing_[m].end(),
+                               [&](const Eigen::Vector3d& before) { return (p - before).norm() < tight_gate_m_[m]; });
       }
-      out.push_back({d, static_cast<int>(m), static_cast<int>(q)});
+      out.push_back({d, static_cast<int>(m), static_cast<int>(q), !followed(m) || d >= tight_gate_m_[m], persists});
     }
   }
   return out;
@@ -379,51 +380,77 @@ void HandTracker::untangle_neighbours(std::span<const Eigen::Vector3d> points, s
   }
 }
 
-void HandTracker::reacquire_by_reach(std::span<const Eigen::Vector3d> points, std::vector<bool>& taken, std::span<int> marker_point) {
-  if (!out_.hand_seen || marker_point.size() != layout_.markers.size()) return;
+std::optional<double> HandTracker::reach_side(std::size_t m, const Eigen::Vector3d& p) const {
+  const auto f = static_cast<std::size_t>(layout_.finger_of_marker(m));
+  const FingerChain& chain = solver_.chains()[f];
+  const LayoutMarker& marker = layout_.markers[m];
+  // Farther from the finger's root than the whole finger and the marker's offset, or farther to
+  // the side of its plane than its widest sideways turn takes it: out of reach, without a fit.
+  const Eigen::Vector3d v = p - chain.root_m;
+  const double side_m = std::abs(v.dot(chain.rest_direction.cross(chain.up)));
+  const double slack_m = marker.offset_m.norm() + kReachMiss_m;
+  if (v.norm() > chain.length_m[0] + chain.length_m[1] + chain.length_m[2] + slack_m) return std::nullopt;
+  if (side_m > std::sin(chain.limits.abduction_max_rad) * v.norm() + slack_m) return std::nullopt;
+  const FingerPoint point = finger_point(marker, p, 1.0);
+  const FingerFit fit =
+      fit_finger(chain, std::span<const FingerPoint>(&point, 1), solver_.state().angles[f], finger_fit_settings(static_cast<Finger>(f)));
+  if ((finger_point_at(chain, fit.angles, point) - p).norm() > kReachMiss_m) return std::nullopt;
+  return side_m;
+}
+
+const std::vector<HandTracker::Reach>& HandTracker::reach_candidates(std::span<const Eigen::Vector3d> points,
+                                                                     const std::vector<bool>& taken) {
+  reach_.clear();
+  if (!out_.hand_seen) return reach_;
   const Rigid3d hand_from_world = out_.world_from_hand.inverse();
-  // A finger with another marker found is held by it already (a glove's middle marker): its
-  // estimate has not drifted, and its free neighbours' markers are within its reach.
-  const auto held = [&](std::size_t m) {
-    const int f = layout_.finger_of_marker(m);
-    for (std::size_t o = layout_.hand_frame_markers; o < layout_.markers.size(); ++o) {
-      if (o != m && layout_.finger_of_marker(o) == f && marker_point[o] >= 0) return true;
-    }
-    return false;
-  };
-  // How far to the side of marker m's finger's own plane (through its knuckle, along its rest
-  // direction) a point p lies, where the finger reaches p (hand frame) within kReachMiss_m and its
-  // joint limits; none where it cannot.
-  const auto reach_side = [&](std::size_t m, const Eigen::Vector3d& p) -> std::optional<double> {
-    const auto f = static_cast<std::size_t>(layout_.finger_of_marker(m));
-    const FingerChain& chain = solver_.chains()[f];
-    const LayoutMarker& marker = layout_.markers[m];
-    // Farther from the finger's root than the whole finger and the marker's offset, or farther to
-    // the side of its plane than its widest sideways turn takes it: out of reach, without a fit.
-    const Eigen::Vector3d v = p - chain.root_m;
-    const double side_m = std::abs(v.dot(chain.rest_direction.cross(chain.up)));
-    const double slack_m = marker.offset_m.norm() + kReachMiss_m;
-    if (v.norm() > chain.length_m[0] + chain.length_m[1] + chain.length_m[2] + slack_m) return std::nullopt;
-    if (side_m > std::sin(chain.limits.abduction_max_rad) * v.norm() + slack_m) return std::nullopt;
-    const FingerPoint point = finger_point(marker, p, 1.0);
-    const FingerFit fit =
-        fit_finger(chain, std::span<const FingerPoint>(&point, 1), solver_.state().angles[f], finger_fit_settings(static_cast<Finger>(f)));
-    if ((finger_point_at(chain, fit.angles, point) - p).norm() > kReachMiss_m) return std::nullopt;
-    return side_m;
-  };
   std::vector<Reach>& reach = reach_;
-  reach.clear();
   for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
-    if (marker_point[m] >= 0 || layout_.markers[m].colour >= 0 || layout_.finger_of_marker(m) < 0 || held(m)) continue;
+    // A marker followed frame to frame keeps its point within its tight gate; one given its point by
+    // reach on the last frame may take it by reach again (not contesting the other hand's: below).
+    if (layout_.markers[m].colour >= 0 || layout_.finger_of_marker(m) < 0 || (followed(m) && reachable_[m].empty())) continue;
     for (std::size_t q = 0; q < points.size(); ++q) {
       if (taken[q] || !points[q].allFinite()) continue;
       const Eigen::Vector3d p = hand_from_world * points[q];
       const auto side = reach_side(m, p);
       if (!side) continue;
-      if (reachable_now_[m].size() < kNearPointsKept) reachable_now_[m].push_back(p);
       const bool persists = std::any_of(reachable_[m].begin(), reachable_[m].end(),
                                         [&](const Eigen::Vector3d& before) { return (p - before).norm() < kReachPersist_m; });
-      if (persists) reach.push_back({*side, (p - predicted_marker_[m]).norm(), static_cast<int>(m), static_cast<int>(q)});
+      reach.push_back({*side, (p - predicted_marker_[m]).norm(), static_cast<int>(m), static_cast<int>(q), persists, p});
+    }
+  }
+  return reach;
+}
+
+void HandTracker::take_by_reach(std::span<const Eigen::Vector3d> points, std::vector<bool>& taken, const std::vector<bool>& contested,
+                                std::span<int> marker_point) {
+  if (!out_.hand_seen || marker_point.size() != layout_.markers.size()) return;
+  // A finger with another marker found is held by it already (a glove's middle marker): its
+  // estimate has not drifted, and its free neighbours' markers are within its reach.
+  std::vector<bool>& held = held_;
+  held.assign(layout_.markers.size(), false);
+  for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
+    const int f = layout_.finger_of_marker(m);
+    for (std::size_t o = layout_.hand_frame_markers; o < layout_.markers.size(); ++o) {
+      if (o != m && f >= 0 && layout_.finger_of_marker(o) == f && marker_point[o] >= 0) held[m] = true;
+    }
+  }
+  std::vector<Reach>& reach = reach_;
+  // What the next frame's persistence asks of a point: that it was reachable and free this frame, by
+  // a marker without a point (contested or not; a marker followed until this frame looks now).
+  for (const Reach& r : reach) {
+    const auto m = static_cast<std::size_t>(r.marker);
+    if (marker_point[m] < 0 && !held[m] && !taken[static_cast<std::size_t>(r.point)] && reachable_now_[m].size() < kNearPointsKept)
+      reachable_now_[m].push_back(r.in_hand);
+  }
+  const Rigid3d hand_from_world = out_.world_from_hand.inverse();
+  for (std::size_t m = layout_.hand_frame_markers; m < layout_.markers.size(); ++m) {
+    if (!followed(m) || !reachable_[m].empty() || marker_point[m] >= 0 || held[m] || layout_.markers[m].colour >= 0 ||
+        layout_.finger_of_marker(m) < 0)
+      continue;
+    for (std::size_t q = 0; q < points.size() && reachable_now_[m].size() < kNearPointsKept; ++q) {
+      if (taken[q] || !points[q].allFinite()) continue;
+      const Eigen::Vector3d p = hand_from_world * points[q];
+      if (reach_side(m, p)) reachable_now_[m].push_back(p);
     }
   }
   // A point two fingers reach goes to the one in whose plane it lies nearest (curled fingers lie in
@@ -433,7 +460,9 @@ void HandTracker::reacquire_by_reach(std::span<const Eigen::Vector3d> points, st
             [](const Reach& a, const Reach& b) { return std::tie(a.side_m, a.predicted_m) < std::tie(b.side_m, b.predicted_m); });
   for (const Reach& r : reach) {
     int& slot = marker_point[static_cast<std::size_t>(r.marker)];
-    if (slot >= 0 || taken[static_cast<std::size_t>(r.point)]) continue;
+    const auto q = static_cast<std::size_t>(r.point);
+    if (!r.persists || slot >= 0 || held[static_cast<std::size_t>(r.marker)] || taken[q] || (q < contested.size() && contested[q]))
+      continue;
     slot = r.point;
     taken[static_cast<std::size_t>(r.point)] = true;
     reach_points_.push_back(r.point);  // at most one a marker: room made for them all
@@ -634,6 +663,7 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
     double distance_m;
     std::size_t hand;
     int marker, point;
+    bool returning, persists;
   };
   // Each hand's candidates (and below its points per marker) in its own kept storage; the picks
   // in the calling thread's (nothing allocated once frames have shown them their largest counts).
@@ -660,24 +690,77 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
       }
     }
   }
-  per_hand([&](std::size_t h) { hands[h]->fingertip_candidates(points, taken, colour); });
+  per_hand([&](std::size_t h) {
+    hands[h]->fingertip_candidates(points, taken, colour);
+    hands[h]->reach_candidates(points, taken);
+  });
   thread_local std::vector<Pick> picks;
   picks.clear();
   for (std::size_t h = 0; h < hands.size(); ++h) {
-    for (const auto& c : hands[h]->candidates_) picks.push_back({c.distance_m, h, c.marker, c.point});
+    for (const auto& c : hands[h]->candidates_) picks.push_back({c.distance_m, h, c.marker, c.point, c.returning, c.persists});
   }
   // Nearest first over every hand: a point goes to the fingertip it fits best, whichever hand's.
-  std::sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance_m < b.distance_m; });
+  std::sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) {
+    return std::tie(a.distance_m, a.hand, a.marker, a.point) < std::tie(b.distance_m, b.hand, b.marker, b.point);
+  });
+  // Two hands on one object (a hand-over, a bar in both hands) hide each other's fingers, and a
+  // hidden finger's estimate, centimetres off, is poor evidence of which hand a marker coming back
+  // belongs to (HandTracker::kContestRatio).
+  struct Returning {
+    int point;
+    std::size_t hand;
+    double distance_m;
+  };
+  thread_local std::vector<Returning> returning;
+  returning.clear();
+  for (const Pick& p : picks) {
+    if (p.returning) returning.push_back({p.point, p.hand, p.distance_m});
+  }
+  for (std::size_t h = 0; h < hands.size(); ++h) {
+    // A finger that reaches the point could be there however far its estimate drifted: it counts as
+    // no farther from it than the tightest gate.
+    for (const HandTracker::Reach& r : hands[h]->reach_) {
+      if (!hands[h]->followed(static_cast<std::size_t>(r.marker)))
+        returning.push_back({r.point, h, std::min(r.predicted_m, HandTracker::kFingertipGateMin_m)});
+    }
+  }
+  std::sort(returning.begin(), returning.end(), [](const Returning& a, const Returning& b) {
+    return std::tie(a.point, a.hand, a.distance_m) < std::tie(b.point, b.hand, b.distance_m);
+  });
+  // contested[h * points + q]: hand h may not take point q back.
+  thread_local std::vector<bool> contested;
+  contested.assign(hands.size() * points.size(), false);
+  // Each hand's nearest entry for a point (the first of its run) against the other hands' nearest.
+  const auto nearest_of_its_hand = [&](std::size_t i) {
+    return i == 0 || returning[i - 1].point != returning[i].point || returning[i - 1].hand != returning[i].hand;
+  };
+  for (std::size_t i = 0; i < returning.size(); ++i) {
+    if (!nearest_of_its_hand(i)) continue;
+    for (std::size_t k = i + 1; k < returning.size() && returning[k].point == returning[i].point; ++k) {
+      const Returning& a = returning[i];
+      const Returning& b = returning[k];
+      if (a.hand == b.hand || !nearest_of_its_hand(k)) continue;
+      const auto q = static_cast<std::size_t>(a.point);
+      if (b.distance_m < HandTracker::kContestRatio * a.distance_m) contested[a.hand * points.size() + q] = true;
+      if (a.distance_m < HandTracker::kContestRatio * b.distance_m) contested[b.hand * points.size() + q] = true;
+    }
+  }
   for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->tip_points_.assign(hands[h]->layout().markers.size(), -1);
   for (const Pick& p : picks) {
     int& slot = hands[p.hand]->tip_points_[static_cast<std::size_t>(p.marker)];
-    if (slot >= 0 || taken[static_cast<std::size_t>(p.point)]) continue;
+    const auto q = static_cast<std::size_t>(p.point);
+    if (!p.persists || slot >= 0 || taken[q] || (p.returning && contested[p.hand * points.size() + q])) continue;
     slot = p.point;
-    taken[static_cast<std::size_t>(p.point)] = true;
+    taken[q] = true;
   }
-  // A marker left without a point takes a free one its finger reaches, hand by hand (a point near
-  // both hands goes to the first).
-  for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->reacquire_by_reach(points, taken, hands[h]->tip_points_);
+  // A marker left without a point takes a free one its finger reaches, hand by hand, where the
+  // other hand does not contest it.
+  thread_local std::vector<bool> contested_here;
+  for (std::size_t h = 0; h < hands.size(); ++h) {
+    contested_here.assign(contested.begin() + static_cast<std::ptrdiff_t>(h * points.size()),
+                          contested.begin() + static_cast<std::ptrdiff_t>((h + 1) * points.size()));
+    hands[h]->take_by_reach(points, taken, contested_here, hands[h]->tip_points_);
+  }
   per_hand([&](std::size_t h) {
     hands[h]->confirm_frame_from_markers(time_s);
     hands[h]->untangle_neighbours(points, hands[h]->tip_points_);

@@ -103,6 +103,12 @@ class HandTracker {
     double distance_m = 0.0;
     int marker = 0;  // index into HandLayout::markers
     int point = 0;
+    // A marker taken back after a gap: not followed the frame before, or the point outside its tight
+    // gate (track_hands contests such a point between two hands).
+    bool returning = false;
+    // Outside the tight gate and not there the frame before: not taken (a ghost of the matching
+    // flickers), but listed for the contest between hands.
+    bool persists = true;
   };
   // The update in three steps, for a hand star followed outside (track_hands):
   //   begin      the hand frame from this frame's star
@@ -121,7 +127,7 @@ class HandTracker {
   // The confidence of the joints the hand frame fixes (palm, wrist, knuckles) in a frame from the
   // markers: fitted to seen markers (HandSolver.h's 0.9), not measured.
   static constexpr double kMarkerFrameConfidence = 0.9;
-  // A finger whose tip marker's point reacquire_by_reach found has the confidence of its joints past
+  // A finger whose tip marker's point take_by_reach found has the confidence of its joints past
   // the knuckle capped at this (below a grasp's `confident`, 0.95, by default) in that frame and the
   // next kReacquiredFrames - 1 frames in which its marker is found (a frame without it does not
   // count, so a stray flickering out for a frame is not trusted when it comes back): a point taken by
@@ -147,16 +153,41 @@ class HandTracker {
   // given (moved by the fits, it gave a hidden finger its neighbour's point: docs/tracking.md).
   // Coloured tips, named by their colour, are left as they are.
   void untangle_neighbours(std::span<const Eigen::Vector3d> points_world, std::span<int> marker_point) const;
-  // Between nearest first and untangle_neighbours: a finger marker left without a point takes a free
-  // point its finger reaches (FingerFit.h: the finger fitted to it misses by at most kReachMiss_m
-  // within its joint limits) that was there the frame before too,
-  // however far its finger's estimate had drifted from it. A hidden finger whose estimate went
-  // astray (a thumb bent at the other fingers' rate while it was hidden) is otherwise never found
-  // again: its marker lies outside every gate. A point several such markers reach goes to the
-  // one in whose plane it lies nearest; `taken` is updated. Only fingers with no other marker found:
-  // a glove's middle marker already holds its finger's estimate, and its free neighbours' markers
-  // are within its reach. Coloured markers, named by their colour, are left to it.
-  void reacquire_by_reach(std::span<const Eigen::Vector3d> points_world, std::vector<bool>& taken, std::span<int> marker_point);
+  // Taking back by reach, in two steps: reach_candidates (beside fingertip_candidates) lists, for
+  // each finger marker not followed the frame before (or given its point by reach then), the free
+  // points its finger reaches
+  // (FingerFit.h: the finger fitted to it misses by at most kReachMiss_m within its joint limits),
+  // however far its finger's estimate had drifted from them, each marked whether it was reachable
+  // the frame before too; take_by_reach (after nearest first, before untangle_neighbours) gives each
+  // marker still without a point one of those that were, and not `contested` (below). A hidden
+  // finger whose estimate went astray (a thumb bent at the other fingers' rate while it was hidden)
+  // is otherwise never found again: its marker lies outside every gate. A point several such
+  // markers reach goes to the one in whose plane it lies nearest; `taken` is updated. Only fingers
+  // with no other marker found: a glove's middle marker already holds its finger's estimate, and its
+  // free neighbours' markers are within its reach. Coloured markers, named by their colour, are
+  // left to it.
+  // Between two hands (track_hands): a point that markers of both could take back after a gap (a
+  // returning candidate, or by reach; one refused as a ghost counts too: the contest asks whose a
+  // point could be, not whether it is a marker) goes to neither hand's marker unless it is
+  // kContestRatio times nearer that marker's predicted place than the other hand's; a finger that
+  // reaches it counts as no farther than kFingertipGateMin_m, its estimate having drifted. Two hands
+  // on one object hide each other's fingers, and a hidden finger's estimate can be centimetres off:
+  // a hand-over's giving hand opened with its thumb hidden, and its thumb's marker, back 17 mm from
+  // that hand's estimate, was taken by the taking hand's hidden thumb 12 mm from it, which followed
+  // it away and let the object go as "thumb opened". Each hand's nearest such marker is weighed
+  // against the other's. A point within the tight gate of a marker followed frame to frame is that
+  // marker's to take nearest first, uncontested.
+  static constexpr double kContestRatio = 2.0;
+  struct Reach {
+    double side_m;
+    double predicted_m;  // from the marker's predicted place
+    int marker, point;
+    bool persists;            // reached the frame before too: only such a point is taken
+    Eigen::Vector3d in_hand;  // the point, hand frame
+  };
+  const std::vector<Reach>& reach_candidates(std::span<const Eigen::Vector3d> points_world, const std::vector<bool>& taken);
+  void take_by_reach(std::span<const Eigen::Vector3d> points_world, std::vector<bool>& taken, const std::vector<bool>& contested,
+                     std::span<int> marker_point);
   const TrackedHand& finish(double time_s, std::span<const Eigen::Vector3d> points_world, std::span<const double> sigma_m,
                             std::span<const int> marker_point);
   const HandLayout& layout() const { return layout_; }
@@ -208,7 +239,7 @@ class HandTracker {
   static constexpr double kUntangleReach_m = 0.04;
   static constexpr double kUntangleMiss_m = 0.004;
   static constexpr double kUntangleMargin_m = 0.002;
-  // reacquire_by_reach: the most a finger fitted to a free point may miss it by, and how far (hand
+  // take_by_reach: the most a finger fitted to a free point may miss it by, and how far (hand
   // frame) the point may have moved since the frame before. Not wider: at 8 mm a pointing finger a
   // few millimetres longer than the model was found again, its straight finger's marker 5-6 mm past
   // its reach, but fingers took points by reach twice as often, some wrong (a pinching finger let a
@@ -226,6 +257,12 @@ class HandTracker {
   int fingertip_model_frames() const { return tip_estimator_ ? tip_estimator_->model().training_frames : 0; }
 
  private:
+  // How far to the side of marker m's finger's own plane (through its knuckle, along its rest
+  // direction) a point p lies, where the finger reaches p (hand frame) within kReachMiss_m and its
+  // joint limits; none where it cannot.
+  std::optional<double> reach_side(std::size_t m, const Eigen::Vector3d& p) const;
+  // Marker m had a point on the last frame: it is followed frame to frame.
+  bool followed(std::size_t m) const { return last_time_s_ && marker_found_s_[m] == last_time_s_; }
   // track_hands' step after begin() found no hand frame: the frame from the hand's markers that are found (free
   // points near where the last frame puts them), while the star has been hidden for at most
   // kMarkerFrameHold_s. Each marker of the layout is where it was on the hand in the star's last
@@ -274,9 +311,9 @@ class HandTracker {
   // Per marker, the free points outside its tight gate but inside its widened one, last frame and
   // this frame (hand frame): where a lost marker may be reappearing.
   std::vector<std::vector<Eigen::Vector3d>> reappearing_, reappearing_now_;
-  // Per marker, the free points its finger reached (reacquire_by_reach), last frame and this one.
+  // Per marker, the free points its finger reached (take_by_reach), last frame and this one.
   std::vector<std::vector<Eigen::Vector3d>> reachable_, reachable_now_;
-  // The points reacquire_by_reach gave this frame (cleared by finish; untangle_neighbours may move
+  // The points take_by_reach gave this frame (cleared by finish; untangle_neighbours may move
   // one to a neighbour, which then holds it), and per marker the frames it is still to be found in
   // before it is trusted.
   std::vector<int> reach_points_;
@@ -285,17 +322,13 @@ class HandTracker {
   static constexpr std::size_t kNearPointsKept = 16;
   // Per-frame working storage, kept from frame to frame (nothing allocated once frames have shown
   // it their largest counts): fingertip_candidates' result, track_hands' points per marker,
-  // reacquire_by_reach's reachable points, finish's found markers (hand frame) and the modelled
+  // take_by_reach's reachable points, finish's found markers (hand frame) and the modelled
   // ones seen, predict_hidden_tips' sample and hand.
-  struct Reach {
-    double side_m;
-    double predicted_m;  // from the marker's predicted place
-    int marker, point;
-  };
   static constexpr std::size_t kPointsRoom = 64;
   std::vector<FingertipCandidate> candidates_;
   std::vector<int> tip_points_;
   std::vector<Reach> reach_;
+  std::vector<bool> held_;
   std::vector<Eigen::Vector3d> found_;
   std::vector<std::optional<Eigen::Vector3d>> seen_;
   Eigen::VectorXd tip_sample_;

@@ -288,6 +288,84 @@ TEST(HandTracker, AStrayTheHiddenThumbReachesForAFewFramesIsNeverTrusted) {
   EXPECT_EQ(taken_at, 101) << "the stray is taken by reach, there two frames running";
 }
 
+// A hand-over (`rhot-eval grasp --hands tracked`, seeds 1-4): the two hands on the cube, each
+// thumb hidden. The giving hand opens, its thumb bending while hidden; its marker comes back 17 mm
+// from where that hand's estimate holds it, 12 mm from the taking hand's hidden thumb's estimate.
+// Nearest first gave it to the taking hand, whose thumb followed it away and let the cube go as
+// "thumb opened". Here: both hands still, both thumbs' markers hidden from frame 60; the right
+// (giving) thumb bends while hidden (`bend` radians more at each joint) and is seen again from frame 100,
+// `left_mm` from the left thumb's estimate (on the side away from the right's). Per frame from
+// 100: whether each hand's thumb had the point.
+struct ReturningThumb {
+  int left_frames = 0;         // frames the left thumb held the right thumb's marker
+  int right_from = -1;         // the first frame the right thumb had it back
+  double right_miss_mm = 0.0;  // how far the right thumb's marker moved while hidden
+};
+ReturningThumb right_thumb_returning_beside_the_left(double bend, double left_mm, bool right_tracked) {
+  const std::array<HandLayout, 2> layouts{shipped_layout("low-cost-left"), low_cost()};
+  std::array<HandPose, 2> skeleton;
+  std::array<std::array<FingerChain, kFingerCount>, 2> chains;
+  std::array<std::array<FingerAngles, kFingerCount>, 2> relaxed;
+  for (std::size_t h = 0; h < 2; ++h) {
+    skeleton[h] = reference_open_hand(layouts[h].side);
+    chains[h] = hand_chains(skeleton[h], layouts[h].side);
+    relaxed[h] = HandSolver(layouts[h].side, skeleton[h]).state().angles;
+  }
+  const auto right_pose = [&](double s) {
+    auto angles = relaxed[1];
+    for (std::size_t k = 0; k < 3; ++k) angles[0].flexion_rad[k] += s * bend;
+    return hand_pose_from_angles(skeleton[1], chains[1], angles);
+  };
+  const HandPose left_pose = hand_pose_from_angles(skeleton[0], chains[0], relaxed[0]);
+  const Rigid3d world_from_right{Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 1.1, -0.45)};
+  const Eigen::Vector3d before = markers(layouts[1], world_from_right, right_pose(0.0))[4];
+  const Eigen::Vector3d after = markers(layouts[1], world_from_right, right_pose(1.0))[4];
+  // The left hand turned half a turn about the vertical, its thumb's marker beyond `after`.
+  Rigid3d world_from_left{Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitY())), Eigen::Vector3d::Zero()};
+  const Eigen::Vector3d away = (after - before).norm() > 1e-6 ? (after - before).normalized() : Eigen::Vector3d::UnitX();
+  world_from_left.translation = after + 0.001 * left_mm * away - world_from_left.rotation * markers(layouts[0], Rigid3d{}, left_pose)[4];
+  StarSet both;
+  for (const HandLayout& l : layouts) both.stars.push_back(l.hand_star_set().stars[0]);
+  both.stars[1].id = 1;
+  StarTracker stars{StarLibrary(both)};
+  std::array<HandTracker, 2> trackers{HandTracker(layouts[0], skeleton[0]), HandTracker(layouts[1], skeleton[1])};
+  ReturningThumb out;
+  out.right_miss_mm = 1000.0 * (after - before).norm();
+  for (int f = 0; f < 150; ++f) {
+    const double t = f / 90.0;
+    std::vector<Eigen::Vector3d> left = markers(layouts[0], world_from_left, left_pose);
+    std::vector<Eigen::Vector3d> right = markers(layouts[1], world_from_right, right_pose(std::clamp((f - 60) / 40.0, 0.0, 1.0)));
+    if (f >= 60) left.erase(left.begin() + 4);               // the left thumb's marker hidden from here on
+    if (f >= 60 && f < 100) right.erase(right.begin() + 4);  // the right thumb's, for 40 frames
+    std::vector<Eigen::Vector3d> points = left;
+    points.insert(points.end(), right.begin(), right.end());
+    std::vector<bool> taken;
+    const std::array<HandTracker*, 2> hands{&trackers[0], &trackers[1]};
+    const std::array<int, 2> star{0, 1};
+    const std::size_t n = right_tracked ? 2 : 1;
+    track_hands(std::span(hands.data(), n), std::span(star.data(), n), stars.update(t, points), t, points, {}, taken);
+    if (f < 100) continue;
+    const auto returned = static_cast<int>(points.size() - right.size() + 4);  // the right thumb's marker
+    if (trackers[0].last().fingertip_point[0] == returned) ++out.left_frames;
+    if (right_tracked && out.right_from < 0 && trackers[1].last().fingertip_point[0] == returned) out.right_from = f;
+  }
+  return out;
+}
+
+TEST(HandTracker, AMarkerComingBackBesideTheOtherHandsHiddenFingerIsNotTakenOnAGuess) {
+  // The failure: the right hand not there to contest it, the left thumb takes the right's marker.
+  EXPECT_GT(right_thumb_returning_beside_the_left(0.5, 12.0, false).left_frames, 40);
+  // The hand-over: the right thumb's estimate, held while hidden, misses its marker by more than
+  // half the left's distance; neither takes it.
+  const ReturningThumb bent = right_thumb_returning_beside_the_left(0.5, 12.0, true);
+  EXPECT_GT(bent.right_miss_mm, 12.0) << "the right's estimate farther from its marker than the left's: nearest first gives it the left";
+  EXPECT_EQ(bent.left_frames, 0);
+  // The right thumb not bent: its estimate is on its marker, and it has it back at once.
+  const ReturningThumb still = right_thumb_returning_beside_the_left(0.0, 12.0, true);
+  EXPECT_EQ(still.left_frames, 0);
+  EXPECT_EQ(still.right_from, 100);
+}
+
 // An open hand held still, its markers seen with noise of noise_m per axis, frames 0-179; at
 // frame 120 the index tip's marker is hidden and a ghost of the matching stands ghost_m from it
 // (above the back of the finger, nearer no other marker). Per frame: whether the index finger had
