@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -148,6 +149,12 @@ TEST(EvalCli, GraspPrintsTheScenarioJson) {
   EXPECT_EQ(j["lift_success_fraction"].get<double>(), 1.0);
   EXPECT_LT(j["max_slip_mm"].get<double>(), 5.0);
   EXPECT_TRUE(j["scenarios"]["lift"]["grasped"].get<bool>());
+  // Each grasp and release says why, as the overlay does.
+  std::vector<std::string> reasons;
+  for (const nlohmann::json& e : j["scenarios"]["lift"]["events"]) {
+    if (e["type"] == "grasp" || e["type"] == "release") reasons.push_back(e.value("reason", std::string("(none)")));
+  }
+  EXPECT_EQ(reasons, (std::vector<std::string>{"thumb against index", "index opened 17 mm (measured, last bone)"}));
   // Through tracked hands, against the same scenario with perfect hands: its one grasp made, never
   // let go early.
   const EvalRun tracked = run_eval("grasp --scenario lift --hands tracked --json");

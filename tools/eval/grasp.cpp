@@ -113,6 +113,7 @@ int grasp(const GraspArgs& args) {
     for (const rhot::InteractionEvent& e : r->events) {
       if (e.type == rhot::InteractionEventType::kHoverBegin || e.type == rhot::InteractionEventType::kHoverEnd) continue;
       nlohmann::json ev = {{"t_s", e.time_s}, {"type", rhot::event_name(e.type)}, {"object", e.object.index}};
+      if (!e.reason.empty()) ev["reason"] = e.reason;  // why a grasp began or ended, as the overlay says it
       if (e.hand) ev["hand"] = *e.hand == rhot::HandSide::kLeft ? "left" : "right";
       if (!e.interaction.empty()) ev["interaction"] = e.interaction;
       events.push_back(ev);
