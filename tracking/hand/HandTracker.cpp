@@ -640,6 +640,43 @@ std::array<std::optional<Eigen::Vector3d>, kFingerCount> HandTracker::measure_se
   return tips;
 }
 
+namespace {
+
+// A point a hand's marker could take back after a gap (track_hands): how far from that marker's
+// predicted place (a finger that reaches it: at most kFingertipGateMin_m).
+struct Returning {
+  int point;
+  std::size_t hand;
+  double distance_m;
+};
+
+// contested[h * point_count + q]: hand h may not take point q back, the other hand's nearest
+// returning marker being less than kContestRatio times farther from it than this hand's nearest
+// (HandTracker.h). Sorts `returning`.
+void contest(std::vector<Returning>& returning, std::size_t hand_count, std::size_t point_count, std::vector<bool>& contested) {
+  std::sort(returning.begin(), returning.end(), [](const Returning& a, const Returning& b) {
+    return std::tie(a.point, a.hand, a.distance_m) < std::tie(b.point, b.hand, b.distance_m);
+  });
+  contested.assign(hand_count * point_count, false);
+  // Each hand's nearest entry for a point (the first of its run) against the other hands' nearest.
+  const auto nearest_of_its_hand = [&](std::size_t i) {
+    return i == 0 || returning[i - 1].point != returning[i].point || returning[i - 1].hand != returning[i].hand;
+  };
+  for (std::size_t i = 0; i < returning.size(); ++i) {
+    if (!nearest_of_its_hand(i)) continue;
+    for (std::size_t k = i + 1; k < returning.size() && returning[k].point == returning[i].point; ++k) {
+      const Returning& a = returning[i];
+      const Returning& b = returning[k];
+      if (a.hand == b.hand || !nearest_of_its_hand(k)) continue;
+      const auto q = static_cast<std::size_t>(a.point);
+      if (b.distance_m < HandTracker::kContestRatio * a.distance_m) contested[a.hand * point_count + q] = true;
+      if (a.distance_m < HandTracker::kContestRatio * b.distance_m) contested[b.hand * point_count + q] = true;
+    }
+  }
+}
+
+}  // namespace
+
 void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_star, const std::vector<TrackedStar>& stars, double time_s,
                  std::span<const Eigen::Vector3d> points, std::span<const double> sigma_m, std::vector<bool>& taken,
                  std::span<const int> colour, JobPool* jobs) {
@@ -706,11 +743,6 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
   // Two hands on one object (a hand-over, a bar in both hands) hide each other's fingers, and a
   // hidden finger's estimate, centimetres off, is poor evidence of which hand a marker coming back
   // belongs to (HandTracker::kContestRatio).
-  struct Returning {
-    int point;
-    std::size_t hand;
-    double distance_m;
-  };
   thread_local std::vector<Returning> returning;
   returning.clear();
   for (const Pick& p : picks) {
@@ -724,27 +756,8 @@ void track_hands(std::span<HandTracker* const> hands, std::span<const int> hand_
         returning.push_back({r.point, h, std::min(r.predicted_m, HandTracker::kFingertipGateMin_m)});
     }
   }
-  std::sort(returning.begin(), returning.end(), [](const Returning& a, const Returning& b) {
-    return std::tie(a.point, a.hand, a.distance_m) < std::tie(b.point, b.hand, b.distance_m);
-  });
-  // contested[h * points + q]: hand h may not take point q back.
   thread_local std::vector<bool> contested;
-  contested.assign(hands.size() * points.size(), false);
-  // Each hand's nearest entry for a point (the first of its run) against the other hands' nearest.
-  const auto nearest_of_its_hand = [&](std::size_t i) {
-    return i == 0 || returning[i - 1].point != returning[i].point || returning[i - 1].hand != returning[i].hand;
-  };
-  for (std::size_t i = 0; i < returning.size(); ++i) {
-    if (!nearest_of_its_hand(i)) continue;
-    for (std::size_t k = i + 1; k < returning.size() && returning[k].point == returning[i].point; ++k) {
-      const Returning& a = returning[i];
-      const Returning& b = returning[k];
-      if (a.hand == b.hand || !nearest_of_its_hand(k)) continue;
-      const auto q = static_cast<std::size_t>(a.point);
-      if (b.distance_m < HandTracker::kContestRatio * a.distance_m) contested[a.hand * points.size() + q] = true;
-      if (a.distance_m < HandTracker::kContestRatio * b.distance_m) contested[b.hand * points.size() + q] = true;
-    }
-  }
+  contest(returning, hands.size(), points.size(), contested);
   for (std::size_t h = 0; h < hands.size(); ++h) hands[h]->tip_points_.assign(hands[h]->layout().markers.size(), -1);
   for (const Pick& p : picks) {
     int& slot = hands[p.hand]->tip_points_[static_cast<std::size_t>(p.marker)];
