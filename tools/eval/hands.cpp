@@ -94,6 +94,7 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   rhot::HandTrackerSettings tracker_settings;
   tracker_settings.filter = args.filter;
   tracker_settings.fingertip_model = args.fingertip_model;
+  if (args.calibrate_hand) tracker_settings.finger_length_tolerance = 0.0;  // the skeleton is the user's
   const rhot::HandPose tracked_skeleton =
       args.calibrate_hand ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings) : skeleton;
   rhot::HandTracker tracker(layout, tracked_skeleton, tracker_settings);

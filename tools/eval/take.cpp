@@ -355,6 +355,7 @@ struct FittedHand {
   HandTracker tracker() const {
     HandTrackerSettings settings;
     settings.fingertip_model = true;
+    if (calibration.frames > 0) settings.finger_length_tolerance = 0.0;  // the skeleton fitted to the take's hand
     return HandTracker(layout, skeleton, settings);
   }
 };

@@ -384,18 +384,27 @@ std::optional<double> HandTracker::reach_side(std::size_t m, const Eigen::Vector
   const auto f = static_cast<std::size_t>(layout_.finger_of_marker(m));
   const FingerChain& chain = solver_.chains()[f];
   const LayoutMarker& marker = layout_.markers[m];
-  // Farther from the finger's root than the whole finger and the marker's offset, or farther to
-  // the side of its plane than its widest sideways turn takes it: out of reach, without a fit.
+  // Farther from the finger's root than the whole finger (at its longest) and the marker's offset,
+  // or farther to the side of its plane than its widest sideways turn takes it: out of reach,
+  // without a fit.
   const Eigen::Vector3d v = p - chain.root_m;
   const double side_m = std::abs(v.dot(chain.rest_direction.cross(chain.up)));
   const double slack_m = marker.offset_m.norm() + kReachMiss_m;
-  if (v.norm() > chain.length_m[0] + chain.length_m[1] + chain.length_m[2] + slack_m) return std::nullopt;
+  const double longest = 1.0 + settings_.finger_length_tolerance;
+  if (v.norm() > longest * (chain.length_m[0] + chain.length_m[1] + chain.length_m[2]) + slack_m) return std::nullopt;
   if (side_m > std::sin(chain.limits.abduction_max_rad) * v.norm() + slack_m) return std::nullopt;
-  const FingerPoint point = finger_point(marker, p, 1.0);
-  const FingerFit fit =
-      fit_finger(chain, std::span<const FingerPoint>(&point, 1), solver_.state().angles[f], finger_fit_settings(static_cast<Finger>(f)));
-  if ((finger_point_at(chain, fit.angles, point) - p).norm() > kReachMiss_m) return std::nullopt;
-  return side_m;
+  // The finger scaled by `scale` about its root reaches p where the finger itself reaches p's
+  // place scaled back; its miss scales with it.
+  const auto miss_m = [&](double scale) {
+    const Eigen::Vector3d q = chain.root_m + v / scale;
+    const FingerPoint point = finger_point(marker, q, 1.0);
+    const FingerFit fit =
+        fit_finger(chain, std::span<const FingerPoint>(&point, 1), solver_.state().angles[f], finger_fit_settings(static_cast<Finger>(f)));
+    return scale * (finger_point_at(chain, fit.angles, point) - q).norm();
+  };
+  if (miss_m(1.0) <= kReachMiss_m) return side_m;
+  if (settings_.finger_length_tolerance > 0.0 && (miss_m(longest) <= kReachMiss_m || miss_m(1.0 / longest) <= kReachMiss_m)) return side_m;
+  return std::nullopt;
 }
 
 const std::vector<HandTracker::Reach>& HandTracker::reach_candidates(std::span<const Eigen::Vector3d> points,

@@ -81,6 +81,13 @@ struct HandTrackerSettings {
   // (docs/tracking.md, "A hand whose star is hidden").
   enum class MarkerFrame : std::uint8_t { kOff, kWhereColoured, kOn };
   MarkerFrame frame_from_markers = MarkerFrame::kWhereColoured;
+  // How much longer or shorter than the skeleton's a user's fingers may be, as a fraction of each
+  // finger's length: a finger marker found again by its reach (take_by_reach) may lie where the
+  // finger would reach at its own length or (1 + this) times longer or shorter. The reference hand stands for adults whose hands span about
+  // +-10 % around it (the simulated users' hands, independent_hand, do too); with it at 0 a user's
+  // longer finger, opened while its marker was hidden, was not found again (docs/tracking.md, "A
+  // finger longer than the skeleton's"). 0 for a skeleton calibrated to the user (HandCalibration.h).
+  double finger_length_tolerance = 0.1;
 };
 
 class HandTracker {
@@ -156,7 +163,8 @@ class HandTracker {
   // Taking back by reach, in two steps: reach_candidates (beside fingertip_candidates) lists, for
   // each finger marker not followed the frame before (or given its point by reach then), the free
   // points its finger reaches
-  // (FingerFit.h: the finger fitted to it misses by at most kReachMiss_m within its joint limits),
+  // (FingerFit.h: the finger fitted to it misses by at most kReachMiss_m within its joint limits, at
+  // its length or one within HandTrackerSettings::finger_length_tolerance of it),
   // however far its finger's estimate had drifted from them, each marked whether it was reachable
   // the frame before too; take_by_reach (after nearest first, before untangle_neighbours) gives each
   // marker still without a point one of those that were, and not `contested` (below). A hidden
@@ -259,7 +267,8 @@ class HandTracker {
  private:
   // How far to the side of marker m's finger's own plane (through its knuckle, along its rest
   // direction) a point p lies, where the finger reaches p (hand frame) within kReachMiss_m and its
-  // joint limits; none where it cannot.
+  // joint limits, at its own length or at (1 + finger_length_tolerance) times longer or shorter;
+  // none where it cannot.
   std::optional<double> reach_side(std::size_t m, const Eigen::Vector3d& p) const;
   // Marker m had a point on the last frame: it is followed frame to frame.
   bool followed(std::size_t m) const { return last_time_s_ && marker_found_s_[m] == last_time_s_; }
