@@ -37,11 +37,12 @@ namespace {
 
 // The user's calibration (HandCalibration.h): the truth hand held flat (every finger straight) for
 // a second where `motion` starts, through its own simulated rig, tracked with the reference
-// skeleton; the fingertip markers found give each finger's length. The reference skeleton when
-// no fingertip was found.
-rhot::HandPose calibrated_skeleton(const rhot::CameraRig& rig, const rhot::CameraRig& tracker_rig, const rhot::HandLayout& layout,
-                                   const rhot::HandPose& reference, const rhot::HandPose& user, const rhot::Rigid3d& world_from_hand,
-                                   rhot::SimulatedRigSettings settings) {
+// skeleton; the fingertip markers found give each finger's length. None when no fingertip was
+// found.
+std::optional<rhot::HandPose> calibrated_skeleton(const rhot::CameraRig& rig, const rhot::CameraRig& tracker_rig,
+                                                  const rhot::HandLayout& layout, const rhot::HandPose& reference,
+                                                  const rhot::HandPose& user, const rhot::Rigid3d& world_from_hand,
+                                                  rhot::SimulatedRigSettings settings) {
   const auto flat = rhot::hand_pose_from_angles(user, rhot::hand_chains(user, layout.side), {});
   settings.seed += 1000;  // not the motion's noise
   rhot::SimulatedRig sim(rig, {}, settings);
@@ -59,7 +60,7 @@ rhot::HandPose calibrated_skeleton(const rhot::CameraRig& rig, const rhot::Camer
     const rhot::TrackedHand& hand = tracker.update(frame.time_s, points, rhot::point_sigmas_m(matched, pixel_sigma.update(matched)));
     samples.push_back(rhot::flat_hand_sample(layout, reference, hand, points));
   }
-  return rhot::calibrate_flat_hand(reference, layout.side, samples).value_or(reference);
+  return rhot::calibrate_flat_hand(reference, layout.side, samples);
 }
 
 // One or every scripted hand motion through the simulated rig with a hand layout: the hand's
@@ -94,9 +95,10 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   rhot::HandTrackerSettings tracker_settings;
   tracker_settings.filter = args.filter;
   tracker_settings.fingertip_model = args.fingertip_model;
-  if (args.calibrate_hand) tracker_settings.finger_length_tolerance = 0.0;  // the skeleton is the user's
-  const rhot::HandPose tracked_skeleton =
-      args.calibrate_hand ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings) : skeleton;
+  const std::optional<rhot::HandPose> calibrated =
+      args.calibrate_hand ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings) : std::nullopt;
+  if (calibrated) tracker_settings.finger_length_tolerance = 0.0;  // the skeleton is the user's
+  const rhot::HandPose tracked_skeleton = calibrated.value_or(skeleton);
   rhot::HandTracker tracker(layout, tracked_skeleton, tracker_settings);
 
   std::vector<double> tip_errors, hidden_errors, joint_errors, ik_us, tracker_us;

@@ -390,20 +390,20 @@ std::optional<double> HandTracker::reach_side(std::size_t m, const Eigen::Vector
   const Eigen::Vector3d v = p - chain.root_m;
   const double side_m = std::abs(v.dot(chain.rest_direction.cross(chain.up)));
   const double slack_m = marker.offset_m.norm() + kReachMiss_m;
-  const double longest = 1.0 + settings_.finger_length_tolerance;
+  const double tolerance = settings_.finger_length_tolerance;
+  const double longest = 1.0 + (std::isfinite(tolerance) ? std::clamp(tolerance, 0.0, kFingerLengthToleranceMax) : 0.0);
   if (v.norm() > longest * (chain.length_m[0] + chain.length_m[1] + chain.length_m[2]) + slack_m) return std::nullopt;
   if (side_m > std::sin(chain.limits.abduction_max_rad) * v.norm() + slack_m) return std::nullopt;
-  // The finger scaled by `scale` about its root reaches p where the finger itself reaches p's
-  // place scaled back; its miss scales with it.
-  const auto miss_m = [&](double scale) {
+  // The finger and its marker scaled by `scale` about its root reach p where they reach p's place
+  // scaled back; the miss scales with them.
+  const auto reaches = [&](double scale) {
     const Eigen::Vector3d q = chain.root_m + v / scale;
     const FingerPoint point = finger_point(marker, q, 1.0);
     const FingerFit fit =
         fit_finger(chain, std::span<const FingerPoint>(&point, 1), solver_.state().angles[f], finger_fit_settings(static_cast<Finger>(f)));
-    return scale * (finger_point_at(chain, fit.angles, point) - q).norm();
+    return scale * (finger_point_at(chain, fit.angles, point) - q).norm() <= kReachMiss_m;
   };
-  if (miss_m(1.0) <= kReachMiss_m) return side_m;
-  if (settings_.finger_length_tolerance > 0.0 && (miss_m(longest) <= kReachMiss_m || miss_m(1.0 / longest) <= kReachMiss_m)) return side_m;
+  if (reaches(1.0) || (longest > 1.0 && (reaches(longest) || reaches(1.0 / longest)))) return side_m;
   return std::nullopt;
 }
 

@@ -83,10 +83,12 @@ struct HandTrackerSettings {
   MarkerFrame frame_from_markers = MarkerFrame::kWhereColoured;
   // How much longer or shorter than the skeleton's a user's fingers may be, as a fraction of each
   // finger's length: a finger marker found again by its reach (take_by_reach) may lie where the
-  // finger would reach at its own length or (1 + this) times longer or shorter. The reference hand stands for adults whose hands span about
-  // +-10 % around it (the simulated users' hands, independent_hand, do too); with it at 0 a user's
-  // longer finger, opened while its marker was hidden, was not found again (docs/tracking.md, "A
-  // finger longer than the skeleton's"). 0 for a skeleton calibrated to the user (HandCalibration.h).
+  // finger, with its marker, would reach at its own size or scaled about its root by (1 + this) or
+  // 1 / (1 + this) (clamped to [0, HandTracker::kFingerLengthToleranceMax]). The reference hand
+  // stands for adults whose hands span about +-10 % around it (the simulated users' hands,
+  // independent_hand, do too). At 0, a user's longer finger opened while its marker was hidden was
+  // not found again (docs/tracking.md, "A finger longer than the skeleton's"). 0 for a skeleton
+  // calibrated to the user (HandCalibration.h).
   double finger_length_tolerance = 0.1;
 };
 
@@ -164,7 +166,7 @@ class HandTracker {
   // each finger marker not followed the frame before (or given its point by reach then), the free
   // points its finger reaches
   // (FingerFit.h: the finger fitted to it misses by at most kReachMiss_m within its joint limits, at
-  // its length or one within HandTrackerSettings::finger_length_tolerance of it),
+  // its size or scaled by HandTrackerSettings::finger_length_tolerance),
   // however far its finger's estimate had drifted from them, each marked whether it was reachable
   // the frame before too; take_by_reach (after nearest first, before untangle_neighbours) gives each
   // marker still without a point one of those that were, and not `contested` (below). A hidden
@@ -253,6 +255,7 @@ class HandTracker {
   // its reach, but fingers took points by reach twice as often, some wrong (a pinching finger let a
   // cube go in rhot-eval grasp seed 4), and a hidden thumb took a stray 86 mm from its estimate.
   static constexpr double kReachMiss_m = 0.004;
+  static constexpr double kFingerLengthToleranceMax = 0.3;  // HandTrackerSettings::finger_length_tolerance's largest
   static constexpr double kReachPersist_m = 0.015;
   // The fingertip model: frames with all five tips seen before it is used, how often it is refitted
   // (frames), how long a hidden tip's last offset from the prediction is kept (HiddenMarkerModel::
@@ -267,8 +270,8 @@ class HandTracker {
  private:
   // How far to the side of marker m's finger's own plane (through its knuckle, along its rest
   // direction) a point p lies, where the finger reaches p (hand frame) within kReachMiss_m and its
-  // joint limits, at its own length or at (1 + finger_length_tolerance) times longer or shorter;
-  // none where it cannot.
+  // joint limits, at its own size or scaled about its root (with its marker) by 1 + t or 1 / (1 + t),
+  // t being HandTrackerSettings::finger_length_tolerance; none where it cannot.
   std::optional<double> reach_side(std::size_t m, const Eigen::Vector3d& p) const;
   // Marker m had a point on the last frame: it is followed frame to frame.
   bool followed(std::size_t m) const { return last_time_s_ && marker_found_s_[m] == last_time_s_; }
