@@ -388,15 +388,23 @@ std::optional<double> HandTracker::reach_side(std::size_t m, const Eigen::Vector
   // or farther to the side of its plane than its widest sideways turn takes it: out of reach,
   // without a fit.
   const Eigen::Vector3d v = p - chain.root_m;
+  const double distance_m = v.norm();
   const double side_m = std::abs(v.dot(chain.rest_direction.cross(chain.up)));
   const double slack_m = marker.offset_m.norm() + kReachMiss_m;
   const double tolerance = settings_.finger_length_tolerance;
   const double longest = 1.0 + (std::isfinite(tolerance) ? std::clamp(tolerance, 0.0, kFingerLengthToleranceMax) : 0.0);
-  if (v.norm() > longest * (chain.length_m[0] + chain.length_m[1] + chain.length_m[2]) + slack_m) return std::nullopt;
-  if (side_m > std::sin(chain.limits.abduction_max_rad) * v.norm() + slack_m) return std::nullopt;
+  if (distance_m > longest * (chain.length_m[0] + chain.length_m[1] + chain.length_m[2]) + slack_m) return std::nullopt;
+  if (side_m > std::sin(chain.limits.abduction_max_rad) * distance_m + slack_m) return std::nullopt;
+  // Whatever the angles, the marker lies within its bones' lengths (those before its joint) and its
+  // offset of the root.
+  double marker_reach_m = marker.offset_m.norm();
+  const int joint = finger_point(marker, p, 1.0).joint;
+  for (int k = 0; k < std::min(joint, 3); ++k) marker_reach_m += chain.length_m[static_cast<std::size_t>(k)];
   // The finger and its marker scaled by `scale` about its root reach p where they reach p's place
-  // scaled back; the miss scales with them.
+  // scaled back; the miss scales with them. A place beyond the scaled marker's reach by more than
+  // the miss is not reached by any fit, so it gets none (the search's cost is in these fits).
   const auto reaches = [&](double scale) {
+    if (distance_m > scale * marker_reach_m + kReachMiss_m) return false;
     const Eigen::Vector3d q = chain.root_m + v / scale;
     const FingerPoint point = finger_point(marker, q, 1.0);
     const FingerFit fit =
