@@ -204,7 +204,7 @@ CapsuleGap capsule_gap(const btCollisionObject& object, const Eigen::Vector3d& a
   btPointCollector out;
   gjk.getClosestPoints(in, out, nullptr);
   if (!out.m_hasResult) return {};
-  return {static_cast<double>(out.m_distance), to_eigen(out.m_pointInWorld)};
+  return {static_cast<double>(out.m_distance), to_eigen(out.m_pointInWorld), to_eigen(out.m_normalOnBInWorld)};
 }
 
 double digit_curl_rad(const HandInput& hand, int digit) {

@@ -121,10 +121,12 @@ double digit_curl_rad(const HandInput& hand, int digit);
 // and a convex collision object at its current pose; +infinity for a non-convex one.
 double capsule_distance_m(const btCollisionObject& object, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius_m);
 
-// The same, with the object's point nearest the capsule (world).
+// The same, with the object's point nearest the capsule and the object's outward normal there
+// (world; from the object toward the capsule).
 struct CapsuleGap {
   double distance_m = std::numeric_limits<double>::infinity();
   Eigen::Vector3d on_object = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
 };
 CapsuleGap capsule_gap(const btCollisionObject& object, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius_m);
 

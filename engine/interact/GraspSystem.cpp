@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <LinearMath/btAabbUtil2.h>
+
 #include "engine/core/World.h"
 #include "engine/interact/FingerContact.h"
 #include "engine/physics/BulletMath.h"
@@ -499,6 +501,7 @@ void GraspSystem::post_step(World& world) {
   contacts_ = read_contacts();
   const HandContacts& contacts = contacts_;
   update_hover_and_contact(contacts);
+  join_fingers();
   release_opened();
   begin_new_grasps(world, contacts);
   resume_collisions();
@@ -567,6 +570,89 @@ void GraspSystem::update_hover_and_contact(const HandContacts& contacts) {
   }
 }
 
+// Fingers that close on a held object after its grasp began join the grip: curled, touching the
+// object where the grip has it (the holding hand's bones no longer collide with it, so this is a
+// distance query per bone, not a contact), a touching bone's normal opposing a thumb or palm grip
+// point's as at a grasp (own with own, or both as finger pads feel them). Every touching bone of
+// the finger becomes a grip point, as at a grasp. The grip then holds until they open too: a
+// grasp begun by the first finger to touch (a tracked finger grazing an edge) is not ended by that
+// finger alone moving off while the others hold. A hidden finger joins where the hidden-finger rule
+// placed it against the object, unmeasured: it never counts as open while hidden, and once
+// measured it is judged against the surface it was placed on (release_opened).
+void GraspSystem::join_fingers() {
+  if (!settings_.fingers_join) return;
+  const auto& bones = hand_bones();
+  for (auto& [object, held] : held_) {
+    btRigidBody* body = physics_.body(object);
+    if (!body) continue;
+    const btTransform target = target_of(held);
+    // The tracked bones brought to the object where it is, from where the grip has it (it lags its
+    // target by millimetres): last_bone_distance_m's frame.
+    const btTransform to_body = body->getWorldTransform() * target.inverse();
+    const btTransform& world_from_body = body->getWorldTransform();
+    const btMatrix3x3 object_from_world = world_from_body.getBasis().transpose();
+    btVector3 lo, hi;
+    body->getAabb(lo, hi);
+    for (int hand = 0; hand < 2; ++hand) {
+      auto& grip = held.by[static_cast<std::size_t>(hand)];
+      const HandColliders* h = hands_[static_cast<std::size_t>(hand)];
+      if (!grip || !h->active()) continue;
+      const HandInput& in = h->input();
+      const btScalar grown = static_cast<btScalar>(physics_.scale(object) / grip->scale);
+      // The thumb's and palm's grip normals (object frame), own and as a pad feels them.
+      std::vector<std::pair<btVector3, btVector3>> anchors;
+      for (const GripPoint& g : grip->grip) {
+        if (g.group != 0 && g.group != kPalmGroup) continue;
+        const btVector3 world_normal = world_from_body.getBasis() * g.normal;
+        const btVector3 pad = pad_normal(*body, world_from_body * (g.on_object * grown), world_normal, settings_.pad_radius_m);
+        anchors.emplace_back(g.normal, object_from_world * pad);
+      }
+      for (int f = 1; f <= 4; ++f) {
+        if (std::any_of(grip->grip.begin(), grip->grip.end(), [&](const GripPoint& g) { return g.group == f; })) continue;
+        if (!(curl_rad(hand, f) >= settings_.min_curl_rad)) continue;
+        std::vector<GripPoint> touching;
+        bool opposes = false;
+        for (std::size_t i = 0; i < bones.size(); ++i) {
+          if (bones[i].group != f) continue;
+          const btVector3 a = to_body * to_bt(in.joints_world[static_cast<std::size_t>(bones[i].from)]);
+          const btVector3 b = to_body * to_bt(in.joints_world[static_cast<std::size_t>(bones[i].to)]);
+          const double radius = h->bone_radius_m(static_cast<int>(i));
+          // Boxes first: the exact query only for a bone whose box (with its radius and the
+          // contact distance) overlaps the object's.
+          const btScalar pad_box = static_cast<btScalar>(radius + settings_.contact_distance_m);
+          btVector3 bone_lo = a, bone_hi = a;
+          bone_lo.setMin(b);
+          bone_hi.setMax(b);
+          const btVector3 grow(pad_box, pad_box, pad_box);
+          if (!TestAabbAgainstAabb2(bone_lo - grow, bone_hi + grow, lo, hi)) continue;
+          const CapsuleGap gap = capsule_gap(*body, to_eigen(a), to_eigen(b), radius);
+          if (!(gap.distance_m <= settings_.contact_distance_m) || !gap.on_object.allFinite() || !gap.normal.allFinite() ||
+              gap.normal.norm() < 0.5)
+            continue;
+          const btVector3 point = to_bt(gap.on_object);
+          const btVector3 normal = to_bt(gap.normal.normalized());
+          const btVector3 own = object_from_world * normal;
+          const btVector3 pad = object_from_world * pad_normal(*body, point, normal, settings_.pad_radius_m);
+          for (const auto& [anchor_own, anchor_pad] : anchors) {
+            opposes = opposes || static_cast<double>(anchor_own.dot(own)) < settings_.opposing_cos ||
+                      static_cast<double>(anchor_pad.dot(pad)) < settings_.opposing_cos;
+          }
+          GripPoint g;
+          g.bone = static_cast<int>(i);
+          g.group = f;
+          g.on_object = world_from_body.invXform(point) / grown;
+          g.normal = own;
+          g.on_bone = h->tracked_bone(g.bone).inverse() * (target * (g.on_object * grown));
+          g.measured = grip_confidence(hand, g) >= settings_.confident;
+          g.joined = true;
+          touching.push_back(g);
+        }
+        if (opposes) grip->grip.insert(grip->grip.end(), touching.begin(), touching.end());
+      }
+    }
+  }
+}
+
 // Releases: fingers opened, or the object stuck far from its grip.
 void GraspSystem::release_opened() {
   struct LetGoOf {
@@ -607,8 +693,11 @@ void GraspSystem::release_opened() {
       for (GripPoint& g : grip->grip) {
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
         if (trusted && !g.measured) {
-          // Measured for the first time since the grasp: held from where it is now.
-          g.on_object = target.inverse() * (h->tracked_bone(g.bone) * g.on_bone) / grown;
+          // Measured for the first time since the grasp: held from where it is now. A finger that
+          // joined the grip hidden keeps its point on the surface it was placed against: measured
+          // away from it, it has opened (else a hand opening as the finger comes into view would
+          // hold on until the finger moved another release distance).
+          if (!g.joined) g.on_object = target.inverse() * (h->tracked_bone(g.bone) * g.on_bone) / grown;
           g.measured = true;
         }
         const double left = g.group == kPalmGroup ? 0.0 : left_m[static_cast<std::size_t>(g.group)];

@@ -19,7 +19,10 @@
 // `confident`: a hidden fingertip marker, say) never counts as open, so a hand whose curled
 // fingers hide their own markers keeps holding; and a
 // finger that was not measured when the grasp began is re-anchored where it is the first time it
-// is (its estimate may have been centimetres off: the jump to its marker is no opening). On
+// is (its estimate may have been centimetres off: the jump to its marker is no opening). A finger
+// that closes on the held object after the grasp began (curled, a bone touching it, opposing the
+// thumb or palm) joins the grip (`fingers_join`), so a grasp begun by the first finger to touch
+// does not end when that finger alone moves off while the others hold. On
 // release the object takes the hand's velocity, fitted by least squares over a window that ends
 // a little before the release (the hand slows while it opens), and its angular velocity, so it
 // can be thrown. A hand cannot grasp again within `regrasp_delay_s` of releasing.
@@ -128,10 +131,13 @@ class GraspSystem {
   struct GripPoint {
     int bone = 0;
     int group = 0;
-    btVector3 on_object;   // object frame
-    btVector3 normal;      // object frame, outward
-    btVector3 on_bone;     // tracked bone frame
-    bool measured = true;  // its finger was measured when the grip began (else: it is, once measured, re-anchored)
+    btVector3 on_object;  // object frame
+    btVector3 normal;     // object frame, outward
+    btVector3 on_bone;    // tracked bone frame
+    // Its finger was measured when it entered the grip (else: it is, once measured, re-anchored
+    // there, unless it joined the grip: GraspSystem::join_fingers).
+    bool measured = true;
+    bool joined = false;  // added after the grasp began (join_fingers): its point is on the surface it touched
   };
   // One hand's hold of an object.
   struct HandGrip {
@@ -175,6 +181,7 @@ class GraspSystem {
   // post_step's phases, in order.
   HandContacts read_contacts() const;
   void update_hover_and_contact(const HandContacts& contacts);
+  void join_fingers();
   void release_opened();
   void begin_new_grasps(World& world, const HandContacts& contacts);
   void resume_collisions();

@@ -50,6 +50,11 @@ class HandColliders {
   std::optional<int> bone_of(const btCollisionObject* object) const;
   // Tracked pose of bone i (capsule axis along its local +Y, from `from` to `to`).
   btTransform tracked_bone(int i) const { return bones_[static_cast<std::size_t>(i)].target; }
+  // Bone i's capsule radius (metres; 0 before the hand was first seen).
+  double bone_radius_m(int i) const {
+    const auto& shape = bones_[static_cast<std::size_t>(i)].shape;
+    return shape ? static_cast<double>(shape->getRadius()) : 0.0;
+  }
   // The physical hand for drawing: joint positions from the bone bodies (tracked where no bone ends).
   std::array<Eigen::Vector3d, kHandJointCount> physical_joints() const;
   // The bones' capsules where the physics has them, for debug drawing (empty before the hand is

@@ -205,7 +205,7 @@ HeadsetSettings read_headset(const Node& n) {
 GraspSettings read_grasp(const Node& n) {
   n.expect_object({"contact_distance_m", "opposing_cos", "pad_radius_m", "min_curl_rad", "release_distance_m", "confident",
                    "regrasp_delay_s", "throw_window_s", "throw_window_end_s", "max_hold_error_m", "max_object_speed_mps",
-                   "hover_distance_m", "hidden_finger_curl_rad"});
+                   "hover_distance_m", "hidden_finger_curl_rad", "fingers_join"});
   GraspSettings g;
   const auto set = [&](const char* key, double& value, double lo, double hi, const char* what) {
     if (auto v = n.optional(key)) value = v->number_in(lo, hi, what);
@@ -223,6 +223,7 @@ GraspSettings read_grasp(const Node& n) {
   set("max_object_speed_mps", g.max_object_speed_mps, 0.1, 100.0, "a speed from 0.1 to 100 m/s");
   set("hover_distance_m", g.hover_distance_m, 0.0, 1.0, "a distance from 0 to 1 m");
   set("hidden_finger_curl_rad", g.hidden_finger_curl_rad, 0.0, 2.0, "an angle from 0 to 2 rad");
+  if (auto v = n.optional("fingers_join")) g.fingers_join = v->boolean();
   return g;
 }
 

@@ -135,12 +135,14 @@ BENCHMARK(BM_WorkbenchFrame)->Unit(benchmark::kMicrosecond);
 // The workbench's showcase script with its own hands (engine/sim/DemoScript.h): the door swung on
 // its hinge, the drawer pulled, the button poked, the peg carried into its socket, the bar carried
 // in both hands to its rack, with the rules firing; the whole script, again and again.
+// fingers_join 0: the grips keep the fingers they began with (GraspSettings::fingers_join).
 void BM_WorkbenchShowcase(benchmark::State& state) {
-  const auto scene = load_scene_file(RHOT_ASSET_DIR "/scenes/workbench.json");
+  auto scene = load_scene_file(RHOT_ASSET_DIR "/scenes/workbench.json");
   if (!scene) {
     state.SkipWithError(scene.error().to_string().c_str());
     return;
   }
+  scene->settings.grasp.fingers_join = state.range(1) != 0;
   const DemoScript script(*scene);
   const long frames = static_cast<long>(script.duration_s() * 90.0);
   std::vector<double> ms;
@@ -176,7 +178,13 @@ void BM_WorkbenchShowcase(benchmark::State& state) {
   }
   report(state, ms);
 }
-BENCHMARK(BM_WorkbenchShowcase)->ArgName("hidden_digits")->Arg(0)->Arg(2)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_WorkbenchShowcase)
+    ->ArgNames({"hidden_digits", "fingers_join"})
+    ->Args({0, 1})
+    ->Args({2, 1})
+    ->Args({0, 0})
+    ->Args({2, 0})
+    ->Unit(benchmark::kMicrosecond);
 
 // The baseline: a bare Bullet world, 38 kinematic capsules following the same hands, 20 objects.
 void BM_BareBulletKinematicFingers(benchmark::State& state) {

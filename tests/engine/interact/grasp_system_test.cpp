@@ -4,6 +4,7 @@
 #include "engine/interact/GraspSystem.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <regex>
@@ -68,6 +69,48 @@ struct Bench {
     physics->step(world, hands);
     for (const InteractionEvent& e : physics->events()) events.push_back(e);
     t += physics->physics().step_s();
+  }
+  // One step with each digit (thumb, index .. little) at its own closure and confidence, the hand
+  // `lift_m` above the cube's start.
+  void step_digits(const std::array<double, kFingerCount>& closure, const std::array<double, kFingerCount>& confidence,
+                   double lift_m = 0.0) {
+    HandPose pose = grasp.pose(1.0);
+    std::array<HandInput, 2> hands;
+    for (int f = 0; f < kFingerCount; ++f) {
+      const HandPose digit = grasp.pose(closure[static_cast<std::size_t>(f)]);
+      for (const HandJoint j : chain_joints(static_cast<Finger>(f))) {
+        pose.position_m[static_cast<std::size_t>(j)] = digit.position_m[static_cast<std::size_t>(j)];
+      }
+    }
+    hands[1] = hand_input(grasp.place(centre + Eigen::Vector3d(0.0, lift_m, 0.0), axis), pose);
+    hands[1].seen = true;
+    for (int f = 0; f < kFingerCount; ++f) {
+      for (const HandJoint j : chain_joints(static_cast<Finger>(f))) {
+        hands[1].confidence[static_cast<std::size_t>(j)] = confidence[static_cast<std::size_t>(f)];
+      }
+    }
+    physics->step(world, hands);
+    for (const InteractionEvent& e : physics->events()) events.push_back(e);
+    t += physics->physics().step_s();
+  }
+  // Lowers the open hand onto the cube and closes it (as reach_and_close) with its middle finger
+  // kept open, every digit measured: the thumb and index grasp the cube.
+  void reach_and_close_but_the_middle() {
+    const std::array<double, kFingerCount> seen{1.0, 1.0, 1.0, 1.0, 1.0};
+    for (int i = 0; i < 45; ++i) step_digits({0.0, 0.0, 0.0, 0.0, 0.0}, seen, 0.15 * (1.0 - i / 44.0));
+    for (int i = 0; i < 45; ++i) {
+      const double c = i / 44.0;
+      step_digits({c, c, 0.0, c, c}, seen);
+    }
+  }
+  // Whether the first release's reason matches `pattern` (a regular expression).
+  bool released_as(const std::string& pattern) const {
+    const std::size_t i = first(InteractionEventType::kRelease);
+    return i < events.size() && std::regex_match(events[i].reason, std::regex(pattern));
+  }
+  std::string release_reason() const {
+    const std::size_t i = first(InteractionEventType::kRelease);
+    return i < events.size() ? events[i].reason : "(no release)";
   }
   // Lowers the open hand from 15 cm onto the cube (0.5 s), then closes it (0.5 s).
   void reach_and_close(bool seen = true) {
@@ -251,6 +294,71 @@ TEST(GraspSystem, FingersEstimatedAtTheGraspAreReanchoredWhenFirstMeasured) {
   ASSERT_EQ(measured.count(InteractionEventType::kGrasp), 1);
   for (int i = 0; i < 5; ++i) measured.step(0.5);
   EXPECT_EQ(measured.count(InteractionEventType::kRelease), 1);
+}
+
+// A grasp begun by the first finger to touch (seed 11 of `rhot-eval grasp --hands tracked`: the
+// tracked middle finger grazing the cube's top edge a step before the hidden index closed on it)
+// is not ended by that finger alone moving off: a finger that closes on the held object after the
+// grasp began joins the grip, and the grip ends when it opens too. Here the thumb and index grasp
+// the cube with the middle finger held open; the middle closes on it (the hand's pose now closing
+// the fingers 20 mm into the cube, so that the middle reaches it); then the index opens wide. With
+// `fingers_join` false the index's opening lets the cube go.
+TEST(GraspSystem, AFingerThatClosesOnTheHeldObjectJoinsTheGripAndHoldsItWhenTheFirstOpens) {
+  const std::array<double, kFingerCount> seen{1.0, 1.0, 1.0, 1.0, 1.0};
+  for (const bool join : {true, false}) {
+    Bench b(true, join ? "" : R"("settings": {"grasp": {"fingers_join": false}}, )");
+    b.reach_and_close_but_the_middle();
+    ASSERT_EQ(b.count(InteractionEventType::kGrasp), 1) << "join " << join;
+    ASSERT_EQ(b.events[b.first(InteractionEventType::kGrasp)].reason, "thumb against index") << "join " << join;
+    b.grasp = make_grasp(HandSide::kRight, 0.05, 0.02, 2);                                   // held: the thumb and index press on, deeper
+    for (int i = 0; i < 23; ++i) b.step_digits({1.0, 1.0, i / 22.0, 1.0, 1.0}, seen);        // the middle closes on the cube
+    for (int i = 0; i < 23; ++i) b.step_digits({1.0, 1.0 - i / 22.0, 1.0, 1.0, 1.0}, seen);  // the index opens wide
+    if (!join) {
+      EXPECT_EQ(b.count(InteractionEventType::kRelease), 1);
+      EXPECT_TRUE(b.released_as(R"(index opened \d+ mm \(measured(, last bone)?\))")) << b.release_reason();
+      continue;
+    }
+    EXPECT_EQ(b.count(InteractionEventType::kRelease), 0);
+    // Held by the thumb and the middle: lifted 10 cm, the cube comes along.
+    for (int i = 0; i < 45; ++i) b.step_digits({1.0, 0.0, 1.0, 1.0, 1.0}, seen, 0.1 * i / 44.0);
+    EXPECT_EQ(b.count(InteractionEventType::kRelease), 0);
+    EXPECT_GT(static_cast<double>(b.physics->physics().body(b.cube)->getWorldTransform().getOrigin().y()), 0.825 + 0.08);
+    // The middle opens too: released, by both.
+    for (int i = 0; i < 23 && b.count(InteractionEventType::kRelease) == 0; ++i)
+      b.step_digits({1.0, 0.0, 1.0 - i / 22.0, 1.0, 1.0}, seen, 0.1);
+    EXPECT_EQ(b.count(InteractionEventType::kRelease), 1);
+    EXPECT_TRUE(b.released_as(R"(index, middle opened \d+ mm \(measured(, last bone)?\))")) << b.release_reason();
+  }
+}
+
+// The same with the middle finger hidden (seed 11's case: the index that really held the cube was
+// hidden): it closes with its marker hidden, the hidden-finger rule places it against the cube,
+// and it joins the grip unmeasured; the index opens wide, measured, and the cube stays held. When
+// the middle finger is first measured, open, it is judged against the surface it was placed on:
+// the hand lets go at once, not a release distance later.
+TEST(GraspSystem, AHiddenFingerPlacedAgainstTheHeldObjectJoinsTheGripAndOpensWhenSeenOpen) {
+  const std::array<double, kFingerCount> seen{1.0, 1.0, 1.0, 1.0, 1.0};
+  const std::array<double, kFingerCount> middle_hidden{1.0, 1.0, 0.6, 1.0, 1.0};
+  for (const bool join : {true, false}) {
+    Bench b(true, join ? "" : R"("settings": {"grasp": {"fingers_join": false}}, )");
+    b.reach_and_close_but_the_middle();
+    ASSERT_EQ(b.count(InteractionEventType::kGrasp), 1) << "join " << join;
+    ASSERT_EQ(b.events[b.first(InteractionEventType::kGrasp)].reason, "thumb against index") << "join " << join;
+    for (int i = 0; i < 23; ++i) b.step_digits({1.0, 1.0, i / 22.0, 1.0, 1.0}, middle_hidden);        // the hidden middle closes
+    for (int i = 0; i < 23; ++i) b.step_digits({1.0, 1.0 - i / 22.0, 1.0, 1.0, 1.0}, middle_hidden);  // the index opens wide
+    if (!join) {
+      EXPECT_EQ(b.count(InteractionEventType::kRelease), 1);
+      EXPECT_TRUE(b.released_as(R"(index opened \d+ mm \(measured(, last bone)?\))")) << b.release_reason();
+      continue;
+    }
+    for (int i = 0; i < 45; ++i) b.step_digits({1.0, 0.0, 1.0, 1.0, 1.0}, middle_hidden, 0.1 * i / 44.0);
+    EXPECT_EQ(b.count(InteractionEventType::kRelease), 0);
+    EXPECT_GT(static_cast<double>(b.physics->physics().body(b.cube)->getWorldTransform().getOrigin().y()), 0.825 + 0.08);
+    // The middle finger comes into view open: released on that step.
+    b.step_digits({1.0, 0.0, 0.0, 1.0, 1.0}, seen, 0.1);
+    EXPECT_EQ(b.count(InteractionEventType::kRelease), 1);
+    EXPECT_TRUE(b.released_as(R"(index, middle opened \d+ mm \(measured(, last bone)?\))")) << b.release_reason();
+  }
 }
 
 }  // namespace
