@@ -391,6 +391,7 @@ void GraspSystem::begin_grasp(World& world, int hand, Entity object, const std::
   }
   grip.centre = world_from_hand.inverse() * (centre / static_cast<btScalar>(std::max<std::size_t>(1, grip.grip.size())));
   grip.scale = physics_.scale(object);
+  grip.began_s = physics_.time_s();
   remember_last_bones(hand, grip, *body, world_from_object);
   if (!joining) {
     Held held;
@@ -645,6 +646,7 @@ void GraspSystem::join_fingers() {
           g.on_bone = h->tracked_bone(g.bone).inverse() * (target * (g.on_object * grown));
           g.measured = grip_confidence(hand, g) >= settings_.confident;
           g.joined = true;
+          if (!g.measured && physics_.time_s() - grip->began_s > kHiddenJoinWindow_s) continue;
           touching.push_back(g);
         }
         if (opposes) grip->grip.insert(grip->grip.end(), touching.begin(), touching.end());
@@ -690,6 +692,15 @@ void GraspSystem::release_opened() {
       std::array<double, 5> left_m{};  // per finger: finger_left_m
       for (int f = 1; f <= 4; ++f) left_m[static_cast<std::size_t>(f)] = finger_left_m(hand, *grip, f, *body, target);
       bool by_last_bone = false;
+      // A finger that joined the grip has opened when any of its points has: its points were all
+      // taken at one moment, and a straightening finger's first bone stays by the surface it
+      // touched while its last bones leave it (the bar, let go at the workbench's rack).
+      std::array<bool, 5> joined_open{};
+      for (const GripPoint& g : grip->grip) {
+        if (g.joined && g.measured && grip_confidence(hand, g) >= settings_.confident &&
+            std::max(out_of_surface_m(hand, g, target, grown), left_m[static_cast<std::size_t>(g.group)]) > settings_.release_distance_m)
+          joined_open[static_cast<std::size_t>(g.group)] = true;
+      }
       for (GripPoint& g : grip->grip) {
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
         if (trusted && !g.measured) {
@@ -702,7 +713,8 @@ void GraspSystem::release_opened() {
         }
         const double left = g.group == kPalmGroup ? 0.0 : left_m[static_cast<std::size_t>(g.group)];
         const double out_m = std::max(out_of_surface_m(hand, g, target, grown), left);
-        const bool open = trusted && out_m > settings_.release_distance_m;
+        const bool open =
+            trusted && (out_m > settings_.release_distance_m || (g.joined && g.measured && joined_open[static_cast<std::size_t>(g.group)]));
         if (g.group == 0 || g.group == kPalmGroup) {
           any_anchor = true;
           if (open && !anchor_open) anchor_reason = std::string(digit_name(g.group)) + " opened " + millimetres(out_m) + " (measured)";

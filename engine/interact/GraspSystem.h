@@ -144,6 +144,7 @@ class GraspSystem {
     btTransform hand_from_object;  // where the object is, hand frame (while this hand holds it alone)
     std::vector<GripPoint> grip;
     btVector3 centre;              // hand frame: the middle of its grip points
+    double began_s = 0.0;          // physics time of the grasp (join_fingers: hidden fingers join only soon after)
     btQuaternion rotation_paired;  // the hand's rotation (world) when the other hand joined
     double scale = 1.0;            // the object's scale (PhysicsWorld::scale) when the grip points were taken
     // Per finger (index 1-4; the thumb and palm open by their grip points alone): the nearest its
@@ -159,6 +160,11 @@ class GraspSystem {
   // nearest and since it was first measured in the grip: a finger curling on past a thin handle takes its last bone
   // away from it too, but closing; one that squeezed and relaxed is back where it grasped.
   static constexpr double kOpenedCurl_rad = 0.3;
+  // A hidden finger joins a grip only this soon after the grasp began, as the hand closes on the
+  // object: later, while carrying, the hidden-finger rule keeps placing hidden fingers against what
+  // the hand holds, and those would hold the grip closed as the hand opens (the workbench's bar,
+  // let go at its rack 0.1-0.2 s late or not at all).
+  static constexpr double kHiddenJoinWindow_s = 0.5;
   struct Held {
     std::array<std::optional<HandGrip>, 2> by;  // per hand (left, right)
     Grabbable options;

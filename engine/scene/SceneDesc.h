@@ -58,8 +58,9 @@ struct GraspSettings {
   // (engine/interact/FingerContact.h); 0: hidden fingers stay where the tracker puts them.
   double hidden_finger_curl_rad = 1.0;
   // Fingers that close on a held object after the grasp began join its grip (curled, touching it
-  // and opposing the thumb or palm; a hidden one where the hidden-finger rule placed it), so the
-  // grip ends only when they open too; false: the grip keeps the fingers it began with.
+  // and opposing the thumb or palm; a hidden one where the hidden-finger rule placed it, in the
+  // grasp's first 0.5 s), so the grip ends only when they open too; false: the grip keeps the
+  // fingers it began with.
   bool fingers_join = true;
 };
 
