@@ -611,6 +611,10 @@ void GraspSystem::join_fingers() {
       for (int f = 1; f <= 4; ++f) {
         if (std::any_of(grip->grip.begin(), grip->grip.end(), [&](const GripPoint& g) { return g.group == f; })) continue;
         if (!(curl_rad(hand, f) >= settings_.min_curl_rad)) continue;
+        // A hidden finger past the window cannot join: no queries for it (a long hold with hidden
+        // fingers placed against the object would otherwise query them every step).
+        const bool tip_measured = in.confidence[static_cast<std::size_t>(chain_joints(static_cast<Finger>(f))[3])] >= settings_.confident;
+        if (!tip_measured && physics_.time_s() - grip->began_s > kHiddenJoinWindow_s) continue;
         std::vector<GripPoint> touching;
         bool opposes = false;
         for (std::size_t i = 0; i < bones.size(); ++i) {
@@ -644,9 +648,8 @@ void GraspSystem::join_fingers() {
           g.on_object = world_from_body.invXform(point) / grown;
           g.normal = own;
           g.on_bone = h->tracked_bone(g.bone).inverse() * (target * (g.on_object * grown));
-          g.measured = grip_confidence(hand, g) >= settings_.confident;
+          g.measured = tip_measured;
           g.joined = true;
-          if (!g.measured && physics_.time_s() - grip->began_s > kHiddenJoinWindow_s) continue;
           touching.push_back(g);
         }
         if (opposes) grip->grip.insert(grip->grip.end(), touching.begin(), touching.end());
