@@ -162,8 +162,8 @@ class GraspSystem {
   static constexpr double kOpenedCurl_rad = 0.3;
   // A hidden finger joins a grip only this soon after the grasp began, as the hand closes on the
   // object: later, while carrying, the hidden-finger rule keeps placing hidden fingers against what
-  // the hand holds, and those would hold the grip closed as the hand opens (the workbench's bar,
-  // let go at its rack 0.1-0.2 s late or not at all).
+  // the hand holds whether or not they are there, and those could hold the grip closed as the hand
+  // opens (docs/grasping.md, "Fingers join the grip", and what joining still costs at the bar).
   static constexpr double kHiddenJoinWindow_s = 0.5;
   struct Held {
     std::array<std::optional<HandGrip>, 2> by;  // per hand (left, right)
