@@ -331,6 +331,7 @@ class CameraHands {
     source->set_world(std::make_shared<ScenarioWorld>(hands, independent_seed_, cameras.layouts, std::move(fixed), object, scene,
                                                       cameras.world.occluding_bodies));
     LiveTrackingSettings settings;
+    settings.threads = cameras.threads;
     if (cameras.world.calib_error_px > 0.0) settings.tracker_rig = perturbed_rig(rig, cameras.world.calib_error_px, cameras.seed);
     live_ = std::make_unique<LiveTracking>(std::move(source), TrackedObjects{}, cameras.layouts, settings);
   }

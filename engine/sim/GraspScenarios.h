@@ -67,6 +67,7 @@ struct ScenarioCameras {
   std::array<HandLayout, 2> layouts;  // left, right
   WorldSettings world;
   unsigned seed = 1;
+  int threads = 0;  // the tracker's (LiveTrackingSettings::threads; 0: every core)
 };
 
 std::span<const std::string_view> grasp_scenario_names();

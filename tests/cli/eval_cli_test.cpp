@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -23,6 +24,28 @@ using EvalRun = rhot::test::CommandRun;
 
 // stdout only: the JSON.
 EvalRun run_eval(const std::string& args) { return rhot::test::run_program("rhot-eval", args, "2>/dev/null"); }
+
+// A report without what may change from run to run or with the thread count: times (keys ending
+// in _ms or _us) and the threads themselves.
+nlohmann::json without_timings(nlohmann::json j) {
+  if (j.is_array()) {
+    for (nlohmann::json& e : j) e = without_timings(e);
+  } else if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end();) {
+      const std::string& k = it.key();
+      const auto ends = [&k](std::string_view end) {
+        return k.size() >= end.size() && k.compare(k.size() - end.size(), end.size(), end) == 0;
+      };
+      if (k == "threads" || ends("_ms") || ends("_us")) {
+        it = j.erase(it);
+      } else {
+        *it = without_timings(*it);
+        ++it;
+      }
+    }
+  }
+  return j;
+}
 
 TEST(EvalCli, TriangulationPrintsTheAccuracyJsonForEveryShippedRig) {
   // No volume flags: each rig file's tracking volume is where the markers move.
@@ -156,10 +179,15 @@ TEST(EvalCli, GraspPrintsTheScenarioJson) {
   }
   EXPECT_EQ(reasons, (std::vector<std::string>{"thumb against index", "index opened 17 mm (measured, last bone)"}));
   // Through tracked hands, against the same scenario with perfect hands: its one grasp made, never
-  // let go early.
-  const EvalRun tracked = run_eval("grasp --scenario lift --hands tracked --json");
+  // let go early; the same on one thread as on two (issue 40: every mode's --threads changes no
+  // result).
+  const EvalRun tracked = run_eval("grasp --scenario lift --hands tracked --threads 2 --json");
   ASSERT_EQ(tracked.exit_code, 0) << tracked.output;
   const nlohmann::json g = nlohmann::json::parse(tracked.output);
+  EXPECT_EQ(g["threads"].get<int>(), 2);
+  const EvalRun one_thread = run_eval("grasp --scenario lift --hands tracked --threads 1 --json");
+  ASSERT_EQ(one_thread.exit_code, 0) << one_thread.output;
+  EXPECT_EQ(without_timings(nlohmann::json::parse(one_thread.output)), without_timings(g));
   EXPECT_EQ(g["grasp_cycles"].get<int>(), 1) << g.dump(2);
   EXPECT_EQ(g["tracked_grasps"].get<int>(), 1);
   EXPECT_EQ(g["missed_grasp_count"].get<int>(), 0);

@@ -116,6 +116,7 @@ struct HandsArgs {
   std::vector<double> volume_centre;
   bool filter = false;
   bool calibrate_hand = false;
+  int threads = 0;  // matching's (0: every core)
   bool fingertip_model = false;
   // A recorded take instead (tools/eval/take.cpp): its fingertips hidden by rule, estimated from the rest.
   std::string take_file;
@@ -166,6 +167,7 @@ struct NodesArgs {
   // --chaos SECONDS: faults thrown at the nodes and the master for this long (Chaos.h), the run's
   // length.
   std::optional<double> chaos_s;
+  int threads = 0;  // the master's tracker's, and each node's detection's (0: every core)
 };
 int nodes(const NodesArgs& args);
 // `rhot-eval colour`'s flags.
@@ -182,9 +184,10 @@ struct ColourArgs {
   std::string device = "auto";
   std::string pictures_dir;  // non-empty: the first frame's images and what the model classifies in them
   bool drawn = false;        // also the demo's runtime on the same script and cameras: the drawn hands' fingertips
+  int threads = 0;           // the tracker's (0: every core)
 };
 int colour(const ColourArgs& args);
-int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout);
+int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout, int threads);
 // `rhot-eval grasp`'s flags.
 struct GraspArgs {
   std::string scenario = "all";
@@ -192,6 +195,7 @@ struct GraspArgs {
   std::string rig_file;  // for tracked hands
   WorldFlags world;
   unsigned seed = 1;
+  int threads = 0;  // tracked: the tracker's (0: every core)
 };
 int grasp(const GraspArgs& args);
 // `rhot-eval interactions`'s flags.
@@ -201,14 +205,17 @@ struct InteractionsArgs {
   unsigned seed = 1;
   std::string hands = "tracked";
   WorldFlags world;
+  int threads = 0;  // the tracker's (0: every core)
 };
 int interactions(const InteractionsArgs& args);
-int demo(const std::string& scene_file, int placements, unsigned seed, const WorldFlags& world, const std::string& hands, int frames);
+int demo(const std::string& scene_file, int placements, unsigned seed, const WorldFlags& world, const std::string& hands, int frames,
+         int threads);
 struct FrameOptions {
   std::string prediction = "on";
   bool gpu_timings = false;
   bool real_time = false;
   bool xr = false;  // on the OpenXR runtime's headset: paced by it, predicted to its display time
+  int threads = 0;  // the tracker's (0: every core)
 };
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, Shading shading,
           const WorldFlags& world, const FrameOptions& options);

@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "tools/eval/Eval.h"
 #include "tracking/calib/RigMerge.h"
 #include "tracking/calib/Similarity.h"
@@ -20,7 +21,7 @@
 
 namespace rhot::eval {
 
-int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout) {
+int calibration(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout, int threads) {
   const auto truth = load_rig(rig_file);
   if (!truth) {
     std::cerr << "rhot-eval: " << truth.error() << "\n";
@@ -43,6 +44,7 @@ int calibration(const std::string& rig_file, double length_mm, double sigma, int
   const Detections d = simulate_wand_session(*truth, session, noise);
   WandSettings settings;
   settings.wand_length_m = session.wand_length_m;
+  settings.threads = threads_or_all(threads);
   const auto start = std::chrono::steady_clock::now();
   const auto result = calibrate_wand(*truth, d, settings);  // the truth's poses are ignored
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -77,6 +79,7 @@ int calibration(const std::string& rig_file, double length_mm, double sigma, int
   nlohmann::json j;
   j["rig"] = rig_file;
   j["frames"] = frames;
+  j["threads"] = settings.threads;
   j["sigma_px"] = sigma;
   j["dropout"] = dropout;
   j["wand_mm"] = length_mm;

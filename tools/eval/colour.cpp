@@ -40,6 +40,7 @@
 #include <spdlog/spdlog.h>
 #include <opencv2/imgproc.hpp>
 
+#include "base/Jobs.h"
 #include "engine/core/World.h"
 #include "engine/hand/HandComponents.h"
 #include "engine/scene/SceneLoader.h"
@@ -285,6 +286,7 @@ nlohmann::ordered_json report(const ColourArgs& a, const std::string& device_nam
   j["noise"] = a.noise;
   j["white_balance_k"] = a.kelvin;
   j["clutter"] = a.clutter;
+  j["threads"] = threads_or_all(a.threads);
   const nlohmann::ordered_json overall = tally.all.json(tally.images);
   for (auto it = overall.begin(); it != overall.end(); ++it) j[it.key()] = it.value();
   j["fingertip_mean_mm"] = tally.tips > 0 ? 1000.0 * tally.tip_sum_m / static_cast<double>(tally.tips) : 0.0;
@@ -317,6 +319,7 @@ std::expected<nlohmann::ordered_json, std::string> drawn_fingertips(const Colour
   settings.colour_cameras.kelvin = a.kelvin;
   settings.colour_cameras.device = a.device;
   settings.seed = a.seed;
+  settings.threads = a.threads;
   auto created = Demo::create(scene, nullptr, settings);
   if (!created) return std::unexpected(created.error());
   Demo& demo = **created;
@@ -408,7 +411,9 @@ int colour(const ColourArgs& a) {
   auto source = std::make_unique<ColourCameraSource>(
       std::move(*cameras), [world](double t) { return world->colour_shot(world->at(t)); }, model);
   ColourCameraSource* src = source.get();
-  LiveTracking live(std::move(source), sim->objects, sim->layouts);
+  LiveTrackingSettings live_settings;
+  live_settings.threads = a.threads;
+  LiveTracking live(std::move(source), sim->objects, sim->layouts, live_settings);
   ColourDetector full_detector(model);
 
   ColourTally tally;

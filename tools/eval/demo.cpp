@@ -10,14 +10,15 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/scene/SceneLoader.h"
+#include "base/Jobs.h"
 #include "engine/sim/DemoPickups.h"
 
 #include "tools/eval/Eval.h"
 
 namespace rhot::eval {
 
-int demo(const std::string& scene_file, int placements, unsigned seed, const WorldFlags& world_flags, const std::string& hands,
-         int frames) {
+int demo(const std::string& scene_file, int placements, unsigned seed, const WorldFlags& world_flags, const std::string& hands, int frames,
+         int threads) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("rhot-eval"));
   spdlog::set_level(spdlog::level::warn);
   const auto world = world_settings(world_flags);
@@ -40,12 +41,14 @@ int demo(const std::string& scene_file, int placements, unsigned seed, const Wor
   settings.world = *world;
   settings.sigma_px = world->sigma_px;
   settings.perfect_hands = hands == "perfect";
+  settings.threads = threads;
   nlohmann::json j;
   j["scene"] = scene_file;
   j["world"] = world_json(*world, world_flags.world);
   j["hands"] = hands;
   j["seed"] = seed;
   j["frames_per_placement"] = frames;
+  j["threads"] = rhot::threads_or_all(threads);
   int successes = 0, confusion = 0;
   long seen = 0, wrong = 0;
   double lift_sum = 0.0;

@@ -18,6 +18,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "engine/sim/GraspScenarios.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
@@ -84,6 +85,7 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   settings.world = *world;
   settings.sigma_px = world->sigma_px;
   settings.predict = options.prediction == "on";
+  settings.threads = options.threads;
   auto demo = rhot::Demo::create(*scene, renderer->get(), settings);
   if (!demo) {
     std::cerr << "rhot-eval: " << demo.error() << "\n";
@@ -148,6 +150,7 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   }
   j["scene"] = scene_file;
   j["world"] = world_json(*world, world_flags.world);
+  j["threads"] = threads_or_all(options.threads);
   j["eye_px"] = {(*renderer)->eye_width_px(), (*renderer)->eye_height_px()};
   j["device"] = (*renderer)->info().device_name;
   j["cpu_device"] = (*renderer)->info().cpu_device;

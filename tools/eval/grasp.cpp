@@ -18,6 +18,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "engine/sim/GraspScenarios.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
@@ -39,7 +40,7 @@ std::expected<rhot::ScenarioCameras, std::string> scenario_cameras(const GraspAr
   if (!world) return std::unexpected(world.error());
   auto rig = rhot::load_rig(args.rig_file);
   if (!rig) return std::unexpected(rig.error());
-  rhot::ScenarioCameras cameras{std::move(*rig), {}, *world, args.seed};
+  rhot::ScenarioCameras cameras{std::move(*rig), {}, *world, args.seed, args.threads};
   for (std::size_t h = 0; h < 2; ++h) {
     auto layout =
         rhot::load_hand_layout(std::string(RHOT_ASSET_DIR) + (h == 0 ? "/hands/low-cost-left.json" : "/hands/low-cost-right.json"));
@@ -153,6 +154,7 @@ int grasp(const GraspArgs& args) {
     j["rig"] = args.rig_file;
     j["world"] = world_json(cameras->world, args.world.world);
     j["seed"] = args.seed;
+    j["threads"] = rhot::threads_or_all(args.threads);
     j["hand_confusion_frames"] = confusion;
     grasps.put(j);
     j["reported_wrong_fraction"] = static_cast<double>(wrong) / static_cast<double>(std::max(1L, seen));

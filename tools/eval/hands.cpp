@@ -19,6 +19,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "engine/sim/GraspScenarios.h"
 #include "engine/scene/SceneLoader.h"
 #include "tracking/camera/RigFile.h"
@@ -42,7 +43,7 @@ namespace {
 std::optional<rhot::HandPose> calibrated_skeleton(const rhot::CameraRig& rig, const rhot::CameraRig& tracker_rig,
                                                   const rhot::HandLayout& layout, const rhot::HandPose& reference,
                                                   const rhot::HandPose& user, const rhot::Rigid3d& world_from_hand,
-                                                  rhot::SimulatedRigSettings settings) {
+                                                  rhot::SimulatedRigSettings settings, rhot::JobPool& jobs) {
   const auto flat = rhot::hand_pose_from_angles(user, rhot::hand_chains(user, layout.side), {});
   settings.seed += 1000;  // not the motion's noise
   rhot::SimulatedRig sim(rig, {}, settings);
@@ -54,7 +55,7 @@ std::optional<rhot::HandPose> calibrated_skeleton(const rhot::CameraRig& rig, co
   const rhot::RigMatcher matcher(tracker_rig);
   for (int f = 0; f < static_cast<int>(settings.rate_hz); ++f) {
     const rhot::RigFrame frame = sim.next();
-    const auto matched = matcher.match(frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
+    const auto matched = matcher.match(frame, rhot::match_settings_for(pixel_sigma.sigma_px()), &jobs);
     std::vector<Eigen::Vector3d> points;
     for (const rhot::MatchedPoint& m : matched) points.push_back(m.point.position_world);
     const rhot::TrackedHand& hand = tracker.update(frame.time_s, points, rhot::point_sigmas_m(matched, pixel_sigma.update(matched)));
@@ -68,7 +69,7 @@ std::optional<rhot::HandPose> calibrated_skeleton(const rhot::CameraRig& rig, co
 // solved, and every joint compared with the truth.
 nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayout& layout, std::string_view motion,
                                const rhot::WorldSettings& world, const HandsArgs& args, const Eigen::Vector3d& centre,
-                               std::vector<double>& hidden_tip_errors) {
+                               std::vector<double>& hidden_tip_errors, rhot::JobPool& jobs) {
   const unsigned seed = args.seed;
   const int frames = args.frames;
   const rhot::HandPose skeleton = rhot::reference_open_hand(layout.side);
@@ -96,7 +97,8 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   tracker_settings.filter = args.filter;
   tracker_settings.fingertip_model = args.fingertip_model;
   const std::optional<rhot::HandPose> calibrated =
-      args.calibrate_hand ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings) : std::nullopt;
+      args.calibrate_hand ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings, jobs)
+                          : std::nullopt;
   if (calibrated) tracker_settings.finger_length_tolerance = 0.0;  // the skeleton is the user's
   const rhot::HandPose tracked_skeleton = calibrated.value_or(skeleton);
   rhot::HandTracker tracker(layout, tracked_skeleton, tracker_settings);
@@ -112,7 +114,7 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
     sim.set_occluders(bones);
     const rhot::RigFrame frame = sim.next();
     std::vector<Eigen::Vector3d> points;
-    const auto matched = matcher.match(frame, rhot::match_settings_for(pixel_sigma.sigma_px()));
+    const auto matched = matcher.match(frame, rhot::match_settings_for(pixel_sigma.sigma_px()), &jobs);
     for (const rhot::MatchedPoint& m : matched) points.push_back(m.point.position_world);
     const auto tracker_start = std::chrono::steady_clock::now();
     const rhot::TrackedHand& hand = tracker.update(frame.time_s, points, rhot::point_sigmas_m(matched, pixel_sigma.update(matched)));
@@ -220,10 +222,12 @@ int hands(const HandsArgs& args) {
   j["filter"] = args.filter;
   j["calibrate_hand"] = args.calibrate_hand;
   j["fingertip_model"] = args.fingertip_model;
+  rhot::JobPool jobs(rhot::threads_or_all(args.threads));
+  j["threads"] = jobs.threads();
   std::vector<double> hidden_tip_errors;
   for (const std::string_view name : motions) {
     std::cerr << "rhot-eval: hand motion " << name << "\n";
-    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, *world, args, box.centre, hidden_tip_errors);
+    j["motions"][std::string(name)] = hand_motion_run(*rig, *layout, name, *world, args, box.centre, hidden_tip_errors, jobs);
   }
   // Hidden tips over every motion's hidden frames together (a motion may hide none).
   j["hidden_tip_mean_mm"] = hidden_tip_errors.empty() ? 0.0

@@ -18,6 +18,7 @@
 #include <spdlog/spdlog.h>
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/Demo.h"
 
@@ -185,6 +186,7 @@ int interactions(const InteractionsArgs& args) {
   settings.world = *world;
   settings.sigma_px = world->sigma_px;
   settings.perfect_hands = args.hands == "perfect";
+  settings.threads = args.threads;
   DemoSettings perfect = settings;
   perfect.perfect_hands = true;
 
@@ -240,6 +242,7 @@ int interactions(const InteractionsArgs& args) {
 
   nlohmann::json j;
   j["scene"] = args.scene_file;
+  j["threads"] = threads_or_all(args.threads);
   j["world"] = world_json(*world, args.world.world);
   j["hands"] = args.hands;
   j["seeds"] = args.seeds;

@@ -21,6 +21,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "base/Jobs.h"
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/Demo.h"
 #include "engine/tracked/LiveTracking.h"
@@ -356,9 +357,12 @@ class AsOnTheNodes final : public FrameSource {
 void set_up_demo_hands(const NodesArgs& a, const CameraRig& rig, const DemoSimulation& demo, DemoHands& hands) {
   auto frames = std::make_unique<HeldFrames>(rig);
   hands.held = frames.get();
-  hands.from_nodes = std::make_unique<LiveTracking>(std::move(frames), demo.objects, demo.layouts);
-  hands.in_process = std::make_unique<LiveTracking>(
-      std::make_unique<SameCamerasAs>(std::make_unique<AsOnTheNodes>(a, rig, demo.world), *hands.held), demo.objects, demo.layouts);
+  LiveTrackingSettings settings;
+  settings.threads = a.threads;
+  hands.from_nodes = std::make_unique<LiveTracking>(std::move(frames), demo.objects, demo.layouts, settings);
+  hands.in_process =
+      std::make_unique<LiveTracking>(std::make_unique<SameCamerasAs>(std::make_unique<AsOnTheNodes>(a, rig, demo.world), *hands.held),
+                                     demo.objects, demo.layouts, settings);
   hands.nodes_hands.live = hands.from_nodes.get();
   hands.local_hands.live = hands.in_process.get();
 }
@@ -377,6 +381,7 @@ struct NodesRun {
   DemoHands& hands;                        // with it
   MatchSettings match;
   const RigMatcher& matcher;  // the rig, prepared for matching once
+  JobPool& jobs;              // matching's threads (--threads)
   std::int64_t start_ns;
   std::int64_t period_ns;
   std::int64_t frames_expected;
@@ -555,7 +560,7 @@ void tally_frame(const NodesRun& run, const AssembledFrame& f, NodesTally& tally
     return;
   }
   count_wrong_markers(run, f, k, tally);
-  const std::vector<MatchedPoint> points = run.matcher.match(frame, run.match);
+  const std::vector<MatchedPoint> points = run.matcher.match(frame, run.match, &run.jobs);
   std::vector<Eigen::Vector3d> truth;
   for (const Trajectory& m : run.markers) truth.push_back(m.at(t));
   const int got = markers_found(truth, points);
@@ -697,6 +702,7 @@ nlohmann::json report(const NodesRun& run, const NodesTally& tally, const NodeSo
   j["nodes"] = a.nodes;
   j["markers"] = a.markers;
   j["rate_hz"] = a.rate_hz;
+  j["threads"] = run.jobs.threads();
   j["seconds"] = a.seconds;
   j["deadline_ms"] = a.deadline_ms;
   j["frames_expected"] = run.frames_expected;
@@ -859,6 +865,7 @@ int nodes(const NodesArgs& given) {
   if (demo) set_up_demo_hands(a, *rig, *demo, hands);
   const std::unique_ptr<Chaos> chaos = make_chaos(a, plans, children, log, *source, !keys.dir.empty());
   const RigMatcher matcher(*rig);
+  JobPool jobs(threads_or_all(a.threads));
   const NodesRun run{.a = a,
                      .rig = *rig,
                      .demo = demo,
@@ -871,6 +878,7 @@ int nodes(const NodesArgs& given) {
                      .hands = hands,
                      .match = match_settings_for(a.sigma),
                      .matcher = matcher,
+                     .jobs = jobs,
                      .start_ns = start_ns,
                      .period_ns = static_cast<std::int64_t>(std::llround(1e9 / a.rate_hz)),
                      .frames_expected = static_cast<std::int64_t>(std::floor(a.seconds * a.rate_hz)),

@@ -18,6 +18,10 @@
 //   rhot-eval wand --rig FILE [--length-mm 195] [--sigma PX] [--frames N] [--seed S] [--dropout P]
 //                  [--volume-m X Y Z] [--volume-centre-m X Y Z] [--threads T] --json
 //
+// Every mode takes --threads T: the threads its tracking (or calibration's bundle adjustment) runs
+// on, 0 (the default) every core there is. The results do not depend on it (docs/tracking.md
+// "Threads"), but for calibration's last digits.
+//
 // Markers wander through a box: the flags', else the rig file's tracking volume, else a 1 m cube
 // where the cameras' optical axes meet (least squares); the simulated rig sees them with Gaussian noise and dropouts; matching and
 // triangulation recover them; the result is compared with ground truth and with the Cramer-Rao
@@ -59,6 +63,14 @@ using namespace rhot::eval;  // NOLINT: the subcommands
 
 namespace {
 
+// --threads, on every mode: what runs on them (a job pool, base/Jobs.h).
+constexpr const char* kMatchingThreads = "threads matching runs on (0: every core there is); the results do not depend on it";
+constexpr const char* kTrackerThreads =
+    "threads the tracker runs on: matching, stars and hands (0: every core there is); the results do not depend on it";
+void add_threads_flag(CLI::App& cmd, int& threads, const char* help = kMatchingThreads) {
+  cmd.add_option("--threads", threads, help)->capture_default_str()->check(CLI::Range(0, rhot::kMaxThreads));
+}
+
 // The simulated world's flags, shared by the subcommands that simulate one.
 void add_world_flags(CLI::App& command, WorldFlags& flags, bool hands) {
   command.add_option("--world", flags.world, "the simulated world: ideal or realistic (docs/tracking.md); the flags below override it")
@@ -93,6 +105,7 @@ struct DemoArgs {
   int frames = 330;
   std::string hands = "tracked";
   WorldFlags world;
+  int threads = 0;
 };
 
 CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
@@ -147,6 +160,7 @@ CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
                 "hidden fingertips placed where the seen ones say, by a model of the hand's fingertips fitted as it runs");
   cmd->add_flag("--calibrate-hand", a.calibrate_hand,
                 "first hold the hand flat for a second, through the cameras, and track with the finger lengths it gives");
+  add_threads_flag(*cmd, a.threads);
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }
@@ -162,6 +176,7 @@ CLI::App* add_grasp_command(CLI::App& app, GraspArgs& a, bool& json) {
   cmd->add_option("--rig", a.rig_file, "tracked: the camera rig, moved to centre its volume over the pedestal")->capture_default_str();
   add_world_flags(*cmd, a.world, true);
   cmd->add_option("--seed", a.seed, "tracked: random seed of the simulated world")->capture_default_str();
+  add_threads_flag(*cmd, a.threads, kTrackerThreads);
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }
@@ -179,6 +194,7 @@ CLI::App* add_interactions_command(CLI::App& app, InteractionsArgs& a, bool& jso
       ->capture_default_str()
       ->check(CLI::IsMember({"tracked", "perfect"}));
   add_world_flags(*cmd, a.world, true);
+  add_threads_flag(*cmd, a.threads, kTrackerThreads);
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }
@@ -196,6 +212,7 @@ CLI::App* add_demo_command(CLI::App& app, DemoArgs& a, bool& json) {
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
   add_world_flags(*cmd, a.world, true);
+  add_threads_flag(*cmd, a.threads, kTrackerThreads);
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }
@@ -242,6 +259,7 @@ CLI::App* add_nodes_command(CLI::App& app, NodesArgs& a, bool& json) {
                   "wrong_markers_accepted")
       ->check(CLI::Range(5.0, 86400.0))
       ->check(rhot::number_check(rhot::NumberBound::kPositive));
+  add_threads_flag(*cmd, a.threads, "threads the master's tracker runs on (0: every core there is); the results do not depend on it");
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }
@@ -255,15 +273,8 @@ struct SharedArgs {
   double dropout = 0.0;
   std::vector<double> volume;
   std::vector<double> volume_centre;
-  int threads = 0;  // wand and stars: matching's threads
+  int threads = 0;  // wand and stars: matching's threads; calibration: the bundle adjustment's
 };
-
-// --threads, for the modes whose matching runs on a job pool.
-void add_threads_flag(CLI::App& cmd, int& threads) {
-  cmd.add_option("--threads", threads, "threads matching runs on (0: every core there is); the results do not depend on it")
-      ->capture_default_str()
-      ->check(CLI::Range(0, rhot::kMaxThreads));
-}
 
 constexpr const char* kVolumeHelp = "size of the box the markers move in, X Y Z metres (default: the rig file's volume_size, else 1 1 1)";
 constexpr const char* kCentreHelp =
@@ -376,6 +387,7 @@ CLI::App* add_colour_command(CLI::App& app, ColourArgs& a, std::string& clutter,
   cmd->add_option("--device", a.device, "Vulkan device: auto, gpu, cpu, an index or part of its name")->capture_default_str();
   cmd->add_option("--pictures", a.pictures_dir,
                   "write the first frame's images (cam<i>.png) and what the colour model takes in them (cam<i>_colours.png) here");
+  add_threads_flag(*cmd, a.threads, kTrackerThreads);
   cmd->add_flag("--drawn", a.drawn,
                 "also run the demo's runtime (physics, grasps, hidden fingers placed against what a hand holds or carries) on the "
                 "same script and cameras: the physical hands' fingertips (drawn, before prediction to display time) against the truth "
@@ -403,6 +415,7 @@ CLI::App* add_frame_command(CLI::App& app, FrameArgs& a, bool& json) {
   cmd->add_flag("--xr", a.options.xr,
                 "on the headset of the OpenXR runtime (XR_RUNTIME_JSON): paced by it, at its eye size, the hands predicted to its display "
                 "time; --frames counts frames shown");
+  add_threads_flag(*cmd, a.options.threads, kTrackerThreads);
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }
@@ -417,6 +430,9 @@ CLI::App* add_calibration_command(CLI::App& app, SharedArgs& s, CalibrationArgs&
   cmd->add_option("--dropout", s.dropout, "probability a camera misses a visible marker")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
+  add_threads_flag(*cmd, s.threads,
+                   "threads the bundle adjustment runs on (0: every core there is); the results' last digits may differ with the "
+                   "count (Ceres)");
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }
@@ -440,9 +456,7 @@ CLI::App* add_scale_command(CLI::App& app, ScaleArgs& a, bool& json) {
       ->capture_default_str()
       ->check(CLI::Range(0, 40));
   cmd->add_option("--hands", a.hands, "tracked hands, two a person")->capture_default_str()->check(CLI::Range(0, 40));
-  cmd->add_option("--threads", a.threads, "threads (0: every core there is); the results do not depend on it")
-      ->capture_default_str()
-      ->check(CLI::Range(0, rhot::kMaxThreads));
+  add_threads_flag(*cmd, a.threads, "threads (0: every core there is); the results do not depend on it");
   cmd->add_option("--rate-hz", a.rate_hz, "the cameras' rate: frames a second, and the period a frame must fit")
       ->capture_default_str()
       ->check(rhot::number_check(rhot::NumberBound::kPositive))
@@ -510,9 +524,10 @@ int main(int argc, char** argv) {
     colour_args.clutter = clutter == "on";
     return colour(colour_args);
   }
-  if (calib_cmd->parsed()) return calibration(s.rig_file, calib_args.wand_mm, s.sigma, calib_args.frames, s.seed, s.dropout);
+  if (calib_cmd->parsed()) return calibration(s.rig_file, calib_args.wand_mm, s.sigma, calib_args.frames, s.seed, s.dropout, s.threads);
   if (demo_cmd->parsed())
-    return demo(demo_args.scene_file, demo_args.placements, demo_args.seed, demo_args.world, demo_args.hands, demo_args.frames);
+    return demo(demo_args.scene_file, demo_args.placements, demo_args.seed, demo_args.world, demo_args.hands, demo_args.frames,
+                demo_args.threads);
   if (frame_cmd->parsed()) {
     return frame(frame_args.scene_file, frame_args.eye, frame_args.frame_count, frame_args.device,
                  *rhot::shading_from_string(frame_args.shading), frame_args.world, frame_args.options);

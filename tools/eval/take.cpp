@@ -14,6 +14,7 @@
 #include <functional>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <span>
@@ -22,6 +23,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/Jobs.h"
 #include "tools/common/NumberChecks.h"
 #include "tools/eval/Eval.h"
 #include "tracking/camera/RigFile.h"
@@ -406,6 +408,7 @@ struct TakeRig {
   CameraRig tracker_rig;  // as an imperfect calibration has it
   SimulatedRigSettings settings;
   Eigen::Vector3d shift_m{0, 0, 0};
+  std::shared_ptr<JobPool> jobs;  // matching's threads (--threads)
 };
 
 // The tracker run over the take's first end_s seconds through the rig's cameras: every take marker
@@ -436,7 +439,7 @@ void run_through_rig(const MarkerTake& take, const TakePlan& plan, const TakeRig
     const int take_frame = std::clamp(static_cast<int>(std::lround(t * take.frame_rate_hz)), 0, take.frame_count() - 1);
     hidden = hide ? plan.hidden_at(take, take_frame) : std::vector<std::size_t>{};
     const RigFrame frame = sim.next();
-    const auto matched = matcher.match(frame, match_settings_for(pixel_sigma.sigma_px()));
+    const auto matched = matcher.match(frame, match_settings_for(pixel_sigma.sigma_px()), r.jobs.get());
     points.clear();
     for (const MatchedPoint& m : matched) points.push_back(m.point.position_world);
     const TrackedHand& hand = tracker.update(frame.time_s, points, point_sigmas_m(matched, pixel_sigma.update(matched)));
@@ -505,7 +508,11 @@ int take_through_rig(const HandsArgs& args, const MarkerTake& take) {
   if (!world) return fail(world.error());
   const auto rig = load_rig(args.rig_file);
   if (!rig) return fail(rig.error());
-  TakeRig r{*rig, perturbed_rig(*rig, world->calib_error_px, args.seed), world->rig_settings(args.seed), {}};
+  TakeRig r{*rig,
+            perturbed_rig(*rig, world->calib_error_px, args.seed),
+            world->rig_settings(args.seed),
+            {},
+            std::make_shared<JobPool>(threads_or_all(args.threads))};
   // The take's back of the hand, on average, onto the volume's centre (its axes as recorded).
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   int n = 0;
@@ -548,6 +555,7 @@ int take_through_rig(const HandsArgs& args, const MarkerTake& take) {
   j["finger_markers_wrong_fraction"] =
       e.markers_given > 0 ? static_cast<double>(e.markers_wrong) / static_cast<double>(e.markers_given) : 0.0;
   j["rig"] = args.rig_file;
+  j["threads"] = r.jobs->threads();
   j["world"] = world_json(*world, args.world.world);
   j["shift_m"] = {r.shift_m.x(), r.shift_m.y(), r.shift_m.z()};
   std::cout << j.dump(2) << "\n";
