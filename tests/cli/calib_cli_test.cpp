@@ -1,6 +1,8 @@
 // Runs the real rhot-calib: a simulated wand session through `wand`, the world from a simulated
 // L-frame, two rigs merged, and the errors a user sees for bad input.
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -16,7 +18,10 @@
 #include <Eigen/Geometry>
 
 #include "tests/support/RunCommand.h"
+#include "tracking/calib/Detections.h"
 #include "tracking/camera/RigFile.h"
+#include "tracking/net/ChildProcess.h"
+#include "tracking/net/NodeSource.h"
 #include "tracking/detect/ColourModel.h"
 #include "tracking/sim/SyntheticImages.h"
 
@@ -164,6 +169,69 @@ TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
   const auto bad = calib("record --rig " + truth + " --source video:" + (dir / "none_%04d.png").string() + " --out x.csv");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.output.find("rhot-calib: error: "), std::string::npos) << bad.output;
+}
+
+// One camera node serving both cameras' image sequences, detected side by side on two threads:
+// `record` through it (a real rhot-node on loopback) gets, in every frame, both cameras'
+// detections of one and the same image pair, exactly as detecting the images here does.
+TEST(CalibCli, ANodeServesTwoCamerasDetectedOnTwoThreadsAsTheImagesAreDetectedHere) {
+  const fs::path dir = temp_dir();
+  const std::string truth = asset("rigs/stereo-2.yaml");
+  const auto sim = calib("simulate wand --rig " + truth + " --markers 1 --frames 60 --rate-hz 8 --seed 4 --out " +
+                         (dir / "truth.csv").string() + " --images " + (dir / "images").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  const std::string cam0 = (dir / "images" / "cam0_%04d.png").string(), cam1 = (dir / "images" / "cam1_%04d.png").string();
+  const auto here = calib("record --rig " + truth + " --source video:" + cam0 + "," + cam1 + " --out " + (dir / "here.csv").string());
+  ASSERT_EQ(here.exit_code, 0) << here.output;
+  const auto ports = rhot::free_tcp_port_pairs(1);
+  ASSERT_TRUE(ports.has_value()) << ports.error();
+  const std::string endpoint = "tcp://127.0.0.1:" + std::to_string(ports->front());
+  // The node's 60 image pairs at 15 Hz take 4 s; the recording (Ctrl-C after 5 s) holds the frames
+  // that came once it had connected and set the node's clock.
+  auto node = rhot::ChildProcess::spawn({std::string(RHOT_BINARY_DIR) + "/rhot-node", "--publish", endpoint, "--insecure", "--device",
+                                         cam0 + "," + cam1, "--rig", truth, "--camera", "0,1", "--threads", "2", "--rate-hz", "15"},
+                                        (dir / "node.log").string());
+  ASSERT_TRUE(node.has_value()) << node.error();
+  const auto recorded = rhot::test::run_program(
+      "rhot-calib", "record --rig " + truth + " --source nodes:" + endpoint + " --insecure --out " + (dir / "node.csv").string(), "2>&1",
+      "timeout --preserve-status -s INT 5");
+  ASSERT_EQ(recorded.exit_code, 0) << recorded.output;
+  EXPECT_EQ(node->wait(30.0), 0) << "the node ends with its images";
+  const auto local = rhot::read_detections_csv(dir / "here.csv");
+  const auto remote = rhot::read_detections_csv(dir / "node.csv");
+  ASSERT_TRUE(local && remote);
+  // A frame's two pixels (camera 0's, camera 1's); one marker, so at most one detection a camera.
+  using Pair = std::array<Eigen::Vector2d, 2>;
+  const auto pairs = [](const rhot::Detections& d) {
+    std::vector<Pair> out;
+    for (const rhot::DetectionFrame& f : d.frames) {
+      Pair p{Eigen::Vector2d::Constant(-1), Eigen::Vector2d::Constant(-1)};
+      for (const rhot::MarkerObservation& o : f.observations) p[static_cast<std::size_t>(o.camera)] = o.pixel;
+      if (p[0].x() >= 0 && p[1].x() >= 0) out.push_back(p);
+    }
+    return out;
+  };
+  const std::vector<Pair> seen_here = pairs(*local), seen_by_node = pairs(*remote);
+  ASSERT_GE(seen_by_node.size(), 15u) << recorded.output;
+  for (const Pair& p : seen_by_node) {
+    const bool same =
+        std::ranges::any_of(seen_here, [&p](const Pair& q) { return (p[0] - q[0]).norm() < 1e-3 && (p[1] - q[1]).norm() < 1e-3; });
+    EXPECT_TRUE(same) << "camera 0 at " << p[0].transpose() << ", camera 1 at " << p[1].transpose() << ": no image pair gives both";
+  }
+  // The node's flags: one camera of the rig a device.
+  const auto mismatched = rhot::test::run_program(
+      "rhot-node", "--publish " + endpoint + " --insecure --device " + cam0 + "," + cam1 + " --rig " + truth + " --camera 1", "2>&1",
+      "timeout 20");
+  EXPECT_EQ(mismatched.exit_code, 1);
+  EXPECT_NE(mismatched.output.find("--camera: 1 cameras of --rig named for 2 devices: one camera a --device, in the same order"),
+            std::string::npos)
+      << mismatched.output;
+  const auto twice = rhot::test::run_program(
+      "rhot-node", "--publish " + endpoint + " --insecure --device " + cam0 + "," + cam1 + " --rig " + truth + " --camera 1,1", "2>&1",
+      "timeout 20");
+  EXPECT_EQ(twice.exit_code, 1);
+  EXPECT_NE(twice.output.find("--camera: camera 1 is named twice: each device is another camera of the rig"), std::string::npos)
+      << twice.output;
 }
 
 TEST(CalibCli, BadInputGetsOneLineNamingIt) {

@@ -1,5 +1,5 @@
-// rhot-node: a camera node. Reads one camera (a capture device, a video file, an image sequence)
-// or simulated cameras of a rig, finds the markers on the node, and publishes each camera frame's
+// rhot-node: a camera node. Reads its cameras (capture devices, video files, image sequences:
+// detected side by side on --threads) or simulated cameras of a rig, finds the markers on the node, and publishes each camera frame's
 // detections to the master over ZeroMQ (docs/camera-nodes.md). Answers time and status requests
 // beside its publish endpoint. Binds only the endpoints it is given.
 
@@ -17,6 +17,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "base/Jobs.h"
 #include "engine/scene/SceneLoader.h"
 #include "engine/sim/Demo.h"
 #include "tracking/camera/RigFile.h"
@@ -45,11 +46,12 @@ struct Options {
   unsigned seed = 1;
   double sigma = 0.3;
   std::optional<std::int64_t> sim_start_ns;
-  // a real camera
-  std::string device;
+  // real cameras, one rig camera each
+  std::vector<std::string> devices;
   std::string rig;
-  int camera = 0;
+  std::vector<int> cameras;  // none: camera 0 (one device)
   int threshold = -1;
+  int threads = 0;  // the devices' detection side by side (VideoSourceSettings::threads)
   // both
   double rate_hz = 90.0;
   double clock_offset_ms = 0.0;
@@ -195,16 +197,31 @@ int run_device(const Options& o, rhot::NodeServer& server) {
     spdlog::error("{}", rig.error());
     return 1;
   }
-  if (o.camera < 0 || o.camera >= static_cast<int>(rig->cameras.size())) {
-    spdlog::error("--camera: camera {} is not in {} ({} cameras)", o.camera, o.rig, rig->cameras.size());
+  const std::vector<int> cameras = o.cameras.empty() ? std::vector<int>{0} : o.cameras;
+  if (cameras.size() != o.devices.size()) {
+    spdlog::error("--camera: {} cameras of --rig named for {} devices: one camera a --device, in the same order", cameras.size(),
+                  o.devices.size());
     return 1;
   }
   rhot::CameraRig mine;
-  mine.cameras.push_back(rig->cameras[static_cast<std::size_t>(o.camera)]);
+  for (std::size_t j = 0; j < cameras.size(); ++j) {
+    const int c = cameras[j];
+    if (c < 0 || c >= static_cast<int>(rig->cameras.size())) {
+      spdlog::error("--camera: camera {} is not in {} ({} cameras)", c, o.rig, rig->cameras.size());
+      return 1;
+    }
+    if (std::find(cameras.begin(), cameras.begin() + static_cast<std::ptrdiff_t>(j), c) !=
+        cameras.begin() + static_cast<std::ptrdiff_t>(j)) {
+      spdlog::error("--camera: camera {} is named twice: each device is another camera of the rig", c);
+      return 1;
+    }
+    mine.cameras.push_back(rig->cameras[static_cast<std::size_t>(c)]);
+  }
   rhot::VideoSourceSettings vs;
   vs.detector.threshold = o.threshold;
   vs.rate_hz = o.rate_hz;
-  auto source = rhot::VideoSource::open(mine, {o.device}, vs);
+  vs.threads = o.threads;
+  auto source = rhot::VideoSource::open(mine, o.devices, vs);
   if (!source) {
     spdlog::error("{}", source.error());
     return 1;
@@ -217,7 +234,8 @@ int run_device(const Options& o, rhot::NodeServer& server) {
   Outbox outbox;
   Meter meter;
   std::int64_t next_frame = start;
-  spdlog::info("node {}: camera {} of {} from {}, publishing on {}", o.node_id, o.camera, o.rig, o.device, o.publish);
+  for (std::size_t j = 0; j < cameras.size(); ++j)
+    spdlog::info("node {}: camera {} of {} from {}, publishing on {}", o.node_id, cameras[j], o.rig, o.devices[j], o.publish);
   while (!g_stop && rhot::steady_now_ns() < end) {
     // Files and image sequences are paced at --rate-hz; a device delivers at its own rate.
     server.serve_until(next_frame);
@@ -228,19 +246,22 @@ int run_device(const Options& o, rhot::NodeServer& server) {
     if (!frame) break;
     for (const std::string& w : source->take_warnings()) spdlog::warn("{}", w);
     const std::int64_t done = rhot::steady_now_ns();
-    rhot::NodeFrameMessage m;
-    m.node = static_cast<std::uint16_t>(o.node_id);
-    m.camera = static_cast<std::uint16_t>(o.camera);
-    m.counter = counter++;
-    m.capture_ns = server.clock().node_ns(grabbed);
-    m.width = static_cast<std::uint16_t>(mine.cameras[0].intrinsics.width_px);
-    m.height = static_cast<std::uint16_t>(mine.cameras[0].intrinsics.height_px);
-    m.detections = frame->cameras[0].detections;
-    if (delay > 0)
-      outbox.queue.emplace_back(done + delay, std::move(m));
-    else
-      server.publish(m);
-    meter.frame(done, static_cast<double>(done - grabbed) / 1e6, 1);
+    for (std::size_t j = 0; j < cameras.size(); ++j) {
+      rhot::NodeFrameMessage m;
+      m.node = static_cast<std::uint16_t>(o.node_id);
+      m.camera = static_cast<std::uint16_t>(cameras[j]);
+      m.counter = counter;
+      m.capture_ns = server.clock().node_ns(grabbed);
+      m.width = static_cast<std::uint16_t>(mine.cameras[j].intrinsics.width_px);
+      m.height = static_cast<std::uint16_t>(mine.cameras[j].intrinsics.height_px);
+      m.detections = frame->cameras[j].detections;
+      if (delay > 0)
+        outbox.queue.emplace_back(done + delay, std::move(m));
+      else
+        server.publish(m);
+    }
+    ++counter;
+    meter.frame(done, static_cast<double>(done - grabbed) / 1e6, static_cast<int>(cameras.size()));
     server.stats().frame_rate_hz = meter.rate_hz();
     server.stats().detect_mean_ms = meter.detect_ms();
     next_frame = std::max(next_frame + period, grabbed);
@@ -271,9 +292,20 @@ void add_options(CLI::App& cli, Options& o) {
   cli.add_option("--sim-start-ns", o.sim_start_ns,
                  "With --sim-rig: the simulated world's time 0 on this machine's steady clock (CLOCK_MONOTONIC, ns), shared by "
                  "every node of one rig (default: when this node starts)");
-  auto* device = cli.add_option("--device", o.device, "A capture device index, a video file or an image sequence (cam_%04d.png)");
-  cli.add_option("--rig", o.rig, "With --device: the rig file naming the camera's calibration")->check(CLI::ExistingFile)->needs(device);
-  cli.add_option("--camera", o.camera, "With --device: which camera of --rig this is")->capture_default_str()->needs(device);
+  auto* device = cli.add_option("--device", o.devices,
+                                "The node's cameras: a capture device index, a video file or an image sequence (cam_%04d.png) each "
+                                "(e.g. 0,2 or a.mp4,b.mp4)")
+                     ->delimiter(',');
+  cli.add_option("--rig", o.rig, "With --device: the rig file naming the cameras' calibration")->check(CLI::ExistingFile)->needs(device);
+  cli.add_option("--camera", o.cameras, "With --device: which camera of --rig each device is, in the same order (default: 0)")
+      ->delimiter(',')
+      ->check(CLI::Range(0, 65535))
+      ->needs(device);
+  cli.add_option("--threads", o.threads,
+                 "With --device: threads the cameras are detected on side by side (0: every core there is, at most one a camera); "
+                 "the detections do not depend on it")
+      ->capture_default_str()
+      ->check(CLI::Range(0, rhot::kMaxThreads));
   cli.add_option("--threshold", o.threshold, "With --device: blob threshold in grey levels (-1: automatic)")
       ->capture_default_str()
       ->check(CLI::Range(-1, 254));
@@ -341,7 +373,7 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  if (o.sim_rig.empty() == o.device.empty()) {
+  if (o.sim_rig.empty() == o.devices.empty()) {
     spdlog::error("give either --sim-rig FILE --sim-camera I or --device DEV --rig FILE --camera I");
     return 1;
   }
@@ -349,8 +381,8 @@ int main(int argc, char** argv) {
     spdlog::error("--sim-rig needs --sim-camera: the rig's cameras this node serves");
     return 1;
   }
-  if (!o.device.empty() && o.rig.empty()) {
-    spdlog::error("--device needs --rig: the rig file with the camera's calibration");
+  if (!o.devices.empty() && o.rig.empty()) {
+    spdlog::error("--device needs --rig: the rig file with the cameras' calibration");
     return 1;
   }
   if (auto ok = rhot::check_endpoint(o.publish); !ok) {
@@ -368,7 +400,7 @@ int main(int argc, char** argv) {
     spdlog::error("{}", security.error());
     return 1;
   }
-  const auto cameras = static_cast<std::uint16_t>(o.sim_rig.empty() ? 1 : o.sim_cameras.size());
+  const auto cameras = static_cast<std::uint16_t>(o.sim_rig.empty() ? o.devices.size() : o.sim_cameras.size());
   auto server = rhot::NodeServer::open(o.publish, o.control, static_cast<std::uint16_t>(o.node_id), cameras, clock, *security);
   if (!server) {
     spdlog::error("{}", server.error());
