@@ -179,7 +179,7 @@ std::vector<Entity> GraspSystem::held_objects() const {
 double GraspSystem::out_of_surface_m(int hand, const GripPoint& g, const btTransform& target, btScalar grown) const {
   const btVector3 on_bone = hands_[static_cast<std::size_t>(hand)]->tracked_bone(g.bone) * g.on_bone;
   const btVector3 on_object = target * (g.on_object * grown);
-  return static_cast<double>((on_bone - on_object).dot(target.getBasis() * g.normal));
+  return static_cast<double>((on_bone - on_object).dot(target.getBasis() * g.normal)) + g.out_carried_m;
 }
 
 bool GraspSystem::grip_seen_closed(Entity object) const {
@@ -435,13 +435,21 @@ void GraspSystem::release(Entity object, int hand, LetGo how, std::string reason
   if (held.both()) {
     // The other hand carries on from where the pair had the object.
     // Its grip points are taken afresh where its fingers are now: while paired the object moved
-    // (and maybe scaled) relative to each hand.
+    // (and maybe scaled) relative to each hand. How far a measured point had already moved out of
+    // the surface is carried over: two hands let go together, and the one still opening when the
+    // other has let go would otherwise start its opening again from nothing (and, its finger
+    // already most of the way open, might never open the release distance more).
     const int other = 1 - hand;
     const btTransform world_from_object = target_of(held);
     HandGrip& stays = *held.by[static_cast<std::size_t>(other)];
     HandColliders* h = hands_[static_cast<std::size_t>(other)];
+    const btScalar grown = static_cast<btScalar>(physics_.scale(object) / stays.scale);
+    for (GripPoint& g : stays.grip) {
+      const bool trusted = g.measured && grip_confidence(other, g) >= settings_.confident;
+      g.out_carried_m = trusted ? std::max(0.0, out_of_surface_m(other, g, world_from_object, grown)) : 0.0;
+      g.on_object = world_from_object.inverse() * (h->tracked_bone(g.bone) * g.on_bone);
+    }
     stays.hand_from_object = to_bt(h->input().world_from_hand).inverse() * world_from_object;
-    for (GripPoint& g : stays.grip) g.on_object = world_from_object.inverse() * (h->tracked_bone(g.bone) * g.on_bone);
     stays.scale = physics_.scale(object);
     held.by[static_cast<std::size_t>(hand)].reset();
     if (body) reenable_.emplace_back(object, hand);
@@ -695,16 +703,13 @@ void GraspSystem::release_opened() {
       std::array<double, 5> left_m{};  // per finger: finger_left_m
       for (int f = 1; f <= 4; ++f) left_m[static_cast<std::size_t>(f)] = finger_left_m(hand, *grip, f, *body, target);
       bool by_last_bone = false;
-      // A finger that joined the grip has opened when any of its points has: its points were all
-      // taken at one moment, and a straightening finger's first bone stays by the surface it
-      // touched while its last bones leave it (the bar, let go at the workbench's rack).
-      std::array<bool, 5> joined_open{};
-      for (const GripPoint& g : grip->grip) {
-        if (g.joined && g.measured && grip_confidence(hand, g) >= settings_.confident &&
-            std::max(out_of_surface_m(hand, g, target, grown), left_m[static_cast<std::size_t>(g.group)]) > settings_.release_distance_m)
-          joined_open[static_cast<std::size_t>(g.group)] = true;
-      }
-      for (GripPoint& g : grip->grip) {
+      // Each point's distance out, and whether it has been out for open_for_s: a few frames' jitter
+      // of a measured finger (its bones' estimate swings by several millimetres from frame to frame
+      // in the realistic world) is no opening.
+      std::vector<double> out(grip->grip.size(), 0.0);
+      std::vector<char> out_for_long(grip->grip.size(), 0);
+      for (std::size_t i = 0; i < grip->grip.size(); ++i) {
+        GripPoint& g = grip->grip[i];
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
         if (trusted && !g.measured) {
           // Measured for the first time since the grasp: held from where it is now. A finger that
@@ -715,9 +720,29 @@ void GraspSystem::release_opened() {
           g.measured = true;
         }
         const double left = g.group == kPalmGroup ? 0.0 : left_m[static_cast<std::size_t>(g.group)];
-        const double out_m = std::max(out_of_surface_m(hand, g, target, grown), left);
-        const bool open =
-            trusted && (out_m > settings_.release_distance_m || (g.joined && g.measured && joined_open[static_cast<std::size_t>(g.group)]));
+        out[i] = std::max(out_of_surface_m(hand, g, target, grown), left);
+        // A frame it is not measured is no evidence either way: the run goes on through it.
+        const bool out_now = trusted && out[i] > settings_.release_distance_m;
+        if (trusted && !out_now) {
+          g.open_since_s = -1.0;
+        } else if (out_now && g.open_since_s < 0.0) {
+          g.open_since_s = physics_.time_s();
+        }
+        out_for_long[i] = out_now && physics_.time_s() - g.open_since_s >= settings_.open_for_s - 1e-9 ? 1 : 0;
+      }
+      // A finger that joined the grip has opened when any of its points has: its points were all
+      // taken at one moment, and a straightening finger's first bone stays by the surface it
+      // touched while its last bones leave it (the bar, let go at the workbench's rack).
+      std::array<bool, 5> joined_open{};
+      for (std::size_t i = 0; i < grip->grip.size(); ++i) {
+        const GripPoint& g = grip->grip[i];
+        if (g.joined && g.measured && out_for_long[i]) joined_open[static_cast<std::size_t>(g.group)] = true;
+      }
+      for (std::size_t i = 0; i < grip->grip.size(); ++i) {
+        const GripPoint& g = grip->grip[i];
+        const double left = g.group == kPalmGroup ? 0.0 : left_m[static_cast<std::size_t>(g.group)];
+        const double out_m = out[i];
+        const bool open = out_for_long[i] || (g.joined && g.measured && joined_open[static_cast<std::size_t>(g.group)]);
         if (g.group == 0 || g.group == kPalmGroup) {
           any_anchor = true;
           if (open && !anchor_open) anchor_reason = std::string(digit_name(g.group)) + " opened " + millimetres(out_m) + " (measured)";

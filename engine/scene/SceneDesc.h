@@ -46,7 +46,8 @@ struct GraspSettings {
   // about half a fingertip's width). 0: the contacts' own normals only (docs/grasping.md, "finger pad").
   double pad_radius_m = 0.01;
   double min_curl_rad = 0.15;         // an opposing finger is curled at least this much (root to tip)
-  double release_distance_m = 0.012;  // a grasping finger this far out of the surface is open
+  double release_distance_m = 0.012;  // a grasping finger this far out of the surface is open ...
+  double open_for_s = 0.05;           // ... once measured so this long (a few frames' jitter is no opening)
   double confident = 0.95;            // joint confidence below this: not measured, never "open"
   double regrasp_delay_s = 0.2;       // a hand that released cannot grasp again this soon
   double throw_window_s = 0.05;       // the release velocity is fitted over this window ...

@@ -203,7 +203,7 @@ HeadsetSettings read_headset(const Node& n) {
 }
 
 GraspSettings read_grasp(const Node& n) {
-  n.expect_object({"contact_distance_m", "opposing_cos", "pad_radius_m", "min_curl_rad", "release_distance_m", "confident",
+  n.expect_object({"contact_distance_m", "opposing_cos", "pad_radius_m", "min_curl_rad", "release_distance_m", "open_for_s", "confident",
                    "regrasp_delay_s", "throw_window_s", "throw_window_end_s", "max_hold_error_m", "max_object_speed_mps",
                    "hover_distance_m", "hidden_finger_curl_rad", "fingers_join"});
   GraspSettings g;
@@ -215,6 +215,7 @@ GraspSettings read_grasp(const Node& n) {
   set("pad_radius_m", g.pad_radius_m, 0.0, 0.05, "a distance from 0 to 0.05 m");
   set("min_curl_rad", g.min_curl_rad, 0.0, 3.2, "an angle from 0 to 3.2 rad");
   set("release_distance_m", g.release_distance_m, 0.001, 0.2, "a distance from 0.001 to 0.2 m");
+  set("open_for_s", g.open_for_s, 0.0, 1.0, "a time from 0 to 1 s");
   set("confident", g.confident, 0.0, 1.0, "a confidence from 0 to 1");
   set("regrasp_delay_s", g.regrasp_delay_s, 0.0, 10.0, "a time from 0 to 10 s");
   set("throw_window_s", g.throw_window_s, 0.0, 1.0, "a time from 0 to 1 s");

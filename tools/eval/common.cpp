@@ -132,8 +132,11 @@ GraspComparison compare_grasps(const std::vector<GraspSpan>& tracked, const std:
     });
     c.unintended_grasps += meant ? 0 : 1;
     if (!g.released) continue;
+    // Unintended: the perfect hands held it (or took it within the same moment) and still held it
+    // a moment after this release. A grasp let go at once, before theirs began, is one too: the
+    // object was dropped.
     const bool held_on = std::any_of(perfect.begin(), perfect.end(), [&](const GraspSpan& p) {
-      return same(g, p) && p.begin_s <= g.end_s && p.end_s > g.end_s + kSameMoment_s;
+      return same(g, p) && p.begin_s <= g.end_s + kSameMoment_s && p.end_s > g.end_s + kSameMoment_s;
     });
     c.unintended_releases += held_on ? 1 : 0;
   }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <regex>
 
 #include <gtest/gtest.h>
 
@@ -35,6 +36,7 @@ struct TwoHands {
   std::array<GraspPose, 2> grasp{make_grasp(HandSide::kLeft, 0.04, 0.006, 2), make_grasp(HandSide::kRight, 0.04, 0.006, 2)};
   std::array<Eigen::Vector3d, 2> at{Eigen::Vector3d(-kGripX, kBarY, 0.0), Eigen::Vector3d(kGripX, kBarY, 0.0)};
   std::array<double, 2> closure{0.0, 0.0};
+  std::array<double, 2> thumb{-1.0, -1.0};  // at or above 0: the hand's thumb at this closure, not at the hand's
   std::vector<InteractionEvent> events;
 
   explicit TwoHands(const std::string& grabbable = "true") {
@@ -43,7 +45,15 @@ struct TwoHands {
   }
   void step() {
     std::array<HandInput, 2> hands;
-    for (std::size_t h = 0; h < 2; ++h) hands[h] = hand_input(grasp[h].place(at[h], Eigen::Vector3d::UnitZ()), grasp[h].pose(closure[h]));
+    for (std::size_t h = 0; h < 2; ++h) {
+      HandPose pose = grasp[h].pose(closure[h]);
+      if (thumb[h] >= 0.0) {
+        const HandPose digit = grasp[h].pose(thumb[h]);
+        for (const HandJoint j : chain_joints(Finger::kThumb))
+          pose.position_m[static_cast<std::size_t>(j)] = digit.position_m[static_cast<std::size_t>(j)];
+      }
+      hands[h] = hand_input(grasp[h].place(at[h], Eigen::Vector3d::UnitZ()), pose);
+    }
     physics->step(world, hands);
     for (const InteractionEvent& e : physics->events()) events.push_back(e);
   }
@@ -150,6 +160,43 @@ TEST(TwoHandGrab, ABarHeldAtBothEndsMovesAndTurnsWithBothHandsAndHandsOverWithou
   const double y = static_cast<double>(t.pose().getOrigin().y());
   for (int i = 0; i < 20; ++i) t.step();
   EXPECT_LT(static_cast<double>(t.pose().getOrigin().y()), y - 0.02);
+}
+
+// Both hands let go of the bar together (the workbench's rack, seed 3: the left hand let go by its
+// thumb): the right opens all the way, the left's thumb a little later and less, out past the
+// release distance when the right has let go. The left hand, carrying on alone, keeps how far its
+// thumb had opened and lets go as well. Taken afresh from where its thumb was (the rule before;
+// GripPoint::out_carried_m left at 0), the thumb would have to open the release distance again, and
+// the left hand kept the bar.
+TEST(TwoHandGrab, TwoHandsOpeningTogetherBothLetGoThoughOneIsStillOpeningWhenTheOtherHasLetGo) {
+  TwoHands t;
+  t.grab_both();
+  ASSERT_EQ(t.count(InteractionEventType::kGrasp), 2);
+  const GraspSystem& g = t.physics->grasp();
+  ASSERT_TRUE(g.held_by_both(t.bar));
+  const Eigen::Vector3d lift(0.0, 0.1, 0.0);
+  t.go(45, {lift, lift}, {1.0, 1.0});
+  // The right opens over 9 frames; the left's thumb starts 3 frames later and stops at 0.6 of its
+  // closure, the left's fingers closed.
+  t.go(3, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {1.0, 2.0 / 3.0});
+  for (int i = 1; i <= 6; ++i) {
+    t.thumb[0] = 1.0 - 0.4 * i / 6.0;
+    t.go(1, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {1.0, 2.0 / 3.0 * (1.0 - i / 6.0)});
+  }
+  for (int i = 0; i < 45; ++i) t.step();
+  std::vector<InteractionEvent> releases;
+  for (const InteractionEvent& e : t.events)
+    if (e.type == InteractionEventType::kRelease) releases.push_back(e);
+  std::string said;
+  for (const InteractionEvent& e : releases)
+    said += std::string(e.hand == HandSide::kLeft ? "left" : "right") + " at " + std::to_string(e.time_s) + ": " + e.reason + "\n";
+  ASSERT_EQ(releases.size(), 2u) << said;
+  EXPECT_EQ(releases[0].hand, HandSide::kRight) << said;
+  EXPECT_TRUE(releases[0].handed_over);
+  EXPECT_EQ(releases[1].hand, HandSide::kLeft);
+  EXPECT_TRUE(std::regex_match(releases[1].reason, std::regex(R"(thumb opened \d+ mm \(measured\))"))) << said;
+  EXPECT_LT(releases[1].time_s - releases[0].time_s, 0.2) << said;
+  EXPECT_FALSE(g.held_by(t.bar).has_value());
 }
 
 TEST(TwoHandGrab, HandsMovingApartScaleAnObjectThatAsksForIt) {

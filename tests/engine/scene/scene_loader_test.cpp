@@ -268,7 +268,8 @@ TEST_F(SceneFiles, ShippedInteractionScenesLoad) {
 TEST_F(SceneFiles, GraspSettingsAndSubsteps) {
   const auto scene = parse_scene(
       R"({"settings": {"physics_substeps": 4,
-                       "grasp": {"regrasp_delay_s": 0.5, "opposing_cos": -0.5, "pad_radius_m": 0, "fingers_join": false}},
+                       "grasp": {"regrasp_delay_s": 0.5, "opposing_cos": -0.5, "pad_radius_m": 0, "fingers_join": false,
+                                 "open_for_s": 0}},
           "entities": []})",
       dir_);
   ASSERT_TRUE(scene.has_value());
@@ -278,9 +279,12 @@ TEST_F(SceneFiles, GraspSettingsAndSubsteps) {
   EXPECT_DOUBLE_EQ(scene->settings.grasp.pad_radius_m, 0.0);
   EXPECT_FALSE(scene->settings.grasp.fingers_join);
   EXPECT_TRUE(GraspSettings{}.fingers_join);
+  EXPECT_DOUBLE_EQ(scene->settings.grasp.open_for_s, 0.0);
   EXPECT_DOUBLE_EQ(scene->settings.grasp.release_distance_m, GraspSettings{}.release_distance_m);
   EXPECT_EQ(error_of(R"({"settings": {"grasp": {"release_distance_m": 0}}})"),
             "/settings/grasp/release_distance_m: expected a distance from 0.001 to 0.2 m, got 0");
+  EXPECT_EQ(error_of(R"({"settings": {"grasp": {"open_for_s": -0.1}}})"),
+            "/settings/grasp/open_for_s: expected a time from 0 to 1 s, got -0.1");
   EXPECT_EQ(error_of(R"({"settings": {"grasp": {"pad_radius_m": -0.01}}})"),
             "/settings/grasp/pad_radius_m: expected a distance from 0 to 0.05 m, got -0.01");
   EXPECT_EQ(error_of(R"({"settings": {"grasp": {"fingers_join": 1}}})"), "/settings/grasp/fingers_join: expected true or false, got 1");
