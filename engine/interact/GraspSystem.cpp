@@ -706,8 +706,10 @@ void GraspSystem::release_opened() {
       // Each point's distance out, and whether it has been out for open_for_s: a few frames' jitter
       // of a measured finger (its bones' estimate swings by several millimetres from frame to frame
       // in the realistic world) is no opening.
-      std::vector<double> out(grip->grip.size(), 0.0);
-      std::vector<char> out_for_long(grip->grip.size(), 0);
+      std::vector<double>& out = point_out_m_;
+      std::vector<char>& out_for_long = point_out_for_long_;
+      out.assign(grip->grip.size(), 0.0);
+      out_for_long.assign(grip->grip.size(), 0);
       for (std::size_t i = 0; i < grip->grip.size(); ++i) {
         GripPoint& g = grip->grip[i];
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
