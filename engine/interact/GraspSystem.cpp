@@ -435,18 +435,19 @@ void GraspSystem::release(Entity object, int hand, LetGo how, std::string reason
   if (held.both()) {
     // The other hand carries on from where the pair had the object.
     // Its grip points are taken afresh where its fingers are now: while paired the object moved
-    // (and maybe scaled) relative to each hand. How far a measured point had already moved out of
-    // the surface is carried over: two hands let go together, and the one still opening when the
-    // other has let go would otherwise start its opening again from nothing (and, its finger
-    // already most of the way open, might never open the release distance more).
+    // (and maybe scaled) relative to each hand. A point already opening (measured out past the
+    // release distance, its open_for_s under way) keeps how far out it was: two hands let go
+    // together, and the one still opening when the other has let go would otherwise start its
+    // opening again from nothing (and, its finger already most of the way open, might never open
+    // the release distance more). The others start afresh, as a frame's jitter is no opening.
     const int other = 1 - hand;
     const btTransform world_from_object = target_of(held);
     HandGrip& stays = *held.by[static_cast<std::size_t>(other)];
     HandColliders* h = hands_[static_cast<std::size_t>(other)];
     const btScalar grown = static_cast<btScalar>(physics_.scale(object) / stays.scale);
     for (GripPoint& g : stays.grip) {
-      const bool trusted = g.measured && grip_confidence(other, g) >= settings_.confident;
-      g.out_carried_m = trusted ? std::max(0.0, out_of_surface_m(other, g, world_from_object, grown)) : 0.0;
+      const bool opening = g.measured && g.open_for_s >= 0.0;
+      g.out_carried_m = opening ? std::max(0.0, out_of_surface_m(other, g, world_from_object, grown)) : 0.0;
       g.on_object = world_from_object.inverse() * (h->tracked_bone(g.bone) * g.on_bone);
     }
     stays.hand_from_object = to_bt(h->input().world_from_hand).inverse() * world_from_object;
@@ -723,14 +724,15 @@ void GraspSystem::release_opened() {
         }
         const double left = g.group == kPalmGroup ? 0.0 : left_m[static_cast<std::size_t>(g.group)];
         out[i] = std::max(out_of_surface_m(hand, g, target, grown), left);
-        // A frame it is not measured is no evidence either way: the run goes on through it.
+        // A frame it is not measured (or its hand is lost) is no evidence either way: the run goes
+        // on through it, but only measured frames count toward open_for_s.
         const bool out_now = trusted && out[i] > settings_.release_distance_m;
         if (trusted && !out_now) {
-          g.open_since_s = -1.0;
-        } else if (out_now && g.open_since_s < 0.0) {
-          g.open_since_s = physics_.time_s();
+          g.open_for_s = -1.0;
+        } else if (out_now) {
+          g.open_for_s = g.open_for_s < 0.0 ? 0.0 : g.open_for_s + physics_.step_s();
         }
-        out_for_long[i] = out_now && physics_.time_s() - g.open_since_s >= settings_.open_for_s - 1e-9 ? 1 : 0;
+        out_for_long[i] = out_now && g.open_for_s >= settings_.open_for_s - 1e-9 ? 1 : 0;
       }
       // A finger that joined the grip has opened when any of its points has: its points were all
       // taken at one moment, and a straightening finger's first bone stays by the surface it

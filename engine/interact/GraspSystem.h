@@ -137,8 +137,10 @@ class GraspSystem {
     // Its finger was measured when it entered the grip (else: it is, once measured, re-anchored
     // there, unless it joined the grip: GraspSystem::join_fingers).
     bool measured = true;
-    bool joined = false;         // added after the grasp began (join_fingers): its point is on the surface it touched
-    double open_since_s = -1.0;  // physics time since when it has been measured out (release_opened); -1: it is not
+    bool joined = false;  // added after the grasp began (join_fingers): its point is on the surface it touched
+    // How long it has been measured out of the surface, in the frames it was measured, since it last
+    // was measured in (release_opened); -1: it is not out.
+    double open_for_s = -1.0;
     double out_carried_m = 0.0;  // how far out it had moved when taken afresh as the other hand let go (release)
   };
   // One hand's hold of an object.

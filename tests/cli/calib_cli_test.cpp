@@ -171,7 +171,8 @@ TEST(CalibCli, RecordsAWaveFromImageSequencesAndCalibratesFromIt) {
   EXPECT_NE(bad.output.find("rhot-calib: error: "), std::string::npos) << bad.output;
 }
 
-// One camera node serving both cameras' image sequences, detected side by side on two threads:
+// One camera node serving both cameras' image sequences (given second camera first, so that each
+// device's camera number counts), detected side by side on two threads:
 // `record` through it (a real rhot-node on loopback) gets, in every frame, both cameras'
 // detections of one and the same image pair, exactly as detecting the images here does.
 TEST(CalibCli, ANodeServesTwoCamerasDetectedOnTwoThreadsAsTheImagesAreDetectedHere) {
@@ -189,7 +190,7 @@ TEST(CalibCli, ANodeServesTwoCamerasDetectedOnTwoThreadsAsTheImagesAreDetectedHe
   // The node's 60 image pairs at 15 Hz take 4 s; the recording (Ctrl-C after 5 s) holds the frames
   // that came once it had connected and set the node's clock.
   auto node = rhot::ChildProcess::spawn({std::string(RHOT_BINARY_DIR) + "/rhot-node", "--publish", endpoint, "--insecure", "--device",
-                                         cam0 + "," + cam1, "--rig", truth, "--camera", "0,1", "--threads", "2", "--rate-hz", "15"},
+                                         cam1 + "," + cam0, "--rig", truth, "--camera", "1,0", "--threads", "2", "--rate-hz", "15"},
                                         (dir / "node.log").string());
   ASSERT_TRUE(node.has_value()) << node.error();
   const auto recorded = rhot::test::run_program(

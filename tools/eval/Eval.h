@@ -167,7 +167,7 @@ struct NodesArgs {
   // --chaos SECONDS: faults thrown at the nodes and the master for this long (Chaos.h), the run's
   // length.
   std::optional<double> chaos_s;
-  int threads = 0;  // the master's tracker's, and each node's detection's (0: every core)
+  int threads = 0;  // the master's tracker's (0: every core); the simulated nodes have none
 };
 int nodes(const NodesArgs& args);
 // `rhot-eval colour`'s flags.

@@ -133,12 +133,15 @@ GraspComparison compare_grasps(const std::vector<GraspSpan>& tracked, const std:
     c.unintended_grasps += meant ? 0 : 1;
     if (!g.released) continue;
     // Unintended: the perfect hands held it (or took it within the same moment) and still held it
-    // a moment after this release. A grasp let go at once, before theirs began, is one too: the
-    // object was dropped.
+    // a moment after this release, and let go of it at no moment near it. A grasp let go at once,
+    // before theirs began, is one too: the object was dropped.
     const bool held_on = std::any_of(perfect.begin(), perfect.end(), [&](const GraspSpan& p) {
       return same(g, p) && p.begin_s <= g.end_s + kSameMoment_s && p.end_s > g.end_s + kSameMoment_s;
     });
-    c.unintended_releases += held_on ? 1 : 0;
+    const bool let_go_then = std::any_of(perfect.begin(), perfect.end(), [&](const GraspSpan& p) {
+      return same(g, p) && p.released && std::abs(p.end_s - g.end_s) <= kSameMoment_s;
+    });
+    c.unintended_releases += held_on && !let_go_then ? 1 : 0;
   }
   return c;
 }

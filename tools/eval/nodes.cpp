@@ -354,11 +354,16 @@ class AsOnTheNodes final : public FrameSource {
   std::vector<Part> parts_;
 };
 
+// The master's threads: --threads, else the cores the node processes leave (they run on this
+// machine too: on two cores, a second matching thread beside two nodes delayed the master's
+// assembly enough to let frames it should have closed wait for a late node).
+int master_threads(const NodesArgs& a) { return a.threads > 0 ? a.threads : std::max(1, threads_or_all(0) - a.nodes); }
+
 void set_up_demo_hands(const NodesArgs& a, const CameraRig& rig, const DemoSimulation& demo, DemoHands& hands) {
   auto frames = std::make_unique<HeldFrames>(rig);
   hands.held = frames.get();
   LiveTrackingSettings settings;
-  settings.threads = a.threads;
+  settings.threads = master_threads(a);
   hands.from_nodes = std::make_unique<LiveTracking>(std::move(frames), demo.objects, demo.layouts, settings);
   hands.in_process =
       std::make_unique<LiveTracking>(std::make_unique<SameCamerasAs>(std::make_unique<AsOnTheNodes>(a, rig, demo.world), *hands.held),
@@ -560,7 +565,7 @@ void tally_frame(const NodesRun& run, const AssembledFrame& f, NodesTally& tally
     return;
   }
   count_wrong_markers(run, f, k, tally);
-  const std::vector<MatchedPoint> points = run.matcher.match(frame, run.match, &run.jobs);
+  const std::vector<MatchedPoint> points = run.matcher.match(frame, run.match, run.jobs.threads() > 1 ? &run.jobs : nullptr);
   std::vector<Eigen::Vector3d> truth;
   for (const Trajectory& m : run.markers) truth.push_back(m.at(t));
   const int got = markers_found(truth, points);
@@ -865,7 +870,7 @@ int nodes(const NodesArgs& given) {
   if (demo) set_up_demo_hands(a, *rig, *demo, hands);
   const std::unique_ptr<Chaos> chaos = make_chaos(a, plans, children, log, *source, !keys.dir.empty());
   const RigMatcher matcher(*rig);
-  JobPool jobs(threads_or_all(a.threads));
+  JobPool jobs(master_threads(a));
   const NodesRun run{.a = a,
                      .rig = *rig,
                      .demo = demo,

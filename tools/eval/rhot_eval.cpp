@@ -259,7 +259,9 @@ CLI::App* add_nodes_command(CLI::App& app, NodesArgs& a, bool& json) {
                   "wrong_markers_accepted")
       ->check(CLI::Range(5.0, 86400.0))
       ->check(rhot::number_check(rhot::NumberBound::kPositive));
-  add_threads_flag(*cmd, a.threads, "threads the master's tracker runs on (0: every core there is); the results do not depend on it");
+  add_threads_flag(*cmd, a.threads,
+                   "threads the master's tracker runs on (0: the cores the node processes leave, at least one); the results do not "
+                   "depend on it");
   cmd->add_flag("--json", json, "print JSON (the only output format)");
   return cmd;
 }

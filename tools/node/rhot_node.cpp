@@ -247,6 +247,9 @@ int run_device(const Options& o, rhot::NodeServer& server) {
     for (const std::string& w : source->take_warnings()) spdlog::warn("{}", w);
     const std::int64_t done = rhot::steady_now_ns();
     for (std::size_t j = 0; j < cameras.size(); ++j) {
+      // A camera with no image this frame (its file ended first, a read failed) sends nothing: the
+      // master counts it missing, not as a camera that saw no marker.
+      if (!frame->cameras[j].delivered) continue;
       rhot::NodeFrameMessage m;
       m.node = static_cast<std::uint16_t>(o.node_id);
       m.camera = static_cast<std::uint16_t>(cameras[j]);
@@ -305,7 +308,8 @@ void add_options(CLI::App& cli, Options& o) {
                  "With --device: threads the cameras are detected on side by side (0: every core there is, at most one a camera); "
                  "the detections do not depend on it")
       ->capture_default_str()
-      ->check(CLI::Range(0, rhot::kMaxThreads));
+      ->check(CLI::Range(0, rhot::kMaxThreads))
+      ->needs(device);
   cli.add_option("--threshold", o.threshold, "With --device: blob threshold in grey levels (-1: automatic)")
       ->capture_default_str()
       ->check(CLI::Range(-1, 254));

@@ -176,6 +176,7 @@ std::optional<RigFrame> VideoSource::next() {
     if (image.empty()) {
       ++st.failed_reads;
       st.last_problem = "frame " + std::to_string(frame.index) + ": no image from \"" + s.devices[c] + "\"";
+      cf.delivered = false;
       return;
     }
     const CameraIntrinsics& k = s.rig.cameras[c].intrinsics;
@@ -183,12 +184,14 @@ std::optional<RigFrame> VideoSource::next() {
       ++st.bad_images;
       st.last_problem = "frame " + std::to_string(frame.index) + ": \"" + s.devices[c] + "\" gave a " + size_text(image.cols, image.rows) +
                         " image, the rig calibrates it at " + size_text(k.width_px, k.height_px);
+      cf.delivered = false;
       return;
     }
     auto detections = s.colour_detectors.empty() ? detect_blobs(image, s.settings.detector) : s.colour_detectors[c].track(image);
     if (!detections) {
       ++st.bad_images;
       st.last_problem = "frame " + std::to_string(frame.index) + ": \"" + s.devices[c] + "\": " + detections.error();
+      cf.delivered = false;
       return;
     }
     ++st.frames;

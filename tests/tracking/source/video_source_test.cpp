@@ -165,7 +165,12 @@ TEST(VideoSource, OneCameraEndingEarlyCountsAsFailedReadsUntilAllEnd) {
   fs::remove(frame_file(dir, 3, 2));
   auto source = VideoSource::open(rig, patterns(dir, rig.cameras.size()));
   ASSERT_TRUE(source.has_value()) << source.error();
-  for (int f = 0; f < 3; ++f) ASSERT_TRUE(source->next().has_value()) << f;
+  for (int f = 0; f < 3; ++f) {
+    const auto frame = source->next();
+    ASSERT_TRUE(frame.has_value()) << f;
+    EXPECT_EQ(frame->cameras[3].delivered, f < 2) << "a camera with no image this frame delivered none: " << f;
+    EXPECT_TRUE(frame->cameras[0].delivered) << f;
+  }
   EXPECT_FALSE(source->next().has_value());
   EXPECT_EQ(source->stats()[3].frames, 2u);
   EXPECT_EQ(source->stats()[3].failed_reads, 1u);
