@@ -435,19 +435,19 @@ void GraspSystem::release(Entity object, int hand, LetGo how, std::string reason
   if (held.both()) {
     // The other hand carries on from where the pair had the object.
     // Its grip points are taken afresh where its fingers are now: while paired the object moved
-    // (and maybe scaled) relative to each hand. A point already opening (measured out past the
-    // release distance, its open_for_s under way) keeps how far out it was: two hands let go
-    // together, and the one still opening when the other has let go would otherwise start its
-    // opening again from nothing (and, its finger already most of the way open, might never open
-    // the release distance more). The others start afresh, as a frame's jitter is no opening.
+    // (and maybe scaled) relative to each hand. A measured point keeps how far out of the surface
+    // it was: two hands let go together, and the one still opening when the other has let go would
+    // otherwise start its opening again from nothing (and, its finger already most of the way open,
+    // might never open the release distance more). Carrying only the points already past the
+    // release distance kept the bar held on 4 of the workbench's 20 seeds (docs/PERFORMANCE.md).
     const int other = 1 - hand;
     const btTransform world_from_object = target_of(held);
     HandGrip& stays = *held.by[static_cast<std::size_t>(other)];
     HandColliders* h = hands_[static_cast<std::size_t>(other)];
     const btScalar grown = static_cast<btScalar>(physics_.scale(object) / stays.scale);
     for (GripPoint& g : stays.grip) {
-      const bool opening = g.measured && g.open_for_s >= 0.0;
-      g.out_carried_m = opening ? std::max(0.0, out_of_surface_m(other, g, world_from_object, grown)) : 0.0;
+      const bool trusted = g.measured && grip_confidence(other, g) >= settings_.confident;
+      g.out_carried_m = trusted ? std::max(0.0, out_of_surface_m(other, g, world_from_object, grown)) : 0.0;
       g.on_object = world_from_object.inverse() * (h->tracked_bone(g.bone) * g.on_bone);
     }
     stays.hand_from_object = to_bt(h->input().world_from_hand).inverse() * world_from_object;
