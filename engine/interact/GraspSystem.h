@@ -12,7 +12,9 @@
 // are cleared as the grasp begins); it still collides with everything else.
 //
 // The grasp ends when the fingers open: a grasping finger counts as open when its tracked bone
-// has moved more than `release_distance_m` out of the object's surface from where it touched, or
+// has moved more than `release_distance_m` out of the object's surface from where it touched
+// (measured so for `open_for_s` of the frames it is measured in: a few frames' jitter is no
+// opening), or
 // (a finger other than the thumb) its measured last bone has gone that much farther from the
 // object than it came, straightening; the grasp ends when the thumb (or palm) or every opposing
 // finger is open. A finger whose joints are not measured this frame (confidence below
@@ -33,7 +35,8 @@
 // left grip to the right one, y the hands' mean roll about that line; so it moves with both hands'
 // midpoint and turns with the line between them, and (with `scale_with_hands`) grows and shrinks
 // with their distance. When one hand lets go, the other keeps the object where the pair held it
-// (a hand-over: its release says `handed_over`), and carries on alone without a jump.
+// (a hand-over: its release says `handed_over`), and carries on alone without a jump, each measured
+// grip point keeping how far it had opened (two hands letting go together both let go).
 //
 // Collisions between a released object and its hand's bones resume once no bone overlaps it.
 
