@@ -36,6 +36,28 @@
 
 namespace rhot::eval {
 
+namespace {
+
+// The drawn hands and objects against the truth, at capture and at display (engine/sim/Demo.h).
+nlohmann::json prediction_errors_json(const rhot::PredictionErrors& errors) {
+  nlohmann::json j = {{"joint_samples", errors.joints},
+                      {"at_capture_mean_mm", 1e3 * errors.at_capture_mean_m()},
+                      {"at_display_mean_mm", 1e3 * errors.predicted_at_display_mean_m()},
+                      {"at_display_unpredicted_mean_mm", 1e3 * errors.tracked_at_display_mean_m()},
+                      {"ratio_unpredicted", errors.ratio_without_prediction()},
+                      {"horizon_mean_ms", errors.joints > 0 ? 1e3 * errors.horizon_sum_s / static_cast<double>(errors.joints) : 0.0}};
+  if (errors.objects > 0) {
+    const auto n = static_cast<double>(errors.objects);
+    j["objects"] = {{"samples", errors.objects},
+                    {"at_capture_mean_mm", 1e3 * errors.object_at_capture_sum_m / n},
+                    {"at_display_mean_mm", 1e3 * errors.object_predicted_at_display_sum_m / n},
+                    {"at_display_unpredicted_mean_mm", 1e3 * errors.object_tracked_at_display_sum_m / n}};
+  }
+  return j;
+}
+
+}  // namespace
+
 // The demo's whole frame, headless: simulated cameras, tracking, physics and both eyes rendered
 // offscreen, every stage timed (engine/sim/Demo.h).
 int frame(const std::string& scene_file, const std::string& eye, int frames, const std::string& device, rhot::Shading shading,
@@ -119,19 +141,7 @@ int frame(const std::string& scene_file, const std::string& eye, int frames, con
   const rhot::PredictionErrors& errors = (*demo)->prediction_errors();
   j["prediction"] = options.prediction;
   j["prediction_error_ratio"] = errors.ratio();
-  j["prediction_errors"] = {{"joint_samples", errors.joints},
-                            {"at_capture_mean_mm", 1e3 * errors.at_capture_mean_m()},
-                            {"at_display_mean_mm", 1e3 * errors.predicted_at_display_mean_m()},
-                            {"at_display_unpredicted_mean_mm", 1e3 * errors.tracked_at_display_mean_m()},
-                            {"ratio_unpredicted", errors.ratio_without_prediction()},
-                            {"horizon_mean_ms", errors.joints > 0 ? 1e3 * errors.horizon_sum_s / static_cast<double>(errors.joints) : 0.0}};
-  if (errors.objects > 0) {
-    const auto n = static_cast<double>(errors.objects);
-    j["prediction_errors"]["objects"] = {{"samples", errors.objects},
-                                         {"at_capture_mean_mm", 1e3 * errors.object_at_capture_sum_m / n},
-                                         {"at_display_mean_mm", 1e3 * errors.object_predicted_at_display_sum_m / n},
-                                         {"at_display_unpredicted_mean_mm", 1e3 * errors.object_tracked_at_display_sum_m / n}};
-  }
+  j["prediction_errors"] = prediction_errors_json(errors);
   if (const auto gpu = runtime.gpu_eye_ms()) {
     for (std::size_t e = 0; e < 2; ++e) {
       j["gpu_eye_ms"][e == 0 ? "left" : "right"] = {{"p50", (*gpu)[e].p50_ms}, {"p99", (*gpu)[e].p99_ms}, {"max", (*gpu)[e].max_ms}};
