@@ -180,6 +180,18 @@ std::optional<double> rest_digit(HandInput& hand, const DigitChain& chain, int f
   return theta;
 }
 
+// A curl of theta from knuckle `first` moves the digit's tip at most theta times this: the sum of
+// its knuckles' weighted distances to the tip (at least a millimetre).
+double tip_lever_m(const HandInput& hand, const DigitChain& chain, int first) {
+  const Eigen::Vector3d& tip = hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)])];
+  double lever_m = 0.0;
+  for (int k = first; k < chain.count - 1; ++k) {
+    lever_m += chain.weight[static_cast<std::size_t>(k)] *
+               (tip - hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)])]).norm();
+  }
+  return std::max(lever_m, 1e-3);
+}
+
 }  // namespace
 
 double capsule_distance_m(const btCollisionObject& object, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius_m) {
@@ -229,18 +241,40 @@ void FingerContact::follow(std::size_t side, double t_s, const HandInput& hand) 
       continue;
     }
     const double curl = digit_curl_rad(hand, digit);
+    const Eigen::Vector3d tip = hand.world_from_hand.inverse() *
+                                hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)])];
     const double dt = t_s - m.t_s;
     // Measured again after a short gap (a marker that flickers), the rate goes on across the gap;
     // after a long one it starts afresh.
     if (m.t_s >= 0.0 && dt > 0.0 && dt <= kFlicker_s) {
       const double blend = std::min(1.0, dt / 0.1);
       m.rate_rad_s += blend * ((curl - m.curl_rad) / dt - m.rate_rad_s);
+      m.tip_speed_mps += blend * ((tip - m.tip_hand).norm() / dt - m.tip_speed_mps);
     } else {
       m.rate_rad_s = 0.0;
+      m.tip_speed_mps = 0.0;
     }
     m.curl_rad = curl;
+    m.tip_hand = tip;
     m.t_s = t_s;
     m.hidden = false;
+    m.hidden_speed_mps = 0.0;
+    m.may_have_moved_m = 0.0;
+  }
+  // How far each hidden digit's tip may have moved in the hand since it hid: at its own speed
+  // when last seen, or its hand's since, whichever is faster (the fastest tip of the digits
+  // measured now or hidden only kReaching_s ago, as they were last seen). A tip's speed, not a
+  // curl's rate: the thumb closes by turning more than by curling.
+  double hand_speed_mps = 0.0;
+  for (const DigitMotion& m : motion_[side]) {
+    if (m.t_s >= 0.0 && t_s - m.t_s <= kReaching_s) hand_speed_mps = std::max(hand_speed_mps, m.tip_speed_mps);
+  }
+  const double dt = followed_t_s_[side] >= 0.0 ? std::clamp(t_s - followed_t_s_[side], 0.0, 0.1) : 0.0;
+  followed_t_s_[side] = t_s;
+  for (DigitMotion& m : motion_[side]) {
+    if (!m.hidden) continue;
+    m.hidden_speed_mps = std::max({m.hidden_speed_mps, m.tip_speed_mps, hand_speed_mps});
+    m.may_have_moved_m += m.hidden_speed_mps * dt;
   }
 }
 
@@ -432,6 +466,8 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
   // Closing on a grabbable object not yet held (a held one ignores its hand's bones): just short of it.
   const bool loose = grasp_.holding(side) != result.object && world.alive(*result.object) && world.has<Grabbable>(*result.object);
   const double rest_m = loose ? settings_.rest_gap_m : 0.0;
+  const auto holder = grasp_.held_by(*result.object);
+  const bool from_other = holder && *holder != side;
   for (int digit = 0; digit < 5; ++digit) {
     const DigitChain chain = digit_chain(digit);
     const auto at = [&](int k) { return static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(k)]); };
@@ -455,7 +491,19 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
       if (across.norm() > 1e-9) axis = across.normalized();
     }
     bends[static_cast<std::size_t>(digit)] = {first, axis};
-    const auto theta = rest_digit(hand, chain, first, axis, *body, rest_m, settings_.max_curl_rad, settings_.max_uncurl_rad);
+    // Held or touched, the digit goes to the object however far, and closing on a loose one, as far
+    // as it must. Closing on one the other hand holds, no farther than its tip can have moved since
+    // it hid: the grasp it makes takes the object from that hand (a release, which needs evidence)
+    // or joins it (and the object then moves with both). A hidden thumb and finger pulled to a cube
+    // as soon as they could reach it took it from the other hand 0.1-0.3 s before the real ones
+    // closed on it. (A loose object is not held back so: a grasp a moment early there changes no
+    // one's hold, and the measured fingers beside the hidden ones are often a few millimetres short
+    // of it.)
+    const double max_curl_rad = in_hand || !from_other
+                                    ? settings_.max_curl_rad
+                                    : std::min(settings_.max_curl_rad, motion_[s][static_cast<std::size_t>(digit)].may_have_moved_m /
+                                                                           tip_lever_m(hand, chain, first));
+    const auto theta = rest_digit(hand, chain, first, axis, *body, rest_m, max_curl_rad, settings_.max_uncurl_rad);
     if (!theta) continue;  // it never meets (or leaves) the object within reach
     result.placed[static_cast<std::size_t>(digit)] = true;
     result.curl_rad[static_cast<std::size_t>(digit)] = *theta;

@@ -14,7 +14,8 @@
 // 0.5 s from its first knuckle. Closing on a grabbable object not yet held, from one side only, they rest `rest_gap_m` off it. A finger
 // bends in its own plane (about the hand's lateral axis); the thumb turns toward the object's nearest surface. A hidden finger whose curl
 // does not meet the object within `max_curl_rad` is left where the tracker put it (it points elsewhere); one already inside is uncurled to
-// the surface.
+// the surface. Closing on an object the other hand holds, a hidden digit is curled no farther than its tip can have moved since it hid
+// (docs/grasping.md, "Taking from the other hand").
 //
 // This lives in the engine, not in the tracker, because it needs the physics world's shapes:
 // tracking stays free of engine types (docs/tracking.md, "Hidden fingers and objects"). The
@@ -90,6 +91,12 @@ class FingerContact {
     double rate_rad_s = 0.0;  // smoothed over about 0.1 s
     double t_s = -1.0;        // when last measured (negative: never)
     bool hidden = true;
+    Eigen::Vector3d tip_hand{0, 0, 0};  // its tip in the hand frame when last measured
+    double tip_speed_mps = 0.0;         // ... and its speed there, smoothed as rate_rad_s
+    // Hidden: the fastest its tip or its hand's have been seen moving since it hid, and how far at
+    // that speed its tip may have moved since.
+    double hidden_speed_mps = 0.0;
+    double may_have_moved_m = 0.0;
   };
   void follow(std::size_t side, double t_s, const HandInput& hand);
   // Which tracked object the hand carries (see FingerContactSettings::carry_moved_m).
@@ -101,6 +108,7 @@ class FingerContact {
   const GraspSystem& grasp_;
   FingerContactSettings settings_;
   std::array<std::array<DigitMotion, 5>, 2> motion_{};
+  std::array<double, 2> followed_t_s_{-1.0, -1.0};  // each hand's last follow()
   // Per hand, the tracked object near its palm and how it has moved with the hand.
   struct Carry {
     std::optional<Entity> object;
