@@ -23,11 +23,17 @@ bool input_finite(const HandInput& in) {
   return true;
 }
 
-// A capsule along +Y from a to b.
-btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+// A capsule along +Y from a to b, its roll about that axis carried from `reference`: the frame
+// of the bone before it in its digit, or, for a digit's first bone, the hand's with +Y turned to
+// the fingers (-Z). Turned from there by the shortest arc, the roll follows the hand and never
+// flips: from the world's +Y instead, a bone pointing down (a pinching thumb) had its roll swing
+// half a turn between two frames, and a grip point on its surface 15 mm with it
+// (docs/grasping.md, "Bones keep their roll").
+btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Quaterniond& reference) {
   const Eigen::Vector3d d = b - a;
   const double n = d.norm();
-  const Eigen::Quaterniond q = n > 1e-9 ? rotation_between(Eigen::Vector3d::UnitY(), d / n) : Eigen::Quaterniond::Identity();
+  const Eigen::Vector3d along = reference * Eigen::Vector3d::UnitY();
+  const Eigen::Quaterniond q = n > 1e-9 ? (rotation_between(along, d / n) * reference).normalized() : reference;
   return btTransform(to_bt(q), to_bt(0.5 * (a + b)));
 }
 
@@ -106,13 +112,18 @@ void HandColliders::drive(const HandInput& input) {
     built_ = true;
   }
   const btScalar dt = static_cast<btScalar>(physics_.step_s());
+  // The hand's frame with its +Y turned to the fingers (-Z): a digit's first bone's reference.
+  const Eigen::Quaterniond hand_reference =
+      input.world_from_hand.rotation * rotation_between(Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitZ());
   for (std::size_t i = 0; i < hand_bones().size(); ++i) {
     Bone& b = bones_[i];
     const auto& def = hand_bones()[i];
     const Eigen::Vector3d a = input.joints_world[at(def.from)];
     const Eigen::Vector3d e = input.joints_world[at(def.to)];
     const btVector3 previous_target = b.target.getOrigin();
-    b.target = bone_pose(a, e);
+    // hand_bones() lists each digit's bones from the hand out: one whose start is the last one's end follows it.
+    const bool follows = i > 0 && hand_bones()[i - 1].to == def.from;
+    b.target = bone_pose(a, e, follows ? to_eigen(bones_[i - 1].target.getRotation()) : hand_reference);
     if (!active_) {
       place(b, b.target);  // seen again (or first seen): no sweep from where it was lost
       set_soft(b, false);

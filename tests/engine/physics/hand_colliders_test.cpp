@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -94,6 +95,42 @@ TEST(HandColliders, NonFiniteHandsAreIgnored) {
   for (int i = 0; i < kHandBoneCount; ++i) EXPECT_TRUE(finite(p->hand(HandSide::kRight).bone(i)->getWorldTransform().getOrigin()));
   p->step(world, {HandInput{}, good});
   EXPECT_TRUE(p->hand(HandSide::kRight).active());
+}
+
+// A point on a bone's surface (a grip point, docs/grasping.md) moves with the hand: the bone's roll
+// about its axis is carried from the hand's frame down the digit. Taken by the shortest arc from the
+// world's +Y, a bone pointing down had no roll to speak of: a hand pointing at the floor and
+// wobbling by a third of a degree swung such a point around its bone by up to twice the bone's
+// radius from one frame to the next (a pinching thumb's grip point, 15 mm out a frame after the
+// grasp, dropped the ball; `rhot-eval grasp --hands tracked --world realistic --seed 31`).
+TEST(HandColliders, APointOnABoneMovesWithTheHandWhereverTheBonePoints) {
+  World world;
+  auto p = physics_for(world, parse(kPlateScene));
+  const HandPose pose = pointing_hand(HandSide::kRight);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  // The fingers (the hand frame's -Z) at the floor, from 0.3 m above the stand's top.
+  const Eigen::Quaterniond down(Eigen::AngleAxisd(-std::numbers::pi / 2.0, Eigen::Vector3d::UnitX()));
+  std::array<Eigen::Vector3d, kHandBoneCount> before{};
+  double worst_m = 0.0, pointing_down = 0.0;
+  for (int i = 0; i < 60; ++i) {
+    Rigid3d hand;
+    hand.translation = Eigen::Vector3d(0.0, 1.2, 0.0);
+    const Eigen::Vector3d axis(noise(rng), noise(rng), noise(rng));
+    hand.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.006, axis.normalized())) * down;
+    p->step(world, {HandInput{}, hand_input(hand, pose)});
+    const HandColliders& h = p->hand(HandSide::kRight);
+    for (int b = 0; b < kHandBoneCount; ++b) {
+      const btTransform bone = h.tracked_bone(b);
+      pointing_down = std::max(pointing_down, -static_cast<double>(quatRotate(bone.getRotation(), btVector3(0, 1, 0)).y()));
+      const Eigen::Vector3d on_surface = to_eigen(bone * btVector3(static_cast<btScalar>(h.bone_radius_m(b)), 0, 0));
+      if (i > 0) worst_m = std::max(worst_m, (on_surface - before[static_cast<std::size_t>(b)]).norm());
+      before[static_cast<std::size_t>(b)] = on_surface;
+    }
+  }
+  EXPECT_GT(pointing_down, 0.999) << "a bone points straight down";
+  // 0.006 rad about the wrist moves a point 20 cm out by 1.2 mm.
+  EXPECT_LT(worst_m, 0.002);
 }
 
 // A contact's body is told to be a bone of this hand, which one, or neither: the other hand's bones
