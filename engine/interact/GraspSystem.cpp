@@ -186,17 +186,14 @@ bool GraspSystem::grip_seen_closed(Entity object) const {
   const auto it = held_.find(object);
   if (it == held_.end()) return false;
   const Held& held = it->second;
-  const btTransform target = target_of(held);
   for (int hand = 0; hand < 2; ++hand) {
     const auto& grip = held.by[static_cast<std::size_t>(hand)];
     if (!grip || !hands_[static_cast<std::size_t>(hand)]->active()) continue;
-    const btScalar grown = static_cast<btScalar>(physics_.scale(object) / grip->scale);
-    const btRigidBody* body = physics_.body(object);
     bool anchor = false, finger = false;
     for (const GripPoint& g : grip->grip) {
       if (!g.measured || grip_confidence(hand, g) < settings_.confident) continue;
-      if (out_of_surface_m(hand, g, target, grown) > settings_.release_distance_m) continue;
-      if (body && finger_left_m(hand, *grip, g.group, *body, target) > settings_.release_distance_m) continue;
+      // Open as release_opened() judges it this step: measured out for open_for_s, not one frame's jitter.
+      if (g.open_for_s >= settings_.open_for_s - 1e-9) continue;
       (g.group == 0 || g.group == kPalmGroup ? anchor : finger) = true;
     }
     if (anchor && finger) return true;

@@ -23,12 +23,21 @@ bool input_finite(const HandInput& in) {
   return true;
 }
 
-// A capsule along +Y from a to b, its roll about that axis carried from `reference`: the frame
-// of the bone before it in its digit, or, for a digit's first bone, the hand's with +Y turned to
-// the fingers (-Z). Turned from there by the shortest arc, the roll follows the hand and never
-// flips: from the world's +Y instead, a bone pointing down (a pinching thumb) had its roll swing
-// half a turn between two frames, and a grip point on its surface 15 mm with it
-// (docs/grasping.md, "Bones keep their roll").
+// A capsule along +Y from a to b, turned by the shortest arc from the world's +Y (where a bone's
+// body is driven).
+btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d d = b - a;
+  const double n = d.norm();
+  const Eigen::Quaterniond q = n > 1e-9 ? rotation_between(Eigen::Vector3d::UnitY(), d / n) : Eigen::Quaterniond::Identity();
+  return btTransform(to_bt(q), to_bt(0.5 * (a + b)));
+}
+
+// The same capsule turned by the shortest arc from `reference`'s +Y: for a bone's frame
+// (HandColliders::tracked_bone) the frame of the bone before it in its digit, or, for a digit's
+// first bone, the hand's with +Y turned to the fingers (-Z); so its roll follows the hand and
+// never flips. From the world's +Y a bone pointing down (a pinching thumb) had its roll swing half
+// a turn between two frames, and a grip point on its surface 15 mm with it (docs/grasping.md,
+// "Bones keep their roll").
 btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Quaterniond& reference) {
   const Eigen::Vector3d d = b - a;
   const double n = d.norm();
@@ -123,7 +132,11 @@ void HandColliders::drive(const HandInput& input) {
     const btVector3 previous_target = b.target.getOrigin();
     // hand_bones() lists each digit's bones from the hand out: one whose start is the last one's end follows it.
     const bool follows = i > 0 && hand_bones()[i - 1].to == def.from;
-    b.target = bone_pose(a, e, follows ? to_eigen(bones_[i - 1].target.getRotation()) : hand_reference);
+    b.frame = bone_pose(a, e, follows ? to_eigen(bones_[i - 1].frame.getRotation()) : hand_reference);
+    // The body itself is driven to the same axis with its roll turned from the world's +Y, as it
+    // always was: a capsule is the same whichever way it is rolled, but how its contacts persist
+    // from step to step is not, and the grasps were tuned with these.
+    b.target = bone_pose(a, e);
     if (!active_) {
       place(b, b.target);  // seen again (or first seen): no sweep from where it was lost
       set_soft(b, false);

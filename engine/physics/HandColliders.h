@@ -48,8 +48,10 @@ class HandColliders {
   btRigidBody* bone(int i) const { return bones_[static_cast<std::size_t>(i)].body.get(); }
   bool soft(int i) const { return bones_[static_cast<std::size_t>(i)].soft; }
   std::optional<int> bone_of(const btCollisionObject* object) const;
-  // Tracked pose of bone i (capsule axis along its local +Y, from `from` to `to`).
-  btTransform tracked_bone(int i) const { return bones_[static_cast<std::size_t>(i)].target; }
+  // Tracked pose of bone i (capsule axis along its local +Y, from `from` to `to`), its roll about
+  // that axis carried from the hand's frame down the digit, so that a point on the bone's surface
+  // (a grip point) moves with the hand (docs/grasping.md, "Bones keep their roll").
+  btTransform tracked_bone(int i) const { return bones_[static_cast<std::size_t>(i)].frame; }
   // Bone i's capsule radius (metres; 0 before the hand was first seen).
   double bone_radius_m(int i) const {
     const auto& shape = bones_[static_cast<std::size_t>(i)].shape;
@@ -69,7 +71,8 @@ class HandColliders {
     std::unique_ptr<btCapsuleShape> shape;
     std::unique_ptr<btDefaultMotionState> motion;
     std::unique_ptr<btRigidBody> body;
-    btTransform target = btTransform::getIdentity();
+    btTransform target = btTransform::getIdentity();  // where the body is driven (its roll from the world's +Y)
+    btTransform frame = btTransform::getIdentity();   // the same pose, its roll carried from the hand (tracked_bone)
     double length_m = 0.0;
     bool soft = false;
   };

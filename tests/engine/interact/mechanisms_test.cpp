@@ -399,6 +399,19 @@ TEST(Sockets, AnObjectSeenHeldCarriedPastOrTakenOutLeavesWithTheHand) {
     EXPECT_EQ(r.count(InteractionEventType::kSnap), 0);
     EXPECT_GT(r.body("cube")->getWorldTransform().getOrigin().y(), 1.05f);
   }
+  for (int jump = 3; jump <= 9; ++jump) {
+    // Seen closed on it, but for one frame of the way up (the `jump`th) measured half open (its
+    // fingertips more than the release distance out of the cube: a tracking jump): one frame is no
+    // opening, and the socket leaves it in the hand. (It took it, "left in the socket", when one
+    // frame was enough.)
+    SocketStage r(R"("peg")");
+    r.carry_in_and_hide(0.5);
+    r.hidden = false;
+    for (int i = 0; i < 45; ++i) r.hand(i == jump ? 0.5 : 1.0, 0.08 + 0.2 * i / 44.0);
+    EXPECT_EQ(r.count(InteractionEventType::kRelease), 0) << "the jump at frame " << jump;
+    EXPECT_EQ(r.count(InteractionEventType::kSnap), 0) << "the jump at frame " << jump;
+    EXPECT_GT(r.body("cube")->getWorldTransform().getOrigin().y(), 1.05f) << "the jump at frame " << jump;
+  }
   {
     // Hidden, but swept through the socket at 0.25 m/s without resting there.
     SocketStage r(R"("peg")");
