@@ -51,6 +51,9 @@ constexpr double kFlicker_s = 0.3;  // a digit hidden no longer than this was on
 // A closing digit hidden no longer than this reaches for what is within its length, and says its
 // hand closes.
 constexpr double kReaching_s = 0.5;
+// A fingertip moves no faster than this in its hand's frame: a faster one is a marker's jump, and
+// would lift the bound on how far a hidden digit can have moved for as long as it stays hidden.
+constexpr double kMaxTipSpeed_mps = 3.0;
 
 // A world transform without its scale.
 Rigid3d rigid_from(const glm::mat4& world_from_local) {
@@ -168,6 +171,8 @@ std::optional<double> rest_digit(HandInput& hand, const DigitChain& chain, int f
     }
     before = theta;
   }
+  // A limit between two steps (a hidden digit's, bounded by how far it can have moved) is tried too.
+  if (after < 0.0 && before < limit - 1e-9 && touches(direction * limit) != inside) after = limit;
   if (after < 0.0) return std::nullopt;
   for (int i = 0; i < 5; ++i) {
     const double mid = 0.5 * (before + after);
@@ -249,7 +254,7 @@ void FingerContact::follow(std::size_t side, double t_s, const HandInput& hand) 
     if (m.t_s >= 0.0 && dt > 0.0 && dt <= kFlicker_s) {
       const double blend = std::min(1.0, dt / 0.1);
       m.rate_rad_s += blend * ((curl - m.curl_rad) / dt - m.rate_rad_s);
-      m.tip_speed_mps += blend * ((tip - m.tip_hand).norm() / dt - m.tip_speed_mps);
+      m.tip_speed_mps += blend * (std::min((tip - m.tip_hand).norm() / dt, kMaxTipSpeed_mps) - m.tip_speed_mps);
     } else {
       m.rate_rad_s = 0.0;
       m.tip_speed_mps = 0.0;
@@ -492,9 +497,10 @@ FingerPlacement FingerContact::place(const World& world, HandSide side, double t
     }
     bends[static_cast<std::size_t>(digit)] = {first, axis};
     // Held or touched, the digit goes to the object however far, and closing on a loose one, as far
-    // as it must. Closing on one the other hand holds, no farther than its tip can have moved since
-    // it hid: the grasp it makes takes the object from that hand (a release, which needs evidence)
-    // or joins it (and the object then moves with both). A hidden thumb and finger pulled to a cube
+    // as it must. Closing on one the other hand holds, curled no farther from where the tracker has
+    // it than its tip can have moved since it hid (the tracker holds a hidden digit where it was,
+    // or curls it with the fingers it sees): the grasp it makes takes the object from that hand (a
+    // release, which needs evidence) or joins it (and the object then moves with both). A hidden thumb and finger pulled to a cube
     // as soon as they could reach it took it from the other hand 0.1-0.3 s before the real ones
     // closed on it. (A loose object is not held back so: a grasp a moment early there changes no
     // one's hold, and the measured fingers beside the hidden ones are often a few millimetres short

@@ -192,8 +192,7 @@ bool GraspSystem::grip_seen_closed(Entity object) const {
     bool anchor = false, finger = false;
     for (const GripPoint& g : grip->grip) {
       if (!g.measured || grip_confidence(hand, g) < settings_.confident) continue;
-      // Open as release_opened() judges it this step: measured out for open_for_s, not one frame's jitter.
-      if (g.open_for_s >= settings_.open_for_s - 1e-9) continue;
+      if (g.open) continue;  // as release_opened() judged it this step
       (g.group == 0 || g.group == kPalmGroup ? anchor : finger) = true;
     }
     if (anchor && finger) return true;
@@ -740,10 +739,11 @@ void GraspSystem::release_opened() {
         if (g.joined && g.measured && out_for_long[i]) joined_open[static_cast<std::size_t>(g.group)] = true;
       }
       for (std::size_t i = 0; i < grip->grip.size(); ++i) {
-        const GripPoint& g = grip->grip[i];
+        GripPoint& g = grip->grip[i];
         const double left = g.group == kPalmGroup ? 0.0 : left_m[static_cast<std::size_t>(g.group)];
         const double out_m = out[i];
         const bool open = out_for_long[i] || (g.joined && g.measured && joined_open[static_cast<std::size_t>(g.group)]);
+        g.open = open;
         if (g.group == 0 || g.group == kPalmGroup) {
           any_anchor = true;
           if (open && !anchor_open) anchor_reason = std::string(digit_name(g.group)) + " opened " + millimetres(out_m) + " (measured)";

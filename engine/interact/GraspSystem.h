@@ -113,9 +113,9 @@ class GraspSystem {
   // The objects held now, by one hand or two.
   std::vector<Entity> held_objects() const;
   // Whether some hand is seen to hold `object` now: a grip point of each side of the grasp (the
-  // anchor, and a finger) measured this frame and not open (out of the surface for open_for_s, as
-  // release_opened() judges it: a frame's jitter is no opening). False for an object not held,
-  // and for one held only by digits that are hidden or measured open.
+  // anchor, and a finger) measured this frame and not open, as release_opened() judged it this
+  // step (out of the surface for open_for_s: a frame's jitter is no opening). False for an object
+  // not held, and for one held only by digits that are hidden or measured open.
   bool grip_seen_closed(Entity object) const;
   // Something other than the hand takes `object` out of its grip (a socket it is seated in):
   // every hand holding it lets go with `reason`, as when it opens (the object keeps the hand's
@@ -145,6 +145,7 @@ class GraspSystem {
     // How long it has been measured out of the surface, in the frames it was measured, since it last
     // was measured in (release_opened); -1: it is not out.
     double open_for_s = -1.0;
+    bool open = false;           // release_opened's verdict this step (out for open_for_s, or its joined finger's other point is)
     double out_carried_m = 0.0;  // how far out it had moved when taken afresh as the other hand let go (release)
   };
   // One hand's hold of an object.

@@ -116,7 +116,7 @@ TEST(HandColliders, APointOnABoneMovesWithTheHandWhereverTheBonePoints) {
   for (int i = 0; i < 60; ++i) {
     Rigid3d hand;
     hand.translation = Eigen::Vector3d(0.0, 1.2, 0.0);
-    const Eigen::Vector3d axis(noise(rng), noise(rng), noise(rng));
+    const Eigen::Vector3d axis{noise(rng), noise(rng), noise(rng)};
     hand.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.006, axis.normalized())) * down;
     p->step(world, {HandInput{}, hand_input(hand, pose)});
     const HandColliders& h = p->hand(HandSide::kRight);
@@ -129,8 +129,8 @@ TEST(HandColliders, APointOnABoneMovesWithTheHandWhereverTheBonePoints) {
     }
   }
   EXPECT_GT(pointing_down, 0.999) << "a bone points straight down";
-  // 0.006 rad about the wrist moves a point 20 cm out by 1.2 mm.
-  EXPECT_LT(worst_m, 0.002);
+  // Two frames' wobbles of 0.006 rad each, about the wrist, move a point 20 cm out by up to 2.4 mm.
+  EXPECT_LT(worst_m, 0.003);
 }
 
 // A contact's body is told to be a bone of this hand, which one, or neither: the other hand's bones
