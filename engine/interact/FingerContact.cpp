@@ -236,6 +236,7 @@ double digit_curl_rad(const HandInput& hand, int digit) {
 }
 
 void FingerContact::follow(std::size_t side, double t_s, const HandInput& hand) {
+  const Rigid3d hand_from_world = hand.world_from_hand.inverse();
   for (int digit = 0; digit < 5; ++digit) {
     DigitMotion& m = motion_[side][static_cast<std::size_t>(digit)];
     const DigitChain chain = digit_chain(digit);
@@ -246,8 +247,8 @@ void FingerContact::follow(std::size_t side, double t_s, const HandInput& hand) 
       continue;
     }
     const double curl = digit_curl_rad(hand, digit);
-    const Eigen::Vector3d tip = hand.world_from_hand.inverse() *
-                                hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)])];
+    const Eigen::Vector3d tip =
+        hand_from_world * hand.joints_world[static_cast<std::size_t>(chain.joints[static_cast<std::size_t>(chain.count - 1)])];
     const double dt = t_s - m.t_s;
     // Measured again after a short gap (a marker that flickers), the rate goes on across the gap;
     // after a long one it starts afresh.

@@ -700,13 +700,11 @@ void GraspSystem::release_opened() {
       std::array<double, 5> left_m{};  // per finger: finger_left_m
       for (int f = 1; f <= 4; ++f) left_m[static_cast<std::size_t>(f)] = finger_left_m(hand, *grip, f, *body, target);
       bool by_last_bone = false;
-      // Each point's distance out, and whether it has been out for open_for_s: a few frames' jitter
-      // of a measured finger (its bones' estimate swings by several millimetres from frame to frame
-      // in the realistic world) is no opening.
+      // Each point's distance out, and whether it has been out for open_for_s (GripPoint::open): a
+      // few frames' jitter of a measured finger (its bones' estimate swings by several millimetres
+      // from frame to frame in the realistic world) is no opening.
       std::vector<double>& out = point_out_m_;
-      std::vector<char>& out_for_long = point_out_for_long_;
       out.assign(grip->grip.size(), 0.0);
-      out_for_long.assign(grip->grip.size(), 0);
       for (std::size_t i = 0; i < grip->grip.size(); ++i) {
         GripPoint& g = grip->grip[i];
         const bool trusted = grip_confidence(hand, g) >= settings_.confident;
@@ -728,22 +726,21 @@ void GraspSystem::release_opened() {
         } else if (out_now) {
           g.open_for_s = g.open_for_s < 0.0 ? 0.0 : g.open_for_s + physics_.step_s();
         }
-        out_for_long[i] = out_now && g.open_for_s >= settings_.open_for_s - 1e-9 ? 1 : 0;
+        g.open = out_now && g.open_for_s >= settings_.open_for_s - 1e-9;
       }
       // A finger that joined the grip has opened when any of its points has: its points were all
       // taken at one moment, and a straightening finger's first bone stays by the surface it
       // touched while its last bones leave it (the bar, let go at the workbench's rack).
       std::array<bool, 5> joined_open{};
-      for (std::size_t i = 0; i < grip->grip.size(); ++i) {
-        const GripPoint& g = grip->grip[i];
-        if (g.joined && g.measured && out_for_long[i]) joined_open[static_cast<std::size_t>(g.group)] = true;
+      for (const GripPoint& g : grip->grip) {
+        if (g.joined && g.measured && g.open) joined_open[static_cast<std::size_t>(g.group)] = true;
       }
       for (std::size_t i = 0; i < grip->grip.size(); ++i) {
         GripPoint& g = grip->grip[i];
         const double left = g.group == kPalmGroup ? 0.0 : left_m[static_cast<std::size_t>(g.group)];
         const double out_m = out[i];
-        const bool open = out_for_long[i] || (g.joined && g.measured && joined_open[static_cast<std::size_t>(g.group)]);
-        g.open = open;
+        g.open = g.open || (g.joined && g.measured && joined_open[static_cast<std::size_t>(g.group)]);
+        const bool open = g.open;
         if (g.group == 0 || g.group == kPalmGroup) {
           any_anchor = true;
           if (open && !anchor_open) anchor_reason = std::string(digit_name(g.group)) + " opened " + millimetres(out_m) + " (measured)";

@@ -239,9 +239,8 @@ class GraspSystem {
   GraspSettings settings_;
   std::unordered_map<Entity, Held> held_;
   std::array<double, 2> released_at_s_{-1e9, -1e9};
-  // release_opened's per grip point working storage, kept so that a frame allocates nothing.
+  // release_opened's per grip point distances out, kept so that a frame allocates nothing.
   std::vector<double> point_out_m_;
-  std::vector<char> point_out_for_long_;
   std::vector<std::pair<Entity, int>> reenable_;  // (object, hand) whose collisions resume once clear
   std::unordered_map<Entity, std::array<PairState, 2>> pairs_;
   std::vector<InteractionEvent> events_;
