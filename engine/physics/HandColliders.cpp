@@ -23,26 +23,18 @@ bool input_finite(const HandInput& in) {
   return true;
 }
 
-// A capsule along +Y from a to b, turned by the shortest arc from the world's +Y (where a bone's
-// body is driven).
-btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+// A capsule along +Y from a to b, turned by the shortest arc from `reference`'s +Y. A bone's body
+// is driven with the world's (the identity). Its frame (HandColliders::tracked_bone) takes the
+// frame of the bone before it in its digit, or, for a digit's first bone, the hand's with +Y turned
+// to the fingers (-Z); so its roll follows the hand and never flips. From the world's +Y a bone
+// pointing down (a pinching thumb) had its roll swing half a turn between two frames, and a grip
+// point on its surface 15 mm with it (docs/grasping.md, "Bones keep their roll"). (btTransform
+// takes the quaternion's length out: a product of unit ones needs no normalising.)
+btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                      const Eigen::Quaterniond& reference = Eigen::Quaterniond::Identity()) {
   const Eigen::Vector3d d = b - a;
   const double n = d.norm();
-  const Eigen::Quaterniond q = n > 1e-9 ? rotation_between(Eigen::Vector3d::UnitY(), d / n) : Eigen::Quaterniond::Identity();
-  return btTransform(to_bt(q), to_bt(0.5 * (a + b)));
-}
-
-// The same capsule turned by the shortest arc from `reference`'s +Y: for a bone's frame
-// (HandColliders::tracked_bone) the frame of the bone before it in its digit, or, for a digit's
-// first bone, the hand's with +Y turned to the fingers (-Z); so its roll follows the hand and
-// never flips. From the world's +Y a bone pointing down (a pinching thumb) had its roll swing half
-// a turn between two frames, and a grip point on its surface 15 mm with it (docs/grasping.md,
-// "Bones keep their roll").
-btTransform bone_pose(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Quaterniond& reference) {
-  const Eigen::Vector3d d = b - a;
-  const double n = d.norm();
-  const Eigen::Vector3d along = reference * Eigen::Vector3d::UnitY();
-  const Eigen::Quaterniond q = n > 1e-9 ? (rotation_between(along, d / n) * reference).normalized() : reference;
+  const Eigen::Quaterniond q = n > 1e-9 ? rotation_between(reference * Eigen::Vector3d::UnitY(), d / n) * reference : reference;
   return btTransform(to_bt(q), to_bt(0.5 * (a + b)));
 }
 
