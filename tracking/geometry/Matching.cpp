@@ -897,12 +897,15 @@ class Matcher {
   // their plans.
   static constexpr std::size_t kIndexAbovePairs = 512;
   // Seeds are grown ahead in parallel for a pair with at least this many open detections in its
-  // first camera (fewer: the dispatch costs more than it saves).
-  static constexpr std::size_t kGrowAheadFrom = 16;
+  // first camera (fewer: the dispatch costs more than it saves). From 4 with 8 seeds grown ahead,
+  // against 16 with 4: stage-32's 1,000 markers on two threads about 4 % faster, room-8's about
+  // 10 %, 100 markers the same (docs/PERFORMANCE.md, "Where two threads lose their time").
+  static constexpr std::size_t kGrowAheadFrom = 4;
   static constexpr std::size_t kPlanRoom = 64;
   // Seeds of a plan grown ahead at most (a detection's first or second candidate is confirmed,
-  // most often); the commit grows any after them on the spot.
-  static constexpr std::size_t kGrownAhead = 4;
+  // most often; among a thousand markers, the fifth to eighth often enough to be worth growing
+  // ahead); the commit grows any after them on the spot.
+  static constexpr std::size_t kGrownAhead = 8;
   // The rays' meeting point starts a seed's refinement when it lies within this of the seed.
   static constexpr double kRaysStartWithin_m = 0.05;
   static constexpr char kUsed = 1;
