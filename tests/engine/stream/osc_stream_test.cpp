@@ -321,7 +321,15 @@ TEST(OscStream, OscdumpReceivesEveryFrame) {
     stream->flush();
     std::this_thread::sleep_for(2ms);
   }
-  std::this_thread::sleep_for(200ms);
+  // Until it has printed the tenth frame's last message (each frame's bundle ends with the body), or
+  // 10 s: a loaded machine may be slow to schedule it.
+  const auto bodies_printed = [&] {
+    std::ifstream printed(out);
+    int n = 0;
+    for (std::string line; std::getline(printed, line);) n += line.find("/rhot/body") != std::string::npos ? 1 : 0;
+    return n;
+  };
+  for (int wait = 0; wait < 1000 && bodies_printed() < 10; ++wait) std::this_thread::sleep_for(10ms);
   std::system(("kill $(cat " + pid.string() + ")").c_str());
   std::ifstream in(out);
   std::string line;
