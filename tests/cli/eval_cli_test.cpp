@@ -143,6 +143,27 @@ TEST(EvalCli, HandsReportsJointErrorsForEveryMotion) {
   EXPECT_EQ(j["motions"]["open"]["hand_seen_fraction"].get<double>(), 1.0);
 }
 
+// --filter-frame steadies the hand frame the hand star gives: with the user's own hand calibrated,
+// the seen fingertips of an open hand jitter less (measured, seed 1: p95 2.17 mm against 2.92,
+// mean 1.15 against 1.29).
+TEST(EvalCli, HandsWithTheFrameFilteredHaveSteadierFingertips) {
+  const auto run = [](const std::string& extra) {
+    const EvalRun r = run_eval(std::string("hands --rig ") + RHOT_ASSET_DIR +
+                               "/rigs/seated-4.yaml --motion open --frames 300 --sigma 0.5 --strays 3 --truth-hand independent "
+                               "--calibrate-hand --seed 1 --json" +
+                               extra);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return nlohmann::json::parse(r.output);
+  };
+  const nlohmann::json plain = run(""), filtered = run(" --filter-frame");
+  EXPECT_FALSE(plain.at("filter_frame").get<bool>());
+  EXPECT_TRUE(filtered.at("filter_frame").get<bool>());
+  const nlohmann::json& a = plain.at("motions").at("open");
+  const nlohmann::json& b = filtered.at("motions").at("open");
+  EXPECT_LT(b.at("fingertip_p95_mm").get<double>(), a.at("fingertip_p95_mm").get<double>() - 0.3) << plain.dump() << filtered.dump();
+  EXPECT_LT(b.at("fingertip_mean_mm").get<double>(), a.at("fingertip_mean_mm").get<double>());
+}
+
 TEST(EvalCli, TheLeftHandLayoutWorksToo) {
   const EvalRun r = run_eval(std::string("hands --rig ") + RHOT_ASSET_DIR + "/rigs/seated-4.yaml --layout " + RHOT_ASSET_DIR +
                              "/hands/low-cost-left.json --motion open --frames 30 --json");

@@ -115,6 +115,7 @@ struct HandsArgs {
   unsigned seed = 1;
   std::vector<double> volume_centre;
   bool filter = false;
+  bool filter_frame = false;
   bool calibrate_hand = false;
   int threads = 0;  // matching's (0: every core)
   bool fingertip_model = false;

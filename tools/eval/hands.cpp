@@ -95,6 +95,7 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   rhot::PixelSigmaEstimate pixel_sigma;
   rhot::HandTrackerSettings tracker_settings;
   tracker_settings.filter = args.filter;
+  tracker_settings.filter_frame = args.filter_frame;
   tracker_settings.fingertip_model = args.fingertip_model;
   const std::optional<rhot::HandPose> calibrated =
       args.calibrate_hand ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings, jobs)
@@ -220,6 +221,7 @@ int hands(const HandsArgs& args) {
   j["seed"] = args.seed;
   j["centre_m"] = {box.centre.x(), box.centre.y(), box.centre.z()};
   j["filter"] = args.filter;
+  j["filter_frame"] = args.filter_frame;
   j["calibrate_hand"] = args.calibrate_hand;
   j["fingertip_model"] = args.fingertip_model;
   rhot::JobPool jobs(rhot::threads_or_all(args.threads));

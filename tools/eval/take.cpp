@@ -315,6 +315,7 @@ nlohmann::json tracker_report(const HandsArgs& args, const MarkerTake& take, con
   j["hide_together"] = args.hide_together;
   j["seed"] = args.seed;
   j["filter"] = args.filter;
+  j["filter_frame"] = args.filter_frame;
   j["hidden_tip_mean_mm"] = take_mean(e.hidden_mm);
   j["hidden_tip_p95_mm"] = percentile(e.hidden_mm, 0.95);
   j["visible_tip_mean_mm"] = take_mean(e.visible_mm);
@@ -356,10 +357,11 @@ struct FittedHand {
 
   // The tracker, its fingertip model on (the take's fingertips are hidden in turn), the 1-euro
   // filter on where asked (--filter).
-  HandTracker tracker(bool filter) const {
+  HandTracker tracker(bool filter, bool filter_frame) const {
     HandTrackerSettings settings;
     settings.fingertip_model = true;
     settings.filter = filter;
+    settings.filter_frame = filter_frame;
     if (calibration.frames > 0) settings.finger_length_tolerance = 0.0;  // the skeleton fitted to the take's hand
     return HandTracker(layout, skeleton, settings);
   }
@@ -383,7 +385,7 @@ int take_through_tracker(const HandsArgs& args, const MarkerTake& take) {
   for (int f = 0; f < plan->calibration_frames; ++f) frames.push_back(layout_frame(take, plan->index, f));
   const auto fitted = fit_hand(*plan, frames);
   if (!fitted) return fail(fitted.error());
-  HandTracker tracker = fitted->tracker(args.filter);
+  HandTracker tracker = fitted->tracker(args.filter, args.filter_frame);
   const TrackerErrors e = run_tracker_over_take(tracker, take, plan->index, plan->first, [&](int f) { return plan->hidden_at(take, f); });
   nlohmann::json j = tracker_report(args, take, *plan, e, fitted->calibration, tracker);
   j["through"] = "hand tracker, labelled markers";
@@ -548,7 +550,7 @@ int take_through_rig(const HandsArgs& args, const MarkerTake& take) {
   }
   const auto fitted = fit_hand(*plan, frames);
   if (!fitted) return fail(fitted.error());
-  HandTracker tracker = fitted->tracker(args.filter);
+  HandTracker tracker = fitted->tracker(args.filter, args.filter_frame);
   const TrackerErrors e = judge_through_rig(take, *plan, r, tracker);
   nlohmann::json j = tracker_report(args, take, *plan, e, fitted->calibration, tracker);
   j["through"] = "the rig's cameras";

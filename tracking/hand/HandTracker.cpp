@@ -172,7 +172,14 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
   if (!out_.hand_seen) return;
   if (!hand_first_seen_s_) hand_first_seen_s_ = time_s;
   const double unfound_gate_m = time_s - *hand_first_seen_s_ <= kUnfoundSearch_s ? kUnfoundMarkerGate_m : kFingertipGateMax_m;
-  out_.world_from_hand = settings_.filter ? hand_filter_.filter(world_from_hand, time_s) : world_from_hand;
+  if (settings_.filter || (settings_.filter_frame && !labelled_)) {
+    // A hand seen again after a while starts its filter afresh, not from where it was lost.
+    if (frame_filtered_s_ && !(time_s - *frame_filtered_s_ <= kFrameFilterGap_s)) hand_filter_.reset();
+    out_.world_from_hand = hand_filter_.filter(world_from_hand, time_s);
+    frame_filtered_s_ = time_s;
+  } else {
+    out_.world_from_hand = world_from_hand;
+  }
   // Each finger marker where the last solve puts it.
   const HandPose& last = solver_.state().pose;
   const auto frames = marker_frames(last, solver_.chains());

@@ -64,6 +64,11 @@ inline PoseKalmanSettings hand_star_motion() {
 struct HandTrackerSettings {
   // 1-euro filtering of the hand frame and of each finger marker (hand frame) before the fit.
   bool filter = false;
+  // 1-euro filtering of the hand frame alone (where it comes from points the cameras saw, not from
+  // labelled markers): the frame's jitter, turned about the back of the hand, moves every finger
+  // marker's predicted place and every fitted fingertip (docs/tracking.md, "The hand frame
+  // steadied"). Started afresh when the hand is seen again after HandTracker::kFrameFilterGap_s.
+  bool filter_frame = false;
   OneEuroSettings position;  // for the hand's origin and the fingertips, metres
   OneEuroSettings rotation{1.0, 2.0, 1.0};
   // Hidden fingertips predicted from the seen markers (HiddenMarkers.h) by a model of how this
@@ -257,6 +262,7 @@ class HandTracker {
   static constexpr double kReachMiss_m = 0.004;
   static constexpr double kFingerLengthToleranceMax = 0.3;  // HandTrackerSettings::finger_length_tolerance's largest
   static constexpr double kReachPersist_m = 0.015;
+  static constexpr double kFrameFilterGap_s = 0.1;
   // The fingertip model: frames with all five tips seen before it is used, how often it is refitted
   // (frames), how long a hidden tip's last offset from the prediction is kept (HiddenMarkerModel::
   // memory_s, the value fitted to the real glove take) and the ridge on its seen tips.
@@ -306,6 +312,7 @@ class HandTracker {
   std::vector<double> tight_gate_m_;                   // this frame's tight gate per marker
   std::vector<double> miss2_m2_;                       // per marker: the mean square miss of its predicted place (kMissMemory_s)
   std::optional<double> last_time_s_;                  // the last update's
+  std::optional<double> frame_filtered_s_;             // when hand_filter_ last filtered a frame
   std::vector<std::optional<double>> marker_found_s_;  // when each marker last had a point
   std::optional<double> hand_first_seen_s_;
   std::optional<double> star_seen_s_;  // when the hand frame last came from the star
