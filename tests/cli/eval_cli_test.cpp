@@ -505,6 +505,11 @@ TEST(EvalCli, ATakesLabelledMarkersDriveTheHandTrackerThroughALayout) {
   EXPECT_EQ(refused(take + " --layout " + layout + " --model model.json"),
             "rhot-eval: hands --take: --model is the estimator's alone (without --layout); the tracker fits its own\n");
   EXPECT_EQ(refused(take + " --map IndexTip=index_tip"), "rhot-eval: hands --take: --map, --calibrate-seconds and --hide need --layout\n");
+  EXPECT_EQ(refused(take + " --filter"),
+            "rhot-eval: hands --take: --filter and --filter-frame need --layout (without it no tracker runs)\n");
+  EXPECT_EQ(refused(take + " --layout " + layout + " --map IndexTip=index_tip --filter-frame"),
+            "rhot-eval: hands --take --labelled: --filter-frame steadies a hand frame found from the cameras' points; labelled markers "
+            "give it as recorded (--filter filters it and the fingertips)\n");
   const std::string mapped = take + " --layout " + layout + " --map IndexTip=index_tip";
   EXPECT_EQ(refused(mapped + " --hide index_tip:5-6"),
             "rhot-eval: --hide index_tip:5-6: expected MARKER@T0-T1 (seconds into the take), e.g. index_tip@12.5-13\n");

@@ -355,8 +355,8 @@ struct FittedHand {
   HandLayout layout;
   LabelledCalibration calibration;
 
-  // The tracker, its fingertip model on (the take's fingertips are hidden in turn), the 1-euro
-  // filter on where asked (--filter).
+  // The tracker, its fingertip model on (the take's fingertips are hidden in turn), its 1-euro
+  // filters on where asked (--filter, --filter-frame).
   HandTracker tracker(bool filter, bool filter_frame) const {
     HandTrackerSettings settings;
     settings.fingertip_model = true;
@@ -574,6 +574,10 @@ int hands_take(const HandsArgs& args) {
   if (args.labelled == through_rig)
     return fail("hands --take: --labelled (the take's 3D points) or --rig FILE (the take photographed by the rig's cameras), one of them");
   if (through_rig && !args.layout_given) return fail("hands --take --rig: needs --layout (the markers the cameras follow)");
+  if (args.labelled && args.filter_frame)
+    return fail(
+        "hands --take --labelled: --filter-frame steadies a hand frame found from the cameras' points; labelled markers "
+        "give it as recorded (--filter filters it and the fingertips)");
   if (args.calibrate_from != "labelled" && (!through_rig || args.calibrate_seconds <= 0.0))
     return fail("hands --take: --calibrate-from cameras needs --rig and --calibrate-seconds (the markers found through the cameras)");
   const auto take = read_marker_take(args.take_file);
@@ -585,6 +589,7 @@ int hands_take(const HandsArgs& args) {
   }
   if (!args.maps.empty() || args.calibrate_seconds > 0.0 || !args.hides.empty())
     return fail("hands --take: --map, --calibrate-seconds and --hide need --layout");
+  if (args.filter || args.filter_frame) return fail("hands --take: --filter and --filter-frame need --layout (without it no tracker runs)");
   HiddenMarkerModel model;
   int unfitted_first = 0;
   if (!args.model_file.empty()) {
