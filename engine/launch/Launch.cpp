@@ -121,6 +121,7 @@ std::expected<std::unique_ptr<Launch>, std::string> Launch::create(const SceneDe
     if (!opened) return std::unexpected(opened.error());
     LiveTrackingSettings live_settings;
     live_settings.filter_hands = settings.filter_hands;
+    live_settings.filter_hand_frames = settings.filter_hand_frames;
     live_settings.threads = 1;
     live_settings.jobs = jobs;
     live_settings.tracker_rig = std::move(opened->tracker_rig);

@@ -39,6 +39,7 @@ struct LaunchSettings {
   std::filesystem::path rig_file;   // empty: the scene's rig, else assets/rigs/seated-4.yaml (stereo-640.yaml with colour markers)
   std::filesystem::path star_set;   // empty: assets/stars/seed-case.json (the objects' stars)
   bool filter_hands = false;        // LiveTrackingSettings::filter_hands
+  bool filter_hand_frames = true;   // LiveTrackingSettings::filter_hand_frames
   int threads = 0;                  // the tracker's threads (LiveTrackingSettings, VideoSourceSettings), 0: every core
   std::filesystem::path replay;     // play this recording instead of tracking
   double speed = 1.0;               // replay speed (2: twice as fast)

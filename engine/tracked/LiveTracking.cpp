@@ -65,6 +65,7 @@ LiveTracking::LiveTracking(std::unique_ptr<FrameSource> source, const TrackedObj
   }
   HandTrackerSettings tracker_settings;
   tracker_settings.filter = settings_.filter_hands;
+  tracker_settings.filter_frame = settings_.filter_hand_frames;
   for (std::size_t h = 0; h < 2; ++h) {
     hand_trackers_[h] = std::make_unique<HandTracker>(layouts_[h], reference_open_hand(layouts_[h].side), tracker_settings);
   }

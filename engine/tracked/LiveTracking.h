@@ -38,6 +38,8 @@ struct LiveTrackingSettings {
   // 1-euro filtering of each hand's frame and fingertips before the IK (HandTrackerSettings):
   // steadier hands at rest, some lag in fast moves. Off by default (docs/tracking.md).
   bool filter_hands = false;
+  // 1-euro filtering of each hand's frame alone (HandTrackerSettings::filter_frame): on by default.
+  bool filter_hand_frames = true;
   // The rig the tracker believes (empty: the source's own). A simulation with a calibration error
   // gives the tracker a rig a little off the one that made the detections.
   std::optional<CameraRig> tracker_rig;

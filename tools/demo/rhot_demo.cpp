@@ -201,6 +201,8 @@ void add_options(CLI::App& cli, Options& o) {
       ->check(CLI::Range(0.0, 20.0));
   cli.add_option("--seed", o.demo.seed, "Simulation seed")->capture_default_str();
   cli.add_flag("--filter", o.demo.filter_hands, "1-euro filter the tracked hands (steadier at rest, some lag)");
+  cli.add_flag("--filter-frame,!--no-filter-frame", o.demo.filter_hand_frames,
+               "1-euro filter each tracked hand's frame alone (on by default: steadier fingers, hidden ones too)");
   cli.add_option("--threads", o.demo.threads, "Threads the tracker matches on (0: every core there is); the results do not depend on it")
       ->capture_default_str()
       ->check(CLI::Range(0, rhot::kMaxThreads));

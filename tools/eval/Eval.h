@@ -115,7 +115,8 @@ struct HandsArgs {
   unsigned seed = 1;
   std::vector<double> volume_centre;
   bool filter = false;
-  bool filter_frame = false;
+  bool filter_frame = true;
+  bool filter_frame_given = false;  // --filter-frame or --no-filter-frame on the command line
   bool calibrate_hand = false;
   int threads = 0;  // matching's (0: every core)
   bool fingertip_model = false;

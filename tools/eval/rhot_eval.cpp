@@ -156,8 +156,9 @@ CLI::App* add_hands_command(CLI::App& app, HandsArgs& a, bool& json) {
       ->expected(3)
       ->check(rhot::number_check(rhot::NumberBound::kAny));
   cmd->add_flag("--filter", a.filter, "1-euro filter the hand frame and the fingertips before the IK");
-  cmd->add_flag("--filter-frame", a.filter_frame,
-                "1-euro filter the hand frame alone (a frame found from the cameras' points: not with --take --labelled)");
+  cmd->add_flag("--filter-frame,!--no-filter-frame", a.filter_frame,
+                "1-euro filter the hand frame alone (on by default; a frame found from the cameras' points: not with --take --labelled)")
+      ->each([&a](const std::string&) { a.filter_frame_given = true; });
   cmd->add_flag("--fingertip-model", a.fingertip_model,
                 "hidden fingertips placed where the seen ones say, by a model of the hand's fingertips fitted as it runs");
   cmd->add_flag("--calibrate-hand", a.calibrate_hand,

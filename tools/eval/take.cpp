@@ -569,17 +569,20 @@ int take_through_rig(const HandsArgs& args, const MarkerTake& take) {
 
 }  // namespace
 
-int hands_take(const HandsArgs& args) {
+int hands_take(const HandsArgs& given) {
+  HandsArgs args = given;
   const bool through_rig = !args.rig_file.empty();
   if (args.labelled == through_rig)
     return fail("hands --take: --labelled (the take's 3D points) or --rig FILE (the take photographed by the rig's cameras), one of them");
   if (through_rig && !args.layout_given) return fail("hands --take --rig: needs --layout (the markers the cameras follow)");
-  if (args.labelled && args.filter_frame)
+  if (args.labelled && args.filter_frame_given && args.filter_frame)
     return fail(
         "hands --take --labelled: --filter-frame steadies a hand frame found from the cameras' points; labelled markers "
         "give it as recorded (--filter filters it and the fingertips)");
   if (args.calibrate_from != "labelled" && (!through_rig || args.calibrate_seconds <= 0.0))
     return fail("hands --take: --calibrate-from cameras needs --rig and --calibrate-seconds (the markers found through the cameras)");
+  // The frame filter (on by default) acts only where the frame comes from the cameras' points.
+  if (args.labelled) args.filter_frame = false;
   const auto take = read_marker_take(args.take_file);
   if (!take) return fail(take.error());
   if (args.layout_given) {
@@ -589,7 +592,8 @@ int hands_take(const HandsArgs& args) {
   }
   if (!args.maps.empty() || args.calibrate_seconds > 0.0 || !args.hides.empty())
     return fail("hands --take: --map, --calibrate-seconds and --hide need --layout");
-  if (args.filter || args.filter_frame) return fail("hands --take: --filter and --filter-frame need --layout (without it no tracker runs)");
+  if (args.filter || (args.filter_frame_given && args.filter_frame))
+    return fail("hands --take: --filter and --filter-frame need --layout (without it no tracker runs)");
   HiddenMarkerModel model;
   int unfitted_first = 0;
   if (!args.model_file.empty()) {

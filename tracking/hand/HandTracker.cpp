@@ -18,7 +18,7 @@ HandTracker::HandTracker(const HandLayout& layout, const HandPose& skeleton, Han
     : layout_(layout),
       settings_(settings),
       star_(layout.has_hand_star() ? std::make_unique<StarTracker>(StarLibrary(layout.hand_star_set())) : nullptr),
-      hand_filter_(settings.position, settings.rotation),
+      hand_filter_(settings.frame_position, settings.rotation),
       solver_(layout.side, skeleton) {
   if (layout.hand_frame_markers == 3)
     triangle_.emplace(std::array{layout.markers[0].offset_m, layout.markers[1].offset_m, layout.markers[2].offset_m});

@@ -482,7 +482,9 @@ TEST(HandTracker, TheHighFidelityLayoutMeasuresEveryBoneOfAFist) {
   const HandPose skeleton = reference_open_hand(HandSide::kRight);
   const auto chains = hand_chains(skeleton, HandSide::kRight);
   const auto relaxed = HandSolver(HandSide::kRight, skeleton).state().angles;
-  HandTracker tracker(layout, skeleton);
+  HandTrackerSettings settings;
+  settings.filter_frame = false;  // exact stars give exact joints; a smoothed frame would lag the moving hand
+  HandTracker tracker(layout, skeleton, settings);
   double worst = 0.0;
   for (int f = 0; f < 180; ++f) {
     const double t = f / 90.0;
@@ -1131,6 +1133,7 @@ TurnedAwayRun turn_the_back_away(const std::string& layout_name, HandTrackerSett
   const auto relaxed = HandSolver(HandSide::kRight, skeleton).state().angles;
   HandTrackerSettings settings;
   settings.frame_from_markers = mode;
+  settings.filter_frame = false;  // exact points: the frame is judged as fitted, not as smoothed (it would lag the turn)
   HandTracker tracker(layout, skeleton, settings);
   const std::vector<int> colours = layout_marker_colours(layout);
   const bool coloured = layout.markers.back().colour >= 0;
