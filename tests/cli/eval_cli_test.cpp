@@ -145,7 +145,7 @@ TEST(EvalCli, HandsReportsJointErrorsForEveryMotion) {
 
 // The hand frame filter (on by default; --no-filter-frame turns it off) steadies the hand frame the
 // hand star gives: with the user's own hand calibrated, the seen fingertips of an open hand jitter
-// less (measured, seed 1: p95 2.35 mm against 2.94, mean 1.10 against 1.30).
+// less (measured, seed 1: p95 2.35 mm against 2.92, mean 1.10 against 1.29).
 TEST(EvalCli, HandsWithTheFrameFilteredHaveSteadierFingertips) {
   const auto run = [](const std::string& extra) {
     const EvalRun r = run_eval(std::string("hands --rig ") + RHOT_ASSET_DIR +

@@ -38,18 +38,20 @@ namespace {
 
 // The user's calibration (HandCalibration.h): the truth hand held flat (every finger straight) for
 // a second where `motion` starts, through its own simulated rig, tracked with the reference
-// skeleton; the fingertip markers found give each finger's length. None when no fingertip was
-// found.
+// skeleton (its frame filtered as the tracker's will be); the fingertip markers found give each
+// finger's length. None when no fingertip was found.
 std::optional<rhot::HandPose> calibrated_skeleton(const rhot::CameraRig& rig, const rhot::CameraRig& tracker_rig,
                                                   const rhot::HandLayout& layout, const rhot::HandPose& reference,
                                                   const rhot::HandPose& user, const rhot::Rigid3d& world_from_hand,
-                                                  rhot::SimulatedRigSettings settings, rhot::JobPool& jobs) {
+                                                  rhot::SimulatedRigSettings settings, bool filter_frame, rhot::JobPool& jobs) {
   const auto flat = rhot::hand_pose_from_angles(user, rhot::hand_chains(user, layout.side), {});
   settings.seed += 1000;  // not the motion's noise
   rhot::SimulatedRig sim(rig, {}, settings);
   const auto markers = rhot::layout_markers(layout, world_from_hand, flat);
   sim.set_scripted_markers([&](double) { return markers; });
-  rhot::HandTracker tracker(layout, reference);
+  rhot::HandTrackerSettings tracker_settings;
+  tracker_settings.filter_frame = filter_frame;
+  rhot::HandTracker tracker(layout, reference, tracker_settings);
   rhot::PixelSigmaEstimate pixel_sigma;
   std::vector<rhot::FingertipSample> samples;
   const rhot::RigMatcher matcher(tracker_rig);
@@ -98,8 +100,9 @@ nlohmann::json hand_motion_run(const rhot::CameraRig& rig, const rhot::HandLayou
   tracker_settings.filter_frame = args.filter_frame;
   tracker_settings.fingertip_model = args.fingertip_model;
   const std::optional<rhot::HandPose> calibrated =
-      args.calibrate_hand ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings, jobs)
-                          : std::nullopt;
+      args.calibrate_hand
+          ? calibrated_skeleton(rig, tracker_rig, layout, skeleton, user, truth_at(0.0).first, settings, args.filter_frame, jobs)
+          : std::nullopt;
   if (calibrated) tracker_settings.finger_length_tolerance = 0.0;  // the skeleton is the user's
   const rhot::HandPose tracked_skeleton = calibrated.value_or(skeleton);
   rhot::HandTracker tracker(layout, tracked_skeleton, tracker_settings);

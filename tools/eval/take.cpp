@@ -536,7 +536,9 @@ int take_through_rig(const HandsArgs& args, const MarkerTake& take) {
   // or through the cameras, from the markers the tracker found on the reference hand.
   std::vector<std::vector<Eigen::Vector3d>> frames;
   if (plan->calibration_frames > 0 && args.calibrate_from == "cameras") {
-    HandTracker finder(plan->layout, reference_open_hand(plan->layout.side));
+    HandTrackerSettings finder_settings;
+    finder_settings.filter_frame = args.filter_frame;
+    HandTracker finder(plan->layout, reference_open_hand(plan->layout.side), finder_settings);
     run_through_rig(take, *plan, r, finder, take.time_s(plan->calibration_frames), false,
                     [&](double, int, const TrackedHand& hand, std::span<const Eigen::Vector3d> points) {
                       if (!hand.hand_seen) return;

@@ -266,6 +266,7 @@ bool HandTracker::frame_from_markers(double time_s, std::span<const Eigen::Vecto
         return false;
       frame_before_markers_ = last;
       filter_before_markers_ = hand_filter_;
+      frame_filtered_before_markers_s_ = frame_filtered_s_;
       begin(time_s, true, fit->to_from_from);
       out_.frame_source = HandFrameSource::kMarkers;
       // The back of the hand's markers used are this hand's (track_hands takes them); its finger
@@ -301,6 +302,7 @@ void HandTracker::confirm_frame_from_markers(double time_s) {
   begin(time_s, false, {});
   out_.world_from_hand = frame_before_markers_;
   hand_filter_ = filter_before_markers_;
+  frame_filtered_s_ = frame_filtered_before_markers_s_;
   std::ranges::fill(tip_points_, -1);
 }
 

@@ -373,6 +373,7 @@ class HandTracker {
   // confirm_frame_from_markers refuses it.
   Rigid3d frame_before_markers_;
   PoseFilter filter_before_markers_;
+  std::optional<double> frame_filtered_before_markers_s_;  // frame_filtered_s_ then
   bool labelled_ = false;  // in update_labelled: the points are the layout's markers, no segment stars among them
   std::optional<MarkerStatistics> tip_statistics_;
   std::optional<HiddenMarkerEstimator> tip_estimator_;
