@@ -594,8 +594,8 @@ int hands_take(const HandsArgs& given) {
   }
   if (!args.maps.empty() || args.calibrate_seconds > 0.0 || !args.hides.empty())
     return fail("hands --take: --map, --calibrate-seconds and --hide need --layout");
-  if (args.filter || (args.filter_frame_given && args.filter_frame))
-    return fail("hands --take: --filter and --filter-frame need --layout (without it no tracker runs)");
+  // (--filter-frame without --layout is --labelled's refusal above: a take without --layout is labelled.)
+  if (args.filter) return fail("hands --take: --filter and --filter-frame need --layout (without it no tracker runs)");
   HiddenMarkerModel model;
   int unfitted_first = 0;
   if (!args.model_file.empty()) {

@@ -79,6 +79,8 @@ class PoseFilter {
       : translation_(translation), rotation_settings_(rotation) {}
 
   Rigid3d filter(const Rigid3d& pose, double time_s);
+  // When the last sample it took was (none before the first, or after reset()).
+  std::optional<double> last_sample_s() const { return rotation_ ? std::optional<double>(time_s_) : std::nullopt; }
   void reset() {
     translation_.reset();
     rotation_.reset();

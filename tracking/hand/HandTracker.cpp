@@ -174,9 +174,9 @@ void HandTracker::begin(double time_s, bool seen, const Rigid3d& world_from_hand
   const double unfound_gate_m = time_s - *hand_first_seen_s_ <= kUnfoundSearch_s ? kUnfoundMarkerGate_m : kFingertipGateMax_m;
   if (settings_.filter || (settings_.filter_frame && !labelled_)) {
     // A hand seen again after a while starts its filter afresh, not from where it was lost.
-    if (frame_filtered_s_ && !(time_s - *frame_filtered_s_ <= kFrameFilterGap_s)) hand_filter_.reset();
+    const std::optional<double> last_s = hand_filter_.last_sample_s();
+    if (last_s && !(time_s - *last_s <= kFrameFilterGap_s)) hand_filter_.reset();
     out_.world_from_hand = hand_filter_.filter(world_from_hand, time_s);
-    frame_filtered_s_ = time_s;
   } else {
     out_.world_from_hand = world_from_hand;
   }
@@ -265,8 +265,7 @@ bool HandTracker::frame_from_markers(double time_s, std::span<const Eigen::Vecto
           fit->to_from_from.rotation.angularDistance(last.rotation) > kMarkerFrameTurn_rad)
         return false;
       frame_before_markers_ = last;
-      filter_before_markers_ = hand_filter_;
-      frame_filtered_before_markers_s_ = frame_filtered_s_;
+      filter_before_markers_ = hand_filter_;  // with its clock
       begin(time_s, true, fit->to_from_from);
       out_.frame_source = HandFrameSource::kMarkers;
       // The back of the hand's markers used are this hand's (track_hands takes them); its finger
@@ -302,7 +301,6 @@ void HandTracker::confirm_frame_from_markers(double time_s) {
   begin(time_s, false, {});
   out_.world_from_hand = frame_before_markers_;
   hand_filter_ = filter_before_markers_;
-  frame_filtered_s_ = frame_filtered_before_markers_s_;
   std::ranges::fill(tip_points_, -1);
 }
 

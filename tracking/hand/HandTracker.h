@@ -307,10 +307,10 @@ class HandTracker {
   void confirm_frame_from_markers(double time_s);
   HandLayout layout_;
   HandTrackerSettings settings_;
-  std::unique_ptr<StarTracker> star_;        // for update(): the hand star alone (layouts with one)
-  std::optional<TriangleTracker> triangle_;  // for update(): three markers on the back of the hand instead
-  std::optional<StarTracker> segments_;      // the layout's segment stars, if any
-  PoseFilter hand_filter_;
+  std::unique_ptr<StarTracker> star_;             // for update(): the hand star alone (layouts with one)
+  std::optional<TriangleTracker> triangle_;       // for update(): three markers on the back of the hand instead
+  std::optional<StarTracker> segments_;           // the layout's segment stars, if any
+  PoseFilter hand_filter_;                        // the hand frame's (filter, filter_frame), with its clock (last_sample_s)
   std::vector<OneEuroFilter<3>> marker_filters_;  // per layout marker (the fingers' used)
   // This frame's, from begin(), per layout marker (the back of the hand's unused): each finger
   // marker's predicted place and its gate (hand frame).
@@ -319,7 +319,6 @@ class HandTracker {
   std::vector<double> tight_gate_m_;                   // this frame's tight gate per marker
   std::vector<double> miss2_m2_;                       // per marker: the mean square miss of its predicted place (kMissMemory_s)
   std::optional<double> last_time_s_;                  // the last update's
-  std::optional<double> frame_filtered_s_;             // when hand_filter_ last filtered a frame
   std::vector<std::optional<double>> marker_found_s_;  // when each marker last had a point
   std::optional<double> hand_first_seen_s_;
   std::optional<double> star_seen_s_;  // when the hand frame last came from the star
@@ -373,7 +372,6 @@ class HandTracker {
   // confirm_frame_from_markers refuses it.
   Rigid3d frame_before_markers_;
   PoseFilter filter_before_markers_;
-  std::optional<double> frame_filtered_before_markers_s_;  // frame_filtered_s_ then
   bool labelled_ = false;  // in update_labelled: the points are the layout's markers, no segment stars among them
   std::optional<MarkerStatistics> tip_statistics_;
   std::optional<HiddenMarkerEstimator> tip_estimator_;

@@ -87,6 +87,26 @@ TEST(PoseFilter, ConstantPoseStaysAndARotationStepConverges) {
   EXPECT_TRUE(f.filter(bad, 3.0).is_finite());
 }
 
+// The filter keeps the time of its last sample (HandTracker starts it afresh after a gap from it),
+// so that a copy of the filter, put back, has its clock with it.
+TEST(PoseFilter, KnowsWhenItLastTookASample) {
+  PoseFilter f;
+  EXPECT_FALSE(f.last_sample_s().has_value());
+  f.filter(Rigid3d{}, 1.0);
+  f.filter(Rigid3d{}, 1.5);
+  EXPECT_EQ(f.last_sample_s(), 1.5);
+  Rigid3d bad;
+  bad.rotation.coeffs().setConstant(std::nan(""));
+  f.filter(bad, 2.0);
+  EXPECT_EQ(f.last_sample_s(), 1.5) << "a bad sample is not taken";
+  const PoseFilter saved = f;
+  f.filter(Rigid3d{}, 2.5);
+  f = saved;
+  EXPECT_EQ(f.last_sample_s(), 1.5);
+  f.reset();
+  EXPECT_FALSE(f.last_sample_s().has_value());
+}
+
 TEST(MovingAverage, MeansTheLastFiveSamples) {
   MovingAverage<1> m;
   using V = Eigen::Matrix<double, 1, 1>;
