@@ -84,21 +84,25 @@ const ScaleData& scale_data(int rig, int markers) {
 // Matching per frame on room-8 (rig 0) and stage-32 (rig 1), one thread (no job pool) or a job
 // pool of `threads` (the same points: tests/tracking/geometry/matching_threads_test.cpp); the rig
 // prepared once and its working storage kept from frame to frame (RigMatcher::match_frame), as the
-// runtime does. BM_MatchScalingFresh: the same with fresh storage each frame (RigMatcher::match,
-// which returns the points as a vector of their own).
-void match_scaling(benchmark::State& state, bool kept_storage) {
+// runtime does, following the last frame's points (MatchSettings::follow_points; the 64 frames
+// replayed in a loop, so every 64th frame is seeded afresh). BM_MatchScalingUnfollowed: every
+// frame seeded afresh. BM_MatchScalingFresh: the same with fresh storage each frame
+// (RigMatcher::match, which returns the points as a vector of their own, and follows nothing).
+void match_scaling(benchmark::State& state, bool kept_storage, bool follow = true) {
   const ScaleData& d = scale_data(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const int threads = static_cast<int>(state.range(2));
   std::optional<rhot::JobPool> jobs;
   if (threads > 1) jobs.emplace(threads);
   rhot::RigMatcher matcher(d.rig);
+  rhot::MatchSettings settings;
+  settings.follow_points = follow;
   std::size_t i = 0;
   double found = 0.0;
   std::int64_t runs = 0;
   for (auto _ : state) {
     const rhot::RigFrame& frame = d.frames[i++ % d.frames.size()];
     if (kept_storage) {
-      const auto points = matcher.match_frame(frame, {}, jobs ? &*jobs : nullptr);
+      const auto points = matcher.match_frame(frame, settings, jobs ? &*jobs : nullptr);
       found += static_cast<double>(points.size());
       benchmark::DoNotOptimize(points.data());
     } else {
@@ -114,9 +118,15 @@ void match_scaling(benchmark::State& state, bool kept_storage) {
 }
 void BM_MatchScaling(benchmark::State& state) { match_scaling(state, true); }
 void BM_MatchScalingFresh(benchmark::State& state) { match_scaling(state, false); }
+void BM_MatchScalingUnfollowed(benchmark::State& state) { match_scaling(state, true, false); }
 BENCHMARK(BM_MatchScaling)
     ->ArgNames({"rig", "markers", "threads"})
     ->ArgsProduct({{0, 1}, {100, 300, 1000}, {1, 2, 4, 8, 16}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MatchScalingUnfollowed)
+    ->ArgNames({"rig", "markers", "threads"})
+    ->ArgsProduct({{0, 1}, {100, 1000}, {1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MatchScalingFresh)

@@ -97,10 +97,12 @@ struct ScaleArgs {
   unsigned seed = 1;
   double sigma = 0.3;
   double dropout = 0.0;
+  bool follow = true;  // MatchSettings::follow_points
 };
 int scale(const ScaleArgs& args);
 int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
-                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform = false, int threads = 0);
+                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform = false, int threads = 0,
+                  bool follow = true);
 int wand(const std::string& rig_file, double length_mm, double sigma, int frames, unsigned seed, double dropout,
          const std::vector<double>& volume, const std::vector<double>& volume_centre, int threads = 0);
 int stars(const std::string& rig_file, const std::string& set_file, int bodies, const WorldFlags& world, int frames, unsigned seed,

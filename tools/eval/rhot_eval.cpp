@@ -1,8 +1,8 @@
 // rhot-eval: measurements a user sizing a rig wants, as one JSON object on stdout.
 //
 //   rhot-eval triangulation --rig FILE [--sigma PX] [--frames N] [--seed S] [--markers M] [--spread wander|uniform]
-//                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] [--threads T] --json
-//   rhot-eval scale [--rig FILE] [--markers N] [--bodies B] [--hands H] [--threads T] [--rate-hz R] [--seconds S] --json
+//                           [--dropout P] [--volume-m X Y Z] [--volume-centre-m X Y Z] [--threads T] [--no-follow] --json
+//   rhot-eval scale [--rig FILE] [--markers N] [--bodies B] [--hands H] [--threads T] [--rate-hz R] [--seconds S] [--no-follow] --json
 //   rhot-eval demo [--scene FILE] [--placements N] [--seed S] [--hands tracked|perfect] [world flags] --json
 //   rhot-eval hands --rig FILE [--layout FILE] [--motion NAME|all] [--calibrate-hand] [world flags] [--frames N] --json
 //   rhot-eval hands --take FILE --labelled [--model FILE | --fit-fraction F] [--hide-gap-s S] [--hide-together N] [--seed K] --json
@@ -290,6 +290,7 @@ struct TriangulationArgs {
   int markers = 100;
   std::string spread = "wander";
   int threads = 0;
+  bool follow = true;
 };
 
 // `rhot-eval stars`' own flags.
@@ -316,6 +317,14 @@ struct CalibrationArgs {
   double wand_mm = 500.0;
 };
 
+// --follow / --no-follow: the runtime's matching, frame after frame, following the last frame's
+// points (the default), or every frame seeded afresh.
+void add_follow_flag(CLI::App& cmd, bool& follow) {
+  cmd.add_flag("--follow,!--no-follow", follow,
+               "follow the last frame's points into the next before seeding (the runtime's default), or seed every frame afresh")
+      ->capture_default_str();
+}
+
 CLI::App* add_triangulation_command(CLI::App& app, SharedArgs& s, TriangulationArgs& a, bool& json) {
   auto* tri = app.add_subcommand("triangulation", "matching and triangulation accuracy against the Cramer-Rao bound");
   tri->add_option("--rig", s.rig_file, "camera rig (OpenCV YAML)")->required();
@@ -334,6 +343,7 @@ CLI::App* add_triangulation_command(CLI::App& app, SharedArgs& s, TriangulationA
       ->check(CLI::IsMember({"wander", "uniform"}));
   tri->add_option("--volume-m", s.volume, kVolumeHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kPositive));
   tri->add_option("--volume-centre-m", s.volume_centre, kCentreHelp)->expected(3)->check(rhot::number_check(rhot::NumberBound::kAny));
+  add_follow_flag(*tri, a.follow);
   tri->add_flag("--json", json, "print JSON (the only output format)");
   return tri;
 }
@@ -462,6 +472,7 @@ CLI::App* add_scale_command(CLI::App& app, ScaleArgs& a, bool& json) {
       ->check(CLI::Range(0, 40));
   cmd->add_option("--hands", a.hands, "tracked hands, two a person")->capture_default_str()->check(CLI::Range(0, 40));
   add_threads_flag(*cmd, a.threads, "threads (0: every core there is); the results do not depend on it");
+  add_follow_flag(*cmd, a.follow);
   cmd->add_option("--rate-hz", a.rate_hz, "the cameras' rate: frames a second, and the period a frame must fit")
       ->capture_default_str()
       ->check(rhot::number_check(rhot::NumberBound::kPositive))
@@ -539,7 +550,7 @@ int main(int argc, char** argv) {
   }
   if (tri->parsed())
     return triangulation(s.rig_file, s.sigma, s.frames, s.seed, tri_args.markers, s.dropout, s.volume, s.volume_centre,
-                         tri_args.spread == "uniform", tri_args.threads);
+                         tri_args.spread == "uniform", tri_args.threads, tri_args.follow);
   if (hands_cmd->parsed()) return hands(hands_args);
   if (scale_cmd->parsed()) return scale(scale_args);
   if (stars_cmd->parsed())

@@ -327,7 +327,9 @@ Run run_crowd(const ScaleArgs& a, const CameraRig& rig, const StarSet& set, cons
     const RigFrame frame = sim.next();
     const std::uint64_t a0 = heap_allocations();
     const auto t0 = Clock::now();
-    const std::span<const MatchedPoint> matched = matcher.match_frame(frame, match_settings_for(pixel_sigma.sigma_px()), pool);
+    MatchSettings match_settings = match_settings_for(pixel_sigma.sigma_px());
+    match_settings.follow_points = a.follow;
+    const std::span<const MatchedPoint> matched = matcher.match_frame(frame, match_settings, pool);
     point_sigmas_m(matched, pixel_sigma.update(matched), sigmas);
     points.clear();
     for (const MatchedPoint& m : matched) points.push_back(m.point.position_world);
@@ -412,6 +414,7 @@ int scale(const ScaleArgs& a) {
   j["bodies"] = a.bodies;
   j["hands"] = a.hands;
   j["threads"] = threads;
+  j["follow"] = a.follow;
   j["rate_hz"] = a.rate_hz;
   j["seconds"] = a.seconds;
   j["seed"] = a.seed;

@@ -33,7 +33,7 @@
 namespace rhot::eval {
 
 int triangulation(const std::string& rig_file, double sigma, int frames, unsigned seed, int markers, double dropout,
-                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform, int threads) {
+                  const std::vector<double>& volume, const std::vector<double>& volume_centre, bool uniform, int threads, bool follow) {
   const auto rig = rhot::load_rig(rig_file);
   if (!rig) {
     std::cerr << "rhot-eval: " << rig.error() << "\n";
@@ -71,11 +71,15 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   std::vector<char> has_point;
   std::vector<double> ms;
   std::vector<double> errors_mm;  // every found marker's 3D error
-  const rhot::RigMatcher matcher(*rig);
+  // Frame after frame as the runtime matches (RigMatcher::match_frame), following the last
+  // frame's points unless --no-follow.
+  rhot::RigMatcher matcher(*rig);
+  rhot::MatchSettings match_settings;
+  match_settings.follow_points = follow;
   for (int f = 0; f < frames; ++f) {
     const rhot::RigFrame frame = sim.next();
     const auto start = std::chrono::steady_clock::now();
-    const auto matched = matcher.match(frame, {}, &jobs);
+    const auto matched = matcher.match_frame(frame, match_settings, &jobs);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     std::vector<int> seen_by(frame.truth_position_m.size(), 0);
     for (const rhot::CameraFrame& cf : frame.cameras) {
@@ -120,6 +124,7 @@ int triangulation(const std::string& rig_file, double sigma, int frames, unsigne
   j["markers"] = markers;
   j["seed"] = seed;
   j["threads"] = jobs.threads();
+  j["follow"] = follow;
   j["volume_centre_m"] = {centre.x(), centre.y(), centre.z()};
   j["volume_size_m"] = {box.size.x(), box.size.y(), box.size.z()};
   j["spread"] = uniform ? "uniform" : "wander";

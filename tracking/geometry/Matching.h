@@ -2,19 +2,24 @@
 // Multi-camera correspondence: which detections in different cameras are the same marker.
 //
 // 1. Every detection is undistorted to normalised image coordinates.
-// 2. Seeds: for every pair of cameras, detection pairs that satisfy the epipolar constraint
+// 2. Frame after frame (RigMatcher::match_frame, MatchSettings::follow_points), each of the last
+//    frame's points is grown first, as a seed is in step 4 but into every camera and with no
+//    detection given, from where it is expected now: its position moved on by its velocity (from
+//    the last two frames' points of its marker). Those three or more cameras confirm explain
+//    their detections before step 3: a marker that moved as it did is found without a seed.
+// 3. Seeds: for every pair of cameras, detection pairs that satisfy the epipolar constraint
 //    within `epipolar_tolerance_px` (measured in the second camera's pixels), triangulated as the
 //    midpoint of the two rays. The second camera's detections are found by epipolar line
 //    (EpipolarIndex), not by testing each, and tried nearest the line first.
-// 3. Each seed is grown: every other camera contributes its detection nearest the point's
+// 4. Each seed is grown: every other camera contributes its detection nearest the point's
 //    reprojection, if within `reprojection_tolerance_px`. A seed that three or more cameras
 //    confirm (refined, every residual within `max_residual_px`, after dropping up to two
 //    observations that disagree with the rest) explains its detections: they seed nothing more,
 //    which keeps seeding near linear in the markers. A two-view seed that more
-//    than two other cameras should see, and do not, is dropped at once (step 4 would refuse it).
+//    than two other cameras should see, and do not, is dropped at once (step 5 would refuse it).
 //    Seeds whose two detections already belong to one cluster are skipped, and so are seeds far
 //    outside the rig's tracking volume (MatchSettings::seed_margin).
-// 4. Clusters are refined (Gauss-Newton), grown again from the refined point, and pruned of
+// 5. Clusters are refined (Gauss-Newton), grown again from the refined point, and pruned of
 //    observations whose residual exceeds `max_residual_px` (worst first); then accepted greedily,
 //    best supported first, each detection used once, so a ghost built from detections that
 //    better-supported points explain is never accepted. A cluster is also refused when more
@@ -55,6 +60,10 @@ struct MatchSettings {
   // seed_margin: seeds anywhere.
   double seed_margin = 0.5;
   double seed_margin_m = 0.25;
+  // RigMatcher::match_frame only: the last frame's points (within 0.1 s) are looked for first,
+  // each where it is expected now (moved on by its velocity), before any pair of cameras is
+  // seeded; markers that move as they did are then found without seeding (step 0 below).
+  bool follow_points = true;
 };
 
 // Tolerances for detections with sigma_px of noise: the defaults (right up to about 0.4 px), or
@@ -121,10 +130,18 @@ class RigMatcher {
   // points are the same, bit for bit, whatever the thread count (docs/tracking.md "Threads").
   std::vector<MatchedPoint> match(const RigFrame& frame, const MatchSettings& settings = {}, JobPool* jobs = nullptr) const;
 
-  // The same points, matched with this matcher's own working storage, kept from frame to frame:
-  // once frames have shown it their largest counts (of detections, seeds, points), matching
-  // allocates nothing. The points stay valid until the next call; one frame at a time.
+  // The points of a frame of a sequence (RigFrame::time_s rising), matched with this matcher's own
+  // working storage, kept from frame to frame: once frames have shown it their largest counts (of
+  // detections, seeds, points), matching allocates nothing. With MatchSettings::follow_points,
+  // the last frame's points are followed into this one first (step 2 above): the points depend on
+  // the frames before, and are the same as match()'s for the first frame, or after a gap of more
+  // than 0.1 s; without, they are always match()'s. Whatever the thread count, they are the same.
+  // The points stay valid until the next call; one frame at a time.
   std::span<const MatchedPoint> match_frame(const RigFrame& frame, const MatchSettings& settings = {}, JobPool* jobs = nullptr);
+
+  // Of the last match_frame's points, how many were followed from the frame before (the rest
+  // were seeded).
+  std::size_t followed_points() const;
 
   const CameraRig& rig() const { return rig_; }
   const CameraVisibility& visibility() const { return visibility_; }

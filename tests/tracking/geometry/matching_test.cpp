@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
+#include <limits>
+#include <span>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -94,6 +98,104 @@ TEST(Matching, RoomRigWithNoiseAndDropoutsFindsNearlyAllAndNoGhosts) {
   std::printf("room-8, 10%% dropout: %d of %d findable marker-frames found (%d in all), %d wrong\n", found, findable, 500, wrong);
   EXPECT_GE(found, findable * 99 / 100);
   EXPECT_EQ(wrong, 0);
+}
+
+// Frame after frame (RigMatcher::match_frame), the last frame's points are followed into the next
+// before any pair of cameras is seeded. Following finds what seeding every frame afresh finds,
+// with nothing wrong, and finds nearly every point itself once the markers' velocities are known
+// (two frames).
+TEST(Matching, FollowedPointsFindWhatSeedingFinds) {
+  SimulatedRigSettings s;
+  s.sigma_px = 0.3;
+  s.dropout = 0.1;
+  s.seed = 4;
+  SimulatedRig sim(rig("room-8.yaml"), random_trajectories(300, {-1.5, 0.2, -1.5}, {1.5, 1.9, 1.5}, 8), s);
+  RigMatcher followed(sim.rig());
+  int found_seeded = 0;
+  int found_followed = 0;
+  int wrong_followed = 0;
+  for (int f = 0; f < 12; ++f) {
+    const RigFrame frame = sim.next();
+    const std::vector<MatchedPoint> seeded = followed.match(frame);
+    const std::span<const MatchedPoint> span = followed.match_frame(frame);
+    const std::vector<MatchedPoint> points(span.begin(), span.end());
+    const Score a = score(frame, seeded);
+    const Score b = score(frame, points);
+    found_seeded += a.found;
+    found_followed += b.found;
+    wrong_followed += b.wrong;
+    EXPECT_LT(b.max_error_m, 0.005) << "frame " << f;
+    if (f == 0) {
+      EXPECT_EQ(followed.followed_points(), 0U) << "nothing to follow in the first frame";
+      ASSERT_EQ(points.size(), seeded.size());
+      for (std::size_t p = 0; p < points.size(); ++p) EXPECT_EQ(points[p].point.position_world, seeded[p].point.position_world);
+    }
+    if (f >= 2) {
+      EXPECT_GE(followed.followed_points(), points.size() * 97 / 100) << "frame " << f;
+    }
+  }
+  std::printf("room-8, 300 markers, 12 frames: %d found seeded, %d followed, %d wrong\n", found_seeded, found_followed, wrong_followed);
+  EXPECT_GE(found_followed, found_seeded);
+  EXPECT_EQ(wrong_followed, 0);
+}
+
+// A frame more than 0.1 s after the last, or before it (a source restarted, a recording looped),
+// is seeded afresh: its points are match()'s.
+TEST(Matching, AFrameAfterAGapOrFromThePastIsSeededAfresh) {
+  SimulatedRigSettings s;
+  s.sigma_px = 0.3;
+  SimulatedRig sim(rig("room-8.yaml"), random_trajectories(100, {-1.5, 0.2, -1.5}, {1.5, 1.9, 1.5}, 3), s);
+  RigMatcher matcher(sim.rig());
+  for (int f = 0; f < 3; ++f) static_cast<void>(matcher.match_frame(sim.next()));
+  ASSERT_GT(matcher.followed_points(), 90U);
+  struct Case {
+    const char* what;
+    int frames_skipped;  // by the sim, unmatched (at 90 Hz)
+    double time_shift_s;
+  };
+  for (const Case& c : {Case{"0.5 s after the last", 44, 0.0}, Case{"1 s before the last", 0, -1.0},
+                        Case{"at no time (NaN)", 0, std::numeric_limits<double>::quiet_NaN()}}) {
+    for (int k = 0; k < c.frames_skipped; ++k) static_cast<void>(sim.next());
+    RigFrame frame = sim.next();
+    const std::vector<MatchedPoint> seeded = matcher.match(frame);
+    frame.time_s += c.time_shift_s;
+    const std::span<const MatchedPoint> points = matcher.match_frame(frame);
+    EXPECT_EQ(matcher.followed_points(), 0U) << c.what;
+    ASSERT_EQ(points.size(), seeded.size()) << c.what;
+    for (std::size_t p = 0; p < points.size(); ++p) EXPECT_EQ(points[p].point.position_world, seeded[p].point.position_world) << c.what;
+    // Frames on time again follow once one has been seeded and two give the velocities.
+    for (int k = 0; k < 3; ++k) static_cast<void>(matcher.match_frame(sim.next()));
+    EXPECT_GT(matcher.followed_points(), 90U) << "three frames after one " << c.what;
+  }
+}
+
+// Markers moving at 3-4 m/s (32-45 mm a frame at 90 Hz, several times the lookup's 2.5 px in most
+// cameras) are followed by their velocity: from the third frame on, every one is followed.
+TEST(Matching, FastMarkersAreFollowedByTheirVelocity) {
+  std::vector<Trajectory> paths(3);
+  const std::array<Eigen::Vector3d, 3> axes = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(), Eigen::Vector3d(0.0, 0.4, 0.6)};
+  for (std::size_t k = 0; k < paths.size(); ++k) {
+    paths[k].centre_m = Eigen::Vector3d(-0.6 + 0.6 * static_cast<double>(k), 1.1, 0.2 * static_cast<double>(k));
+    paths[k].amplitude_m = axes[k];
+    paths[k].frequency_hz = Eigen::Vector3d::Constant(0.65);
+  }
+  SimulatedRigSettings s;
+  s.sigma_px = 0.3;
+  SimulatedRig sim(rig("room-8.yaml"), paths, s);
+  RigMatcher matcher(sim.rig());
+  for (int f = 0; f < 10; ++f) {
+    const RigFrame frame = sim.next();
+    const std::span<const MatchedPoint> span = matcher.match_frame(frame);
+    const Score sc = score(frame, std::vector<MatchedPoint>(span.begin(), span.end()));
+    EXPECT_EQ(sc.found, 3) << "frame " << f;
+    EXPECT_EQ(sc.wrong, 0) << "frame " << f;
+    EXPECT_LT(sc.max_error_m, 0.003) << "frame " << f;
+    if (f == 0) {
+      EXPECT_EQ(matcher.followed_points(), 0U);
+    } else if (f >= 2) {
+      EXPECT_EQ(matcher.followed_points(), 3U) << "frame " << f;
+    }
+  }
 }
 
 // A marker near the room's edge that only two of the eight cameras can see is still found.

@@ -3,6 +3,8 @@
 
 #include <bit>
 #include <filesystem>
+#include <span>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -37,18 +39,23 @@ void expect_identical(const std::vector<MatchedPoint>& serial, const std::vector
   }
 }
 
+// A crowded stage: 400 markers wandering through stage-32's volume, 0.3 px of noise, 10 % dropout.
+SimulatedRig crowded_stage(const CameraRig& rig) {
+  const TrackingVolume volume = rig.volume.value();
+  SimulatedRigSettings settings;
+  settings.dropout = 0.1;
+  settings.sigma_px = 0.3;
+  return SimulatedRig(rig, random_trajectories(400, volume.centre_m - 0.5 * volume.size_m, volume.centre_m + 0.5 * volume.size_m, 11),
+                      settings);
+}
+
 // A crowded stage (32 cameras, 400 markers, noise and dropout): many seeds per camera pair, so the
 // seeds are grown ahead on the pool and what one detection's cluster explains changes what the
 // next may seed.
 TEST(MatchingThreads, TheSameSeedGivesTheSamePointsWhateverTheThreadCount) {
   const auto rig = load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / "stage-32.yaml");
   ASSERT_TRUE(rig.has_value()) << (rig ? "" : rig.error());
-  const TrackingVolume volume = rig->volume.value();
-  SimulatedRigSettings settings;
-  settings.dropout = 0.1;
-  settings.sigma_px = 0.3;
-  SimulatedRig sim(*rig, random_trajectories(400, volume.centre_m - 0.5 * volume.size_m, volume.centre_m + 0.5 * volume.size_m, 11),
-                   settings);
+  SimulatedRig sim = crowded_stage(*rig);
   JobPool two(2);
   JobPool three(3);
   JobPool eight(8);
@@ -59,6 +66,30 @@ TEST(MatchingThreads, TheSameSeedGivesTheSamePointsWhateverTheThreadCount) {
     expect_identical(serial, match_and_triangulate(*rig, frame, {}, &two), 2);
     expect_identical(serial, match_and_triangulate(*rig, frame, {}, &three), 3);
     expect_identical(serial, match_and_triangulate(*rig, frame, {}, &eight), 8);
+  }
+}
+
+// Frame after frame, following the last frame's points (RigMatcher::match_frame): what one frame
+// found decides what the next looks for first, and still the points are the same whatever the
+// thread count.
+TEST(MatchingThreads, PointsFollowedFrameAfterFrameAreTheSameWhateverTheThreadCount) {
+  const auto rig = load_rig(std::filesystem::path(RHOT_ASSET_DIR) / "rigs" / "stage-32.yaml");
+  ASSERT_TRUE(rig.has_value()) << (rig ? "" : rig.error());
+  SimulatedRig sim = crowded_stage(*rig);
+  JobPool two(2);
+  JobPool three(3);
+  RigMatcher serial(*rig), on_two(*rig), on_three(*rig);
+  const auto copy = [](std::span<const MatchedPoint> points) { return std::vector<MatchedPoint>(points.begin(), points.end()); };
+  for (int f = 0; f < 4; ++f) {
+    const RigFrame frame = sim.next();
+    const std::vector<MatchedPoint> one = copy(serial.match_frame(frame));
+    ASSERT_GT(one.size(), 300U) << "a crowded frame";
+    if (f >= 2) {
+      EXPECT_GT(serial.followed_points(), one.size() * 9 / 10) << "frame " << f << ": followed, not seeded";
+    }
+    expect_identical(one, copy(on_two.match_frame(frame, {}, &two)), 2);
+    EXPECT_EQ(on_two.followed_points(), serial.followed_points());
+    expect_identical(one, copy(on_three.match_frame(frame, {}, &three)), 3);
   }
 }
 
