@@ -41,8 +41,10 @@ struct CameraDetections {
   };
   std::vector<int> cell_start;
   std::vector<Item> items;
-  // Per detection: it seeded (or joined) a cluster three or more cameras confirm.
+  // Per detection: it seeded (or joined) a cluster three or more cameras confirm; and how many
+  // are not (Matcher::keep counts them down).
   std::vector<char> explained;
+  std::size_t open = 0;
   // Per detection: the first link of its list of clusters (see Membership), -1 for none.
   std::vector<int> first_link;
   // build's own: the detections OpenCV undistorts, and each detection's cell while filling the grid.
@@ -107,6 +109,7 @@ struct CameraDetections {
                                                                                        colour[i]};
     }
     explained.assign(pixel.size(), 0);
+    open = pixel.size();
     first_link.assign(pixel.size(), -1);
   }
   int cell(const Eigen::Vector2d& p) const {
@@ -228,6 +231,7 @@ struct MatchScratch {
   std::vector<matching_detail::Grown> from_followed;
   std::vector<int> point_followed;
   std::vector<char> followed_claimed;
+  std::vector<std::size_t> followed_lost;
   std::size_t followed_points = 0;  // of this frame's points, those grown from a followed point
   matching_detail::Grown grown;     // the serial pass's seed
   std::vector<std::size_t> order;
@@ -378,7 +382,14 @@ class Matcher {
     if (clusters_.size() < 3 * most) grow_clusters(4 * most);  // with room for a third more detections
     if (follow_) follow_points();
     for (std::size_t i = 0; i < n_; ++i) {
-      for (std::size_t j = i + 1; j < n_; ++j) seed_pair(i, j);
+      // Camera i's open detections, in order, kept for its pairs (each drops what the pairs
+      // before it explained).
+      open_.clear();
+      reserve_room(open_, cams_[i].pixel.size());
+      for (std::size_t a = 0; a < cams_[i].pixel.size(); ++a) {
+        if (cams_[i].explained[a] == 0) open_.push_back(a);
+      }
+      for (std::size_t j = i + 1; j < n_ && cams_[i].open > 0; ++j) seed_pair(i, j);
     }
     for_each(
         s_.cluster_count, [&](std::size_t k) { refine(clusters_[k]); }, kShortJobs);
@@ -437,9 +448,15 @@ class Matcher {
 
   // This frame's points, to be followed into the next: each with its velocity from the last
   // frame's point it grew from or, for a seeded one, from the last frame's point of its colour that
-  // no point grew from, nearest to where that was expected (within kLinkedWithin_m; a marker lost
-  // by its followed point and seeded again, or a point seeded for the first time in the last frame).
+  // no point grew from, nearest to where that was expected (a marker lost by its followed point and
+  // seeded again, or seeded for the first time in the last frame), within the distance
+  // kFastest_mps would take it, and kLinkedWithin_m. A velocity over kFastest_mps (a point linked
+  // to another marker's, a frame a fraction of a millisecond after the last) is taken as none. A
+  // frame with no detections at all (a dropped frame) leaves the last frame's points to follow.
   void remember_points() {
+    bool any = false;
+    for (const CameraDetections& c : cams_) any = any || !c.pixel.empty();
+    if (!any) return;
     const std::vector<Followed>& before = s_.followed;
     std::vector<Followed>& next = s_.next_followed;
     const double dt = time_s_ - s_.followed_time_s;
@@ -450,19 +467,24 @@ class Matcher {
     reserve_room(claimed, before.size());
     claimed.assign(before.size(), 0);
     std::size_t seeded = 0;
-    for (std::size_t p = 0; p < s_.point_count; ++p) {
-      if (!linked) break;
+    for (std::size_t p = 0; p < s_.point_count && linked; ++p) {
       if (s_.point_followed[p] >= 0) {
         claimed[static_cast<std::size_t>(s_.point_followed[p])] = 1;
       } else {
         ++seeded;
       }
     }
-    const auto unclaimed = static_cast<std::size_t>(std::count(claimed.begin(), claimed.end(), char{0}));
-    // Nearest by testing every pair: after the first frames, few points are seeded and few
-    // followed points lost; where a frame has too many of both (the motion no longer followed),
-    // the seeded points start with no velocity.
-    const bool search = linked && seeded * unclaimed <= kMostLinkTests;
+    // The lost ones, to link seeded points to. Nearest by testing every pair: after the first
+    // frames few points are seeded and few lost; where a frame has too many of both (the motion no
+    // longer followed), the seeded points start with no velocity.
+    std::vector<std::size_t>& lost = s_.followed_lost;
+    reserve_room(lost, before.size());
+    lost.clear();
+    for (std::size_t q = 0; q < claimed.size() && seeded > 0; ++q) {
+      if (claimed[q] == 0) lost.push_back(q);
+    }
+    const bool search = seeded * lost.size() <= kMostLinkTests;
+    const double within = std::min(kLinkedWithin_m, kFastest_mps * dt + kLinkSlack_m);
     for (std::size_t p = 0; p < s_.point_count; ++p) {
       const MatchedPoint& m = s_.points[p];
       Followed& f = next[p];
@@ -472,18 +494,25 @@ class Matcher {
       if (!linked) continue;
       int from = s_.point_followed[p];
       if (from < 0 && search) {
-        double best = kLinkedWithin_m * kLinkedWithin_m;
-        for (std::size_t q = 0; q < before.size(); ++q) {
-          if (claimed[q] != 0 || before[q].colour != f.colour) continue;
-          const double d2 = (before[q].position + dt * before[q].velocity - f.position).squaredNorm();
+        double best = within * within;
+        std::size_t best_at = lost.size();
+        for (std::size_t l = 0; l < lost.size(); ++l) {
+          const Followed& q = before[lost[l]];
+          if (claimed[lost[l]] != 0 || q.colour != f.colour) continue;
+          const double d2 = (q.position + dt * q.velocity - f.position).squaredNorm();
           if (d2 < best) {
             best = d2;
-            from = static_cast<int>(q);
+            best_at = l;
           }
         }
-        if (from >= 0) claimed[static_cast<std::size_t>(from)] = 1;
+        if (best_at < lost.size()) {
+          from = static_cast<int>(lost[best_at]);
+          claimed[lost[best_at]] = 1;
+        }
       }
-      if (from >= 0) f.velocity = (f.position - before[static_cast<std::size_t>(from)].position) / dt;
+      if (from < 0) continue;
+      const Eigen::Vector3d v = (f.position - before[static_cast<std::size_t>(from)].position) / dt;
+      if (v.squaredNorm() <= kFastest_mps * kFastest_mps) f.velocity = v;
     }
     std::swap(s_.followed, next);
     s_.followed_time_s = time_s_;
@@ -497,20 +526,16 @@ class Matcher {
   // (growing reads only the detections); the plans are then committed in order, skipping what an
   // earlier detection's cluster explained meanwhile and growing on the spot where a plan ran out
   // or was not grown that far: the clusters, and all that follows, are exactly the serial ones.
+  // open_ holds camera i's open detections as the pair before left them (run).
   void seed_pair(std::size_t i, std::size_t j) {
-    if (cams_[i].pixel.empty() || cams_[j].pixel.empty()) return;
+    const std::size_t open_j = cams_[j].open;
+    if (cams_[i].open == 0 || open_j == 0) return;
+    std::erase_if(open_, [&](std::size_t a) { return cams_[i].explained[a] != 0; });
     // cam_j_from_cam_i = R t; essential matrix E = [t]x R maps x_i to the epipolar line in j.
     const Rigid3d j_from_i = rig_.cameras[j].cam_from_world * rig_.cameras[i].cam_from_world.inverse();
     const Eigen::Matrix3d e = skew(j_from_i.translation) * j_from_i.rotation.toRotationMatrix();
     // Many lines against many detections: index camera j's detections by epipolar line
     // (EpipolarIndex); few: test every one.
-    open_.clear();
-    reserve_room(open_, cams_[i].pixel.size());
-    for (std::size_t a = 0; a < cams_[i].pixel.size(); ++a) {
-      if (cams_[i].explained[a] == 0) open_.push_back(a);
-    }
-    const auto open_j = static_cast<std::size_t>(std::count(cams_[j].explained.begin(), cams_[j].explained.end(), char{0}));
-    if (open_.empty() || open_j == 0) return;
     const bool indexed = open_.size() * open_j >= kIndexAbovePairs;
     if (indexed) index_.build(j_from_i.translation, cams_[j].normalised, cams_[j].explained);
     const bool ahead = jobs_ != nullptr && jobs_->threads() > 1 && open_.size() >= kGrowAheadFrom;
@@ -770,7 +795,10 @@ class Matcher {
       const auto d = static_cast<std::size_t>(g.cluster.detection[k]);
       links_.emplace_back(index, cams_[k].first_link[d]);
       cams_[k].first_link[d] = static_cast<int>(links_.size()) - 1;
-      if (g.confirmed) cams_[k].explained[d] = 1;
+      if (g.confirmed && cams_[k].explained[d] == 0) {
+        cams_[k].explained[d] = 1;
+        --cams_[k].open;
+      }
     }
     if (s_.cluster_count == clusters_.size()) grow_clusters(2 * clusters_.size() + 16);
     Cluster& cl = clusters_[s_.cluster_count++];
@@ -879,7 +907,9 @@ class Matcher {
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
       if (clusters_[a].support != clusters_[b].support) return clusters_[a].support > clusters_[b].support;
-      return clusters_[a].point.reprojection_rms_px < clusters_[b].point.reprojection_rms_px;
+      if (clusters_[a].point.reprojection_rms_px != clusters_[b].point.reprojection_rms_px)
+        return clusters_[a].point.reprojection_rms_px < clusters_[b].point.reprojection_rms_px;
+      return a < b;  // a tie (two clusters of the same detections) to the one kept first, whatever the library's sort
     });
     std::vector<std::vector<char>>& used = s_.used;
     if (used.size() < n_) used.resize(n_);
@@ -1038,10 +1068,14 @@ class Matcher {
   static constexpr std::size_t kShortJobs = 8;
   // No camera given to grow (grow).
   static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
-  // Points are followed from a frame at most this long before (a slower source, or a gap, and
-  // every marker is seeded again), and a seeded point is linked to a lost one within this distance
-  // of where that was expected, testing at most this many pairs.
-  static constexpr double kFollowedFor_s = 0.1;
+  // Points are followed from a frame at most this long before (a tenth of a second, give or take
+  // a 10 Hz source's rounding; a slower source, or a gap, and every marker is seeded again). A
+  // seeded point is linked to a lost one within what kFastest_mps makes of the time between, plus
+  // kLinkSlack_m, and at most kLinkedWithin_m, of where that was expected, testing at most
+  // kMostLinkTests pairs; a velocity over kFastest_mps (a hand thrown hard moves 10 m/s) is none.
+  static constexpr double kFollowedFor_s = 0.1001;
+  static constexpr double kFastest_mps = 15.0;
+  static constexpr double kLinkSlack_m = 0.02;
   static constexpr double kLinkedWithin_m = 0.15;
   static constexpr std::size_t kMostLinkTests = 4'000'000;
   // The rays' meeting point starts a seed's refinement when it lies within this of the seed.

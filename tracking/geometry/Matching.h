@@ -3,10 +3,10 @@
 //
 // 1. Every detection is undistorted to normalised image coordinates.
 // 2. Frame after frame (RigMatcher::match_frame, MatchSettings::follow_points), each of the last
-//    frame's points is grown first, as a seed is in step 4 but into every camera and with no
-//    detection given, from where it is expected now: its position moved on by its velocity (from
-//    the last two frames' points of its marker). Those three or more cameras confirm explain
-//    their detections before step 3: a marker that moved as it did is found without a seed.
+//    frame's points is grown first, as a seed is in step 4 but with no detection given (into every
+//    camera that may see it, any two of its views free to be dropped), from where it is expected
+//    now: its position moved on by its velocity (from the last two frames' points of its marker). Those three or more cameras confirm
+//    explain their detections before step 3: a marker that moved as it did is found without a seed.
 // 3. Seeds: for every pair of cameras, detection pairs that satisfy the epipolar constraint
 //    within `epipolar_tolerance_px` (measured in the second camera's pixels), triangulated as the
 //    midpoint of the two rays. The second camera's detections are found by epipolar line
@@ -62,7 +62,7 @@ struct MatchSettings {
   double seed_margin_m = 0.25;
   // RigMatcher::match_frame only: the last frame's points (within 0.1 s) are looked for first,
   // each where it is expected now (moved on by its velocity), before any pair of cameras is
-  // seeded; markers that move as they did are then found without seeding (step 0 below).
+  // seeded; markers that move as they did are then found without seeding (step 2 at the top of this file).
   bool follow_points = true;
 };
 

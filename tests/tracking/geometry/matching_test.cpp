@@ -169,6 +169,24 @@ TEST(Matching, AFrameAfterAGapOrFromThePastIsSeededAfresh) {
   }
 }
 
+// A frame with no detections at all (dropped on its way) forgets nothing: the next frame follows
+// the points of the one before it, moved on by their velocities over both frames' time.
+TEST(Matching, ADroppedFrameLeavesThePointsToFollow) {
+  SimulatedRigSettings s;
+  s.sigma_px = 0.3;
+  SimulatedRig sim(rig("room-8.yaml"), random_trajectories(100, {-1.5, 0.2, -1.5}, {1.5, 1.9, 1.5}, 6), s);
+  RigMatcher matcher(sim.rig());
+  for (int f = 0; f < 3; ++f) static_cast<void>(matcher.match_frame(sim.next()));
+  ASSERT_GT(matcher.followed_points(), 90U);
+  RigFrame dropped = sim.next();
+  for (CameraFrame& c : dropped.cameras) c.detections.clear();
+  EXPECT_TRUE(matcher.match_frame(dropped).empty());
+  const RigFrame frame = sim.next();
+  const std::span<const MatchedPoint> points = matcher.match_frame(frame);
+  EXPECT_GE(matcher.followed_points(), points.size() * 97 / 100) << "followed over the dropped frame";
+  EXPECT_EQ(score(frame, std::vector<MatchedPoint>(points.begin(), points.end())).wrong, 0);
+}
+
 // Markers moving at 3-4 m/s (32-45 mm a frame at 90 Hz, several times the lookup's 2.5 px in most
 // cameras) are followed by their velocity: from the third frame on, every one is followed.
 TEST(Matching, FastMarkersAreFollowedByTheirVelocity) {

@@ -90,6 +90,7 @@ TEST(MatchingThreads, PointsFollowedFrameAfterFrameAreTheSameWhateverTheThreadCo
     expect_identical(one, copy(on_two.match_frame(frame, {}, &two)), 2);
     EXPECT_EQ(on_two.followed_points(), serial.followed_points());
     expect_identical(one, copy(on_three.match_frame(frame, {}, &three)), 3);
+    EXPECT_EQ(on_three.followed_points(), serial.followed_points());
   }
 }
 
