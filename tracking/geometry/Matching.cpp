@@ -653,8 +653,8 @@ class Matcher {
   }
 
   // A point near x grown into every camera that may see it, as a seed is (grow_seed) but with the
-  // detections of cameras i and j given (i and j kNone: none given, every camera looked in, any
-  // observation may be dropped).
+  // detections of cameras i and j given (i and j kNone: none given, every camera looked in, and
+  // the two that disagree most may be dropped whichever cameras they are, while three remain).
   void grow(const Eigen::Vector3d& x, int colour, std::size_t i, std::size_t a, std::size_t j, std::size_t b, Grown& out) const {
     thread_local std::vector<Observation> grown;
     // Per camera: where the seed projects, and whether the detection found there was the only one
